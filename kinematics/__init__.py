@@ -1,0 +1,53 @@
+"""Exact kinematics of single-loop linkages: dual quaternions, Pluecker lines, DH, Bennett.
+
+Conventions (stated once, tested in ``tests/kinematics``): SI units (metres, radians);
+quaternions scalar first; active rotations; dual quaternion products compose like 4x4
+matrices (the right factor acts first); the paper's DH convention
+``r_x(alpha_{i-1}) t_x(a_{i-1}) t_z(d_i) r_z(theta_i)``; Pluecker moment ``m = p x l``
+and the paper's line embedding ``l - eps m``.
+"""
+
+from .bennett import PAPER_A, PAPER_ALPHA, BennettConditionError, BennettLinkage, MotionPolynomial
+from .dh import (
+    ClosureResidual,
+    DHParameters,
+    LoopClosureError,
+    dh_axes,
+    dh_from_axes,
+    dh_matrix,
+    dh_transform,
+    home_configuration,
+    loop_closure_residual,
+    open_loop_axes,
+    wrap_angle,
+)
+from .dual_quaternion import DualQuaternion
+from .mobility import MobilityReport, rigid_mobility
+from .pluecker import CommonNormal, Line, angle, common_normal, distance
+
+__all__ = [
+    "PAPER_A",
+    "PAPER_ALPHA",
+    "BennettConditionError",
+    "BennettLinkage",
+    "ClosureResidual",
+    "CommonNormal",
+    "DHParameters",
+    "DualQuaternion",
+    "Line",
+    "LoopClosureError",
+    "MobilityReport",
+    "MotionPolynomial",
+    "angle",
+    "common_normal",
+    "dh_axes",
+    "dh_from_axes",
+    "dh_matrix",
+    "dh_transform",
+    "distance",
+    "home_configuration",
+    "loop_closure_residual",
+    "open_loop_axes",
+    "rigid_mobility",
+    "wrap_angle",
+]

@@ -1,0 +1,93 @@
+"""Command line: ``python -m kinematics bennett [--alpha3-deg A] [--out DIR]``.
+
+Prints the DH table, the joint axes as in the paper, the configuration curve and the
+motion polynomial of the Bennett linkage, and writes the ideal coupler path (CSV, PNG and
+JSON) to ``DIR``. With a misaligned base twist it reports that the rigid loop cannot move.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .bennett import PAPER_A, PAPER_ALPHA, BennettConditionError, BennettLinkage
+from .mobility import rigid_mobility
+
+
+def _quaternion_text(q: np.ndarray) -> str:
+    terms = []
+    for value, unit in zip(q, ("", "i", "j", "k")):
+        if abs(value) > 1e-12:
+            terms.append(f"{value:+.6g}{unit}")
+    return " ".join(terms) if terms else "0"
+
+
+def _dual_quaternion_text(coeffs: np.ndarray) -> str:
+    return f"{_quaternion_text(coeffs[:4])} + eps({_quaternion_text(coeffs[4:])})"
+
+
+def _print_bennett(linkage: BennettLinkage, out: Path, n: int) -> None:
+    print("Joint axes in the home configuration (paper's embedding h = l - eps m, metres):")
+    for i, line in enumerate(linkage.axes):
+        point = ", ".join(f"{1e3 * c:.3f}" for c in line.point)
+        print(f"  h{i} = {_dual_quaternion_text(line.to_dual_quaternion().coeffs)}   (through [{point}] mm)")
+    k = linkage.coefficients
+    print("Configuration curve: (t0, t1, t2, t3) = (" + ", ".join(f"{c:.6g} t" for c in k) + ")")
+    print("Motion polynomial of the coupler (link 2) relative to the base, C(t) = (t - h0)(k1 t - h1):")
+    for power, c in zip((2, 1, 0), linkage.motion_polynomial().coefficients):
+        print(f"  t^{power}: {_dual_quaternion_text(c)}")
+    path = linkage.coupler_path(n=n)
+    residual = linkage.closure_residual(linkage.parameter_from_joint(np.linspace(0, 2 * np.pi, n), joint=3))
+    print(f"Loop closure along the motion: max {residual.translation.max():.2e} m, {residual.rotation.max():.2e} rad")
+    out.mkdir(parents=True, exist_ok=True)
+    np.savetxt(out / "coupler_path.csv", path, delimiter=",", header="x_m,y_m,z_m", comments="")
+    from .plotting import plot_coupler_path
+
+    fig, _ = plot_coupler_path(linkage, path)
+    fig.savefig(out / "coupler_path.png", dpi=150, bbox_inches="tight")
+    summary = {
+        "a_m": list(linkage.a),
+        "alpha_rad": list(linkage.alpha),
+        "axes": [{"direction": l.direction.tolist(), "moment": l.moment.tolist()} for l in linkage.axes],
+        "configuration_ratios": k.tolist(),
+        "motion_polynomial": linkage.motion_polynomial().coefficients.tolist(),
+        "coupler_point_m": linkage.coupler_point().tolist(),
+    }
+    (out / "kinematics.json").write_text(json.dumps(summary, indent=2))
+    print(f"Wrote {out / 'coupler_path.png'}, {out / 'coupler_path.csv'} and {out / 'kinematics.json'}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m kinematics", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    bennett = sub.add_parser("bennett", help="the paper's Bennett linkage (or a misaligned variant)")
+    bennett.add_argument("--alpha3-deg", type=float, default=90.0, help="twist of the base link (paper: 90, 91, 92)")
+    bennett.add_argument("--out", type=Path, default=Path("out"), help="output folder")
+    bennett.add_argument("--points", type=int, default=720, help="samples of the coupler path")
+    args = parser.parse_args(argv)
+
+    a = np.array(PAPER_A)
+    alpha = np.array(PAPER_ALPHA)
+    alpha[3] = np.radians(args.alpha3_deg)
+    print("DH parameters (paper's Table 'DH parameters of the 4R mechanism'):")
+    print("  i   a_i [mm]   alpha_i [deg]   d_i [mm]")
+    for i in range(4):
+        print(f"  {i}   {1e3 * a[i]:8.3f}   {np.degrees(alpha[i]):13.3f}   {0.0:8.3f}")
+    try:
+        linkage = BennettLinkage(tuple(a), tuple(alpha))
+    except BennettConditionError as error:
+        print(f"Not a Bennett linkage: {error}")
+        report = rigid_mobility(a, alpha, n_angles=args.points // 4)
+        print(report.summary())
+        return 0
+    print("Bennett conditions hold: a0 = a2, a1 = a3, alpha0 = alpha2, alpha1 = alpha3, a0/sin(alpha0) = a1/sin(alpha1)")
+    _print_bennett(linkage, args.out, args.points)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

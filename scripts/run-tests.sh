@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Default test suite (what CI runs). Extra arguments go to pytest, e.g. -m slow.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/ensure-venv.sh
+# pytest exits 5 when it collected no test: that is a failure here, as any non-zero code.
+exec .venv/bin/python -m pytest "$@"
