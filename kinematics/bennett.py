@@ -167,6 +167,31 @@ class BennettLinkage:
         """Unit dual quaternion of the coupler's displacement from home at curve parameter ``t``."""
         return self.motion_polynomial()(t).normalized()
 
+    def link_poses(self, t: ArrayLike) -> list[DualQuaternion]:
+        r"""Displacements from home of links 0..3 (paper's numbering) at curve parameter ``t``.
+
+        In product-of-exponentials form: link 0 (base) does not move, link 1 turns about
+        :math:`h_0` by :math:`t_0 - h_0`, link 2 (coupler) moves by
+        :math:`(t_0 - h_0)(t_1 - h_1)`, and link 3 turns about :math:`h_3`. From the closure
+        :math:`(t_0-h_0)(t_1-h_1) \propto ((t_2-h_2)(t_3-h_3))^{-1}` and
+        :math:`(t - h)^{-1} \propto t + h` (since :math:`h^2 = -1`), link 3 moves by
+        :math:`t_3 + h_3`, which is :math:`-((-t_3) - h_3)`.
+        """
+        t = np.asarray(t, dtype=float)
+        ts = self.configuration(t)
+        one = DualQuaternion(np.broadcast_to(np.eye(8)[0], t.shape + (8,)))
+
+        def factor(parameter, axis: Line, sign: float) -> DualQuaternion:
+            """``parameter + sign * h``, or the identity where ``parameter`` is infinite."""
+            finite = np.isfinite(parameter)
+            linear = np.where(finite, parameter, 0.0)[..., None] * np.eye(8)[0] + sign * axis.to_dual_quaternion().coeffs
+            return DualQuaternion(np.where(finite[..., None], linear, np.eye(8)[0]))
+
+        link1 = factor(ts[..., 0], self.axes[0], -1.0)
+        link2 = link1 * factor(ts[..., 1], self.axes[1], -1.0)
+        link3 = factor(ts[..., 3], self.axes[3], +1.0)
+        return [one, link1.normalized(), link2.normalized(), link3.normalized()]
+
     def coupler_point(self) -> NDArray[np.float64]:
         r"""Midpoint of the common normal of :math:`h_1` and :math:`h_2` (on the coupler), home configuration."""
         normal = common_normal(self.axes[1], self.axes[2])

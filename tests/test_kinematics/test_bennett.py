@@ -121,3 +121,17 @@ def test_bennett_conditions_are_checked_and_named():
         BennettLinkage((0.11, 0.22, 0.12, 0.22), PAPER_ALPHA)
     with pytest.raises(BennettConditionError, match="a0/sin"):
         BennettLinkage((0.11, 0.20, 0.11, 0.20), PAPER_ALPHA)
+
+
+def test_link_poses_keep_every_joint_together(rng):
+    """Each joint axis (points at home) is carried identically by the two links it connects."""
+    for _ in range(3):
+        a, alpha = random_bennett(rng)
+        bennett = BennettLinkage(a, alpha)
+        t = np.r_[rng.normal(size=20) * 2, np.inf, 0.0]
+        poses = bennett.link_poses(t)
+        for joint, (left, right) in enumerate([(0, 1), (1, 2), (2, 3), (3, 0)]):
+            points = bennett.axes[joint].point_at(np.array([-0.3, 0.4]))
+            for p in points:
+                np.testing.assert_allclose(poses[left].act(p), poses[right].act(p), atol=1e-12)
+        np.testing.assert_allclose(poses[2].coeffs, bennett.coupler_pose(t).coeffs, atol=1e-12)
