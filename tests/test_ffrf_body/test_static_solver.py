@@ -1,0 +1,71 @@
+"""Static equilibrium against a direct FE solution and a hanging pendulum."""
+
+import numpy as np
+import pytest
+import scipy.sparse.linalg as spla
+from body_fixtures import bar_model
+from pendulum_fixtures import pendulum
+
+from ffrf.constraints import GroundPerpendicular, GroundPoint
+from ffrf.craig_bampton import craig_bampton
+from ffrf.euler_parameters import rotation_matrix
+from ffrf.flexible_body import FlexibleBody
+from ffrf.modal_moments import modal_moments
+from ffrf.static_solver import StaticDivergence, static_equilibrium
+from ffrf.system import MultibodySystem
+
+GRAVITY = np.array([0.0, 0.0, -9.81])
+
+
+def _cantilever(n_modes):
+    model = bar_model(E=1e8, rho=450.0)
+    clamp = np.flatnonzero(model.nodes[:, 0] < 1e-9)
+    basis = craig_bampton(model, [clamp], n_modes)
+    body = FlexibleBody("bar", modal_moments(model.nodes, model.mass, basis.basis), basis.reduced_stiffness,
+                        0.0 * basis.reduced_stiffness)
+    e = np.eye(3)
+    fixed = (GroundPoint((0,), "clamp"), GroundPerpendicular((0,), "clamp y", vector=e[1], normals=e[[0, 2]]),
+             GroundPerpendicular((0,), "clamp x", vector=e[0], normals=e[[2]]))
+    return model, clamp, basis.basis, MultibodySystem((body,), fixed, gravity=GRAVITY)
+
+
+def test_cantilever_under_gravity_equals_ritz_and_approaches_full_fe():
+    """With the frame clamped, the reduced static solution is the Ritz solution
+    K_r zeta = Psi^T M (1 x g) (built here straight from the FE matrices), and it approaches the
+    full FE solution K_ff u = f_f as modes are added."""
+    model, clamp, _, _ = _cantilever(1)
+    n = model.nodes.shape[0]
+    load = model.mass @ np.tile(GRAVITY, n)
+    free = np.setdiff1d(np.arange(3 * n), (3 * clamp[:, None] + np.arange(3)).ravel())
+    full = np.zeros(3 * n)
+    full[free] = spla.spsolve(model.stiffness[free][:, free].tocsc(), load[free])
+    tip = int(np.argmin(np.linalg.norm(model.nodes - [0.2, 0.01, 0.005], axis=1)))
+    errors = []
+    for n_modes in (2, 6):
+        model, clamp, psi, system = _cantilever(n_modes)
+        solution = static_equilibrium(system, system.initial_state(), load_steps=2)
+        ritz = np.linalg.solve(psi.T @ model.stiffness @ psi, psi.T @ load)
+        np.testing.assert_allclose(solution.q[7:], ritz, rtol=1e-8, atol=1e-12 * np.abs(ritz).max())
+        np.testing.assert_allclose(solution.q[:7], [0, 0, 0, 1, 0, 0, 0], atol=1e-12)
+        errors.append(abs((psi @ solution.q[7:])[3 * tip + 2] - full[3 * tip + 2]) / abs(full[3 * tip + 2]))
+    assert errors[1] < errors[0] and errors[1] < 0.02
+
+
+def test_hinged_bar_hangs_straight_down():
+    system, _, _, hinge = pendulum(n_modes=0)
+    q0 = system.initial_state()
+    tilt = np.radians(-70.0) / 2  # start 70 deg below horizontal: rotate about +y by 70 deg (x towards -z)
+    q0[3:7] = [np.cos(-tilt), 0.0, np.sin(-tilt), 0.0]
+    q0[:3] = hinge - rotation_matrix(q0[3:7]) @ hinge
+    solution = static_equilibrium(system, q0)
+    axis = rotation_matrix(solution.q[3:7]) @ np.array([1.0, 0, 0])
+    np.testing.assert_allclose(axis, [0, 0, -1], atol=1e-12)
+    # The hinge carries the full weight.
+    assert -solution.multipliers[3] == pytest.approx(450.0 * 0.2 * 0.02 * 0.01 * 9.81, rel=1e-10)
+
+
+def test_free_body_is_refused_with_a_clear_message():
+    model, _, psi, system = _cantilever(1)
+    free = MultibodySystem(system.bodies, (), gravity=GRAVITY)
+    with pytest.raises(StaticDivergence, match="mechanism or a body is not held"):
+        static_equilibrium(free, free.initial_state())
