@@ -1,0 +1,235 @@
+r"""Joints between markers: revolute, fixed, general subsets, and prescribed rotations.
+
+A joint connects a frame on marker 0 (a body marker or the ground) with a frame on marker 1
+(``docs/formulation.md``, Sect. "Joints", Eqs. (J1)-(J3)). Each joint frame is the
+marker frame (Eq. (K3)) times a constant rotation ``R`` (its columns are the joint axes
+x, y, z in marker coordinates), at the marker point plus a constant ``offset`` (marker
+coordinates; e.g. the axial offset from a bore centre to the joint point):
+
+.. math:: J_k = A_{M,k} R_k,\qquad p_k = r_{M,k} + A_{M,k}\,o_k .
+
+Equations, as Exudyn's ``GenericJoint`` (so that reactions compare one to one):
+
+* translations (J1): all three locked: :math:`p_1 - p_0 = 0` (world); a subset: components of
+  :math:`J_0^T(p_1 - p_0)`;
+* rotations (J2): about x :math:`z_0\cdot y_1 = 0`, about y :math:`z_0\cdot x_1 = 0`, about z
+  :math:`x_0'\cdot y_1 = 0`, where :math:`x_0'` is :math:`x_0` turned about :math:`z_0` by the
+  prescribed angle :math:`\varphi(t)` (zero for a passive joint) (J3).
+
+A revolute joint locks ``[tx, ty, tz, rx, ry]``; a fixed joint all six; a driven revolute
+all six with :math:`\varphi(t)`. The constraint force on body ``k`` is :math:`-C_{q_k}^T\lambda`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .constraints import Constraint
+from .euler_parameters import rotation_derivative, rotation_matrix
+from .markers import BodyMarker, exp_so3
+
+__all__ = ["GroundFrame", "MarkerJoint", "revolute_joint", "fixed_joint", "driven_revolute_joint", "exp_so3_tangent"]
+
+
+def _skew(v):
+    return np.array([[0.0 * v[0], -v[2], v[1]], [v[2], 0.0 * v[0], -v[0]], [-v[1], v[0], 0.0 * v[0]]])
+
+
+def exp_so3_tangent(theta: NDArray) -> NDArray:
+    r"""Right Jacobian :math:`T(\theta)` of the exponential map, :math:`d\exp(\tilde\theta) = \exp(\tilde\theta)\,(T\,d\theta)^\sim`:
+    :math:`T = I - \frac{1-\cos\phi}{\phi^2}\tilde\theta + \frac{\phi - \sin\phi}{\phi^3}\tilde\theta^2`."""
+    phi2 = theta @ theta
+    skew = _skew(theta)
+    if abs(phi2) < 1e-8:
+        a, b = 0.5 - phi2 / 24.0, 1.0 / 6.0 - phi2 / 120.0
+    else:
+        phi = np.sqrt(phi2)
+        a, b = (1.0 - np.cos(phi)) / phi2, (phi - np.sin(phi)) / (phi2 * phi)
+    return np.eye(3) - a * skew + b * (skew @ skew)
+
+
+@dataclass(frozen=True, eq=False)
+class GroundFrame:
+    """A fixed world frame: ``point`` (world) and ``rotation`` (world axes as columns)."""
+
+    point: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    rotation: NDArray[np.float64] = field(default_factory=lambda: np.eye(3))
+    name: str = "ground"
+
+
+def _frame(marker, q, rotation, offset):
+    """Joint point, joint axes (columns) and their derivative data on one side."""
+    if isinstance(marker, GroundFrame):
+        axes = marker.rotation @ rotation
+        return marker.point + marker.rotation @ offset, axes
+    a_body = rotation_matrix(q[3:7])
+    local = exp_so3(marker.rotation_vector(q)) @ rotation
+    axes = a_body @ local
+    point = marker.position(q) + a_body @ (exp_so3(marker.rotation_vector(q)) @ offset)
+    return point, axes
+
+
+def _point_jacobian(marker: BodyMarker, q, offset):
+    """d p / dq for p = r_M + A exp(theta~) o."""
+    theta = marker.rotation_vector(q)
+    turned = exp_so3(theta) @ offset
+    out = marker.position_jacobian(q)
+    out[:, 3:7] += rotation_derivative(q[3:7], turned.astype(q.dtype))
+    if marker.rotation_modes.shape[1]:
+        a_body = rotation_matrix(q[3:7])
+        out[:, 7:] += -(a_body @ exp_so3(theta) @ _skew(offset.astype(q.dtype)) @ exp_so3_tangent(theta)) @ marker.rotation_modes
+    return out
+
+
+def _axis_jacobian(marker: BodyMarker, q, local_axis):
+    """d(axis)/dq for axis = A exp(theta~) w (w: joint axis in marker coordinates)."""
+    theta = marker.rotation_vector(q)
+    turned = exp_so3(theta) @ local_axis
+    out = np.zeros((3, q.shape[0]), dtype=q.dtype)
+    out[:, 3:7] = rotation_derivative(q[3:7], turned.astype(q.dtype))
+    if marker.rotation_modes.shape[1]:
+        a_body = rotation_matrix(q[3:7])
+        out[:, 7:] = -(a_body @ exp_so3(theta) @ _skew(local_axis.astype(q.dtype)) @ exp_so3_tangent(theta)) @ marker.rotation_modes
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class MarkerJoint(Constraint):
+    """Eqs. (J1)-(J3) between ``marker0`` (body marker or :class:`GroundFrame`) and ``marker1``."""
+
+    marker0: BodyMarker | GroundFrame = field(default_factory=GroundFrame)
+    marker1: BodyMarker | None = None
+    rotation0: NDArray[np.float64] = field(default_factory=lambda: np.eye(3))
+    rotation1: NDArray[np.float64] = field(default_factory=lambda: np.eye(3))
+    offset0: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    offset1: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    locked: tuple[bool, bool, bool, bool, bool, bool] = (True, True, True, True, True, False)
+    angle: Callable[[float], float] | None = None
+
+    def __post_init__(self):
+        if self.marker1 is None or isinstance(self.marker1, GroundFrame):
+            raise ValueError(f"joint {self.name!r}: marker 1 must be on a body")
+        expected = ((self.marker1.body,) if isinstance(self.marker0, GroundFrame)
+                    else (self.marker0.body, self.marker1.body))
+        if tuple(self.bodies) != expected:
+            raise ValueError(f"joint {self.name!r}: bodies {self.bodies} do not match its markers {expected}")
+        if self.angle is not None and not self.locked[5]:
+            raise ValueError(f"joint {self.name!r}: a prescribed angle needs the z rotation locked")
+
+    @property
+    def size(self) -> int:
+        return int(sum(self.locked))
+
+    def _sides(self, blocks):
+        if isinstance(self.marker0, GroundFrame):
+            return None, blocks[0]
+        return blocks[0], blocks[1]
+
+    def _prescribed_x0(self, axes0, t):
+        if self.angle is None:
+            return axes0[:, 0]
+        phi = self.angle(t)
+        return np.cos(phi) * axes0[:, 0] + np.sin(phi) * axes0[:, 1]
+
+    def value(self, blocks, t):
+        q0, q1 = self._sides(blocks)
+        p0, axes0 = _frame(self.marker0, q0, self.rotation0, self.offset0)
+        p1, axes1 = _frame(self.marker1, q1, self.rotation1, self.offset1)
+        gap = p1 - p0
+        out = []
+        if all(self.locked[:3]):
+            out.extend(gap)
+        else:
+            out.extend((axes0.T @ gap)[[i for i in range(3) if self.locked[i]]])
+        if self.locked[3]:
+            out.append(axes0[:, 2] @ axes1[:, 1])
+        if self.locked[4]:
+            out.append(axes0[:, 2] @ axes1[:, 0])
+        if self.locked[5]:
+            out.append(self._prescribed_x0(axes0, t) @ axes1[:, 1])
+        return np.array(out)
+
+    def jacobian(self, blocks, t):
+        q0, q1 = self._sides(blocks)
+        ground = q0 is None
+        p0, axes0 = _frame(self.marker0, q0, self.rotation0, self.offset0)
+        p1, axes1 = _frame(self.marker1, q1, self.rotation1, self.offset1)
+        n1 = q1.shape[0]
+        dtype = q1.dtype if ground else np.result_type(q0.dtype, q1.dtype)
+        rows1 = np.zeros((self.size, n1), dtype=dtype)
+        rows0 = None if ground else np.zeros((self.size, q0.shape[0]), dtype=dtype)
+        dp1 = _point_jacobian(self.marker1, q1, self.offset1)
+        dp0 = None if ground else _point_jacobian(self.marker0, q0, self.offset0)
+
+        def d_axis(marker, q, rotation, k):
+            return _axis_jacobian(marker, q, rotation[:, k])
+
+        row = 0
+        gap = p1 - p0
+        if all(self.locked[:3]):
+            rows1[0:3] = dp1
+            if not ground:
+                rows0[0:3] = -dp0
+            row = 3
+        else:
+            for i in range(3):
+                if self.locked[i]:
+                    rows1[row] = axes0[:, i] @ dp1
+                    if not ground:
+                        rows0[row] = -axes0[:, i] @ dp0 + gap @ d_axis(self.marker0, q0, self.rotation0, i)
+                    row += 1
+        pairs = []
+        if self.locked[3]:
+            pairs.append((2, 1, False))
+        if self.locked[4]:
+            pairs.append((2, 0, False))
+        if self.locked[5]:
+            pairs.append((0, 1, True))
+        for k0, k1, turned in pairs:
+            a0 = self._prescribed_x0(axes0, t) if turned else axes0[:, k0]
+            rows1[row] = a0 @ d_axis(self.marker1, q1, self.rotation1, k1)
+            if not ground:
+                if turned and self.angle is not None:
+                    phi = self.angle(t)
+                    da0 = (np.cos(phi) * d_axis(self.marker0, q0, self.rotation0, 0)
+                           + np.sin(phi) * d_axis(self.marker0, q0, self.rotation0, 1))
+                else:
+                    da0 = d_axis(self.marker0, q0, self.rotation0, k0)
+                rows0[row] = axes1[:, k1] @ da0
+            row += 1
+        return [rows1] if ground else [rows0, rows1]
+
+
+def _frame_bodies(marker0, marker1) -> tuple[int, ...]:
+    return (marker1.body,) if isinstance(marker0, GroundFrame) else (marker0.body, marker1.body)
+
+
+def revolute_joint(marker0, marker1, rotation0=None, rotation1=None, offset0=None, offset1=None,
+                   name: str = "revolute") -> MarkerJoint:
+    """Revolute about the joint z-axis (5 equations)."""
+    return MarkerJoint(_frame_bodies(marker0, marker1), name, marker0, marker1,
+                       np.eye(3) if rotation0 is None else np.asarray(rotation0, float),
+                       np.eye(3) if rotation1 is None else np.asarray(rotation1, float),
+                       np.zeros(3) if offset0 is None else np.asarray(offset0, float),
+                       np.zeros(3) if offset1 is None else np.asarray(offset1, float),
+                       (True, True, True, True, True, False))
+
+
+def fixed_joint(marker0, marker1, rotation0=None, rotation1=None, offset0=None, offset1=None,
+                name: str = "fixed") -> MarkerJoint:
+    """All six relative motions locked."""
+    joint = revolute_joint(marker0, marker1, rotation0, rotation1, offset0, offset1, name)
+    return MarkerJoint(joint.bodies, name, joint.marker0, joint.marker1, joint.rotation0, joint.rotation1,
+                       joint.offset0, joint.offset1, (True,) * 6)
+
+
+def driven_revolute_joint(marker0, marker1, angle: Callable[[float], float], rotation0=None, rotation1=None,
+                          offset0=None, offset1=None, name: str = "drive") -> MarkerJoint:
+    """Revolute whose relative rotation about z is prescribed, :math:`\\varphi(t)` (rad), Eq. (J3)."""
+    joint = revolute_joint(marker0, marker1, rotation0, rotation1, offset0, offset1, name)
+    return MarkerJoint(joint.bodies, name, joint.marker0, joint.marker1, joint.rotation0, joint.rotation1,
+                       joint.offset0, joint.offset1, (True,) * 6, angle)
