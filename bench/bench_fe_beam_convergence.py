@@ -7,7 +7,7 @@ Usage (from the repository root)::
 Prints, for each element order and mesh size h, the relative error of the first
 bending (thin and wide direction) and torsion frequencies against Timoshenko
 bending theory (Cowper shear coefficient) and Saint-Venant torsion, clamped-free
-and free-free. The reference formulas live in ``tests/ffrf/ffrf_reference.py``.
+and free-free. The reference formulas live in ``tests/test_fe_models/ffrf_reference.py``.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "ffrf")]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "test_fe_models")]
 
 CASES = [(1, 0.004), (1, 0.002), (1, 0.001), (2, 0.004), (2, 0.002)]
 

@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import FEInputError, MeshError
+from .errors import FEInputError
 from .materials import Material
 from .mesh import TetMesh, check_mesh
 
@@ -140,7 +140,7 @@ def _node_dof_permutation(basis, n_vertices: int, n_edges: int) -> NDArray[np.in
         blocks.append(basis.edge_dofs.T)
     perm = np.concatenate(blocks).reshape(-1)
     if len(perm) != basis.N:
-        raise MeshError(f"unexpected scikit-fem DOF layout: {len(perm)} node DOFs vs {basis.N} in total")
+        raise RuntimeError(f"unexpected scikit-fem DOF layout: {len(perm)} node DOFs vs {basis.N} in total")
     return perm
 
 
@@ -168,12 +168,12 @@ def _assemble(mesh: TetMesh, material: Material, order: int):
 
     edges = sk_mesh.edges.T.astype(np.int64) if order == 2 else np.zeros((0, 2), dtype=np.int64)
     if not np.array_equal(sk_mesh.p.T, mesh.points):
-        raise MeshError(f"{mesh.name}: scikit-fem reordered the mesh points; cannot keep the node numbering")
+        raise RuntimeError(f"{mesh.name}: scikit-fem reordered the mesh points; cannot keep the node numbering")
     perm = _node_dof_permutation(basis, len(mesh.points), len(edges))
     # Exact coordinates (scikit-fem's doflocs carry mapping round-off); checked against them.
     nodes = np.vstack([mesh.points, mesh.points[edges].mean(axis=1)])
-    if not np.allclose(basis.doflocs[:, perm[0::3]].T, nodes, rtol=0.0, atol=1e-12 * np.ptp(nodes).max()):
-        raise MeshError(f"{mesh.name}: scikit-fem DOF locations do not match vertices + edge midpoints; "
+    if not np.allclose(basis.doflocs[:, perm[0::3]].T, nodes, rtol=0.0, atol=1e-12 * np.ptp(nodes, axis=0).max()):
+        raise RuntimeError(f"{mesh.name}: scikit-fem DOF locations do not match vertices + edge midpoints; "
                         "its DOF layout changed, update ffrf.fe_model._node_dof_permutation")
     if not np.array_equal(perm, np.arange(len(perm))):
         stiffness = stiffness[perm][:, perm]

@@ -162,9 +162,10 @@ def generalized_alpha(
         q_base = q + h * qd + h * h * (0.5 - par.beta) * accel
         qd_base = qd + h * (1.0 - par.gamma) * accel
         accel_base = (par.alpha_f * qdd - par.alpha_m * accel) / (1.0 - par.alpha_m)
+        total = 0  # Newton iterations of this step, retries included
         for attempt in range(2 if modified_newton else 1):
             qdd_new, lam_new = qdd.copy(), lam.copy()
-            converged, previous, total = False, np.inf, 0
+            converged, previous = False, np.inf
             for iteration in range(1, max_iterations + 1):
                 a_new = accel_base + to_accel * qdd_new
                 q_new = q_base + h * h * par.beta * a_new

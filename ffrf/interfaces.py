@@ -100,14 +100,17 @@ def interface_from_triangles(model: FEModel, name: str, triangles: ArrayLike) ->
     if len(tris) == 0:
         raise InterfaceError(f"interface {name!r} of {model.mesh.name}: no surface triangles selected; "
                              "check the group name, the cylinder radius/axis/extent and the units (metres)")
+    if tris.min() < 0 or tris.max() >= model.n_vertices:
+        raise InterfaceError(f"interface {name!r} of {model.mesh.name}: triangle vertex index out of range "
+                             f"[0, {model.n_vertices}); triangles index the linear mesh points")
     areas = _triangle_areas(model.mesh.points, tris)
+    # P1: area/3 to each vertex; P2: area/3 to each midside node, 0 to the corners (module docstring).
+    loads = np.repeat(areas[:, None] / 3.0, 3, axis=1)
     if model.order == 1:
         carriers = tris
-        loads = np.repeat(areas[:, None] / 3.0, 3, axis=1)
         all_nodes = tris.reshape(-1)
     else:
         carriers = _midside_nodes(model, tris)
-        loads = np.repeat(areas[:, None] / 3.0, 3, axis=1)
         all_nodes = np.concatenate([tris.reshape(-1), carriers.reshape(-1)])
     nodes = np.unique(all_nodes)
     weights = np.zeros(len(nodes))

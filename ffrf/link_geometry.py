@@ -202,10 +202,10 @@ def _surface_samples(gmsh, tag: int, n: int = 5) -> NDArray[np.float64]:
     return np.asarray(gmsh.model.getValue(2, tag, np.column_stack([u.ravel(), v.ravel()]).ravel())).reshape(-1, 3)
 
 
-def _classify_surfaces(gmsh, geometry_axes, centers, design: LinkDesign, mount) -> dict[int, list[int]]:
+def _classify_surfaces(gmsh, geometry_axes, centers, design: LinkDesign, mount) -> dict[int | str, list[int]]:
     """Which gmsh surfaces lie on bore i (0, 1) or on the mount plane ("mount")."""
     tol = 1e-6 + 1e-4 * design.bore_radius
-    found: dict = {0: [], 1: [], "mount": []}
+    found: dict[int | str, list[int]] = {0: [], 1: [], "mount": []}
     for _, tag in gmsh.model.getEntities(2):
         pts = _surface_samples(gmsh, tag)
         for i, (axis, center) in enumerate(zip(geometry_axes, centers)):

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from .system import MultibodySystem
 
-__all__ = ["StaticSolution", "StaticDivergence", "static_equilibrium"]
+__all__ = ["StaticSolution", "StaticDivergence", "static_equilibrium", "quasi_static"]
 
 log = logging.getLogger(__name__)
 
@@ -88,3 +88,31 @@ def static_equilibrium(
         counts.append(iterations)
         log.debug("load step %d/%d converged in %d iterations", k, load_steps, iterations)
     return StaticSolution(q, lam, tuple(counts))
+
+
+def quasi_static(
+    system: MultibodySystem,
+    q0: NDArray,
+    times: NDArray,
+    tolerance: float = 1e-10,
+    max_iterations: int = 25,
+    progress=None,
+) -> StaticSolution:
+    """A sequence of static equilibria at ``times`` (prescribed motions follow their time laws;
+    no inertia), each starting from the previous one. Returns ``q`` and ``multipliers`` with one
+    row per time (``iterations`` per time)."""
+    times = np.asarray(times, dtype=float)
+    q = np.array(q0, dtype=float)
+    lam = np.zeros(system.n_constraints)
+    qs, lams, counts = [], [], []
+    for k, t in enumerate(times):
+        try:
+            q, lam, iterations = _newton(system, q, lam, float(t), tolerance, max_iterations)
+        except StaticDivergence as error:
+            raise StaticDivergence(f"quasi-static step {k} at t = {t:.6g} s: {error}") from error
+        qs.append(q.copy())
+        lams.append(lam.copy())
+        counts.append(iterations)
+        if progress is not None:
+            progress(float(t), float(times[-1]))
+    return StaticSolution(np.array(qs), np.array(lams), tuple(counts))

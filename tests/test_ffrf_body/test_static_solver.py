@@ -69,3 +69,22 @@ def test_free_body_is_refused_with_a_clear_message():
     free = MultibodySystem(system.bodies, (), gravity=GRAVITY)
     with pytest.raises(StaticDivergence, match="mechanism or a body is not held"):
         static_equilibrium(free, free.initial_state())
+
+
+def test_quasi_static_drive_follows_the_prescribed_angle():
+    """A rigid bar held by a driven hinge: without inertia the drive only balances gravity,
+    tau = -m g (L/2) cos(phi) (about +y, see test_joints), at every prescribed angle."""
+    from ffrf.joints import GroundFrame, driven_revolute_joint
+    from ffrf.markers import frame_marker
+    from ffrf.static_solver import quasi_static
+
+    _, _, _, hinge = pendulum(n_modes=0)
+    system, _, _, _ = pendulum(n_modes=0)
+    axes = np.array([[0.0, 0, 1], [1, 0, 0], [0, 1, 0]]).T
+    drive = driven_revolute_joint(GroundFrame(hinge, np.eye(3)), frame_marker(0, 0, hinge), lambda t: t,
+                                  rotation0=axes, rotation1=axes)
+    driven = MultibodySystem(system.bodies, (drive,), gravity=GRAVITY)
+    times = np.linspace(0.0, 3.0, 7)
+    solution = quasi_static(driven, driven.initial_state(), times)
+    mass = 450.0 * 0.2 * 0.02 * 0.01
+    np.testing.assert_allclose(solution.multipliers[:, -1], -mass * 9.81 * 0.1 * np.cos(times), atol=1e-12)

@@ -14,7 +14,7 @@ import scipy.sparse as sp
 ng = pytest.importorskip("ngsolve", reason="ngsolve is an optional validation dependency "
                                            "(pip install '.[validation]'); NGsolve cross-check skipped")
 
-from ffrf import PLA, FEModel  # noqa: E402
+from ffrf import PLA, FEModel, mesh_link, paper_link_axes  # noqa: E402
 from ffrf.meshing import configure_meshing, gmsh_session, mesh_current_model  # noqa: E402
 
 RTOL = 1e-10
@@ -27,6 +27,12 @@ def cylinder_mesh():
         gmsh.model.occ.synchronize()
         configure_meshing(0.005)
         return mesh_current_model("cylinder")
+
+
+@pytest.fixture(scope="module")
+def link_mesh():
+    first, second, names = paper_link_axes(1)
+    return mesh_link(first, second, h=0.008, names=names)[0]
 
 
 def _ngsolve_mesh(points, tets):
@@ -108,9 +114,11 @@ def _relative_difference(a, b):
 
 
 @pytest.mark.parametrize("order", [1, 2])
-def test_mass_and_stiffness_equal_ngsolve(cylinder_mesh, order):
-    model = FEModel.from_tet_mesh(cylinder_mesh, PLA, order)
-    mesh = _ngsolve_mesh(cylinder_mesh.points, cylinder_mesh.tets)
+@pytest.mark.parametrize("which", ["cylinder_mesh", "link_mesh"])
+def test_mass_and_stiffness_equal_ngsolve(request, which, order):
+    tet_mesh = request.getfixturevalue(which)
+    model = FEModel.from_tet_mesh(tet_mesh, PLA, order)
+    mesh = _ngsolve_mesh(tet_mesh.points, tet_mesh.tets)
     fes, k_ng, m_ng = _ngsolve_matrices(mesh, order, PLA)
     scalar_dofs = _scalar_dof_of_node(mesh, order, model)
     n_scalar = fes.ndof // 3
@@ -128,6 +136,6 @@ def test_mass_and_stiffness_equal_ngsolve(cylinder_mesh, order):
     m_from_ffrf = t_full.T @ model.mass @ t_full
     dk = _relative_difference(k_from_ffrf, k_ng)
     dm = _relative_difference(m_from_ffrf, m_ng)
-    print(f"P{order}: max relative difference K {dk:.2e}, M {dm:.2e} ({model.n_dofs} DOFs)")
+    print(f"{which} P{order}: max relative difference K {dk:.2e}, M {dm:.2e} ({model.n_dofs} DOFs)")
     assert dk < RTOL
     assert dm < RTOL
