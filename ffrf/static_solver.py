@@ -40,6 +40,14 @@ class StaticSolution:
     iterations: tuple[int, ...]
 
 
+def _equilibration(matrix: NDArray) -> tuple[NDArray, NDArray]:
+    """Row and column scalings 1/sqrt(max |a|) (one Ruiz pass; zero rows and columns keep 1)."""
+    row_max, col_max = np.abs(matrix).max(axis=1), np.abs(matrix).max(axis=0)
+    rows = 1.0 / np.sqrt(np.where(row_max > 0, row_max, 1.0))
+    cols = 1.0 / np.sqrt(np.where(col_max > 0, col_max, 1.0))
+    return rows, cols
+
+
 def _newton(system: MultibodySystem, q: NDArray, lam: NDArray, t: float, tolerance: float, max_iterations: int):
     n = system.n_coordinates
     zeros = np.zeros(n)
@@ -52,13 +60,19 @@ def _newton(system: MultibodySystem, q: NDArray, lam: NDArray, t: float, toleran
         jq, _ = system.body_tangents(q, zeros, zeros)
         tangent = jq + system.constraint_hessian(q, lam, t)
         matrix = np.block([[tangent, cq.T], [cq, np.zeros((cq.shape[0], cq.shape[0]))]])
-        singular_values = scipy.linalg.svdvals(matrix)
-        if singular_values[-1] <= 1e-13 * singular_values[0]:
-            free = int(np.sum(singular_values <= 1e-13 * singular_values[0]))
+        # Judge singularity after equilibrating rows and columns: forces, moments and
+        # constraint rows differ by many orders of magnitude without meaning a free motion.
+        # Equilibrate rows and columns before judging singularity and solving: stiffness rows of
+        # near-rigid links (E = 1e15 Pa) and unit constraint rows differ by 15 orders of magnitude.
+        rows, cols = _equilibration(matrix)
+        scaled = rows[:, None] * matrix * cols[None, :]
+        singular_values = scipy.linalg.svdvals(scaled)
+        if singular_values[-1] <= 1e-15 * singular_values[0]:
+            free = int(np.sum(singular_values <= 1e-15 * singular_values[0]))
             raise StaticDivergence(
                 f"the static tangent is singular ({free} free motion(s)): the system is a mechanism or a body is "
                 "not held; prescribe the drive or add the missing support before a static solve")
-        delta = scipy.linalg.solve(matrix, -np.concatenate([residual, gap]))
+        delta = cols * scipy.linalg.solve(scaled, -rows * np.concatenate([residual, gap]))
         q = q + delta[:n]
         lam = lam + delta[n:]
         if np.abs(delta[:n]).max() <= tolerance * max(1.0, np.abs(q).max()) and np.abs(gap).max() <= tolerance:
