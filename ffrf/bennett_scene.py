@@ -24,14 +24,13 @@ from numpy.typing import NDArray
 
 from kinematics import PAPER_A, PAPER_ALPHA, BennettLinkage
 
-from .cli import bennett_axes
 from .craig_bampton import CraigBamptonBasis, craig_bampton
 from .drives import CosineRamp, rpm
 from .fe_model import FEModel
 from .flexible_body import FlexibleBody
 from .interfaces import InterfaceNodes, boundary_triangles, interface_from_group
 from .joints import GroundFrame, MarkerJoint, driven_revolute_joint, fixed_joint, revolute_joint
-from .link_geometry import LinkGeometry, mesh_link, paper_link_axes
+from .link_geometry import LinkGeometry, bennett_axes, mesh_link, paper_link_axes
 from .markers import BodyMarker, rigid_interface_marker
 from .materials import PLA, RIGID, Material
 from .modal_moments import modal_moments

@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -18,42 +17,13 @@ from pathlib import Path
 from .errors import FEInputError
 from .fe_model import FEModel
 from .interfaces import interface_from_group
-from .link_geometry import PAPER_AXES, Axis, LinkDesign, mesh_link, paper_link_axes
+from .link_geometry import LinkDesign, bennett_axes, mesh_link, paper_link_axes
 from .materials import PLA
 from .mesh import quality_summary, write_vtu
 
 __all__ = ["main", "SUBCOMMANDS", "bennett_axes", "link_summary"]
 
 logger = logging.getLogger(__name__)
-
-#: The paper's Denavit-Hartenberg lengths (m) and twists (deg) of the Bennett linkage.
-PAPER_A = (0.11, 0.22, 0.11, 0.22)
-PAPER_ALPHA_DEG = (150.0, 90.0, 150.0, 90.0)
-
-
-def bennett_axes(alpha3_deg: float = 90.0) -> tuple:
-    """Joint axes h0..h3 of the paper's linkage with base-link twist ``alpha3_deg``.
-
-    The base link (link 0) carries (h3, h0). With alpha_3 != 90 deg the loop
-    does not close, so its h3 is the axis where the *base link* wants it:
-    ``kinematics.open_loop_axes`` returns h0..h3 chained through links 0..2
-    (nominal) and that closing axis, which replaces h3 here. Without the
-    kinematics package only the nominal linkage (alpha_3 = 90 deg) is known.
-    """
-    try:
-        from kinematics.dh import open_loop_axes  # written in parallel by the kinematics package
-    except ImportError:
-        open_loop_axes = None
-    if open_loop_axes is not None:
-        alpha = [math.radians(a) for a in PAPER_ALPHA_DEG[:3]] + [math.radians(alpha3_deg)]
-        axes, closing_axis = open_loop_axes(list(PAPER_A), alpha)
-        return tuple(Axis.of(a) for a in axes[:3]) + (Axis.of(closing_axis),)
-    if not math.isclose(alpha3_deg, 90.0):
-        raise FEInputError(f"--alpha3-deg {alpha3_deg}: misaligned axes need kinematics.dh.open_loop_axes, which "
-                           "is not importable; run from the project root with the kinematics package, "
-                           "or use the nominal 90 deg")
-    return PAPER_AXES
-
 
 def link_summary(model: FEModel, geometry, interfaces) -> dict:
     """JSON-ready summary of a meshed link."""
@@ -107,13 +77,70 @@ def _run_mesh(args: argparse.Namespace) -> int:
     return 0
 
 
+def _configure_bennett(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--variant", choices=("rigid", "pla", "pla1", "pla2"), default="pla",
+                        help="paper's variant: rigid, PLA, PLA with alpha_3 = 91 or 92 deg")
+    parser.add_argument("--h", type=float, default=4e-3, help="maximum element edge in metres (paper: 0.002)")
+    parser.add_argument("--order", type=int, choices=(1, 2), default=1, help="tetrahedron order")
+    parser.add_argument("--modes", type=int, default=8, help="fixed-interface modes per link (paper: 32)")
+    parser.add_argument("--dt", type=float, default=1e-3, help="time step of a dynamic run (s)")
+    parser.add_argument("--outputs", type=int, default=241, help="output times over the run")
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument("--quasi-static", dest="mode", action="store_const", const="quasi_static")
+    mode.add_argument("--dynamic", dest="mode", action="store_const", const="dynamic")
+    parser.set_defaults(mode="auto")
+    parser.add_argument("--out", type=Path, required=True, help="output directory (results.npz, metadata.json)")
+
+
+def _progress_printer():
+    last = [-1]
+
+    def show(t: float, t_end: float) -> None:
+        percent = int(100 * t / t_end) if t_end > 0 else 100
+        if percent != last[0]:
+            last[0] = percent
+            bar = "#" * (percent // 4)
+            print(f"\r  [{bar:<25}] {percent:3d} %  t = {t:7.2f} s", end="", file=sys.stderr, flush=True)
+            if percent >= 100:
+                print(file=sys.stderr)
+    return show
+
+
+def _run_bennett(args: argparse.Namespace) -> int:
+    import time
+
+    from .bennett_run import choose_mode, run_bennett, write_results
+    from .bennett_scene import build_bennett
+
+    started = time.perf_counter()
+    print(f"Building the {args.variant} Bennett scene: 4 links, h = {1e3 * args.h:g} mm, P{args.order}, "
+          f"{args.modes} fixed-interface modes per link ...", file=sys.stderr)
+    scene = build_bennett(args.variant, h=args.h, order=args.order, n_modes=args.modes)
+    mode, ratio = choose_mode(scene) if args.mode == "auto" else (args.mode, float("nan"))
+    print(f"Running {mode.replace('_', '-')} over {scene.t_end:.1f} s of drive"
+          + (f" (drive time scale / longest link period = {ratio:.0f})" if args.mode == "auto" else ""),
+          file=sys.stderr)
+    result = run_bennett(scene, mode=mode, n_outputs=args.outputs, step=args.dt, progress=_progress_printer())
+    write_results(result, args.out)
+    summary = result.summary()
+    paper = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}[args.variant]
+    print(f"{args.variant}: max coupler deviation from the ideal path {1e3 * summary['max_coupler_deviation_m']:.4f} mm "
+          f"at the same drive angle, {1e3 * summary['max_coupler_distance_to_path_m']:.4f} mm to the closest point "
+          f"(paper: below {paper} mm); max driving torque {1e3 * summary['max_abs_driving_torque_Nm']:.3f} N mm; "
+          f"largest constraint residual {summary['max_constraint_residual']:.1e}; wall time "
+          f"{time.perf_counter() - started:.1f} s -> {args.out}")
+    return 0
+
+
 SUBCOMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None], Callable[[argparse.Namespace], int]]] = {
     "mesh": ("mesh one Bennett link and write .vtu + JSON summary", _configure_mesh, _run_mesh),
+    "bennett": ("simulate the paper's flexible Bennett linkage and write its sensors", _configure_bennett,
+                _run_bennett),
 }
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m ffrf", description="Flexible link FE models")
+    parser = argparse.ArgumentParser(prog="python -m ffrf", description="In-house flexible multibody solver (FFRF)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress")
     sub = parser.add_subparsers(dest="command", required=True)
     for name, (help_text, configure, run) in SUBCOMMANDS.items():

@@ -38,6 +38,7 @@ __all__ = [
     "LinkGeometry",
     "PAPER_AXES",
     "paper_link_axes",
+    "bennett_axes",
     "common_normal_feet",
     "build_link",
     "mesh_link",
@@ -80,6 +81,23 @@ PAPER_AXES: tuple[Axis, ...] = (
     Axis((0.11, 0.0, 0.0), (0.0, np.sqrt(3.0) / 2.0, 0.5)),
     Axis((0.22, 0.0, 0.0), (0.0, -1.0, 0.0)),
 )
+
+
+def bennett_axes(alpha3_deg: float = 90.0) -> tuple[Axis, Axis, Axis, Axis]:
+    """Joint axes h0..h3 of the paper's linkage (:data:`kinematics.PAPER_A`, ``PAPER_ALPHA``)
+    with the base-link twist ``alpha3_deg``.
+
+    The base link (link 0) carries (h3, h0). With alpha_3 != 90 deg the loop does not
+    close, so its h3 is where the *base link* puts it: :func:`kinematics.open_loop_axes`
+    chains h0..h3 through links 0..2 (nominal) and returns that closing axis, which
+    replaces h3 here (the base's bore axis; link 3 keeps the nominal h3).
+    """
+    from kinematics import PAPER_A, PAPER_ALPHA, open_loop_axes
+
+    alpha = np.array(PAPER_ALPHA)
+    alpha[3] = np.radians(alpha3_deg)
+    axes, closing_axis = open_loop_axes(PAPER_A, alpha)
+    return tuple(Axis.of(a) for a in axes[:3]) + (Axis.of(closing_axis),)
 
 
 def paper_link_axes(link: int, axes=PAPER_AXES) -> tuple[Axis, Axis, tuple[str, str]]:

@@ -48,37 +48,86 @@ def _equilibration(matrix: NDArray) -> tuple[NDArray, NDArray]:
     return rows, cols
 
 
-def _newton(system: MultibodySystem, q: NDArray, lam: NDArray, t: float, tolerance: float, max_iterations: int):
+@dataclass
+class _Tangent:
+    """An equilibrated tangent kept between Newton iterations (modified Newton): LU factors,
+    or, when it is numerically singular, its pseudo-inverse and the number of free motions."""
+
+    rows: NDArray
+    cols: NDArray
+    factors: tuple | None
+    pseudo_inverse: NDArray | None = None
+    free_motions: int = 0
+
+    def solve(self, rhs: NDArray) -> NDArray:
+        scaled = self.rows * rhs
+        if self.factors is not None:
+            return self.cols * scipy.linalg.lu_solve(self.factors, scaled, check_finite=False)
+        return self.cols * (self.pseudo_inverse @ scaled)
+
+
+_SINGULAR = 1e-15  # relative singular value of the equilibrated tangent counted as zero
+
+
+def _factor_tangent(system: MultibodySystem, q: NDArray, lam: NDArray, t: float) -> _Tangent:
     n = system.n_coordinates
     zeros = np.zeros(n)
+    cq = system.constraint_jacobian(q, t)
+    jq, _ = system.body_tangents(q, zeros, zeros)
+    matrix = np.block([[jq + system.constraint_hessian(q, lam, t), cq.T], [cq, np.zeros((cq.shape[0], cq.shape[0]))]])
+    # Equilibrate rows and columns before judging singularity and solving: stiffness rows of
+    # near-rigid links (E = 1e15 Pa) and unit constraint rows differ by 15 orders of magnitude.
+    rows, cols = _equilibration(matrix)
+    scaled = rows[:, None] * matrix * cols[None, :]
+    u, singular_values, vt = scipy.linalg.svd(scaled)
+    free = int(np.sum(singular_values <= _SINGULAR * singular_values[0]))
+    if free == 0:
+        return _Tangent(rows, cols, scipy.linalg.lu_factor(scaled, check_finite=False))
+    # Singular tangents occur at the folded poses of a near-rigid Bennett loop (one more
+    # instantaneous freedom); the minimum-norm Newton step still converges there.
+    log.debug("static tangent has %d free motion(s) at t = %g; using its pseudo-inverse", free, t)
+    keep = singular_values > _SINGULAR * singular_values[0]
+    pseudo_inverse = (vt[keep].T / singular_values[keep]) @ u[:, keep].T
+    return _Tangent(rows, cols, None, pseudo_inverse, free)
+
+
+def _newton(system: MultibodySystem, q: NDArray, lam: NDArray, t: float, tolerance: float, max_iterations: int,
+            tangent: _Tangent | None = None):
+    """Newton from ``(q, lam)``; with a ``tangent`` from an earlier solve it starts as modified
+    Newton and refactors whenever an iteration contracts the increment by less than a half."""
+    n = system.n_coordinates
+    zeros = np.zeros(n)
+    previous = np.inf
+    free_motions = 0
     for iteration in range(1, max_iterations + 1):
         cq = system.constraint_jacobian(q, t)
         residual = system.body_residuals(q, zeros, zeros) + cq.T @ lam
         gap = system.constraint_values(q, t)
         if not (np.all(np.isfinite(residual)) and np.all(np.isfinite(gap))):
             raise StaticDivergence(f"NaN in the static residual (iteration {iteration}); check the model and the start")
-        jq, _ = system.body_tangents(q, zeros, zeros)
-        tangent = jq + system.constraint_hessian(q, lam, t)
-        matrix = np.block([[tangent, cq.T], [cq, np.zeros((cq.shape[0], cq.shape[0]))]])
-        # Judge singularity after equilibrating rows and columns: forces, moments and
-        # constraint rows differ by many orders of magnitude without meaning a free motion.
-        # Equilibrate rows and columns before judging singularity and solving: stiffness rows of
-        # near-rigid links (E = 1e15 Pa) and unit constraint rows differ by 15 orders of magnitude.
-        rows, cols = _equilibration(matrix)
-        scaled = rows[:, None] * matrix * cols[None, :]
-        singular_values = scipy.linalg.svdvals(scaled)
-        if singular_values[-1] <= 1e-15 * singular_values[0]:
-            free = int(np.sum(singular_values <= 1e-15 * singular_values[0]))
-            raise StaticDivergence(
-                f"the static tangent is singular ({free} free motion(s)): the system is a mechanism or a body is "
-                "not held; prescribe the drive or add the missing support before a static solve")
-        delta = cols * scipy.linalg.solve(scaled, -rows * np.concatenate([residual, gap]))
+        if tangent is None:
+            tangent = _factor_tangent(system, q, lam, t)
+            free_motions = max(free_motions, tangent.free_motions)
+        delta = tangent.solve(-np.concatenate([residual, gap]))
         q = q + delta[:n]
         lam = lam + delta[n:]
-        if np.abs(delta[:n]).max() <= tolerance * max(1.0, np.abs(q).max()) and np.abs(gap).max() <= tolerance:
-            return q, lam, iteration
+        increment = np.abs(delta[:n]).max()
+        scale = max(1.0, np.abs(q).max())
+        multipliers_settled = np.abs(delta[n:]).max(initial=0.0) <= tolerance * max(1.0, np.abs(lam).max(initial=0.0))
+        # Multipliers of (nearly) redundant constraints, as in near-rigid closed loops, are fixed only to
+        # round-off; once the positions stop changing at machine precision, further iterations cannot help.
+        if (increment <= tolerance * scale and np.abs(gap).max() <= tolerance
+                and (multipliers_settled or increment <= 1e3 * np.finfo(float).eps * scale)):
+            return q, lam, iteration, tangent
+        if increment > 0.5 * previous:
+            tangent = None
+        previous = increment
+    if free_motions:
+        raise StaticDivergence(
+            f"the static tangent is singular ({free_motions} free motion(s)) and Newton found no equilibrium: the "
+            "system is a mechanism or a body is not held; prescribe the drive or add the missing support")
     raise StaticDivergence(
-        f"static Newton did not converge in {max_iterations} iterations: last increment {np.abs(delta[:n]).max():.3e}, "
+        f"static Newton did not converge in {max_iterations} iterations: last increment {increment:.3e}, "
         f"constraint residual {np.abs(gap).max():.3e}; use more load_steps or a better start")
 
 
@@ -98,10 +147,26 @@ def static_equilibrium(
     counts = []
     for k in range(1, load_steps + 1):
         scaled = replace(system, gravity=system.gravity * (k / load_steps))
-        q, lam, iterations = _newton(scaled, q, lam, t, tolerance, max_iterations)
+        q, lam, iterations, _ = _newton(scaled, q, lam, t, tolerance, max_iterations)
         counts.append(iterations)
         log.debug("load step %d/%d converged in %d iterations", k, load_steps, iterations)
     return StaticSolution(q, lam, tuple(counts))
+
+
+def _continue(system, q, lam, t_from: float, t_to: float, tolerance: float, max_iterations: int, tangent,
+              depth: int = 0):
+    """Equilibrium at ``t_to`` from the one at ``t_from``; a failed step is halved (up to 2^8 parts),
+    which carries the solution through near-singular poses such as a stiff Bennett loop's folded one."""
+    try:
+        return _newton(system, q, lam, t_to, tolerance, max_iterations, tangent)
+    except StaticDivergence:
+        if depth >= 8 or t_to == t_from:
+            raise
+    t_mid = 0.5 * (t_from + t_to)
+    log.debug("quasi-static step %g -> %g halved", t_from, t_to)
+    q, lam, first, tangent = _continue(system, q, lam, t_from, t_mid, tolerance, max_iterations, None, depth + 1)
+    q, lam, second, tangent = _continue(system, q, lam, t_mid, t_to, tolerance, max_iterations, tangent, depth + 1)
+    return q, lam, first + second, tangent
 
 
 def quasi_static(
@@ -119,11 +184,14 @@ def quasi_static(
     q = np.array(q0, dtype=float)
     lam = np.zeros(system.n_constraints)
     qs, lams, counts = [], [], []
+    tangent = None
+    t_done = float(times[0])
     for k, t in enumerate(times):
         try:
-            q, lam, iterations = _newton(system, q, lam, float(t), tolerance, max_iterations)
+            q, lam, iterations, tangent = _continue(system, q, lam, t_done, float(t), tolerance, max_iterations, tangent)
         except StaticDivergence as error:
             raise StaticDivergence(f"quasi-static step {k} at t = {t:.6g} s: {error}") from error
+        t_done = float(t)
         qs.append(q.copy())
         lams.append(lam.copy())
         counts.append(iterations)

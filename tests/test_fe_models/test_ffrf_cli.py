@@ -55,21 +55,9 @@ def test_bad_arguments_give_a_clear_error(tmp_path, capsys):
 
 def test_paper_axes_agree_with_kinematics_dh():
     """The hard-coded home-configuration axes against the kinematics package's DH chain."""
-    pytest.importorskip("kinematics.dh", reason="kinematics package not importable")
-    from ffrf.cli import bennett_axes
+    from ffrf.link_geometry import bennett_axes
     from ffrf.link_geometry import PAPER_AXES
 
     for ours, theirs in zip(PAPER_AXES, bennett_axes(90.0)):
         np.testing.assert_allclose(theirs.point, ours.point, atol=1e-12)
         np.testing.assert_allclose(theirs.direction, ours.direction, atol=1e-12)
-
-
-def test_without_kinematics_only_nominal_alpha3(monkeypatch):
-    from ffrf import FEInputError
-    from ffrf.cli import bennett_axes
-    from ffrf.link_geometry import PAPER_AXES
-
-    monkeypatch.setitem(sys.modules, "kinematics.dh", None)  # import now raises ImportError
-    assert bennett_axes(90.0) is PAPER_AXES
-    with pytest.raises(FEInputError, match="alpha3-deg 91.0.*open_loop_axes"):
-        bennett_axes(91.0)

@@ -1,0 +1,177 @@
+r"""Run the Bennett scene quasi-statically or dynamically, evaluate its sensors, write results.
+
+Sensors (names as in the project's issues): ``drive_angle`` (link 3 about h3 relative to
+the base, rad), ``driving_torque`` (N m, applied to link 3 about the joint axis),
+``coupler_point`` (mean of link 2's two joint points, m), ``joint_angles`` (4 relative
+rotations about the joint axes, rad), ``link{k}_node{j}`` (three tracked surface nodes of
+links 1, 2, 3, m), ``energy_kinetic``, ``energy_strain``, ``energy_potential`` (J) and
+``constraint_residual`` (largest |g|). The ideal coupler point at the same drive angle
+comes from the motion polynomial (:mod:`kinematics`), giving ``coupler_deviation`` (same
+drive angle) and ``coupler_distance_to_path`` (closest point of the ideal curve).
+
+Results are written as ``DIR/results.npz`` (``time`` and one array per sensor, SI units)
+and ``DIR/metadata.json`` (scene settings, versions, timings, summary).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import platform
+import time as wallclock
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .bennett_scene import BennettScene, assemble
+from .euler_parameters import rotation_matrix
+from .generalized_alpha import generalized_alpha
+from .joints import MarkerJoint, _frame
+from .static_solver import quasi_static
+
+__all__ = ["BennettResult", "run_bennett", "evaluate_sensors", "ideal_coupler_points", "choose_mode", "write_results"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class BennettResult:
+    time: NDArray[np.float64]
+    sensors: dict[str, NDArray[np.float64]]
+    metadata: dict = field(default_factory=dict)
+
+    def summary(self) -> dict[str, float]:
+        s = self.sensors
+        return {
+            "max_coupler_deviation_m": float(np.max(np.linalg.norm(s["coupler_deviation"], axis=1))),
+            "max_coupler_distance_to_path_m": float(np.max(s["coupler_distance_to_path"])),
+            "max_abs_driving_torque_Nm": float(np.max(np.abs(s["driving_torque"]))),
+            "max_constraint_residual": float(np.max(s["constraint_residual"])),
+        }
+
+
+def choose_mode(scene: BennettScene) -> tuple[str, float]:
+    """``quasi_static`` when the drive is slow compared with the links' vibrations: the time
+    to turn one radian at full speed against the longest fixed-interface period of any link
+    (ratio > 100), else ``dynamic``. Returns the mode and the ratio."""
+    longest = max(1.0 / float(link.reduction.fixed_interface_frequencies_hz[0]) for link in scene.links
+                  if link.reduction.fixed_interface_frequencies_hz.size)
+    ratio = (1.0 / scene.drive.omega) / longest
+    return ("quasi_static" if ratio > 100.0 else "dynamic"), ratio
+
+
+def _joints(scene: BennettScene) -> list[MarkerJoint]:
+    return [c for c in scene.system.constraints if isinstance(c, MarkerJoint) and c.name != "clamp"]
+
+
+def _joint_state(joint: MarkerJoint, scene: BennettScene, q: NDArray):
+    blocks = [q[scene.system.block(i)] for i in joint.bodies]
+    q0, q1 = (None, blocks[0]) if len(blocks) == 1 else blocks
+    p0, axes0 = _frame(joint.marker0, q0, joint.rotation0, joint.offset0)
+    p1, axes1 = _frame(joint.marker1, q1, joint.rotation1, joint.offset1)
+    angle = np.arctan2(np.cross(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0])
+    return p0, p1, angle
+
+
+def ideal_coupler_points(scene: BennettScene, drive_angles: NDArray) -> NDArray[np.float64]:
+    """Coupler point of the ideal linkage (motion polynomial) at the given drive angles."""
+    linkage = scene.linkage
+    t = linkage.parameter_from_joint(linkage.home_theta[3] - np.asarray(drive_angles), joint=3)
+    return linkage.coupler_pose(t).act(linkage.coupler_point())
+
+
+def _distance_to_polyline(points: NDArray, curve: NDArray) -> NDArray[np.float64]:
+    start, end = curve, np.roll(curve, -1, axis=0)
+    seg = end - start
+    out = np.empty(len(points))
+    for k, p in enumerate(points):
+        s = np.clip(np.einsum("ij,ij->i", p - start, seg) / np.einsum("ij,ij->i", seg, seg), 0.0, 1.0)
+        out[k] = np.min(np.linalg.norm(start + s[:, None] * seg - p, axis=1))
+    return out
+
+
+def evaluate_sensors(scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray | None,
+                     multipliers: NDArray) -> dict[str, NDArray]:
+    """All sensors of the module docstring at every output row."""
+    system = scene.system
+    joints = _joints(scene)
+    sensors: dict[str, list] = {k: [] for k in ("drive_angle", "driving_torque", "coupler_point", "joint_angles",
+                                                 "energy_kinetic", "energy_strain", "energy_potential",
+                                                 "constraint_residual")}
+    for k in (1, 2, 3):
+        for j in range(3):
+            sensors[f"link{k}_node{j}"] = []
+    for row, t in enumerate(time):
+        qq = q[row]
+        sensors["drive_angle"].append(scene.drive_angle(float(t)))
+        sensors["driving_torque"].append(multipliers[row, -1])
+        states = [_joint_state(j, scene, qq) for j in joints]
+        sensors["joint_angles"].append([s[2] for s in states])
+        # Link 2 is the far side of joint 1 and the near side of joint 2 (marker 1 and marker 0).
+        sensors["coupler_point"].append(0.5 * (states[1][1] + states[2][0]))
+        energies = system.energies(qq, np.zeros_like(qq) if qd is None else qd[row])
+        sensors["energy_kinetic"].append(energies["kinetic"])
+        sensors["energy_strain"].append(energies["strain"])
+        sensors["energy_potential"].append(energies["potential"])
+        sensors["constraint_residual"].append(np.abs(system.constraint_values(qq, float(t))).max())
+        for link in scene.links[1:]:
+            block = qq[system.block(link.index)]
+            psi = link.reduction.basis
+            rotation = rotation_matrix(block[3:7])
+            for j, node in enumerate(link.tracked_nodes):
+                local = link.fe.nodes[node] + psi[3 * node:3 * node + 3] @ block[7:]
+                sensors[f"link{link.index}_node{j}"].append(block[:3] + rotation @ local)
+    out = {k: np.array(v) for k, v in sensors.items()}
+    ideal = ideal_coupler_points(scene, out["drive_angle"])
+    out["coupler_ideal"] = ideal
+    out["coupler_deviation"] = out["coupler_point"] - ideal
+    curve = ideal_coupler_points(scene, scene.start_angle + np.linspace(0.0, 2 * np.pi, 4000, endpoint=False))
+    out["coupler_distance_to_path"] = _distance_to_polyline(out["coupler_point"], curve)
+    return out
+
+
+def run_bennett(scene: BennettScene, mode: str = "auto", n_outputs: int = 241, step: float = 1e-3,
+                rho_inf: float = 0.9, progress: Callable[[float, float], None] | None = None) -> BennettResult:
+    """Assemble (static, with misalignment continuation), then run over the drive's ramp and
+    revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
+    generalized-alpha with ``step`` (s) starting from the assembled state at rest."""
+    chosen, ratio = choose_mode(scene)
+    mode = chosen if mode == "auto" else mode
+    if mode not in ("quasi_static", "dynamic"):
+        raise ValueError(f"mode must be 'auto', 'quasi_static' or 'dynamic', got {mode!r}")
+    started = wallclock.perf_counter()
+    assembly = assemble(scene)
+    assembled = wallclock.perf_counter()
+    times = np.linspace(0.0, scene.t_end, n_outputs)
+    if mode == "quasi_static":
+        solution = quasi_static(scene.system, assembly.q, times, progress=progress)
+        q, qd, lam = solution.q, None, solution.multipliers
+    else:
+        every = max(1, int(round(scene.t_end / step / (n_outputs - 1))))
+        result = generalized_alpha(scene.system, assembly.q, np.zeros_like(assembly.q), scene.t_end, step,
+                                   rho_inf=rho_inf, output_every=every, progress=progress)
+        times, q, qd, lam = result.time, result.q, result.qd, result.multipliers
+    solved = wallclock.perf_counter()
+    sensors = evaluate_sensors(scene, times, q, qd, lam)
+    metadata = dict(scene.settings, mode=mode, quasi_static_ratio=ratio, t_end=scene.t_end, n_outputs=len(times),
+                    step=step if mode == "dynamic" else None, rho_inf=rho_inf if mode == "dynamic" else None,
+                    timings_s={"assembly": assembled - started, "solve": solved - assembled,
+                               "sensors": wallclock.perf_counter() - solved},
+                    python=platform.python_version(), numpy=np.__version__,
+                    n_coordinates=scene.system.n_coordinates, n_constraints=scene.system.n_constraints,
+                    modes_per_link=[link.reduction.n_modes for link in scene.links])
+    out = BennettResult(times, sensors, metadata)
+    out.metadata["summary"] = out.summary()
+    return out
+
+
+def write_results(result: BennettResult, directory: str | Path) -> Path:
+    """``DIR/results.npz`` (time + sensors) and ``DIR/metadata.json``."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    np.savez(directory / "results.npz", time=result.time, **result.sensors)
+    (directory / "metadata.json").write_text(json.dumps(result.metadata, indent=2, default=float))
+    return directory
