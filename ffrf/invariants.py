@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 
 from .craig_bampton import ReductionError, checked_model
 
-__all__ = ["InertiaInvariants", "inertia_invariants", "is_isotropic_mass", "nodal_tilde"]
+__all__ = ["InertiaInvariants", "inertia_invariants", "is_isotropic_mass", "component_gram", "nodal_tilde"]
 
 logger = logging.getLogger(__name__)
 
@@ -101,6 +101,15 @@ def is_isotropic_mass(mass: sp.spmatrix) -> bool:
     return all(abs(blocks[0] - b).max() <= tol for b in blocks[1:])
 
 
+def component_gram(nodes: NDArray, mass: sp.spmatrix, psi: NDArray) -> NDArray[np.float64]:
+    """Eq. (INV-5): G = W^T M_s W with W = [1, x_0, x_1, x_2, Psi_0, Psi_1, Psi_2] (component rows)
+    and the scalar mass M_s of an isotropic M = M_s kron I3; one sparse product."""
+    scalar_mass = sp.csr_matrix(mass)[0::3, 0::3]
+    w = np.hstack([np.ones((len(nodes), 1)), nodes, psi[0::3], psi[1::3], psi[2::3]])
+    g = w.T @ (scalar_mass @ w)
+    return 0.5 * (g + g.T)
+
+
 def inertia_invariants(fe_model: Any, basis: Any, *, isotropic: bool | None = None) -> InertiaInvariants:
     """Inertia invariants of ``fe_model`` (``.nodes``, ``.mass``, ``.stiffness``) reduced by ``basis``.
 
@@ -134,9 +143,7 @@ def _from_rigid_part(m: float, first: NDArray, theta: NDArray, **matrices: NDArr
 def _isotropic(nodes: NDArray, mass: sp.csr_matrix, psi: NDArray) -> InertiaInvariants:
     """Eq. (INV-5): all invariants from G = W^T M_s W, W = [1, x_0, x_1, x_2, Psi_0, Psi_1, Psi_2]."""
     n, m = len(nodes), psi.shape[1]
-    scalar_mass = sp.csr_matrix(mass)[0::3, 0::3]
-    w = np.hstack([np.ones((n, 1)), nodes, psi[0::3], psi[1::3], psi[2::3]])
-    g = w.T @ (scalar_mass @ w)
+    g = component_gram(nodes, mass, psi)
     u = [slice(4 + c * m, 4 + (c + 1) * m) for c in range(3)]
     one_u = np.stack([g[0, u[c]] for c in range(3)])                       # (c, k): 1^T M_s Psi_c
     x_u = np.stack([np.stack([g[1 + c, u[d]] for d in range(3)]) for c in range(3)])   # (c, d, k)

@@ -5,7 +5,8 @@ every inertia term of the reduced body is a component-wise Gram product of
 ``W_a = [1, x^(a), Psi^(a)]`` (rows of component ``a``) with the scalar mass matrix M_s:
 the total mass ``m``, the first moments ``S0, S1``, the second moments ``X`` and the
 couplings ``C, D`` (see :mod:`ffrf.body_kernels` for the table). They are computed once,
-with one sparse product ``M_s W``; no lumped mass is involved (Zwoelfer and Gerstmayr 2021).
+with one sparse product ``M_s W`` (:func:`ffrf.invariants.component_gram`, shared with the
+Exudyn-style invariants); no lumped mass is involved (Zwoelfer and Gerstmayr 2021).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import FEInputError
-from .invariants import is_isotropic_mass
+from .invariants import component_gram, is_isotropic_mass
 
 __all__ = ["ModalMoments", "modal_moments"]
 
@@ -55,10 +56,7 @@ def modal_moments(nodes: ArrayLike, mass: sp.spmatrix, basis: ArrayLike) -> Moda
             "the mass matrix is not of the form M_s kron I3 (x, y, z uncoupled and equal); the FFRF body "
             "needs an isotropic consistent mass matrix as assembled by ffrf.FEModel"
         )
-    scalar = sp.csr_matrix(mass)[0::3, 0::3]
-    w = np.hstack([np.ones((n, 1)), nodes, basis[0::3], basis[1::3], basis[2::3]])
-    gram = w.T @ (scalar @ w)
-    gram = 0.5 * (gram + gram.T)
+    gram = component_gram(nodes, mass, basis)
     modes = [slice(4 + a * m, 4 + (a + 1) * m) for a in range(3)]
     s1 = np.stack([gram[0, modes[a]] for a in range(3)])
     c = np.stack([np.stack([gram[modes[a], 1 + b] for b in range(3)]) for a in range(3)])
