@@ -9,6 +9,8 @@ links 1, 2, 3, m), ``energy_kinetic``, ``energy_strain``, ``energy_potential`` (
 comes from the motion polynomial (:mod:`kinematics`), giving ``coupler_deviation`` (same
 drive angle) and ``coupler_distance_to_path`` (closest point of the ideal curve).
 
+An energy balance closes the books: the drive's work against the changes of kinetic,
+gravity and strain energy plus the damping dissipation (``energy_balance_residual``).
 Results are written as ``DIR/results.npz`` (``time`` and one array per sensor, SI units)
 and ``DIR/metadata.json`` (scene settings, versions, timings, summary).
 """
@@ -25,6 +27,7 @@ from typing import Callable
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.integrate import cumulative_simpson
 
 from .bennett_scene import BennettScene, assemble
 from .euler_parameters import rotation_matrix
@@ -39,8 +42,11 @@ log = logging.getLogger(__name__)
 
 @dataclass
 class BennettResult:
+    """Output times, sensors (name -> array), the coordinates ``q`` (rows = times) and metadata."""
+
     time: NDArray[np.float64]
     sensors: dict[str, NDArray[np.float64]]
+    q: NDArray[np.float64]
     metadata: dict = field(default_factory=dict)
 
     def summary(self) -> dict[str, float]:
@@ -50,6 +56,8 @@ class BennettResult:
             "max_coupler_distance_to_path_m": float(np.max(s["coupler_distance_to_path"])),
             "max_abs_driving_torque_Nm": float(np.max(np.abs(s["driving_torque"]))),
             "max_constraint_residual": float(np.max(s["constraint_residual"])),
+            "energy_balance_relative": float(np.max(np.abs(s["energy_balance_residual"]))
+                                             / max(np.max(np.abs(s["energy_drive_work"])), 1e-300)),
         }
 
 
@@ -130,7 +138,30 @@ def evaluate_sensors(scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray
     out["coupler_deviation"] = out["coupler_point"] - ideal
     curve = ideal_coupler_points(scene, scene.start_angle + np.linspace(0.0, 2 * np.pi, 4000, endpoint=False))
     out["coupler_distance_to_path"] = _distance_to_polyline(out["coupler_point"], curve)
+    out.update(_energy_balance(scene, time, out, qd))
     return out
+
+
+def _cumulative_integral(values: NDArray, x: NDArray) -> NDArray:
+    """Cumulative Simpson integral (fourth order for smooth samples; trapezoid below 3 samples)."""
+    if len(x) < 3:
+        return np.concatenate([[0.0], np.cumsum(0.5 * (values[1:] + values[:-1]) * np.diff(x))])
+    return cumulative_simpson(values, x=x, initial=0.0)
+
+
+def _energy_balance(scene: BennettScene, time: NDArray, sensors: dict, qd: NDArray | None) -> dict[str, NDArray]:
+    """Work of the drive (integral of torque over the drive angle), damping dissipation (integral of
+    zetad^T D zetad over time) and the balance residual W - (dE_kin + dE_pot + dE_strain + D)."""
+    work = _cumulative_integral(sensors["driving_torque"], sensors["drive_angle"])
+    if qd is None:
+        dissipated = np.zeros_like(work)
+    else:
+        rate = np.array([sum(float(v[scene.system.block(k)][7:] @ link.body.damping @ v[scene.system.block(k)][7:])
+                             for k, link in enumerate(scene.links)) for v in qd])
+        dissipated = _cumulative_integral(rate, time)
+    stored = sum(sensors[f"energy_{kind}"] - sensors[f"energy_{kind}"][0] for kind in ("kinetic", "potential", "strain"))
+    return {"energy_drive_work": work, "energy_dissipated": dissipated,
+            "energy_balance_residual": work - stored - dissipated}
 
 
 def run_bennett(scene: BennettScene, mode: str = "auto", n_outputs: int = 241, step: float = 1e-3,
@@ -163,7 +194,7 @@ def run_bennett(scene: BennettScene, mode: str = "auto", n_outputs: int = 241, s
                     python=platform.python_version(), numpy=np.__version__,
                     n_coordinates=scene.system.n_coordinates, n_constraints=scene.system.n_constraints,
                     modes_per_link=[link.reduction.n_modes for link in scene.links])
-    out = BennettResult(times, sensors, metadata)
+    out = BennettResult(times, sensors, q, metadata)
     out.metadata["summary"] = out.summary()
     return out
 
