@@ -165,10 +165,12 @@ def _energy_balance(scene: BennettScene, time: NDArray, sensors: dict, qd: NDArr
 
 
 def run_bennett(scene: BennettScene, mode: str = "auto", n_outputs: int = 241, step: float = 1e-3,
-                rho_inf: float = 0.9, progress: Callable[[float, float], None] | None = None) -> BennettResult:
+                rho_inf: float = 0.9, progress: Callable[[float, float], None] | None = None,
+                t_end: float | None = None) -> BennettResult:
     """Assemble (static, with misalignment continuation), then run over the drive's ramp and
     revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
-    generalized-alpha with ``step`` (s) starting from the assembled state at rest."""
+    generalized-alpha with ``step`` (s) starting from the assembled state at rest. ``t_end``
+    shortens the run (default: the scene's ramp plus revolutions)."""
     chosen, ratio = choose_mode(scene)
     mode = chosen if mode == "auto" else mode
     if mode not in ("quasi_static", "dynamic"):
@@ -176,18 +178,19 @@ def run_bennett(scene: BennettScene, mode: str = "auto", n_outputs: int = 241, s
     started = wallclock.perf_counter()
     assembly = assemble(scene)
     assembled = wallclock.perf_counter()
-    times = np.linspace(0.0, scene.t_end, n_outputs)
+    t_end = scene.t_end if t_end is None else float(t_end)
+    times = np.linspace(0.0, t_end, n_outputs)
     if mode == "quasi_static":
         solution = quasi_static(scene.system, assembly.q, times, progress=progress)
         q, qd, lam = solution.q, None, solution.multipliers
     else:
-        every = max(1, int(round(scene.t_end / step / (n_outputs - 1))))
-        result = generalized_alpha(scene.system, assembly.q, np.zeros_like(assembly.q), scene.t_end, step,
+        every = max(1, int(round(t_end / step / (n_outputs - 1))))
+        result = generalized_alpha(scene.system, assembly.q, np.zeros_like(assembly.q), t_end, step,
                                    rho_inf=rho_inf, output_every=every, progress=progress)
         times, q, qd, lam = result.time, result.q, result.qd, result.multipliers
     solved = wallclock.perf_counter()
     sensors = evaluate_sensors(scene, times, q, qd, lam)
-    metadata = dict(scene.settings, mode=mode, quasi_static_ratio=ratio, t_end=scene.t_end, n_outputs=len(times),
+    metadata = dict(scene.settings, mode=mode, quasi_static_ratio=ratio, t_end=t_end, n_outputs=len(times),
                     step=step if mode == "dynamic" else None, rho_inf=rho_inf if mode == "dynamic" else None,
                     timings_s={"assembly": assembled - started, "solve": solved - assembled,
                                "sensors": wallclock.perf_counter() - solved},
