@@ -29,27 +29,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .constraints import Constraint
-from .euler_parameters import rotation_derivative, rotation_matrix
-from .markers import BodyMarker, exp_so3
+from .marker_kernels import exp_so3_tangent_kernel, marker_frame
+from .markers import BodyMarker
 
 __all__ = ["GroundFrame", "MarkerJoint", "revolute_joint", "fixed_joint", "driven_revolute_joint", "exp_so3_tangent"]
-
-
-def _skew(v):
-    return np.array([[0.0 * v[0], -v[2], v[1]], [v[2], 0.0 * v[0], -v[0]], [-v[1], v[0], 0.0 * v[0]]])
 
 
 def exp_so3_tangent(theta: NDArray) -> NDArray:
     r"""Right Jacobian :math:`T(\theta)` of the exponential map, :math:`d\exp(\tilde\theta) = \exp(\tilde\theta)\,(T\,d\theta)^\sim`:
     :math:`T = I - \frac{1-\cos\phi}{\phi^2}\tilde\theta + \frac{\phi - \sin\phi}{\phi^3}\tilde\theta^2`."""
-    phi2 = theta @ theta
-    skew = _skew(theta)
-    if abs(phi2) < 1e-8:
-        a, b = 0.5 - phi2 / 24.0, 1.0 / 6.0 - phi2 / 120.0
-    else:
-        phi = np.sqrt(phi2)
-        a, b = (1.0 - np.cos(phi)) / phi2, (phi - np.sin(phi)) / (phi2 * phi)
-    return np.eye(3) - a * skew + b * (skew @ skew)
+    theta = np.asarray(theta)
+    return exp_so3_tangent_kernel(theta.astype(np.result_type(theta, float)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,40 +51,19 @@ class GroundFrame:
     name: str = "ground"
 
 
-def _frame(marker, q, rotation, offset):
-    """Joint point, joint axes (columns) and their derivative data on one side."""
+def _side(marker, q, rotation, offset, derivatives: bool = True):
+    """Joint point, axes (columns) and, for a body marker, their derivatives (``None`` on the ground)."""
     if isinstance(marker, GroundFrame):
-        axes = marker.rotation @ rotation
-        return marker.point + marker.rotation @ offset, axes
-    a_body = rotation_matrix(q[3:7])
-    local = exp_so3(marker.rotation_vector(q)) @ rotation
-    axes = a_body @ local
-    point = marker.position(q) + a_body @ (exp_so3(marker.rotation_vector(q)) @ offset)
+        return marker.point + marker.rotation @ offset, marker.rotation @ rotation, None, None
+    dtype = q.dtype
+    return marker_frame(q, marker.point.astype(dtype), marker.position_modes.astype(dtype),
+                        marker.rotation_modes.astype(dtype), rotation.astype(dtype), offset.astype(dtype))
+
+
+def _frame(marker, q, rotation, offset):
+    """Joint point and axes (columns) of one side of a joint."""
+    point, axes, _, _ = _side(marker, q, rotation, offset)
     return point, axes
-
-
-def _point_jacobian(marker: BodyMarker, q, offset):
-    """d p / dq for p = r_M + A exp(theta~) o."""
-    theta = marker.rotation_vector(q)
-    turned = exp_so3(theta) @ offset
-    out = marker.position_jacobian(q)
-    out[:, 3:7] += rotation_derivative(q[3:7], turned.astype(q.dtype))
-    if marker.rotation_modes.shape[1]:
-        a_body = rotation_matrix(q[3:7])
-        out[:, 7:] += -(a_body @ exp_so3(theta) @ _skew(offset.astype(q.dtype)) @ exp_so3_tangent(theta)) @ marker.rotation_modes
-    return out
-
-
-def _axis_jacobian(marker: BodyMarker, q, local_axis):
-    """d(axis)/dq for axis = A exp(theta~) w (w: joint axis in marker coordinates)."""
-    theta = marker.rotation_vector(q)
-    turned = exp_so3(theta) @ local_axis
-    out = np.zeros((3, q.shape[0]), dtype=q.dtype)
-    out[:, 3:7] = rotation_derivative(q[3:7], turned.astype(q.dtype))
-    if marker.rotation_modes.shape[1]:
-        a_body = rotation_matrix(q[3:7])
-        out[:, 7:] = -(a_body @ exp_so3(theta) @ _skew(local_axis.astype(q.dtype)) @ exp_so3_tangent(theta)) @ marker.rotation_modes
-    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,14 +106,13 @@ class MarkerJoint(Constraint):
 
     def value(self, blocks, t):
         q0, q1 = self._sides(blocks)
-        p0, axes0 = _frame(self.marker0, q0, self.rotation0, self.offset0)
-        p1, axes1 = _frame(self.marker1, q1, self.rotation1, self.offset1)
+        p0, axes0, _, _ = _side(self.marker0, q0, self.rotation0, self.offset0)
+        p1, axes1, _, _ = _side(self.marker1, q1, self.rotation1, self.offset1)
+        return self._equations(p0, axes0, p1, axes1, t)
+
+    def _equations(self, p0, axes0, p1, axes1, t):
         gap = p1 - p0
-        out = []
-        if all(self.locked[:3]):
-            out.extend(gap)
-        else:
-            out.extend((axes0.T @ gap)[[i for i in range(3) if self.locked[i]]])
+        out = list(gap) if all(self.locked[:3]) else [axes0[:, i] @ gap for i in range(3) if self.locked[i]]
         if self.locked[3]:
             out.append(axes0[:, 2] @ axes1[:, 1])
         if self.locked[4]:
@@ -156,18 +124,11 @@ class MarkerJoint(Constraint):
     def jacobian(self, blocks, t):
         q0, q1 = self._sides(blocks)
         ground = q0 is None
-        p0, axes0 = _frame(self.marker0, q0, self.rotation0, self.offset0)
-        p1, axes1 = _frame(self.marker1, q1, self.rotation1, self.offset1)
-        n1 = q1.shape[0]
+        p0, axes0, dp0, da0 = _side(self.marker0, q0, self.rotation0, self.offset0)
+        p1, axes1, dp1, da1 = _side(self.marker1, q1, self.rotation1, self.offset1)
         dtype = q1.dtype if ground else np.result_type(q0.dtype, q1.dtype)
-        rows1 = np.zeros((self.size, n1), dtype=dtype)
+        rows1 = np.zeros((self.size, q1.shape[0]), dtype=dtype)
         rows0 = None if ground else np.zeros((self.size, q0.shape[0]), dtype=dtype)
-        dp1 = _point_jacobian(self.marker1, q1, self.offset1)
-        dp0 = None if ground else _point_jacobian(self.marker0, q0, self.offset0)
-
-        def d_axis(marker, q, rotation, k):
-            return _axis_jacobian(marker, q, rotation[:, k])
-
         row = 0
         gap = p1 - p0
         if all(self.locked[:3]):
@@ -180,26 +141,20 @@ class MarkerJoint(Constraint):
                 if self.locked[i]:
                     rows1[row] = axes0[:, i] @ dp1
                     if not ground:
-                        rows0[row] = -axes0[:, i] @ dp0 + gap @ d_axis(self.marker0, q0, self.rotation0, i)
+                        rows0[row] = -axes0[:, i] @ dp0 + gap @ da0[i]
                     row += 1
-        pairs = []
-        if self.locked[3]:
-            pairs.append((2, 1, False))
-        if self.locked[4]:
-            pairs.append((2, 0, False))
-        if self.locked[5]:
-            pairs.append((0, 1, True))
+        pairs = [(2, 1, False)] * self.locked[3] + [(2, 0, False)] * self.locked[4] + [(0, 1, True)] * self.locked[5]
         for k0, k1, turned in pairs:
-            a0 = self._prescribed_x0(axes0, t) if turned else axes0[:, k0]
-            rows1[row] = a0 @ d_axis(self.marker1, q1, self.rotation1, k1)
+            if turned and self.angle is not None:
+                phi = self.angle(t)
+                a0 = np.cos(phi) * axes0[:, 0] + np.sin(phi) * axes0[:, 1]
+                d_a0 = None if ground else np.cos(phi) * da0[0] + np.sin(phi) * da0[1]
+            else:
+                a0 = axes0[:, k0]
+                d_a0 = None if ground else da0[k0]
+            rows1[row] = a0 @ da1[k1]
             if not ground:
-                if turned and self.angle is not None:
-                    phi = self.angle(t)
-                    da0 = (np.cos(phi) * d_axis(self.marker0, q0, self.rotation0, 0)
-                           + np.sin(phi) * d_axis(self.marker0, q0, self.rotation0, 1))
-                else:
-                    da0 = d_axis(self.marker0, q0, self.rotation0, k0)
-                rows0[row] = axes1[:, k1] @ da0
+                rows0[row] = axes1[:, k1] @ d_a0
             row += 1
         return [rows1] if ground else [rows0, rows1]
 
