@@ -1,0 +1,280 @@
+"""Scenes as TOML files: run a linkage built from your own meshes without writing Python.
+
+A scene lists bodies (a mesh file or one of the paper's parametric links), their material,
+element order, number of modes and interfaces; joints between interfaces (or the ground);
+an optional drive; gravity, damping, solver settings and sensors. All lengths are metres
+unless a body says ``unit = "mm"`` for its mesh. Bodies sit where their meshes are: the
+mesh coordinates are world coordinates at t = 0 (as in the built-in Bennett scene)::
+
+    [scene]
+    name = "hinged link"
+    gravity = [0.0, 0.0, -9.81]
+    beta = 0.005                      # stiffness-proportional damping
+    mode = "dynamic"                  # or "quasi_static"
+    t_end = 1.0
+    step = 1e-3                       # dynamic time step
+    rho_inf = 0.9
+    outputs = 101
+
+    [[bodies]]
+    name = "link"
+    mesh = "link.msh"                 # any meshio volume mesh; or: parametric = {link = 1, alpha3_deg = 90, h = 0.004}
+    unit = "mm"                       # optional, scales the mesh to metres
+    material = {E = 1.2e9, nu = 0.33, rho = 450.0}
+    order = 1
+    modes = 8
+    interfaces = [                    # the first is the body's frame interface
+        {name = "bore0", group = "joint0"},
+        {name = "bore1", cylinder = {point = [0.1, 0, 0], direction = [0, 0, 1], radius = 0.0095, axial_extent = [-0.01, 0.01]}},
+        {name = "pad", nodes_file = "pad_nodes.txt"},
+    ]
+
+    [[joints]]
+    name = "hinge"
+    type = "revolute"                 # "revolute", "fixed" or "driven_revolute"
+    body0 = "ground"                  # or a body name, with interface0 = "..."
+    body1 = "link"
+    interface1 = "bore0"
+    axis = [0.0, 1.0, 0.0]            # joint axis (world, at t = 0)
+    point = [0.0, 0.0, 0.0]           # joint point (world, at t = 0); default: interface1's centre
+    drive = {rpm = 1.0, ramp_time = 1.0}   # driven_revolute only: the paper's cosine ramp
+
+    [[sensors]]
+    name = "tip"
+    body = "link"
+    point = [0.2, 0.0, 0.0]           # the mesh node nearest to this point (world, t = 0)
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time as wallclock
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .craig_bampton import CraigBamptonBasis, craig_bampton
+from .drives import CosineRamp, rpm
+from .errors import FEInputError
+from .euler_parameters import rotation_matrix
+from .fe_model import FEModel
+from .flexible_body import FlexibleBody
+from .generalized_alpha import generalized_alpha
+from .interfaces import InterfaceNodes, interface_from_group, interface_from_nodes, interface_in_cylinder
+from .joints import GroundFrame, MarkerJoint, driven_revolute_joint, fixed_joint, revolute_joint
+from .link_geometry import bennett_axes, mesh_link, paper_link_axes
+from .markers import rigid_interface_marker
+from .materials import Material
+from .mesh import read_mesh
+from .modal_moments import modal_moments
+from .static_solver import quasi_static, static_equilibrium
+from .system import MultibodySystem
+
+__all__ = ["SceneError", "FileScene", "load_scene", "run_scene"]
+
+log = logging.getLogger(__name__)
+
+
+class SceneError(FEInputError):
+    """A scene file that cannot be built; the message names the entry and the fix."""
+
+
+@dataclass(frozen=True, eq=False)
+class FileBody:
+    name: str
+    fe: FEModel
+    interfaces: dict[str, InterfaceNodes]
+    reduction: CraigBamptonBasis
+
+
+@dataclass(frozen=True, eq=False)
+class FileScene:
+    """A scene read from TOML: the system, its bodies, the settings and the sensors (body, node)."""
+
+    name: str
+    bodies: tuple[FileBody, ...]
+    system: MultibodySystem
+    settings: dict
+    sensors: dict[str, tuple[int, int]]
+    driven: tuple[str, ...]
+
+
+def _require(table: dict, key: str, where: str):
+    if key not in table:
+        raise SceneError(f"{where}: missing required key {key!r}")
+    return table[key]
+
+
+def _mesh(entry: dict, base: Path, where: str):
+    if "mesh" in entry:
+        path = base / entry["mesh"]
+        if not path.exists():
+            raise SceneError(f"{where}: mesh file {path} not found")
+        return read_mesh(path, unit=entry.get("unit"))
+    if "parametric" in entry:
+        spec = entry["parametric"]
+        first, second, names = paper_link_axes(int(_require(spec, "link", where)),
+                                               bennett_axes(float(spec.get("alpha3_deg", 90.0))))
+        mesh, _ = mesh_link(first, second, h=float(spec.get("h", 4e-3)), names=names, mount=int(spec["link"]) == 0,
+                            name=entry["name"])
+        return mesh
+    raise SceneError(f"{where}: give either mesh = \"file\" or parametric = {{link = ...}}")
+
+
+def _interface(fe: FEModel, spec: dict, base: Path, where: str) -> InterfaceNodes:
+    name = _require(spec, "name", where)
+    if "group" in spec:
+        return interface_from_group(fe, name, spec["group"])
+    if "cylinder" in spec:
+        c = spec["cylinder"]
+        return interface_in_cylinder(fe, name, c["point"], c["direction"], float(c["radius"]),
+                                     tuple(c["axial_extent"]), float(c.get("tolerance", 1e-4)))
+    if "nodes_file" in spec:
+        nodes = np.loadtxt(base / spec["nodes_file"], dtype=np.int64, ndmin=1)
+        return interface_from_nodes(fe, name, nodes)
+    raise SceneError(f"{where}, interface {name!r}: select it by group, cylinder or nodes_file")
+
+
+def _body(entry: dict, base: Path, beta: float, exact_gravity: bool) -> tuple[FileBody, FlexibleBody]:
+    where = f"body {entry.get('name', '?')!r}"
+    name = _require(entry, "name", "a [[bodies]] entry")
+    m = _require(entry, "material", where)
+    material = Material(float(m["E"]), float(m["nu"]), float(m["rho"]), name=f"{name} material")
+    fe = FEModel.from_tet_mesh(_mesh(entry, base, where), material, int(entry.get("order", 1)))
+    specs = _require(entry, "interfaces", where)
+    if not specs:
+        raise SceneError(f"{where}: list at least one interface (the first is the body's frame)")
+    interfaces = {}
+    for spec in specs:
+        interface = _interface(fe, spec, base, where)
+        interfaces[interface.name] = interface
+    reduction = craig_bampton(fe, list(interfaces.values()), int(entry.get("modes", 8)))
+    body = FlexibleBody(name, modal_moments(fe.nodes, fe.mass, reduction.basis), reduction.reduced_stiffness,
+                        beta * reduction.reduced_stiffness, exact_gravity)
+    return FileBody(name, fe, interfaces, reduction), body
+
+
+def _joint_frame(axis) -> NDArray:
+    from .bennett_scene import joint_frame
+
+    return joint_frame(np.asarray(axis, dtype=float))
+
+
+def _joint(spec: dict, index: dict[str, int], bodies: list[FileBody]) -> MarkerJoint:
+    name = spec.get("name", "joint")
+    where = f"joint {name!r}"
+    kind = spec.get("type", "revolute")
+
+    def marker(side: str):
+        body_name = _require(spec, f"body{side}", where)
+        if body_name == "ground":
+            return None
+        if body_name not in index:
+            raise SceneError(f"{where}: unknown body {body_name!r}; bodies are {sorted(index)}")
+        body = bodies[index[body_name]]
+        interface_name = _require(spec, f"interface{side}", where)
+        if interface_name not in body.interfaces:
+            raise SceneError(f"{where}: body {body_name!r} has no interface {interface_name!r}; it has "
+                             f"{sorted(body.interfaces)}")
+        itf = body.interfaces[interface_name]
+        return rigid_interface_marker(index[body_name], body.fe.nodes, body.reduction.basis, itf.nodes, itf.weights,
+                                      name=f"{body_name}:{interface_name}")
+
+    m0, m1 = marker("0"), marker("1")
+    if m1 is None:
+        m0, m1 = m1, m0
+    if m1 is None:
+        raise SceneError(f"{where}: at least one side must be a body")
+    frame = _joint_frame(spec.get("axis", [0.0, 0.0, 1.0]))
+    point = np.asarray(spec.get("point", m1.point), dtype=float)
+    side0 = GroundFrame(point, np.eye(3)) if m0 is None else m0
+    offset0 = np.zeros(3) if m0 is None else point - m0.point
+    offset1 = point - m1.point
+    if kind == "revolute":
+        return revolute_joint(side0, m1, frame, frame, offset0, offset1, name=name)
+    if kind == "fixed":
+        return fixed_joint(side0, m1, frame, frame, offset0, offset1, name=name)
+    if kind == "driven_revolute":
+        d = _require(spec, "drive", where)
+        ramp = CosineRamp(rpm(float(d["rpm"])), float(d.get("ramp_time", 1.0)))
+        start = np.radians(float(d.get("start_angle_deg", 0.0)))
+        return driven_revolute_joint(side0, m1, lambda t: start + float(ramp(t)), frame, frame, offset0, offset1,
+                                     name=name)
+    raise SceneError(f"{where}: type {kind!r} is unknown; use revolute, fixed or driven_revolute")
+
+
+def load_scene(path: str | Path) -> FileScene:
+    """Read and build a TOML scene (see the module docstring)."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as error:
+        raise SceneError(f"{path}: cannot read the scene ({error})") from error
+    settings = dict(data.get("scene", {}))
+    beta = float(settings.get("beta", 0.0))
+    built = [_body(entry, path.parent, beta, bool(settings.get("exact_gravity", True))) for entry in data.get("bodies", [])]
+    if not built:
+        raise SceneError(f"{path}: no [[bodies]]")
+    bodies = [b for b, _ in built]
+    index = {b.name: k for k, b in enumerate(bodies)}
+    if len(index) != len(bodies):
+        raise SceneError(f"{path}: body names must be unique")
+    joints = [_joint(spec, index, bodies) for spec in data.get("joints", [])]
+    system = MultibodySystem(tuple(body for _, body in built), tuple(joints),
+                             gravity=np.asarray(settings.get("gravity", [0.0, 0.0, -9.81]), dtype=float))
+    sensors = {}
+    for spec in data.get("sensors", []):
+        name = _require(spec, "name", "a [[sensors]] entry")
+        body = _require(spec, "body", f"sensor {name!r}")
+        if body not in index:
+            raise SceneError(f"sensor {name!r}: unknown body {body!r}; bodies are {sorted(index)}")
+        nodes = bodies[index[body]].fe.nodes
+        node = int(spec["node"]) if "node" in spec else int(np.argmin(np.linalg.norm(nodes - spec["point"], axis=1)))
+        sensors[name] = (index[body], node)
+    driven = tuple(j.name for j in joints if j.angle is not None)
+    return FileScene(settings.get("name", path.stem), tuple(bodies), system, settings, sensors, driven)
+
+
+def run_scene(scene: FileScene, directory: str | Path, progress=None) -> dict:
+    """Static start, then the dynamic or quasi-static run; writes ``results.npz`` and ``metadata.json``."""
+    s = scene.settings
+    t_end = float(s.get("t_end", 1.0))
+    outputs = int(s.get("outputs", 101))
+    mode = s.get("mode", "dynamic")
+    started = wallclock.perf_counter()
+    start = static_equilibrium(scene.system, scene.system.initial_state()) if s.get("static_start", mode != "dynamic") \
+        else None
+    q0 = scene.system.initial_state() if start is None else start.q
+    if mode == "quasi_static":
+        solution = quasi_static(scene.system, q0, np.linspace(0.0, t_end, outputs), progress=progress)
+        time, q, lam = np.linspace(0.0, t_end, outputs), solution.q, solution.multipliers
+    elif mode == "dynamic":
+        step = float(s.get("step", 1e-3))
+        every = max(1, int(round(t_end / step / max(outputs - 1, 1))))
+        result = generalized_alpha(scene.system, q0, np.zeros_like(q0), t_end, step, rho_inf=float(s.get("rho_inf", 0.9)),
+                                   output_every=every, progress=progress)
+        time, q, lam = result.time, result.q, result.multipliers
+    else:
+        raise SceneError(f"scene mode {mode!r}: use 'dynamic' or 'quasi_static'")
+    arrays = {"time": time}
+    for name, (body, node) in scene.sensors.items():
+        block = scene.system.block(body)
+        psi = scene.bodies[body].reduction.basis[3 * node:3 * node + 3]
+        local = scene.bodies[body].fe.nodes[node]
+        arrays[name] = np.array([row[block][:3] + rotation_matrix(row[block][3:7]) @ (local + psi @ row[block][7:])
+                                 for row in q])
+    rows = scene.system.rows
+    for k, constraint in enumerate(scene.system.all_constraints):
+        if constraint.name in scene.driven:
+            arrays[f"{constraint.name}_torque"] = lam[:, int(rows[k + 1]) - 1]
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    np.savez(directory / "results.npz", **arrays)
+    metadata = dict(scene=scene.name, settings=s, bodies=[b.name for b in scene.bodies],
+                    modes=[b.reduction.n_modes for b in scene.bodies], wall_time_s=wallclock.perf_counter() - started)
+    (directory / "metadata.json").write_text(json.dumps(metadata, indent=2, default=str))
+    return metadata

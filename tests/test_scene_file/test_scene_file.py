@@ -1,0 +1,109 @@
+"""Scenes from TOML files: the same pendulum as built in Python, a driven parametric link,
+and clear errors for bad scenes."""
+
+import sys
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "test_ffrf_body"))
+from body_fixtures import bar_model  # noqa: E402
+from pendulum_fixtures import pendulum, tip_position  # noqa: E402
+
+from ffrf.cli import main  # noqa: E402
+from ffrf.generalized_alpha import generalized_alpha  # noqa: E402
+from ffrf.scene_file import SceneError, load_scene, run_scene  # noqa: E402
+
+PENDULUM = """
+[scene]
+name = "bar pendulum"
+gravity = [0.0, 0.0, -9.81]
+mode = "dynamic"
+t_end = 0.1
+step = 1e-3
+rho_inf = 0.8
+outputs = 101
+
+[[bodies]]
+name = "bar"
+mesh = "bar.vtu"
+unit = "mm"
+material = {E = 1e8, nu = 0.3, rho = 450.0}
+modes = 3
+interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]
+
+[[joints]]
+name = "hinge"
+type = "revolute"
+body0 = "ground"
+body1 = "bar"
+interface1 = "hinge"
+axis = [0.0, 1.0, 0.0]
+
+[[sensors]]
+name = "tip"
+body = "bar"
+point = [0.2, 0.0, 0.0]
+"""
+
+
+def _write_bar(tmp_path):
+    model = bar_model(E=1e8, rho=450.0)
+    meshio.write(tmp_path / "bar.vtu", meshio.Mesh(1e3 * model.mesh.points, [("tetra", model.mesh.tets)]))
+    np.savetxt(tmp_path / "hinge.txt", np.flatnonzero(model.nodes[:, 0] < 1e-9), fmt="%d")
+    return model
+
+
+def test_file_pendulum_equals_the_python_pendulum(tmp_path):
+    _write_bar(tmp_path)
+    (tmp_path / "scene.toml").write_text(PENDULUM)
+    assert main(["run", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "out")]) == 0
+    data = np.load(tmp_path / "out" / "results.npz")
+    system, model, psi, _ = pendulum(n_modes=3)
+    q0 = system.initial_state()
+    reference = generalized_alpha(system, q0, np.zeros_like(q0), 0.1, 1e-3, rho_inf=0.8)
+    np.testing.assert_allclose(data["tip"], [tip_position(q, model, psi) for q in reference.q], atol=1e-9)
+
+
+def test_driven_parametric_link(tmp_path):
+    (tmp_path / "link.toml").write_text("""
+[scene]
+mode = "quasi_static"
+t_end = 5.0
+outputs = 6
+[[bodies]]
+name = "link1"
+parametric = {link = 1, h = 0.008}
+material = {E = 1.2e9, nu = 0.33, rho = 450.0}
+modes = 2
+interfaces = [{name = "a", group = "joint0"}, {name = "b", group = "joint1"}]
+[[joints]]
+name = "motor"
+type = "driven_revolute"
+body0 = "ground"
+body1 = "link1"
+interface1 = "a"
+axis = [0.0, 0.0, 1.0]
+point = [0.0, 0.0, 0.0085]
+drive = {rpm = 1.0, ramp_time = 1.0}
+""")
+    scene = load_scene(tmp_path / "link.toml")
+    run_scene(scene, tmp_path / "out")
+    torque = np.load(tmp_path / "out" / "results.npz")["motor_torque"]
+    # Turning about the vertical axis h0 does no work against gravity: the drive torque vanishes.
+    assert torque.shape == (6,) and np.abs(torque).max() < 1e-9
+
+
+def test_bad_scenes_are_named(tmp_path):
+    _write_bar(tmp_path)
+    (tmp_path / "bad.toml").write_text(PENDULUM.replace('body1 = "bar"', 'body1 = "rod"'))
+    with pytest.raises(SceneError, match="unknown body 'rod'"):
+        load_scene(tmp_path / "bad.toml")
+    (tmp_path / "bad2.toml").write_text(PENDULUM.replace('interface1 = "hinge"', 'interface1 = "bore"'))
+    with pytest.raises(SceneError, match="no interface 'bore'"):
+        load_scene(tmp_path / "bad2.toml")
+    (tmp_path / "bad3.toml").write_text(PENDULUM.replace('mesh = "bar.vtu"', 'mesh = "missing.vtu"'))
+    with pytest.raises(SceneError, match="missing.vtu not found"):
+        load_scene(tmp_path / "bad3.toml")
