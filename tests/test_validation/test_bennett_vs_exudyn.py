@@ -1,0 +1,192 @@
+"""Our solver against the Exudyn twin of the flexible Bennett scene (issue 7).
+
+Coarse PLA scene (``build_bennett("pla", h=6e-3, n_modes=2, exact_gravity=False)``: 4 links,
+8..14 modes each), started from ``scene.q_start`` (undeformed links at rest, drive at its start
+angle) so that gravity excites the links while the cosine ramp begins to turn the drive;
+generalized-alpha, h = 1e-3 s, rho_inf = 0.9, 0.2 s; and the static equilibrium at t = 0.
+
+Exudyn differs from ``scene.system`` in two modelling conventions (``validation.exudyn_bennett``):
+
+1. the ``localHT`` translation (offset) of ``MarkerSuperElementRigid`` is applied in the body
+   frame, ours in the marker frame (p = r_M + A exp(theta~) o);
+2. its marker rotation Jacobian is A(omega_bar + T theta_dot), not the exact derivative of its
+   orientation A exp(theta~) (which has exp(theta~) T), so its reaction C_q^T lambda is not the
+   exact gradient of its constraint equations.
+
+Three systems of ours are compared with the one Exudyn run: with both Exudyn conventions
+(must agree to round-off), with Exudyn's offset but our exact Jacobian (must meet the
+issue's targets), and the production system (the offset convention shows; measured).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+pytest.importorskip("exudyn", reason="Exudyn is the reference implementation for these cross-checks")
+
+from ffrf.bennett_scene import assemble, build_bennett  # noqa: E402
+from validation.exudyn_bennett import (compare, exudyn_convention_system, probe_marker_offset,  # noqa: E402
+                                       run_exudyn_bennett, run_ffrf_bennett, static_exudyn_bennett,
+                                       static_ffrf_bennett)
+
+STEP, T_END, RHO_INF = 1e-3, 0.2, 0.9
+#: Issue 7 targets: driving torque (relative) and coupler / tracked nodes (relative to the elastic motion).
+TORQUE_TARGET, TRAJECTORY_TARGET = 1e-4, 1e-3
+
+
+@lru_cache(maxsize=None)
+def scene():
+    return build_bennett("pla", h=6e-3, n_modes=2, exact_gravity=False)
+
+
+@lru_cache(maxsize=None)
+def system(kind: str):
+    s = scene()
+    if kind == "production":
+        return s.system
+    return exudyn_convention_system(s.system, exudyn_jacobian=(kind == "exudyn"))
+
+
+@lru_cache(maxsize=None)
+def exudyn_run():
+    return run_exudyn_bennett(scene(), scene().q_start, T_END, STEP, RHO_INF, tolerance=1e-14)
+
+
+@lru_cache(maxsize=None)
+def ffrf_run(kind: str):
+    return run_ffrf_bennett(scene(), system(kind), scene().q_start, T_END, STEP, RHO_INF, label=kind)
+
+
+@lru_cache(maxsize=None)
+def differences(kind: str) -> dict:
+    return compare(ffrf_run(kind), exudyn_run())
+
+
+@lru_cache(maxsize=None)
+def exudyn_static():
+    return static_exudyn_bennett(scene(), scene().q_start, 0.0, load_steps=2, tolerance=1e-12)
+
+
+# ---------------------------------------------------------------------------------------------
+# Conventions and set-up
+# ---------------------------------------------------------------------------------------------
+
+def test_exudyn_applies_the_marker_offset_in_the_body_frame():
+    """Measured on a deformed link: Exudyn's marker point is R + A(x_bar + P zeta + o) to round-off,
+    millimetres away from ours r_M + A exp(theta~) o; its orientation is A exp(theta~) R as ours."""
+    probe = probe_marker_offset(scene())
+    assert probe["theta_norm"] > 1e-2
+    assert probe["body_frame_distance"] < 1e-14
+    assert probe["marker_frame_distance"] > 1e-4
+    assert probe["orientation_error"] < 1e-13
+
+
+def test_twin_uses_a_symbolic_drive_and_reports_every_step():
+    run = exudyn_run()
+    assert run.extra["symbolic"], run.extra["notes"]
+    assert run.time.shape == (int(round(T_END / STEP)) + 1,)
+    assert run.setup_time > 0 and run.integration_time > 0
+
+
+def test_the_window_exercises_elasticity_and_the_drive():
+    """Guards against a vacuous comparison: the links deform (modal coordinates up to ~3e-4) and
+    the coupler moves by far more than the tolerances (sag under gravity plus the ramp)."""
+    d = differences("exudyn")
+    assert d["zeta_scale"] > 1e-4
+    assert d["coupler_motion_m"] > 1e-5
+    assert d["torque_scale_Nm"] > 1e-3
+    s = scene()
+    assert s.drive_angle(T_END) - s.drive_angle(0.0) > 5e-4  # rad turned by the ramp in the window
+
+
+# ---------------------------------------------------------------------------------------------
+# Dynamics
+# ---------------------------------------------------------------------------------------------
+
+def test_with_exudyn_conventions_the_solvers_agree_to_round_off():
+    d = differences("exudyn")
+    assert d["coupler_m"] < 1e-12
+    assert d["tracked_m"] < 1e-12
+    assert d["zeta_relative"] < 1e-9
+    assert d["torque_relative"] < 1e-7  # limited by Exudyn's Newton on the multipliers (measured 1e-9)
+    q_ours, q_theirs = ffrf_run("exudyn").q, exudyn_run().q
+    assert np.abs(q_ours - q_theirs).max() < 1e-12
+
+
+def test_with_our_exact_jacobian_the_issue_targets_are_met():
+    """Our exact marker Jacobian against Exudyn's (same offset convention): measured coupler 4e-5
+    and torque 2e-6 of their scales on this scene, within the issue's 1e-3 and 1e-4."""
+    d = differences("exact")
+    assert d["torque_relative"] < TORQUE_TARGET
+    assert d["coupler_m"] < TRAJECTORY_TARGET * d["coupler_motion_m"]
+    assert d["tracked_m"] < TRAJECTORY_TARGET * d["tracked_motion_m"]
+    assert d["coupler_m"] < 1e-7  # well below a micrometre
+    # and the comparison does resolve the Jacobian difference (far above round-off)
+    assert d["coupler_m"] > 1e3 * differences("exudyn")["coupler_m"]
+
+
+def test_production_offset_convention_is_resolved_by_the_comparison():
+    """The production system (offsets in the marker frame) differs from Exudyn by the offset
+    convention: measured 1.2e-6 m coupler (3 % of its motion), torque 4 %. This is a modelling
+    difference, not a solver error: the same system with Exudyn's offset convention agrees."""
+    production, exact = differences("production"), differences("exact")
+    assert production["coupler_m"] > 100 * exact["coupler_m"]
+    assert production["torque_relative"] > 100 * exact["torque_relative"]
+    ours = compare(ffrf_run("production"), ffrf_run("exact"))
+    assert abs(ours["coupler_m"] - production["coupler_m"]) < 2 * exact["coupler_m"]
+
+
+# ---------------------------------------------------------------------------------------------
+# Statics
+# ---------------------------------------------------------------------------------------------
+
+def test_static_equilibrium_agrees_with_exudyn_solve_static():
+    """Exudyn's static multipliers have the opposite sign (residual f + C_q^T lambda):
+    ``static_exudyn_bennett`` flips it, so our torque equals minus Exudyn's TorqueLocal z."""
+    s = scene()
+    q_e, torque_e, coupler_e, tracked_e = exudyn_static()
+    q_o, torque_o, coupler_o, tracked_o = static_ffrf_bennett(s, system("exudyn"), s.q_start)
+    assert np.abs(q_o - q_e).max() < 1e-12
+    assert np.abs(coupler_o - coupler_e).max() < 1e-12
+    assert np.abs(tracked_o - tracked_e).max() < 1e-12
+    assert abs(torque_o) > 1e-5 and abs(torque_o - torque_e) < 1e-9 * abs(torque_o)
+
+
+def test_production_assembly_against_exudyn_statics():
+    """``assemble(scene)`` (production conventions) against Exudyn: measured torque 8e-4 relative,
+    coupler 1.2e-6 m, both from the offset convention (with it, see above, round-off)."""
+    s = scene()
+    q_e, torque_e, coupler_e, _ = exudyn_static()
+    solution = assemble(s)
+    assert abs(solution.multipliers[-1] - torque_e) < 2e-3 * abs(torque_e)
+    _, _, coupler_p, _ = static_ffrf_bennett(s, s.system, s.q_start)
+    assert np.abs(coupler_p - coupler_e).max() < 5e-6
+    q_exact, *_ = static_ffrf_bennett(s, system("exact"), s.q_start)
+    assert np.abs(q_exact - q_e).max() < 1e-6 * max(1.0, np.abs(q_e).max())
+
+
+def test_exudyn_marker_jacobian_is_not_the_derivative_of_its_constraints():
+    """Why the exact-Jacobian system differs from Exudyn: at a deformed state (Exudyn's static
+    solution) our joint Jacobian equals the complex-step derivative of the constraint values to
+    round-off, while the Exudyn variant (marker angular velocity A(omega_bar + T theta_dot)) is off
+    in the modal columns of the rotation rows by O(|theta|) relative."""
+    s = scene()
+    q_e = exudyn_static()[0]
+    exact_errors, exudyn_errors, scales = [], [], []
+    for name, exact in ((c.name, c) for c in system("exact").constraints):
+        variant = next(c for c in system("exudyn").constraints if c.name == name)
+        blocks = [q_e[s.system.block(i)] for i in exact.bodies]
+        for j, block in enumerate(blocks):
+            numeric = np.empty((exact.size, block.shape[0]))
+            for k in range(block.shape[0]):
+                shifted = [b.astype(complex) for b in blocks]
+                shifted[j][k] += 1e-30j
+                numeric[:, k] = exact.value(shifted, 0.0).imag / 1e-30
+            exact_errors.append(np.abs(exact.jacobian(blocks, 0.0)[j] - numeric).max())
+            exudyn_errors.append(np.abs(variant.jacobian(blocks, 0.0)[j] - numeric).max())
+            scales.append(np.abs(numeric).max())
+    assert max(exact_errors) < 1e-12 * max(scales)
+    assert max(exudyn_errors) > 1e-6 * max(scales)

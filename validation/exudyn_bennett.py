@@ -1,0 +1,562 @@
+r"""The Exudyn twin of the flexible Bennett scene, its runner, and the comparison with our solver.
+
+The twin is built from a :class:`ffrf.bennett_scene.BennettScene` only (identical input in both
+solvers):
+
+* four ``ObjectFFRFreducedOrder`` bodies (``FEMinterface`` with our nodes, consistent M, K and
+  **our** Craig-Bampton basis, via :func:`validation.exudyn_ffrf._exudyn_fem`), each with
+  ``positionRef``/``rotationMatrixRef`` from the start state ``q0`` (absolute, our layout) and
+  its modal coordinates as initial values; gravity through ``LoadMassProportional`` (our
+  ``exact_gravity=False``) and ``stiffnessProportionalDamping = beta``;
+* one ``MarkerSuperElementRigid`` per joint side on the interface's nodes with our weights
+  (``useAlternativeApproach=True``, exponential map), ``localHT`` = (our ``rotation0/1``,
+  our ``offset0/1``); a ground ``MarkerBodyRigid`` for the clamp;
+* the clamp as ``GenericJoint`` (all six axes), joints 0..2 as ``GenericJoint([1,1,1,1,1,0])``,
+  joint 3 as ``GenericJoint`` (all six) whose ``offsetUserFunction`` turns J0 about its z-axis by
+  the prescribed angle ``scene.drive_angle(t)`` (a *symbolic* user function; the joint frames
+  are defined in the FE reference pose, so the offset at t = 0 is the start angle).
+
+**Offset convention (measured, see ``probe_marker_offset``).** Exudyn applies the translation
+of a ``MarkerSuperElementRigid``'s ``localHT`` (= its ``offset``) in the *body* frame:
+``p = R + A (o + sum w_i (x_i + u_i))``, whereas our joints put the joint point at
+``p = r_M + A exp(theta_M) o`` (*marker* frame, :mod:`ffrf.joints`). The two agree at
+``theta_M = 0`` (frame interfaces, undeformed links) and differ by ``A (exp(theta_M) - I) o``
+otherwise (``|o|`` = 8.5 mm axial offsets on the Bennett bores). The comparison therefore
+runs our solver on the production system (``scene.system``) and on
+:func:`exudyn_convention_system`, the same system with Exudyn's convention (the offset moved
+into the body-frame marker point, joint offsets zero), which isolates the solver comparison
+from the modelling difference.
+
+**Marker rotation Jacobian (measured).** Exudyn's joint Jacobian uses the marker angular
+velocity ``A (omega_bar + T(theta) theta_dot)``; the exact derivative of its own orientation
+``A exp(theta~)`` is ``A (omega_bar + exp(theta~) T(theta) theta_dot)``. So Exudyn's reaction
+``C_q^T lambda`` is not the gradient of its constraint equations when a non-frame interface
+rotates elastically (O(|theta|) relative in the modal columns of the rotation rows; |theta| up
+to 3e-4 here). ``exudyn_convention_system(..., exudyn_jacobian=True)`` reproduces it in our
+solver (a :class:`ffrf.joints.MarkerJoint` subclass, same equations); then both solvers agree
+to round-off.
+
+Measured on the coarse PLA scene (h = 6 mm, 2 modes, from ``q_start``, h = 1e-3, 0.2 s):
+both Exudyn conventions: coupler 1e-16 m, torque 1e-9 relative; Exudyn's offset with our exact
+Jacobian: coupler 2e-9 m (4e-5 of its motion), torque 2.4e-6 relative; production system:
+coupler 1.2e-6 m (3 %), torque 4 % (``bench/bench_bennett_vs_exudyn.py`` and the tests).
+
+``exudyn`` is imported lazily.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+from types import SimpleNamespace
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "BennettTrajectory",
+    "ExudynTwin",
+    "exudyn_convention_system",
+    "build_exudyn_twin",
+    "run_exudyn_bennett",
+    "run_ffrf_bennett",
+    "static_exudyn_bennett",
+    "static_ffrf_bennett",
+    "compare",
+    "probe_marker_offset",
+    "exudyn_settings",
+    "system_points",
+]
+
+
+# --------------------------------------------------------------------------------------------
+# Results
+# --------------------------------------------------------------------------------------------
+
+@dataclass
+class BennettTrajectory:
+    """Time histories (rows = output times, t = 0 included) of one solver on the Bennett scene.
+
+    ``q``: coordinates in our layout (absolute; Euler parameters with our sign); ``coupler``:
+    (n, 3) mean of link 2's two joint points; ``tracked``: (n, 9, 3) links 1..3, three nodes
+    each; ``torque``: (n,) multiplier of the drive's x0'.y1 equation (dynamic sign: the
+    constraint force is -C_q^T lambda); ``zeta``: list of (n, m_k) per link.
+    """
+
+    time: NDArray[np.float64]
+    q: NDArray[np.float64]
+    coupler: NDArray[np.float64]
+    tracked: NDArray[np.float64]
+    torque: NDArray[np.float64]
+    zeta: list
+    setup_time: float
+    integration_time: float
+    newton_iterations: int
+    solver: str
+    extra: dict = field(default_factory=dict)
+
+
+# --------------------------------------------------------------------------------------------
+# Our system with Exudyn's offset convention
+# --------------------------------------------------------------------------------------------
+
+def _exudyn_joint_class():
+    """:class:`ffrf.joints.MarkerJoint` with Exudyn's marker rotation Jacobian (see :func:`exudyn_convention_system`)."""
+    from ffrf.euler_parameters import rotation_matrix
+    from ffrf.joints import MarkerJoint, _side, exp_so3_tangent
+    from ffrf.markers import _skew, exp_so3
+
+    def axis_correction(marker, q, rotation):
+        """Exudyn's minus the exact d(axis_k)/d zeta, k = 0..2: -A[(E w)~ - E w~] T Theta (3, 3, m)."""
+        a_body = rotation_matrix(np.ascontiguousarray(q[3:7]))
+        theta = marker.rotation_modes.astype(q.dtype) @ q[7:]
+        turn, tangent = exp_so3(theta), exp_so3_tangent(theta)
+        out = []
+        for k in range(3):
+            w = rotation[:, k].astype(q.dtype)
+            out.append(-(a_body @ (_skew(turn @ w) - turn @ _skew(w)) @ tangent) @ marker.rotation_modes)
+        return out
+
+    class ExudynMarkerJoint(MarkerJoint):
+        """Constraint equations as :class:`MarkerJoint`; in the Jacobian the modal columns of the
+        rotation rows use Exudyn's marker angular velocity A(omega_bar + T theta_dot) instead of the
+        exact A(omega_bar + exp(theta~) T theta_dot), so C_q^T lambda is Exudyn's reaction."""
+
+        def jacobian(self, blocks, t):
+            if not all(self.locked[:3]):
+                raise NotImplementedError("Exudyn-Jacobian joints are implemented for locked translations only")
+            rows = super().jacobian(blocks, t)
+            q0, q1 = self._sides(blocks)
+            ground = q0 is None
+            _, axes0, _, _ = _side(self.marker0, q0, self.rotation0, self.offset0, False)
+            _, axes1, _, _ = _side(self.marker1, q1, self.rotation1, self.offset1, False)
+            c1 = axis_correction(self.marker1, q1, self.rotation1) if self.marker1.rotation_modes.shape[1] else None
+            c0 = (axis_correction(self.marker0, q0, self.rotation0)
+                  if not ground and self.marker0.rotation_modes.shape[1] else None)
+            rows0, rows1 = (None, rows[0]) if ground else (rows[0], rows[1])
+            row = 3
+            pairs = [(2, 1, False)] * self.locked[3] + [(2, 0, False)] * self.locked[4] + [(0, 1, True)] * self.locked[5]
+            for k0, k1, turned in pairs:
+                if turned and self.angle is not None:
+                    phi = self.angle(t)
+                    a0 = np.cos(phi) * axes0[:, 0] + np.sin(phi) * axes0[:, 1]
+                    d0 = None if c0 is None else np.cos(phi) * c0[0] + np.sin(phi) * c0[1]
+                else:
+                    a0 = axes0[:, k0]
+                    d0 = None if c0 is None else c0[k0]
+                if c1 is not None:
+                    rows1[row, 7:] += a0 @ c1[k1]
+                if d0 is not None:
+                    rows0[row, 7:] += axes1[:, k1] @ d0
+                row += 1
+            return rows
+
+    return ExudynMarkerJoint
+
+
+def exudyn_convention_system(system, exudyn_jacobian: bool = True):
+    """``system`` with Exudyn's conventions: every joint offset moved into the marker point (body
+    frame), as Exudyn's ``MarkerSuperElementRigid`` offset/``localHT`` translation
+    (p = R + A(o + x_bar + P zeta)), and, with ``exudyn_jacobian``, Exudyn's marker rotation
+    Jacobian (angular velocity A(omega_bar + T theta_dot), without the factor exp(theta~) in front
+    of T that the exact derivative of its orientation A exp(theta~) has) in the joints' C_q.
+    The constraint equations are ours either way."""
+    from ffrf.joints import GroundFrame, MarkerJoint
+    from ffrf.system import MultibodySystem
+
+    joint_class = _exudyn_joint_class() if exudyn_jacobian else None
+    constraints = []
+    for c in system.constraints:
+        if isinstance(c, MarkerJoint):
+            changes = {}
+            for side in (0, 1):
+                marker, offset = getattr(c, f"marker{side}"), getattr(c, f"offset{side}")
+                if isinstance(marker, GroundFrame):
+                    changes[f"marker{side}"] = dataclasses.replace(marker, point=marker.point + marker.rotation @ offset)
+                else:
+                    changes[f"marker{side}"] = dataclasses.replace(marker, point=marker.point + offset)
+                changes[f"offset{side}"] = np.zeros(3)
+            c = dataclasses.replace(c, **changes)
+            if joint_class is not None:
+                c = joint_class(**{f.name: getattr(c, f.name) for f in dataclasses.fields(c)})
+        constraints.append(c)
+    return MultibodySystem(system.bodies, tuple(constraints), gravity=system.gravity)
+
+
+def _joints(system):
+    from ffrf.joints import MarkerJoint
+
+    return {c.name: c for c in system.constraints if isinstance(c, MarkerJoint)}
+
+
+def system_points(scene, system, q: NDArray) -> tuple[NDArray, NDArray]:
+    """Coupler point (mean of link 2's joint points, as :func:`ffrf.bennett_run.evaluate_sensors`)
+    and the tracked nodes of links 1..3 for coordinate rows ``q``, using ``system``'s joints."""
+    from ffrf.euler_parameters import rotation_matrix
+    from ffrf.joints import _frame
+
+    joints = _joints(system)
+    j1, j2 = joints["joint1"], joints["joint2"]
+    q = np.atleast_2d(q)
+    coupler = np.empty((len(q), 3))
+    tracked = np.empty((len(q), 9, 3))
+    for row, qq in enumerate(q):
+        p_far, _ = _frame(j1.marker1, qq[system.block(j1.bodies[1])], j1.rotation1, j1.offset1)
+        p_near, _ = _frame(j2.marker0, qq[system.block(j2.bodies[0])], j2.rotation0, j2.offset0)
+        coupler[row] = 0.5 * (p_far + p_near)
+        for a, link in enumerate(scene.links[1:]):
+            block = qq[system.block(link.index)]
+            rot = rotation_matrix(np.ascontiguousarray(block[3:7]))
+            psi = link.reduction.basis
+            for j, node in enumerate(link.tracked_nodes):
+                tracked[row, 3 * a + j] = block[:3] + rot @ (link.fe.nodes[node] + psi[3 * node:3 * node + 3] @ block[7:])
+    return coupler, tracked
+
+
+def _zeta(system, q) -> list:
+    return [q[:, system.block(k)][:, 7:] for k in range(len(system.bodies))]
+
+
+# --------------------------------------------------------------------------------------------
+# Exudyn twin
+# --------------------------------------------------------------------------------------------
+
+@dataclass
+class ExudynTwin:
+    """An assembled Exudyn system and the item numbers needed to read it back."""
+
+    sc: object
+    mbs: object
+    objects: list
+    rigid_nodes: list
+    modal_nodes: list
+    reference: list  # per body: reference coordinates of the rigid node (R, ep)
+    markers: dict
+    joints: dict
+    sensors: dict
+    symbolic: bool
+    keep_alive: list = field(default_factory=list)
+
+
+def _interface_of(link, marker):
+    for name, candidate in link.markers.items():
+        if candidate is marker:
+            return link.interfaces[name]
+    raise ValueError(f"marker {marker.name!r} is not one of link {link.index}'s interface markers")
+
+
+def _drive_offset_function(scene, frozen_time: float | None):
+    """offsetUserFunction: [0, 0, 0, 0, 0, angle(t)] (the cosine ramp of :class:`ffrf.drives.CosineRamp`)."""
+    import exudyn as exu
+
+    esym = exu.symbolic
+    start = float(scene.start_angle)
+    w, tr = float(scene.drive.omega), float(scene.drive.ramp_time)
+
+    if frozen_time is not None:
+        angle = float(scene.drive_angle(frozen_time))
+
+        def offset(mbs, t, itemNumber, args):
+            return [0.0, 0.0, 0.0, 0.0, 0.0, angle + 0.0 * t]
+        return offset
+
+    def offset(mbs, t, itemNumber, args):
+        during = 0.5 * w * (t - tr / np.pi * esym.sin(np.pi / tr * t))
+        after = 0.5 * w * tr + w * (t - tr)
+        return [0.0, 0.0, 0.0, 0.0, 0.0, start + esym.IfThenElse(t < tr, during, after)]
+    return offset
+
+
+def _drive_offset_python(scene, frozen_time: float | None):
+    def offset(mbs, t, itemNumber, args):
+        return [0.0, 0.0, 0.0, 0.0, 0.0, float(scene.drive_angle(t if frozen_time is None else frozen_time))]
+    return offset
+
+
+def build_exudyn_twin(scene, q0: NDArray, symbolic: bool = True, frozen_drive_time: float | None = None) -> ExudynTwin:
+    """The Exudyn twin of ``scene.system`` starting at ``q0`` (our layout, absolute, at rest).
+
+    ``frozen_drive_time``: evaluate the drive angle at this fixed time (static solves, whose
+    quasi-time would otherwise turn the drive). ``symbolic=False`` uses a Python user function.
+    """
+    import exudyn as exu
+    import exudyn.itemInterface as eii
+    from exudyn.FEM import ObjectFFRFreducedOrderInterface
+
+    from ffrf.euler_parameters import rotation_matrix
+    from ffrf.joints import GroundFrame, MarkerJoint
+
+    from .exudyn_ffrf import _exudyn_fem
+
+    system = scene.system
+    sc = exu.SystemContainer()
+    mbs = sc.AddSystem()
+    beta = float(scene.settings["beta"])
+    objects, rigid_nodes, modal_nodes, reference = [], [], [], []
+    for k, link in enumerate(scene.links):
+        block = np.asarray(q0[system.block(k)], dtype=float)
+        body = SimpleNamespace(nodes=np.asarray(link.fe.nodes), mass=link.fe.mass, stiffness=link.fe.stiffness,
+                               basis=np.asarray(link.reduction.basis))
+        cms = ObjectFFRFreducedOrderInterface(_exudyn_fem(body))
+        info = cms.AddObjectFFRFreducedOrder(
+            mbs, positionRef=[float(v) for v in block[:3]], rotationMatrixRef=rotation_matrix(block[3:7]),
+            gravity=[float(v) for v in scene.gravity], stiffnessProportionalDamping=beta, name=f"link{k}")
+        mbs.SetNodeParameter(info["nGenericODE2"], "initialCoordinates", [float(z) for z in block[7:]])
+        objects.append(info["oFFRFreducedOrder"])
+        rigid_nodes.append(info["nRigidBody"])
+        modal_nodes.append(info["nGenericODE2"])
+        reference.append(np.asarray(mbs.GetNodeParameter(info["nRigidBody"], "referenceCoordinates"), dtype=float))
+
+    ground = mbs.AddObject(eii.ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
+    markers, joints, keep = {}, {}, []
+
+    def add_marker(marker, rotation, offset, label):
+        if isinstance(marker, GroundFrame):
+            ht = exu.HT(rotation=marker.rotation @ rotation, translation=marker.point + marker.rotation @ offset)
+            return mbs.AddMarker(eii.MarkerBodyRigid(bodyNumber=ground, localHT=ht, name=label))
+        link = scene.links[marker.body]
+        itf = _interface_of(link, marker)
+        return mbs.AddMarker(eii.MarkerSuperElementRigid(
+            bodyNumber=objects[marker.body], meshNodeNumbers=[int(i) for i in itf.nodes],
+            weightingFactors=[float(w) for w in itf.weights], useAlternativeApproach=True, rotationsExponentialMap=2,
+            localHT=exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(offset, float)), name=label))
+
+    used_symbolic = False
+    for c in system.constraints:
+        if not isinstance(c, MarkerJoint):
+            raise TypeError(f"constraint {c.name!r} ({type(c).__name__}) has no Exudyn twin here")
+        key = c.name.split(" ")[0]
+        m0 = add_marker(c.marker0, c.rotation0, c.offset0, f"{key}:m0")
+        m1 = add_marker(c.marker1, c.rotation1, c.offset1, f"{key}:m1")
+        markers[key] = (m0, m1)
+        axes = [int(v) for v in c.locked]
+        joint = mbs.AddObject(eii.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=axes, name=key))
+        joints[key] = joint
+        if c.angle is not None:
+            function = None
+            if symbolic:
+                from exudyn.utilities import CreateSymbolicUserFunction
+
+                try:
+                    function = CreateSymbolicUserFunction(mbs, _drive_offset_function(scene, frozen_drive_time),
+                                                          "offsetUserFunction", joint)
+                    used_symbolic = True
+                except Exception as error:  # pragma: no cover - reported to the caller
+                    keep.append(f"symbolic user function failed: {error!r}")
+                    function = None
+            if function is None:
+                function = _drive_offset_python(scene, frozen_drive_time)
+            mbs.SetObjectParameter(joint, "offsetUserFunction", function)
+            keep.append(function)
+
+    out = exu.OutputVariableType
+    sensors = {}
+    for k in range(len(scene.links)):
+        sensors[f"rigid{k}"] = mbs.AddSensor(eii.SensorNode(nodeNumber=rigid_nodes[k], outputVariableType=out.Coordinates,
+                                                            storeInternal=True, writeToFile=False))
+        sensors[f"modal{k}"] = mbs.AddSensor(eii.SensorNode(nodeNumber=modal_nodes[k], outputVariableType=out.Coordinates,
+                                                            storeInternal=True, writeToFile=False))
+    for a, link in enumerate(scene.links[1:]):
+        for j, node in enumerate(link.tracked_nodes):
+            sensors[f"node{3 * a + j}"] = mbs.AddSensor(eii.SensorSuperElement(
+                bodyNumber=objects[link.index], meshNodeNumber=int(node), outputVariableType=out.Position,
+                storeInternal=True, writeToFile=False))
+    # coupler: link 2 is marker 1 of joint1 and marker 0 of joint2
+    sensors["coupler_a"] = mbs.AddSensor(eii.SensorMarker(markerNumber=markers["joint1"][1], outputVariableType=out.Position,
+                                                          storeInternal=True, writeToFile=False))
+    sensors["coupler_b"] = mbs.AddSensor(eii.SensorMarker(markerNumber=markers["joint2"][0], outputVariableType=out.Position,
+                                                          storeInternal=True, writeToFile=False))
+    sensors["torque"] = mbs.AddSensor(eii.SensorObject(objectNumber=joints["joint3"], outputVariableType=out.TorqueLocal,
+                                                       storeInternal=True, writeToFile=False))
+    mbs.Assemble()
+    return ExudynTwin(sc, mbs, objects, rigid_nodes, modal_nodes, reference, markers, joints, sensors, used_symbolic, keep)
+
+
+def _q_from_exudyn(twin: ExudynTwin, scene, q0: NDArray, rigid: list, modal: list) -> NDArray:
+    """Our-layout absolute coordinates from Exudyn's displacement coordinates (rows = times);
+    Euler parameters are given our sign (Exudyn's reference may be -p)."""
+    system = scene.system
+    rows = rigid[0].shape[0]
+    q = np.empty((rows, system.n_coordinates))
+    for k in range(len(scene.links)):
+        block = system.block(k)
+        absolute = rigid[k] + twin.reference[k]
+        sign = 1.0 if np.dot(twin.reference[k][3:7], q0[block][3:7]) >= 0 else -1.0
+        absolute[:, 3:7] *= sign
+        q[:, block.start:block.start + 7] = absolute
+        q[:, block.start + 7:block.stop] = modal[k]
+    return q
+
+
+def exudyn_settings(t_end: float, step: float, rho_inf: float, tolerance: float = 1e-10):
+    """:func:`validation.exudyn_ffrf.exudyn_settings`: generalized-alpha index 3, fixed steps, full Newton."""
+    from .exudyn_ffrf import exudyn_settings as settings
+
+    n_steps = int(round(t_end / step))
+    plan = SimpleNamespace(n_steps=n_steps, t_end=t_end, rho_inf=rho_inf, step=step)
+    s = settings(plan, False, tolerance, tolerance)
+    return s
+
+
+def run_exudyn_bennett(scene, q0: NDArray, t_end: float, step: float = 1e-3, rho_inf: float = 0.9,
+                       tolerance: float = 1e-10, symbolic: bool = True) -> BennettTrajectory:
+    """Build the twin at ``q0`` (at rest), integrate to ``t_end`` and read every step back."""
+    import exudyn as exu
+
+    started = time.perf_counter()
+    twin = build_exudyn_twin(scene, q0, symbolic=symbolic)
+    settings = exudyn_settings(t_end, step, rho_inf, tolerance)
+    setup = time.perf_counter() - started
+    started = time.perf_counter()
+    solver = exu.MainSolverImplicitSecondOrder()
+    success = solver.SolveSystem(twin.mbs, settings)
+    integration = time.perf_counter() - started
+    if not success:
+        raise RuntimeError(f"Exudyn did not finish the Bennett run: {solver.GetErrorString()}")
+    mbs, sensors = twin.mbs, twin.sensors
+    data = {name: np.asarray(mbs.GetSensorStoredData(number)) for name, number in sensors.items()}
+    times = data["rigid0"][:, 0]
+    expected = step * np.arange(int(round(t_end / step)) + 1)
+    if times.shape != expected.shape or np.abs(times - expected).max() > 1e-9:
+        raise RuntimeError(f"Exudyn sensor output has {len(times)} rows, expected one per step ({len(expected)})")
+    n = len(scene.links)
+    q = _q_from_exudyn(twin, scene, q0, [data[f"rigid{k}"][:, 1:] for k in range(n)],
+                       [data[f"modal{k}"][:, 1:] for k in range(n)])
+    tracked = np.stack([data[f"node{i}"][:, 1:] for i in range(9)], axis=1)
+    coupler = 0.5 * (data["coupler_a"][:, 1:] + data["coupler_b"][:, 1:])
+    torque = data["torque"][:, 3]
+    iterations = int(solver.it.newtonStepsCount) if hasattr(solver, "it") else -1
+    return BennettTrajectory(times, q, coupler, tracked, torque, _zeta(scene.system, q), setup, integration, iterations,
+                             f"exudyn {exu.__version__}" + (" (symbolic drive)" if twin.symbolic else " (Python drive)"),
+                             {"symbolic": twin.symbolic, "notes": [x for x in twin.keep_alive if isinstance(x, str)]})
+
+
+def run_ffrf_bennett(scene, system, q0: NDArray, t_end: float, step: float = 1e-3, rho_inf: float = 0.9,
+                     tolerance: float = 1e-12, label: str = "ffrf") -> BennettTrajectory:
+    """Our generalized-alpha on ``system`` (``scene.system`` or :func:`exudyn_convention_system`) from ``q0`` at rest."""
+    from ffrf.generalized_alpha import generalized_alpha
+
+    result = generalized_alpha(system, np.asarray(q0, float), np.zeros_like(q0), t_end, step, rho_inf=rho_inf,
+                               tolerance=tolerance)
+    coupler, tracked = system_points(scene, system, result.q)
+    return BennettTrajectory(result.time, result.q, coupler, tracked, result.multipliers[:, -1],
+                             _zeta(system, result.q), 0.0, result.wall_time, int(result.newton_iterations.sum()), label)
+
+
+# --------------------------------------------------------------------------------------------
+# Statics
+# --------------------------------------------------------------------------------------------
+
+def static_exudyn_bennett(scene, q0: NDArray, t: float = 0.0, load_steps: int = 2, tolerance: float = 1e-10):
+    """Exudyn ``SolveStatic`` of the twin from ``q0`` with the drive frozen at ``t``. Returns
+    (q (our layout), drive multiplier with *our* sign (Exudyn's static lambda is flipped), coupler, tracked)."""
+    import exudyn as exu
+
+    twin = build_exudyn_twin(scene, q0, symbolic=False, frozen_drive_time=t)
+    s = exu.SimulationSettings()
+    s.staticSolver.numberOfLoadSteps = load_steps
+    s.staticSolver.adaptiveStep = False
+    s.staticSolver.newton.relativeTolerance = tolerance
+    s.staticSolver.newton.absoluteTolerance = tolerance
+    s.staticSolver.newton.maxIterations = 50
+    s.staticSolver.verboseMode = 0
+    s.linearSolver.solverType = exu.LinearSolverType.EXUdense
+    s.solution.file.write = False
+    solver = exu.MainSolverStatic()
+    if not solver.SolveSystem(twin.mbs, s):
+        raise RuntimeError(f"Exudyn SolveStatic failed: {solver.GetErrorString()}")
+    mbs = twin.mbs
+    out = exu.OutputVariableType
+    n = len(scene.links)
+    rigid = [np.atleast_2d(mbs.GetNodeOutput(twin.rigid_nodes[k], out.Coordinates)) for k in range(n)]
+    modal = [np.atleast_2d(mbs.GetNodeOutput(twin.modal_nodes[k], out.Coordinates)) for k in range(n)]
+    q = _q_from_exudyn(twin, scene, q0, rigid, modal)[0]
+    torque = -float(np.asarray(mbs.GetObjectOutput(twin.joints["joint3"], out.TorqueLocal))[2])
+    ca = np.asarray(mbs.GetMarkerOutput(twin.markers["joint1"][1], out.Position))
+    cb = np.asarray(mbs.GetMarkerOutput(twin.markers["joint2"][0], out.Position))
+    tracked = np.stack([np.asarray(mbs.GetSensorValues(twin.sensors[f"node{i}"])) for i in range(9)])
+    return q, torque, 0.5 * (ca + cb), tracked
+
+
+def static_ffrf_bennett(scene, system, q0: NDArray, t: float = 0.0, load_steps: int = 2, tolerance: float = 1e-12):
+    """Our static equilibrium of ``system`` from ``q0``: (q, drive multiplier, coupler, tracked)."""
+    from ffrf.static_solver import static_equilibrium
+
+    solution = static_equilibrium(system, np.asarray(q0, float), t=t, load_steps=load_steps, tolerance=tolerance)
+    coupler, tracked = system_points(scene, system, solution.q)
+    return solution.q, float(solution.multipliers[-1]), coupler[0], tracked[0]
+
+
+# --------------------------------------------------------------------------------------------
+# Comparison
+# --------------------------------------------------------------------------------------------
+
+def compare(a: BennettTrajectory, b: BennettTrajectory, elastic: BennettTrajectory | None = None) -> dict[str, float]:
+    """Max differences between two runs (same output times). ``elastic``: a run whose coupler
+    motion away from its start measures the elastic deviation scale (default ``b``)."""
+    assert a.time.shape == b.time.shape and np.abs(a.time - b.time).max() < 1e-9
+    ref = b if elastic is None else elastic
+    out = {
+        "coupler_m": float(np.abs(a.coupler - b.coupler).max()),
+        "tracked_m": float(np.abs(a.tracked - b.tracked).max()),
+        "zeta": float(max(np.abs(za - zb).max() for za, zb in zip(a.zeta, b.zeta))),
+        "zeta_scale": float(max(np.abs(zb).max() for zb in b.zeta)),
+        "torque_Nm": float(np.abs(a.torque - b.torque).max()),
+        "torque_scale_Nm": float(np.abs(b.torque).max()),
+        "coupler_motion_m": float(np.linalg.norm(ref.coupler - ref.coupler[0], axis=1).max()),
+        "tracked_motion_m": float(np.linalg.norm(ref.tracked - ref.tracked[0], axis=2).max()),
+    }
+    out["torque_relative"] = out["torque_Nm"] / max(out["torque_scale_Nm"], 1e-300)
+    out["zeta_relative"] = out["zeta"] / max(out["zeta_scale"], 1e-300)
+    out["coupler_relative_to_motion"] = out["coupler_m"] / max(out["coupler_motion_m"], 1e-300)
+    return out
+
+
+def probe_marker_offset(scene, link_index: int = 1, interface: str | None = None, zeta_scale: float = 0.03,
+                        offset=(0.01, -0.02, 0.005)) -> dict[str, float]:
+    """Where Exudyn puts a ``MarkerSuperElementRigid``'s ``localHT`` translation on a deformed body:
+    distances of its marker position from R + A(x_bar + P zeta + o) (body frame) and from
+    r_M + A exp(theta) o (marker frame, ours), and its orientation error against A exp(theta) R."""
+    import exudyn as exu
+    import exudyn.itemInterface as eii
+    from exudyn.FEM import ObjectFFRFreducedOrderInterface
+
+    from ffrf.euler_parameters import rotation_matrix
+    from ffrf.markers import exp_so3
+
+    from .exudyn_ffrf import _exudyn_fem
+
+    link = scene.links[link_index]
+    name = interface or list(link.interfaces)[-1]
+    block = scene.q_start[scene.system.block(link_index)]
+    a = rotation_matrix(block[3:7])
+    m = link.reduction.basis.shape[1]
+    zeta = zeta_scale * np.array([(-1.0) ** k * (k + 1) for k in range(m)]) / m
+    body = SimpleNamespace(nodes=np.asarray(link.fe.nodes), mass=link.fe.mass, stiffness=link.fe.stiffness,
+                           basis=np.asarray(link.reduction.basis))
+    sc = exu.SystemContainer()
+    mbs = sc.AddSystem()
+    info = ObjectFFRFreducedOrderInterface(_exudyn_fem(body)).AddObjectFFRFreducedOrder(
+        mbs, positionRef=list(block[:3]), rotationMatrixRef=a)
+    mbs.SetNodeParameter(info["nGenericODE2"], "initialCoordinates", [float(z) for z in zeta])
+    itf = link.interfaces[name]
+    turn = rotation_matrix(np.array([np.cos(0.3), np.sin(0.3), 0.0, 0.0]))
+    o = np.asarray(offset, float)
+    marker = mbs.AddMarker(eii.MarkerSuperElementRigid(
+        bodyNumber=info["oFFRFreducedOrder"], meshNodeNumbers=[int(i) for i in itf.nodes],
+        weightingFactors=[float(w) for w in itf.weights], useAlternativeApproach=True,
+        localHT=exu.HT(rotation=turn, translation=o)))
+    mbs.Assemble()
+    out = exu.OutputVariableType
+    position = np.asarray(mbs.GetMarkerOutput(marker, out.Position))
+    rotation = np.asarray(mbs.GetMarkerOutput(marker, out.RotationMatrix)).reshape(3, 3)
+    ours = link.markers[name]
+    q = np.r_[block[:7], zeta]
+    theta = ours.rotation_vector(q)
+    return {
+        "theta_norm": float(np.linalg.norm(theta)),
+        "body_frame_distance": float(np.linalg.norm(position - (ours.position(q) + a @ o))),
+        "marker_frame_distance": float(np.linalg.norm(position - (ours.position(q) + a @ exp_so3(theta) @ o))),
+        "orientation_error": float(np.abs(rotation - a @ exp_so3(theta) @ turn).max()),
+    }
