@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .euler_parameters import rotation_derivative, rotation_matrix
+from .marker_kernels import exp_so3_kernel
 
 __all__ = ["BodyMarker", "rigid_interface_marker", "node_marker", "frame_marker", "exp_so3"]
 
@@ -36,14 +37,8 @@ def _skew(v: NDArray) -> NDArray:
 def exp_so3(theta: NDArray) -> NDArray:
     r"""Rodrigues' formula :math:`\exp(\tilde\theta) = I + \frac{\sin\phi}{\phi}\tilde\theta +
     \frac{1-\cos\phi}{\phi^2}\tilde\theta^2`, :math:`\phi^2 = \theta\cdot\theta` (analytic, also for complex ``theta``)."""
-    phi2 = theta @ theta
-    skew = _skew(theta)
-    if abs(phi2) < 1e-8:  # Taylor series: error below 1e-17
-        a, b = 1.0 - phi2 / 6.0, 0.5 - phi2 / 24.0
-    else:
-        phi = np.sqrt(phi2)
-        a, b = np.sin(phi) / phi, (1.0 - np.cos(phi)) / phi2
-    return np.eye(3) + a * skew + b * (skew @ skew)
+    theta = np.asarray(theta)
+    return exp_so3_kernel(theta.astype(np.result_type(theta, float)))
 
 
 @dataclass(frozen=True, eq=False)
