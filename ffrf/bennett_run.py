@@ -32,7 +32,7 @@ from scipy.integrate import cumulative_simpson
 from .bennett_scene import BennettScene, assemble
 from .euler_parameters import rotation_matrix
 from .generalized_alpha import generalized_alpha
-from .joints import MarkerJoint, _frame
+from .joints import MarkerJoint, joint_pose
 from .static_solver import quasi_static
 
 __all__ = ["BennettResult", "run_bennett", "evaluate_sensors", "ideal_coupler_points", "choose_mode", "write_results"]
@@ -78,8 +78,8 @@ def _joints(scene: BennettScene) -> list[MarkerJoint]:
 def _joint_state(joint: MarkerJoint, scene: BennettScene, q: NDArray):
     blocks = [q[scene.system.block(i)] for i in joint.bodies]
     q0, q1 = (None, blocks[0]) if len(blocks) == 1 else blocks
-    p0, axes0 = _frame(joint.marker0, q0, joint.rotation0, joint.offset0)
-    p1, axes1 = _frame(joint.marker1, q1, joint.rotation1, joint.offset1)
+    p0, axes0 = joint_pose(joint.marker0, q0, joint.rotation0, joint.offset0)
+    p1, axes1 = joint_pose(joint.marker1, q1, joint.rotation1, joint.offset1)
     angle = np.arctan2(np.cross(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0])
     return p0, p1, angle
 

@@ -32,7 +32,10 @@ from .constraints import Constraint
 from .marker_kernels import exp_so3_tangent_kernel, marker_frame
 from .markers import BodyMarker
 
-__all__ = ["GroundFrame", "MarkerJoint", "revolute_joint", "fixed_joint", "driven_revolute_joint", "exp_so3_tangent"]
+__all__ = [
+    "GroundFrame", "MarkerJoint", "joint_side", "joint_pose", "revolute_joint", "fixed_joint", "driven_revolute_joint",
+    "exp_so3_tangent",
+]
 
 
 def exp_so3_tangent(theta: NDArray) -> NDArray:
@@ -51,8 +54,9 @@ class GroundFrame:
     name: str = "ground"
 
 
-def _side(marker, q, rotation, offset, derivatives: bool = True):
-    """Joint point, axes (columns) and, for a body marker, their derivatives (``None`` on the ground)."""
+def joint_side(marker, q, rotation, offset):
+    """Joint point, axes (columns) and, for a body marker, their derivatives ``dp/dq`` (3 x n) and
+    ``d axes/dq`` (3, 3, n) (``None`` on the ground)."""
     if isinstance(marker, GroundFrame):
         return marker.point + marker.rotation @ offset, marker.rotation @ rotation, None, None
     dtype = q.dtype
@@ -60,9 +64,9 @@ def _side(marker, q, rotation, offset, derivatives: bool = True):
                         marker.rotation_modes.astype(dtype), rotation.astype(dtype), offset.astype(dtype))
 
 
-def _frame(marker, q, rotation, offset):
+def joint_pose(marker, q, rotation, offset):
     """Joint point and axes (columns) of one side of a joint."""
-    point, axes, _, _ = _side(marker, q, rotation, offset)
+    point, axes, _, _ = joint_side(marker, q, rotation, offset)
     return point, axes
 
 
@@ -106,8 +110,8 @@ class MarkerJoint(Constraint):
 
     def value(self, blocks, t):
         q0, q1 = self._sides(blocks)
-        p0, axes0, _, _ = _side(self.marker0, q0, self.rotation0, self.offset0)
-        p1, axes1, _, _ = _side(self.marker1, q1, self.rotation1, self.offset1)
+        p0, axes0, _, _ = joint_side(self.marker0, q0, self.rotation0, self.offset0)
+        p1, axes1, _, _ = joint_side(self.marker1, q1, self.rotation1, self.offset1)
         return self._equations(p0, axes0, p1, axes1, t)
 
     def _equations(self, p0, axes0, p1, axes1, t):
@@ -124,8 +128,8 @@ class MarkerJoint(Constraint):
     def jacobian(self, blocks, t):
         q0, q1 = self._sides(blocks)
         ground = q0 is None
-        p0, axes0, dp0, da0 = _side(self.marker0, q0, self.rotation0, self.offset0)
-        p1, axes1, dp1, da1 = _side(self.marker1, q1, self.rotation1, self.offset1)
+        p0, axes0, dp0, da0 = joint_side(self.marker0, q0, self.rotation0, self.offset0)
+        p1, axes1, dp1, da1 = joint_side(self.marker1, q1, self.rotation1, self.offset1)
         dtype = q1.dtype if ground else np.result_type(q0.dtype, q1.dtype)
         rows1 = np.zeros((self.size, q1.shape[0]), dtype=dtype)
         rows0 = None if ground else np.zeros((self.size, q0.shape[0]), dtype=dtype)

@@ -1,4 +1,7 @@
-"""Shared fixtures. Random numbers are always seeded."""
+"""Shared fixtures. Random numbers are always seeded.
+
+This folder is on ``sys.path`` during tests, so the shared reference modules next to this file
+(``kinematics_reference``, ``body_fixtures``, ``pendulum_fixtures``) import from any test folder."""
 
 import numpy as np
 import pytest

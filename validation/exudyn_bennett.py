@@ -104,7 +104,7 @@ class BennettTrajectory:
 def _exudyn_joint_class():
     """:class:`ffrf.joints.MarkerJoint` with Exudyn's marker rotation Jacobian (see :func:`exudyn_convention_system`)."""
     from ffrf.euler_parameters import rotation_matrix
-    from ffrf.joints import MarkerJoint, _side, exp_so3_tangent
+    from ffrf.joints import MarkerJoint, exp_so3_tangent, joint_side
     from ffrf.markers import _skew, exp_so3
 
     def axis_correction(marker, q, rotation):
@@ -129,8 +129,8 @@ def _exudyn_joint_class():
             rows = super().jacobian(blocks, t)
             q0, q1 = self._sides(blocks)
             ground = q0 is None
-            _, axes0, _, _ = _side(self.marker0, q0, self.rotation0, self.offset0, False)
-            _, axes1, _, _ = _side(self.marker1, q1, self.rotation1, self.offset1, False)
+            _, axes0, _, _ = joint_side(self.marker0, q0, self.rotation0, self.offset0)
+            _, axes1, _, _ = joint_side(self.marker1, q1, self.rotation1, self.offset1)
             c1 = axis_correction(self.marker1, q1, self.rotation1) if self.marker1.rotation_modes.shape[1] else None
             c0 = (axis_correction(self.marker0, q0, self.rotation0)
                   if not ground and self.marker0.rotation_modes.shape[1] else None)
@@ -194,7 +194,7 @@ def system_points(scene, system, q: NDArray) -> tuple[NDArray, NDArray]:
     """Coupler point (mean of link 2's joint points, as :func:`ffrf.bennett_run.evaluate_sensors`)
     and the tracked nodes of links 1..3 for coordinate rows ``q``, using ``system``'s joints."""
     from ffrf.euler_parameters import rotation_matrix
-    from ffrf.joints import _frame
+    from ffrf.joints import joint_pose
 
     joints = _joints(system)
     j1, j2 = joints["joint1"], joints["joint2"]
@@ -202,8 +202,8 @@ def system_points(scene, system, q: NDArray) -> tuple[NDArray, NDArray]:
     coupler = np.empty((len(q), 3))
     tracked = np.empty((len(q), 9, 3))
     for row, qq in enumerate(q):
-        p_far, _ = _frame(j1.marker1, qq[system.block(j1.bodies[1])], j1.rotation1, j1.offset1)
-        p_near, _ = _frame(j2.marker0, qq[system.block(j2.bodies[0])], j2.rotation0, j2.offset0)
+        p_far, _ = joint_pose(j1.marker1, qq[system.block(j1.bodies[1])], j1.rotation1, j1.offset1)
+        p_near, _ = joint_pose(j2.marker0, qq[system.block(j2.bodies[0])], j2.rotation0, j2.offset0)
         coupler[row] = 0.5 * (p_far + p_near)
         for a, link in enumerate(scene.links[1:]):
             block = qq[system.block(link.index)]

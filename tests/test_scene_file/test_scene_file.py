@@ -1,20 +1,15 @@
 """Scenes from TOML files: the same pendulum as built in Python, a driven parametric link,
 and clear errors for bad scenes."""
 
-import sys
-from pathlib import Path
-
 import meshio
 import numpy as np
 import pytest
+from body_fixtures import bar_model
+from pendulum_fixtures import pendulum, tip_position
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "test_ffrf_body"))
-from body_fixtures import bar_model  # noqa: E402
-from pendulum_fixtures import pendulum, tip_position  # noqa: E402
-
-from ffrf.cli import main  # noqa: E402
-from ffrf.generalized_alpha import generalized_alpha  # noqa: E402
-from ffrf.scene_file import SceneError, load_scene, run_scene  # noqa: E402
+from ffrf.cli import main
+from ffrf.generalized_alpha import generalized_alpha
+from ffrf.scene_file import SceneError, load_scene, run_scene
 
 PENDULUM = """
 [scene]
