@@ -12,6 +12,19 @@ of the driver, where link ``k`` is displaced by the motion polynomial's pose of 
 Misaligned variants (base twist 91 or 92 deg) cannot be assembled rigidly: the base's
 joint-3 frame is turned from the nominal axis to its own bore axis in small steps of a
 static solution (:func:`assemble`), and the assembly stresses remain in the links.
+
+**Joint points off the bore centre.** The two housings at a joint are stacked along its axis,
+so each joint point lies ``o`` = 8.5 mm from its bore's weighted centre. ``joint_offsets``
+chooses where that offset lives (:func:`ffrf.markers.attach_joint_point`):
+
+* ``"body"`` (default): in the body frame, ``p = R + A(o + x_bar + P zeta)`` (Eq. (K1) with
+  the offset in the marker point). This is the paper's model: Exudyn's
+  ``MarkerSuperElementRigid`` applies its offset this way, so the Exudyn twin is exactly
+  equivalent (:mod:`validation.exudyn_bennett`).
+* ``"marker"``: in the bore marker's frame, ``p = r_M + A exp(theta_M) o`` (a pin rigidly
+  attached to the rigid bore, Eqs. (J1)-(J3)). It differs from ``"body"`` by
+  ``A (exp(theta_M) - I) o``, about 3 % of the PLA coupler's sag (measured in the report of
+  :mod:`validation`); Exudyn cannot express it.
 """
 
 from __future__ import annotations
@@ -31,7 +44,7 @@ from .flexible_body import FlexibleBody
 from .interfaces import InterfaceNodes, boundary_triangles, interface_from_group
 from .joints import GroundFrame, MarkerJoint, driven_revolute_joint, fixed_joint, revolute_joint
 from .link_geometry import LinkGeometry, bennett_axes, mesh_link, paper_link_axes
-from .markers import BodyMarker, rigid_interface_marker
+from .markers import JOINT_OFFSETS, BodyMarker, attach_joint_point, rigid_interface_marker
 from .materials import PLA, RIGID, Material
 from .modal_moments import modal_moments
 from .static_solver import static_equilibrium
@@ -80,7 +93,7 @@ class BennettScene:
 
     def with_misalignment(self, fraction: float) -> MultibodySystem:
         """The system with the base's joint-3 frame turned by ``fraction`` of the misalignment."""
-        return _system(self.links, self.drive_angle, self.gravity, fraction, self.settings["beta"])
+        return _system(self.links, self.drive_angle, self.gravity, fraction, self.settings["joint_offsets"])
 
     @property
     def gravity(self) -> NDArray[np.float64]:
@@ -134,7 +147,7 @@ def _axis(link: LinkModel, name: str) -> NDArray[np.float64]:
     return link.geometry.axes[index].direction
 
 
-def _system(links, drive_angle, gravity, misalignment: float, beta: float) -> MultibodySystem:
+def _system(links, drive_angle, gravity, misalignment: float, joint_offsets: str) -> MultibodySystem:
     base = links[0]
     mount = base.markers["mount"]
     constraints: list = [fixed_joint(GroundFrame(mount.point.copy(), np.eye(3)), mount, name="clamp")]
@@ -147,11 +160,12 @@ def _system(links, drive_angle, gravity, misalignment: float, beta: float) -> Mu
         frame_far = joint_frame(z_far)
         z_near = _axis(near, name)
         point_near = _joint_point(near, name)
+        marker_near, offset_near = attach_joint_point(marker_near, point_near, joint_offsets)
+        marker_far, offset_far = attach_joint_point(marker_far, point_far, joint_offsets)
         if i != 3:
             frame_near = joint_frame(z_near, frame_far[:, 0])
-            constraints.append(revolute_joint(
-                marker_near, marker_far, frame_near, frame_far,
-                point_near - marker_near.point, point_far - marker_far.point, name=name))
+            constraints.append(revolute_joint(marker_near, marker_far, frame_near, frame_far, offset_near, offset_far,
+                                              name=name))
         else:
             # Joint 3: marker 0 on the base (link 0, far side), marker 1 on link 3 (near side).
             # The base's own axis may be misaligned; continuation turns its frame from the
@@ -159,9 +173,8 @@ def _system(links, drive_angle, gravity, misalignment: float, beta: float) -> Mu
             nominal = joint_frame(z_near)
             own = joint_frame(z_far, nominal[:, 0])
             frame_base = _interpolate_frames(nominal, own, misalignment)
-            constraints.append(driven_revolute_joint(
-                marker_far, marker_near, drive_angle, frame_base, nominal,
-                point_far - marker_far.point, point_near - marker_near.point, name="joint3 (drive)"))
+            constraints.append(driven_revolute_joint(marker_far, marker_near, drive_angle, frame_base, nominal,
+                                                     offset_far, offset_near, name="joint3 (drive)"))
     return MultibodySystem(tuple(l.body for l in links), tuple(constraints), gravity=gravity)
 
 
@@ -199,15 +212,19 @@ def build_bennett(
     revolutions: float = 1.0,
     gravity=(0.0, 0.0, -9.81),
     exact_gravity: bool = True,
+    joint_offsets: str = "body",
 ) -> BennettScene:
     """Build the paper's scene ``variant`` (``rigid``, ``pla``, ``pla1``, ``pla2``).
 
     ``h``: maximum tetrahedron edge (m; paper 2 mm); ``n_modes``: fixed-interface modes per
     link (paper 32); ``start_angle``: link 3's rotation about h3 from the folded home pose
-    at t = 0 (the folded pose itself has overlapping arms); ``revolutions`` after the ramp.
+    at t = 0 (the folded pose itself has overlapping arms); ``revolutions`` after the ramp;
+    ``joint_offsets``: ``"body"`` (paper, Exudyn) or ``"marker"`` (module docstring).
     """
     if variant not in VARIANTS:
         raise ValueError(f"unknown variant {variant!r}; choose one of {sorted(VARIANTS)}")
+    if joint_offsets not in JOINT_OFFSETS:
+        raise ValueError(f"joint_offsets must be one of {JOINT_OFFSETS}, got {joint_offsets!r}")
     material, alpha3 = VARIANTS[variant]
     axes = bennett_axes(alpha3)
     links = tuple(_build_link(k, axes, material, h, order, n_modes, beta, exact_gravity) for k in range(4))
@@ -216,12 +233,13 @@ def build_bennett(
     gravity = np.asarray(gravity, dtype=float)
     settings = dict(variant=variant, h=h, order=order, n_modes=n_modes, beta=beta, omega=omega, ramp_time=ramp_time,
                     start_angle=start_angle, revolutions=revolutions, gravity=gravity.tolist(),
-                    exact_gravity=exact_gravity, alpha3_deg=alpha3, material=material.name)
+                    exact_gravity=exact_gravity, alpha3_deg=alpha3, material=material.name,
+                    joint_offsets=joint_offsets)
 
     def angle(t: float) -> float:
         return start_angle + float(drive(t))
 
-    system = _system(links, angle, gravity, 1.0, beta)
+    system = _system(links, angle, gravity, 1.0, joint_offsets)
     q_start = _start_state(system, linkage, start_angle)
     t_end = drive.time_for_angle(float(drive.angle(ramp_time)) + 2.0 * np.pi * revolutions)
     return BennettScene(variant, links, system, q_start, drive, start_angle, t_end, linkage, settings)

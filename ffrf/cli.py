@@ -83,6 +83,8 @@ def _configure_bennett(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--h", type=float, default=4e-3, help="maximum element edge in metres (paper: 0.002)")
     parser.add_argument("--order", type=int, choices=(1, 2), default=1, help="tetrahedron order")
     parser.add_argument("--modes", type=int, default=8, help="fixed-interface modes per link (paper: 32)")
+    parser.add_argument("--joint-offsets", choices=("body", "marker"), default="body",
+                        help="joint point off the bore centre in the body frame (paper, Exudyn) or the bore's frame")
     parser.add_argument("--dt", type=float, default=1e-3, help="time step of a dynamic run (s)")
     parser.add_argument("--outputs", type=int, default=241, help="output times over the run")
     mode = parser.add_mutually_exclusive_group()
@@ -117,7 +119,8 @@ def _run_bennett(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     print(f"Building the {args.variant} Bennett scene: 4 links, h = {1e3 * args.h:g} mm, P{args.order}, "
           f"{args.modes} fixed-interface modes per link ...", file=sys.stderr)
-    scene = build_bennett(args.variant, h=args.h, order=args.order, n_modes=args.modes)
+    scene = build_bennett(args.variant, h=args.h, order=args.order, n_modes=args.modes,
+                          joint_offsets=args.joint_offsets)
     mode, ratio = choose_mode(scene) if args.mode == "auto" else (args.mode, float("nan"))
     print(f"Running {mode.replace('_', '-')} over {scene.t_end:.1f} s of drive"
           + (f" (drive time scale / longest link period = {ratio:.0f})" if args.mode == "auto" else ""),

@@ -19,7 +19,7 @@ first order) and :math:`P\zeta` its translation.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,7 +27,11 @@ from numpy.typing import ArrayLike, NDArray
 from .euler_parameters import rotation_derivative, rotation_matrix
 from .marker_kernels import exp_so3_kernel
 
-__all__ = ["BodyMarker", "rigid_interface_marker", "node_marker", "frame_marker", "exp_so3"]
+__all__ = ["BodyMarker", "JOINT_OFFSETS", "attach_joint_point", "rigid_interface_marker", "node_marker", "frame_marker",
+           "exp_so3"]
+
+#: Where a joint point's offset from its marker lives (see :func:`attach_joint_point`).
+JOINT_OFFSETS = ("body", "marker")
 
 
 def _skew(v: NDArray) -> NDArray:
@@ -112,6 +116,23 @@ def rigid_interface_marker(
                          "undefined; select nodes spread over a surface")
     rotation_modes = np.linalg.solve(w_matrix, np.einsum("i,iab,ibm->am", w, skews, modes))
     return BodyMarker(body, name, centre + np.asarray(offset, dtype=float), position_modes, rotation_modes)
+
+
+def attach_joint_point(marker: BodyMarker, point: ArrayLike, joint_offsets: str = "body"
+                       ) -> tuple[BodyMarker, NDArray[np.float64]]:
+    """The marker and joint offset ``o`` that put a joint at ``point`` (body coordinates).
+
+    ``"body"``: the marker itself moves to ``point``, ``o = 0``: Eq. (K1) with the offset in the
+    body frame, as Exudyn's ``MarkerSuperElementRigid`` applies its ``localHT`` translation.
+    ``"marker"``: the marker stays, ``o = point - marker point`` turns with the marker frame,
+    ``p = r_M + A exp(theta_M) o`` (Eq. (J1)): a pin rigidly attached to a rigid interface.
+    The two differ by ``A (exp(theta_M) - I) o``."""
+    point = np.array(point, dtype=float)
+    if joint_offsets == "body":
+        return replace(marker, point=point), np.zeros(3)
+    if joint_offsets == "marker":
+        return marker, point - marker.point
+    raise ValueError(f"joint_offsets must be one of {JOINT_OFFSETS}, got {joint_offsets!r}")
 
 
 def node_marker(body: int, nodes: ArrayLike, basis: ArrayLike, index: int, name: str = "node") -> BodyMarker:

@@ -15,6 +15,7 @@ mesh coordinates are world coordinates at t = 0 (as in the built-in Bennett scen
     step = 1e-3                       # dynamic time step
     rho_inf = 0.9
     outputs = 101
+    joint_offsets = "body"            # joint point off its interface centre: "body" (as Exudyn) or "marker" frame
 
     [[bodies]]
     name = "link"
@@ -67,7 +68,7 @@ from .generalized_alpha import generalized_alpha
 from .interfaces import InterfaceNodes, interface_from_group, interface_from_nodes, interface_in_cylinder
 from .joints import GroundFrame, MarkerJoint, driven_revolute_joint, fixed_joint, revolute_joint
 from .link_geometry import bennett_axes, mesh_link, paper_link_axes
-from .markers import rigid_interface_marker
+from .markers import JOINT_OFFSETS, attach_joint_point, rigid_interface_marker
 from .materials import Material
 from .mesh import read_mesh
 from .modal_moments import modal_moments
@@ -164,7 +165,7 @@ def _joint_frame(axis) -> NDArray:
     return joint_frame(np.asarray(axis, dtype=float))
 
 
-def _joint(spec: dict, index: dict[str, int], bodies: list[FileBody]) -> MarkerJoint:
+def _joint(spec: dict, index: dict[str, int], bodies: list[FileBody], joint_offsets: str) -> MarkerJoint:
     name = spec.get("name", "joint")
     where = f"joint {name!r}"
     kind = spec.get("type", "revolute")
@@ -191,9 +192,11 @@ def _joint(spec: dict, index: dict[str, int], bodies: list[FileBody]) -> MarkerJ
         raise SceneError(f"{where}: at least one side must be a body")
     frame = _joint_frame(spec.get("axis", [0.0, 0.0, 1.0]))
     point = np.asarray(spec.get("point", m1.point), dtype=float)
-    side0 = GroundFrame(point, np.eye(3)) if m0 is None else m0
-    offset0 = np.zeros(3) if m0 is None else point - m0.point
-    offset1 = point - m1.point
+    if m0 is None:
+        side0, offset0 = GroundFrame(point, np.eye(3)), np.zeros(3)
+    else:
+        side0, offset0 = attach_joint_point(m0, point, joint_offsets)
+    m1, offset1 = attach_joint_point(m1, point, joint_offsets)
     if kind == "revolute":
         return revolute_joint(side0, m1, frame, frame, offset0, offset1, name=name)
     if kind == "fixed":
@@ -223,7 +226,10 @@ def load_scene(path: str | Path) -> FileScene:
     index = {b.name: k for k, b in enumerate(bodies)}
     if len(index) != len(bodies):
         raise SceneError(f"{path}: body names must be unique")
-    joints = [_joint(spec, index, bodies) for spec in data.get("joints", [])]
+    joint_offsets = settings.get("joint_offsets", "body")
+    if joint_offsets not in JOINT_OFFSETS:
+        raise SceneError(f"{path}: [scene] joint_offsets must be one of {JOINT_OFFSETS}, got {joint_offsets!r}")
+    joints = [_joint(spec, index, bodies, joint_offsets) for spec in data.get("joints", [])]
     system = MultibodySystem(tuple(body for _, body in built), tuple(joints),
                              gravity=np.asarray(settings.get("gravity", [0.0, 0.0, -9.81]), dtype=float))
     sensors = {}

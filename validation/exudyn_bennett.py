@@ -17,15 +17,14 @@ solvers):
   are defined in the FE reference pose, so the offset at t = 0 is the start angle).
 
 **Offset convention (measured, see ``probe_marker_offset``).** Exudyn applies the translation
-of a ``MarkerSuperElementRigid``'s ``localHT`` (= its ``offset``) in the *body* frame:
-``p = R + A (o + sum w_i (x_i + u_i))``, whereas our joints put the joint point at
-``p = r_M + A exp(theta_M) o`` (*marker* frame, :mod:`ffrf.joints`). The two agree at
-``theta_M = 0`` (frame interfaces, undeformed links) and differ by ``A (exp(theta_M) - I) o``
-otherwise (``|o|`` = 8.5 mm axial offsets on the Bennett bores). The comparison therefore
-runs our solver on the production system (``scene.system``) and on
-:func:`exudyn_convention_system`, the same system with Exudyn's convention (the offset moved
-into the body-frame marker point, joint offsets zero), which isolates the solver comparison
-from the modelling difference.
+of a ``MarkerSuperElementRigid``'s ``localHT`` in the *body* frame:
+``p = R + A (o + sum w_i (x_i + u_i))``. Our scenes do the same by default
+(``joint_offsets="body"``, :func:`ffrf.markers.attach_joint_point`), so the twin's marker
+translation is our marker point minus the interface's weighted centre and the models are
+equivalent. With ``joint_offsets="marker"`` our joint point is ``r_M + A exp(theta_M) o``,
+which Exudyn cannot express; the twin then applies ``o`` in the body frame and records a note
+(``ExudynTwin.notes``): the two differ by ``A (exp(theta_M) - I) o`` (``|o|`` = 8.5 mm).
+:func:`exudyn_convention_system` also moves any remaining joint offsets into the marker point.
 
 **Marker rotation Jacobian (measured).** Exudyn's joint Jacobian uses the marker angular
 velocity ``A (omega_bar + T(theta) theta_dot)``; the exact derivative of its own orientation
@@ -37,8 +36,8 @@ solver (a :class:`ffrf.joints.MarkerJoint` subclass, same equations); then both 
 to round-off.
 
 Measured on the coarse PLA scene (h = 6 mm, 2 modes, from ``q_start``, h = 1e-3, 0.2 s):
-both Exudyn conventions: coupler 1e-16 m, torque 1e-9 relative; Exudyn's offset with our exact
-Jacobian: coupler 2e-9 m (4e-5 of its motion), torque 2.4e-6 relative; production system:
+with Exudyn's Jacobian: coupler 1e-16 m, torque 1e-9 relative; production system (our exact
+Jacobian): coupler 2e-9 m (4e-5 of its motion), torque 2.4e-6 relative; marker-frame offsets:
 coupler 1.2e-6 m (3 %), torque 4 % (``bench/bench_bennett_vs_exudyn.py`` and the tests).
 
 ``exudyn`` is imported lazily.
@@ -237,12 +236,14 @@ class ExudynTwin:
     sensors: dict
     symbolic: bool
     keep_alive: list = field(default_factory=list)
+    notes: list = field(default_factory=list)  # where the twin is not exactly equivalent
 
 
 def _interface_of(link, marker):
+    """The interface name of a joint's ``marker`` (the scene may have moved its point, not its name)."""
     for name, candidate in link.markers.items():
-        if candidate is marker:
-            return link.interfaces[name]
+        if candidate.name == marker.name:
+            return name
     raise ValueError(f"marker {marker.name!r} is not one of link {link.index}'s interface markers")
 
 
@@ -309,18 +310,25 @@ def build_exudyn_twin(scene, q0: NDArray, symbolic: bool = True, frozen_drive_ti
         reference.append(np.asarray(mbs.GetNodeParameter(info["nRigidBody"], "referenceCoordinates"), dtype=float))
 
     ground = mbs.AddObject(eii.ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
-    markers, joints, keep = {}, {}, []
+    markers, joints, keep, notes = {}, {}, [], []
 
     def add_marker(marker, rotation, offset, label):
         if isinstance(marker, GroundFrame):
             ht = exu.HT(rotation=marker.rotation @ rotation, translation=marker.point + marker.rotation @ offset)
             return mbs.AddMarker(eii.MarkerBodyRigid(bodyNumber=ground, localHT=ht, name=label))
         link = scene.links[marker.body]
-        itf = _interface_of(link, marker)
+        name = _interface_of(link, marker)
+        itf = link.interfaces[name]
+        if np.any(offset != 0.0) and np.any(marker.rotation_modes != 0.0):
+            # Our marker-frame offset A exp(theta) o has no Exudyn equivalent; Exudyn applies it as A o.
+            notes.append(f"{label}: marker-frame offset {np.linalg.norm(offset) * 1e3:.3g} mm applied in the body frame")
+        # Exudyn's marker point is the interface's weighted centre plus localHT's translation, in the body frame.
+        translation = marker.point - link.markers[name].point + offset
         return mbs.AddMarker(eii.MarkerSuperElementRigid(
             bodyNumber=objects[marker.body], meshNodeNumbers=[int(i) for i in itf.nodes],
             weightingFactors=[float(w) for w in itf.weights], useAlternativeApproach=True, rotationsExponentialMap=2,
-            localHT=exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(offset, float)), name=label))
+            localHT=exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(translation, float)),
+            name=label))
 
     used_symbolic = False
     for c in system.constraints:
@@ -370,7 +378,8 @@ def build_exudyn_twin(scene, q0: NDArray, symbolic: bool = True, frozen_drive_ti
     sensors["torque"] = mbs.AddSensor(eii.SensorObject(objectNumber=joints["joint3"], outputVariableType=out.TorqueLocal,
                                                        storeInternal=True, writeToFile=False))
     mbs.Assemble()
-    return ExudynTwin(sc, mbs, objects, rigid_nodes, modal_nodes, reference, markers, joints, sensors, used_symbolic, keep)
+    return ExudynTwin(sc, mbs, objects, rigid_nodes, modal_nodes, reference, markers, joints, sensors, used_symbolic, keep,
+                      notes)
 
 
 def _q_from_exudyn(twin: ExudynTwin, scene, q0: NDArray, rigid: list, modal: list) -> NDArray:
@@ -429,7 +438,8 @@ def run_exudyn_bennett(scene, q0: NDArray, t_end: float, step: float = 1e-3, rho
     iterations = int(solver.it.newtonStepsCount) if hasattr(solver, "it") else -1
     return BennettTrajectory(times, q, coupler, tracked, torque, _zeta(scene.system, q), setup, integration, iterations,
                              f"exudyn {exu.__version__}" + (" (symbolic drive)" if twin.symbolic else " (Python drive)"),
-                             {"symbolic": twin.symbolic, "notes": [x for x in twin.keep_alive if isinstance(x, str)]})
+                             {"symbolic": twin.symbolic,
+                              "notes": twin.notes + [x for x in twin.keep_alive if isinstance(x, str)]})
 
 
 def run_ffrf_bennett(scene, system, q0: NDArray, t_end: float, step: float = 1e-3, rho_inf: float = 0.9,

@@ -54,8 +54,10 @@ def test_results_are_written_with_metadata(runs, tmp_path):
 
 
 def test_energy_balance_closes_quasi_statically():
-    """Drive work = change of gravity + strain energy (no inertia, no damping) over the revolution."""
-    result = run_bennett(build_bennett("pla", **COARSE), mode="quasi_static", n_outputs=241)
+    """Drive work = change of gravity + strain energy (no inertia, no damping) over the revolution.
+    The work is a Simpson integral over the outputs (fourth order): measured 2.4e-6 with 241
+    outputs, 1.2e-7 with 481."""
+    result = run_bennett(build_bennett("pla", **COARSE), mode="quasi_static", n_outputs=481)
     assert result.summary()["energy_balance_relative"] < 1e-6
     assert result.summary()["max_constraint_residual"] < 1e-10
 
