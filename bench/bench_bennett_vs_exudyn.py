@@ -97,7 +97,7 @@ def main(argv=None) -> dict:
               f"{d['torque_scale_Nm']:.3e})", flush=True)
     if not args.no_static:
         started = time.perf_counter()
-        q_e, torque_e, coupler_e, tracked_e = static_exudyn_bennett(scene, scene.q_start, 0.0)
+        q_e, torque_e, coupler_e, tracked_e, _ = static_exudyn_bennett(scene, scene.q_start, 0.0)
         out["static_exudyn_s"] = time.perf_counter() - started
         out["static"] = {}
         for name in args.systems.split(","):

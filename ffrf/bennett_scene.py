@@ -30,6 +30,7 @@ chooses where that offset lives (:func:`ffrf.markers.attach_joint_point`):
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -94,6 +95,12 @@ class BennettScene:
     def with_misalignment(self, fraction: float) -> MultibodySystem:
         """The system with the base's joint-3 frame turned by ``fraction`` of the misalignment."""
         return _system(self.links, self.drive_angle, self.gravity, fraction, self.settings["joint_offsets"])
+
+    def with_exact_gravity(self, exact: bool) -> "BennettScene":
+        """The same scene with the exact gravity force or Exudyn's simplified one (Eq. (F10))."""
+        links = tuple(replace(l, body=replace(l.body, exact_gravity=exact)) for l in self.links)
+        scene = replace(self, links=links, settings=dict(self.settings, exact_gravity=exact))
+        return replace(scene, system=scene.with_misalignment(1.0))
 
     @property
     def gravity(self) -> NDArray[np.float64]:
@@ -245,14 +252,17 @@ def build_bennett(
     return BennettScene(variant, links, system, q_start, drive, start_angle, t_end, linkage, settings)
 
 
-def assemble(scene: BennettScene, steps: int | None = None, t: float = 0.0):
+def assemble(scene: BennettScene, steps: int | None = None, t: float = 0.0,
+             convert: Callable[[MultibodySystem], MultibodySystem] | None = None):
     """Static assembly at time ``t``: gravity, then the misalignment in ``steps`` increments
-    (default: 1 for aligned variants, 4 per degree otherwise). Returns the static solution."""
+    (default: 1 for aligned variants, 4 per degree otherwise). ``convert`` maps each
+    intermediate system (e.g. to other joint conventions). Returns the static solution."""
     misaligned = abs(scene.settings["alpha3_deg"] - 90.0) > 1e-12
     steps = (max(1, int(np.ceil(4 * abs(scene.settings["alpha3_deg"] - 90.0)))) if misaligned else 1) \
         if steps is None else steps
+    convert = (lambda system: system) if convert is None else convert
     q = scene.q_start
-    solution = static_equilibrium(scene.with_misalignment(0.0), q, t=t, load_steps=2)
+    solution = static_equilibrium(convert(scene.with_misalignment(0.0)), q, t=t, load_steps=2)
     for k in range(1, steps + 1):
-        solution = static_equilibrium(scene.with_misalignment(k / steps), solution.q, t=t)
+        solution = static_equilibrium(convert(scene.with_misalignment(k / steps)), solution.q, t=t)
     return solution

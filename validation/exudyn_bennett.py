@@ -61,6 +61,11 @@ __all__ = [
     "run_exudyn_bennett",
     "run_ffrf_bennett",
     "static_exudyn_bennett",
+    "assemble_exudyn_bennett",
+    "quasi_static_exudyn_bennett",
+    "TwinBasis",
+    "twin_bases",
+    "to_twin_layout",
     "static_ffrf_bennett",
     "compare",
     "probe_marker_offset",
@@ -237,6 +242,7 @@ class ExudynTwin:
     symbolic: bool
     keep_alive: list = field(default_factory=list)
     notes: list = field(default_factory=list)  # where the twin is not exactly equivalent
+    bases: list | None = None  # per body TwinBasis (None: our basis)
 
 
 def _interface_of(link, marker):
@@ -275,11 +281,68 @@ def _drive_offset_python(scene, frozen_time: float | None):
     return offset
 
 
-def build_exudyn_twin(scene, q0: NDArray, symbolic: bool = True, frozen_drive_time: float | None = None) -> ExudynTwin:
-    """The Exudyn twin of ``scene.system`` starting at ``q0`` (our layout, absolute, at rest).
+@dataclass(frozen=True)
+class TwinBasis:
+    """The mode basis of one body in the twin: Exudyn's own HCB (``source="exudyn"``) or ours."""
+
+    matrix: NDArray[np.float64]  # (3N, m)
+    fixed_interface_frequencies_hz: NDArray[np.float64]
+    source: str
+    setup_s: float
+    to_ours: NDArray[np.float64]  # (m, m): our modal coordinates of the same displacement field
+    from_ours: NDArray[np.float64]
+
+
+def _modal_map(mass, source: NDArray, target: NDArray) -> NDArray[np.float64]:
+    """Mass-orthogonal projection of span(source) onto target's coordinates, (target^T M target)^-1 target^T M source;
+    exact when both span the same space (our and Exudyn's HCB bases do, to 1e-13)."""
+    m_target = target.T @ (mass @ target)
+    return np.linalg.solve(m_target, target.T @ (mass @ source))
+
+
+def twin_bases(scene, source: str = "exudyn") -> list[TwinBasis]:
+    """Per link: Exudyn's own HCB modes on our nodes, M, K, interface node sets and weights
+    (:func:`validation.modes.exudyn_hcb`), or ``source="ffrf"``: our basis as is."""
+    from .modes import exudyn_hcb
+
+    out = []
+    for link in scene.links:
+        ours = np.asarray(link.reduction.basis)
+        if source == "ffrf":
+            eye = np.eye(ours.shape[1])
+            out.append(TwinBasis(ours, link.reduction.fixed_interface_frequencies_hz, "ffrf", 0.0, eye, eye))
+            continue
+        if source != "exudyn":
+            raise ValueError(f"basis source must be 'exudyn' or 'ffrf', got {source!r}")
+        started = time.perf_counter()
+        itfs = list(link.interfaces.values())
+        basis, frequencies = exudyn_hcb(link.fe, [i.nodes for i in itfs], [i.weights for i in itfs],
+                                        link.reduction.fixed_interface_frequencies_hz.size)
+        elapsed = time.perf_counter() - started
+        out.append(TwinBasis(basis, np.sort(frequencies), "exudyn", elapsed,
+                             _modal_map(link.fe.mass, basis, ours), _modal_map(link.fe.mass, ours, basis)))
+    return out
+
+
+def to_twin_layout(scene, q: NDArray, bases: list[TwinBasis] | None) -> NDArray[np.float64]:
+    """Our coordinates with each body's modal part in the twin's basis."""
+    q = np.array(q, dtype=float)
+    if bases is None:
+        return q
+    for k, basis in enumerate(bases):
+        block = scene.system.block(k)
+        q[..., block.start + 7:block.stop] = q[..., block.start + 7:block.stop] @ basis.from_ours.T
+    return q
+
+
+def build_exudyn_twin(scene, q0: NDArray, symbolic: bool = True, frozen_drive_time: float | None = None,
+                      system=None, bases: list[TwinBasis] | None = None) -> ExudynTwin:
+    """The Exudyn twin of ``system`` (default ``scene.system``) starting at ``q0`` (our layout,
+    absolute, at rest; modal coordinates in ``bases``, default our own basis).
 
     ``frozen_drive_time``: evaluate the drive angle at this fixed time (static solves, whose
     quasi-time would otherwise turn the drive). ``symbolic=False`` uses a Python user function.
+    ``bases``: per body the twin's mode basis (:func:`twin_bases`).
     """
     import exudyn as exu
     import exudyn.itemInterface as eii
@@ -290,15 +353,16 @@ def build_exudyn_twin(scene, q0: NDArray, symbolic: bool = True, frozen_drive_ti
 
     from .exudyn_ffrf import _exudyn_fem
 
-    system = scene.system
+    system = scene.system if system is None else system
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
     beta = float(scene.settings["beta"])
     objects, rigid_nodes, modal_nodes, reference = [], [], [], []
     for k, link in enumerate(scene.links):
         block = np.asarray(q0[system.block(k)], dtype=float)
+        basis = np.asarray(link.reduction.basis) if bases is None else bases[k].matrix
         body = SimpleNamespace(nodes=np.asarray(link.fe.nodes), mass=link.fe.mass, stiffness=link.fe.stiffness,
-                               basis=np.asarray(link.reduction.basis))
+                               basis=basis)
         cms = ObjectFFRFreducedOrderInterface(_exudyn_fem(body))
         info = cms.AddObjectFFRFreducedOrder(
             mbs, positionRef=[float(v) for v in block[:3]], rotationMatrixRef=rotation_matrix(block[3:7]),
@@ -379,12 +443,13 @@ def build_exudyn_twin(scene, q0: NDArray, symbolic: bool = True, frozen_drive_ti
                                                        storeInternal=True, writeToFile=False))
     mbs.Assemble()
     return ExudynTwin(sc, mbs, objects, rigid_nodes, modal_nodes, reference, markers, joints, sensors, used_symbolic, keep,
-                      notes)
+                      notes, bases)
 
 
-def _q_from_exudyn(twin: ExudynTwin, scene, q0: NDArray, rigid: list, modal: list) -> NDArray:
+def _q_from_exudyn(twin: ExudynTwin, scene, q0: NDArray, rigid: list, modal: list, our_basis: bool = True) -> NDArray:
     """Our-layout absolute coordinates from Exudyn's displacement coordinates (rows = times);
-    Euler parameters are given our sign (Exudyn's reference may be -p)."""
+    Euler parameters are given our sign (Exudyn's reference may be -p); modal coordinates in
+    our basis (``our_basis``) or the twin's."""
     system = scene.system
     rows = rigid[0].shape[0]
     q = np.empty((rows, system.n_coordinates))
@@ -394,7 +459,8 @@ def _q_from_exudyn(twin: ExudynTwin, scene, q0: NDArray, rigid: list, modal: lis
         sign = 1.0 if np.dot(twin.reference[k][3:7], q0[block][3:7]) >= 0 else -1.0
         absolute[:, 3:7] *= sign
         q[:, block.start:block.start + 7] = absolute
-        q[:, block.start + 7:block.stop] = modal[k]
+        to_ours = twin.bases[k].to_ours if (our_basis and twin.bases is not None) else None
+        q[:, block.start + 7:block.stop] = modal[k] if to_ours is None else modal[k] @ to_ours.T
     return q
 
 
@@ -408,13 +474,42 @@ def exudyn_settings(t_end: float, step: float, rho_inf: float, tolerance: float 
     return s
 
 
+def _read_twin(twin: ExudynTwin, scene, q0: NDArray) -> dict:
+    """Every stored sensor row of ``twin`` (time in column 0 stripped): q (our basis), twin q,
+    coupler, tracked nodes, drive multiplier (dynamic sign)."""
+    mbs, sensors = twin.mbs, twin.sensors
+    data = {name: np.asarray(mbs.GetSensorStoredData(number)) for name, number in sensors.items()}
+    n = len(scene.links)
+    rigid = [data[f"rigid{k}"][:, 1:] for k in range(n)]
+    modal = [data[f"modal{k}"][:, 1:] for k in range(n)]
+    return {"time": data["rigid0"][:, 0],
+            "q": _q_from_exudyn(twin, scene, q0, rigid, modal),
+            "twin_q": _q_from_exudyn(twin, scene, q0, rigid, modal, our_basis=False),
+            "tracked": np.stack([data[f"node{i}"][:, 1:] for i in range(9)], axis=1),
+            "coupler": 0.5 * (data["coupler_a"][:, 1:] + data["coupler_b"][:, 1:]),
+            "torque": data["torque"][:, 3]}
+
+
+def _check_times(times: NDArray, expected: NDArray, what: str) -> None:
+    if times.shape != expected.shape or np.abs(times - expected).max() > 1e-9 * max(1.0, expected[-1]):
+        raise RuntimeError(f"Exudyn {what} output has {len(times)} rows, expected one per step ({len(expected)})")
+
+
+def _label(twin: ExudynTwin) -> str:
+    import exudyn as exu
+
+    return f"exudyn {exu.__version__}" + (" (symbolic drive)" if twin.symbolic else " (Python drive)")
+
+
 def run_exudyn_bennett(scene, q0: NDArray, t_end: float, step: float = 1e-3, rho_inf: float = 0.9,
-                       tolerance: float = 1e-10, symbolic: bool = True) -> BennettTrajectory:
-    """Build the twin at ``q0`` (at rest), integrate to ``t_end`` and read every step back."""
+                       tolerance: float = 1e-10, symbolic: bool = True,
+                       bases: list[TwinBasis] | None = None) -> BennettTrajectory:
+    """Build the twin at ``q0`` (at rest; modal part in ``bases``), integrate to ``t_end`` with
+    generalized-alpha and read every step back (``q`` in our basis)."""
     import exudyn as exu
 
     started = time.perf_counter()
-    twin = build_exudyn_twin(scene, q0, symbolic=symbolic)
+    twin = build_exudyn_twin(scene, q0, symbolic=symbolic, bases=bases)
     settings = exudyn_settings(t_end, step, rho_inf, tolerance)
     setup = time.perf_counter() - started
     started = time.perf_counter()
@@ -423,22 +518,12 @@ def run_exudyn_bennett(scene, q0: NDArray, t_end: float, step: float = 1e-3, rho
     integration = time.perf_counter() - started
     if not success:
         raise RuntimeError(f"Exudyn did not finish the Bennett run: {solver.GetErrorString()}")
-    mbs, sensors = twin.mbs, twin.sensors
-    data = {name: np.asarray(mbs.GetSensorStoredData(number)) for name, number in sensors.items()}
-    times = data["rigid0"][:, 0]
-    expected = step * np.arange(int(round(t_end / step)) + 1)
-    if times.shape != expected.shape or np.abs(times - expected).max() > 1e-9:
-        raise RuntimeError(f"Exudyn sensor output has {len(times)} rows, expected one per step ({len(expected)})")
-    n = len(scene.links)
-    q = _q_from_exudyn(twin, scene, q0, [data[f"rigid{k}"][:, 1:] for k in range(n)],
-                       [data[f"modal{k}"][:, 1:] for k in range(n)])
-    tracked = np.stack([data[f"node{i}"][:, 1:] for i in range(9)], axis=1)
-    coupler = 0.5 * (data["coupler_a"][:, 1:] + data["coupler_b"][:, 1:])
-    torque = data["torque"][:, 3]
+    out = _read_twin(twin, scene, q0)
+    _check_times(out["time"], step * np.arange(int(round(t_end / step)) + 1), "dynamic")
     iterations = int(solver.it.newtonStepsCount) if hasattr(solver, "it") else -1
-    return BennettTrajectory(times, q, coupler, tracked, torque, _zeta(scene.system, q), setup, integration, iterations,
-                             f"exudyn {exu.__version__}" + (" (symbolic drive)" if twin.symbolic else " (Python drive)"),
-                             {"symbolic": twin.symbolic,
+    return BennettTrajectory(out["time"], out["q"], out["coupler"], out["tracked"], out["torque"],
+                             _zeta(scene.system, out["q"]), setup, integration, iterations, _label(twin),
+                             {"symbolic": twin.symbolic, "twin_q": out["twin_q"],
                               "notes": twin.notes + [x for x in twin.keep_alive if isinstance(x, str)]})
 
 
@@ -458,14 +543,13 @@ def run_ffrf_bennett(scene, system, q0: NDArray, t_end: float, step: float = 1e-
 # Statics
 # --------------------------------------------------------------------------------------------
 
-def static_exudyn_bennett(scene, q0: NDArray, t: float = 0.0, load_steps: int = 2, tolerance: float = 1e-10):
-    """Exudyn ``SolveStatic`` of the twin from ``q0`` with the drive frozen at ``t``. Returns
-    (q (our layout), drive multiplier with *our* sign (Exudyn's static lambda is flipped), coupler, tracked)."""
+def _static_settings(load_steps: int, tolerance: float, duration: float = 1.0, load_factor: bool = True):
     import exudyn as exu
 
-    twin = build_exudyn_twin(scene, q0, symbolic=False, frozen_drive_time=t)
     s = exu.SimulationSettings()
     s.staticSolver.numberOfLoadSteps = load_steps
+    s.staticSolver.loadStepDuration = duration
+    s.staticSolver.useLoadFactor = load_factor
     s.staticSolver.adaptiveStep = False
     s.staticSolver.newton.relativeTolerance = tolerance
     s.staticSolver.newton.absoluteTolerance = tolerance
@@ -473,20 +557,82 @@ def static_exudyn_bennett(scene, q0: NDArray, t: float = 0.0, load_steps: int = 
     s.staticSolver.verboseMode = 0
     s.linearSolver.solverType = exu.LinearSolverType.EXUdense
     s.solution.file.write = False
+    return s
+
+
+def _solve_static(twin: ExudynTwin, settings) -> None:
+    import exudyn as exu
+
     solver = exu.MainSolverStatic()
-    if not solver.SolveSystem(twin.mbs, s):
+    if not solver.SolveSystem(twin.mbs, settings):
         raise RuntimeError(f"Exudyn SolveStatic failed: {solver.GetErrorString()}")
+
+
+def static_exudyn_bennett(scene, q0: NDArray, t: float = 0.0, load_steps: int = 2, tolerance: float = 1e-10,
+                          system=None, bases: list[TwinBasis] | None = None):
+    """Exudyn ``SolveStatic`` of the twin of ``system`` from ``q0`` with the drive frozen at ``t``
+    (gravity in ``load_steps``). Returns (q (our basis), drive multiplier with *our* sign (Exudyn's
+    static lambda is flipped), coupler, tracked, q in the twin's basis)."""
+    import exudyn as exu
+
+    twin = build_exudyn_twin(scene, q0, symbolic=False, frozen_drive_time=t, system=system, bases=bases)
+    _solve_static(twin, _static_settings(load_steps, tolerance))
     mbs = twin.mbs
     out = exu.OutputVariableType
     n = len(scene.links)
     rigid = [np.atleast_2d(mbs.GetNodeOutput(twin.rigid_nodes[k], out.Coordinates)) for k in range(n)]
     modal = [np.atleast_2d(mbs.GetNodeOutput(twin.modal_nodes[k], out.Coordinates)) for k in range(n)]
     q = _q_from_exudyn(twin, scene, q0, rigid, modal)[0]
+    twin_q = _q_from_exudyn(twin, scene, q0, rigid, modal, our_basis=False)[0]
     torque = -float(np.asarray(mbs.GetObjectOutput(twin.joints["joint3"], out.TorqueLocal))[2])
     ca = np.asarray(mbs.GetMarkerOutput(twin.markers["joint1"][1], out.Position))
     cb = np.asarray(mbs.GetMarkerOutput(twin.markers["joint2"][0], out.Position))
     tracked = np.stack([np.asarray(mbs.GetSensorValues(twin.sensors[f"node{i}"])) for i in range(9)])
-    return q, torque, 0.5 * (ca + cb), tracked
+    return q, torque, 0.5 * (ca + cb), tracked, twin_q
+
+
+def assemble_exudyn_bennett(scene, bases: list[TwinBasis] | None = None, steps: int | None = None,
+                            tolerance: float = 1e-10):
+    """Exudyn's own static assembly at t = 0, as :func:`ffrf.bennett_scene.assemble`: gravity from
+    ``scene.q_start``, then the misalignment in ``steps`` increments, each a new twin of
+    ``scene.with_misalignment(k / steps)`` started from the previous equilibrium. Returns the
+    static result of :func:`static_exudyn_bennett` at full misalignment."""
+    misalignment = abs(scene.settings["alpha3_deg"] - 90.0)
+    if steps is None:
+        steps = max(1, int(np.ceil(4 * misalignment))) if misalignment > 1e-12 else 1
+    result = static_exudyn_bennett(scene, to_twin_layout(scene, scene.q_start, bases), 0.0, 2, tolerance,
+                                   scene.with_misalignment(0.0) if misalignment > 1e-12 else scene.system, bases)
+    if misalignment > 1e-12:
+        for k in range(1, steps + 1):
+            result = static_exudyn_bennett(scene, result[4], 0.0, 1, tolerance, scene.with_misalignment(k / steps), bases)
+    return result
+
+
+def quasi_static_exudyn_bennett(scene, start: tuple, times: NDArray, tolerance: float = 1e-10,
+                                bases: list[TwinBasis] | None = None) -> BennettTrajectory:
+    """Static equilibria at equally spaced ``times`` (from 0) with one ``SolveStatic``: the load
+    steps' quasi-time turns the drive (``useLoadFactor=False``: gravity is always on).
+    ``start``: the equilibrium at t = 0 (:func:`assemble_exudyn_bennett`), the first row."""
+    q0 = start[4]
+    times = np.asarray(times, dtype=float)
+    if abs(times[0]) > 0 or np.abs(np.diff(times) - times[1] + times[0]).max() > 1e-9 * times[-1]:
+        raise ValueError("times must start at 0 and be equally spaced (Exudyn's load steps)")
+    started = time.perf_counter()
+    twin = build_exudyn_twin(scene, q0, symbolic=True, bases=bases)
+    settings = _static_settings(len(times) - 1, tolerance, duration=float(times[-1]), load_factor=False)
+    setup = time.perf_counter() - started
+    started = time.perf_counter()
+    _solve_static(twin, settings)
+    integration = time.perf_counter() - started
+    out = _read_twin(twin, scene, q0)
+    _check_times(out["time"], times, "static sweep")
+    # Exudyn's static multipliers have the opposite sign of its dynamic ones (and ours); the
+    # first row is the start state, whose multipliers the sweep never computed.
+    torque = -out["torque"]
+    torque[0] = start[1]
+    return BennettTrajectory(out["time"], out["q"], out["coupler"], out["tracked"], torque,
+                             _zeta(scene.system, out["q"]), setup, integration, -1, _label(twin) + ", SolveStatic",
+                             {"symbolic": twin.symbolic, "twin_q": out["twin_q"], "notes": twin.notes})
 
 
 def static_ffrf_bennett(scene, system, q0: NDArray, t: float = 0.0, load_steps: int = 2, tolerance: float = 1e-12):

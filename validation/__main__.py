@@ -1,0 +1,78 @@
+"""Command line: ``python -m validation report --variant NAME --out DIR`` and
+``python -m validation summary --variants rigid pla pla1 pla2 --out DIR``.
+
+``report`` cross-validates one built-in Bennett variant against its Exudyn twin and writes
+``DIR/report.md``, ``DIR/metrics.json`` and the figures; ``summary`` does so for several
+variants (``DIR/<variant>/``) and writes ``DIR/summary.md`` in the layout of the paper's
+results. The exit status is 0 whether or not the targets are met (the report says which);
+it is 1 only when a run fails.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .bennett_validation import ValidationSettings, validate_bennett
+from .report import write_report, write_summary
+
+VARIANTS = ("rigid", "pla", "pla1", "pla2")
+
+
+def _settings_arguments(parser: argparse.ArgumentParser) -> None:
+    defaults = ValidationSettings()
+    parser.add_argument("--h", type=float, default=defaults.h, help="maximum tetrahedron edge (m); paper 0.002")
+    parser.add_argument("--order", type=int, choices=(1, 2), default=defaults.order, help="element order")
+    parser.add_argument("--modes", type=int, default=defaults.n_modes, help="fixed-interface modes per link (paper 32)")
+    parser.add_argument("--outputs", type=int, default=defaults.outputs, help="quasi-static rows over the revolution")
+    parser.add_argument("--dynamic-window", type=float, default=defaults.dynamic_t_end,
+                        help="seconds of dynamic simulation compared from t = 0 (0: skip)")
+    parser.add_argument("--step", type=float, default=defaults.step, help="time step of the dynamic window (s)")
+    parser.add_argument("--rho-inf", type=float, default=defaults.rho_inf, help="generalized-alpha spectral radius")
+    parser.add_argument("--basis", choices=("exudyn", "ffrf"), default=defaults.basis,
+                        help="mode basis of Exudyn's bodies: its own Craig-Bampton (default) or ours")
+    parser.add_argument("--out", type=Path, required=True, help="output folder")
+
+
+def _settings(args, variant: str) -> ValidationSettings:
+    return ValidationSettings(variant=variant, h=args.h, order=args.order, n_modes=args.modes, outputs=args.outputs,
+                              dynamic_t_end=args.dynamic_window, step=args.step, rho_inf=args.rho_inf,
+                              basis=args.basis)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m validation", description=__doc__.splitlines()[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    report = commands.add_parser("report", help="one variant: report.md, metrics.json, figures")
+    report.add_argument("--variant", choices=VARIANTS, default="pla")
+    _settings_arguments(report)
+    summary = commands.add_parser("summary", help="several variants and a summary in the paper's layout")
+    summary.add_argument("--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS))
+    _settings_arguments(summary)
+    args = parser.parse_args(argv)
+
+    variants = [args.variant] if args.command == "report" else args.variants
+    validations = []
+    try:
+        for variant in variants:
+            folder = args.out if args.command == "report" else args.out / variant
+            validation = validate_bennett(_settings(args, variant))
+            path = write_report(validation, folder)
+            validations.append(validation)
+            m = validation.metrics
+            print(f"[{variant}] {'all targets met' if m['passed'] else 'targets missed (explained in the report)'}; "
+                  f"coupler diff {m['trajectories']['coupler_point']['max_abs_diff_m']:.3e} m, torque diff "
+                  f"{m['torque']['max_rel_diff']:.2e}; report: {path}", flush=True)
+    except Exception as error:  # every failure ends with the reason, and the reports written so far stay
+        print(f"validation failed: {type(error).__name__}: {error}", file=sys.stderr)
+        if len(validations) > 1 and args.command == "summary":
+            write_summary(validations, args.out)
+        return 1
+    if args.command == "summary":
+        print(f"summary: {write_summary(validations, args.out)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
