@@ -12,7 +12,8 @@ drive angle) and ``coupler_distance_to_path`` (closest point of the ideal curve)
 An energy balance closes the books: the drive's work against the changes of kinetic,
 gravity and strain energy plus the damping dissipation (``energy_balance_residual``).
 Results are written as ``DIR/results.npz`` (``time`` and one array per sensor, SI units)
-and ``DIR/metadata.json`` (scene settings, versions, timings, summary).
+and ``DIR/metadata.json`` (scene settings, versions, timings, summary, and under ``assembly``
+the stress state of the assembled links, :mod:`ffrf.assembly_stress`).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import cumulative_simpson
 
+from .assembly_stress import AssemblyStress, scene_assembly_stress
 from .bennett_scene import BennettScene, assemble
 from .euler_parameters import rotation_matrix
 from .generalized_alpha import generalized_alpha
@@ -42,12 +44,14 @@ log = logging.getLogger(__name__)
 
 @dataclass
 class BennettResult:
-    """Output times, sensors (name -> array), the coordinates ``q`` (rows = times) and metadata."""
+    """Output times, sensors (name -> array), the coordinates ``q`` (rows = times), metadata and
+    the stress state of the static assembly the run started from."""
 
     time: NDArray[np.float64]
     sensors: dict[str, NDArray[np.float64]]
     q: NDArray[np.float64]
     metadata: dict = field(default_factory=dict)
+    assembly: AssemblyStress | None = None
 
     def summary(self) -> dict[str, float]:
         s = self.sensors
@@ -177,6 +181,7 @@ def run_bennett(scene: BennettScene, mode: str = "auto", n_outputs: int = 241, s
         raise ValueError(f"mode must be 'auto', 'quasi_static' or 'dynamic', got {mode!r}")
     started = wallclock.perf_counter()
     assembly = assemble(scene)
+    stress = scene_assembly_stress(scene, assembly.q, assembly.multipliers)
     assembled = wallclock.perf_counter()
     t_end = scene.t_end if t_end is None else float(t_end)
     times = np.linspace(0.0, t_end, n_outputs)
@@ -196,8 +201,9 @@ def run_bennett(scene: BennettScene, mode: str = "auto", n_outputs: int = 241, s
                                "sensors": wallclock.perf_counter() - solved},
                     python=platform.python_version(), numpy=np.__version__,
                     n_coordinates=scene.system.n_coordinates, n_constraints=scene.system.n_constraints,
-                    modes_per_link=[link.reduction.n_modes for link in scene.links])
-    out = BennettResult(times, sensors, q, metadata)
+                    modes_per_link=[link.reduction.n_modes for link in scene.links],
+                    assembly=stress.as_dict())
+    out = BennettResult(times, sensors, q, metadata, stress)
     out.metadata["summary"] = out.summary()
     return out
 

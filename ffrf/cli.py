@@ -93,7 +93,9 @@ def _configure_bennett(parser: argparse.ArgumentParser) -> None:
     parser.set_defaults(mode="auto")
     parser.add_argument("--vtk-every", type=int, default=0,
                         help="also write deformed meshes for ParaView (DIR/bennett.pvd) every N outputs (0: none)")
-    parser.add_argument("--out", type=Path, required=True, help="output directory (results.npz, metadata.json)")
+    parser.add_argument("--out", type=Path, required=True,
+                        help="output directory (results.npz, metadata.json, assembly.vtu, coupler_deviation.png, "
+                             "driving_torque.png)")
 
 
 def _progress_printer():
@@ -134,6 +136,12 @@ def _run_bennett(args: argparse.Namespace) -> int:
                                 [scene.system.block(k) for k in range(4)], result.time, result.q,
                                 every=args.vtk_every, name="bennett")
         print(f"ParaView series: {pvd}", file=sys.stderr)
+    from .assembly_stress import write_assembly_vtu
+    from .bennett_figures import plot_coupler_deviation, plot_driving_torque
+
+    write_assembly_vtu(args.out / "assembly.vtu", scene, result.assembly)
+    plot_coupler_deviation({args.variant: result}, args.out / "coupler_deviation.png")
+    plot_driving_torque({args.variant: result}, args.out / "driving_torque.png")
     summary = result.summary()
     paper = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}[args.variant]
     print(f"{args.variant}: max coupler deviation from the ideal path {1e3 * summary['max_coupler_deviation_m']:.4f} mm "
@@ -142,6 +150,10 @@ def _run_bennett(args: argparse.Namespace) -> int:
           f"largest constraint residual {summary['max_constraint_residual']:.1e}; energy balance closed to "
           f"{summary['energy_balance_relative']:.1e} of the drive work; wall time "
           f"{time.perf_counter() - started:.1f} s -> {args.out}")
+    print("assembled state (gravity" + (", misalignment" if scene.settings["alpha3_deg"] != 90.0 else "")
+          + f"; {args.out / 'assembly.vtu'}):")
+    for link in result.assembly.links:
+        print("  " + link.line())
     return 0
 
 
