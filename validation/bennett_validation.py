@@ -36,7 +36,8 @@ from typing import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ValidationSettings", "SolverRun", "BennettValidation", "TARGETS", "validate_bennett"]
+__all__ = ["ValidationSettings", "SolverRun", "BennettValidation", "TARGETS", "validate_bennett", "run_ours",
+           "quasi_static_solve", "dynamic_solve", "from_exudyn"]
 
 #: Issue 7's targets: frequencies (relative), MAC diagonal (1 - value), torque (relative to its
 #: maximum), trajectories (relative to the coupler's elastic deviation from the ideal path).
@@ -129,7 +130,8 @@ def _constraint_residual(system, run: SolverRun) -> float:
     return float(max(np.abs(system.constraint_values(q, float(t))).max() for q, t in zip(run.q, run.time)))
 
 
-def _ffrf_run(label, scene, system, times, q0, setup_s, solve) -> SolverRun:
+def run_ours(label, scene, system, times, q0, setup_s, solve) -> SolverRun:
+    """Our run of ``system`` from ``q0`` at ``times`` with ``solve(system, q0, times) -> (q, torque, extra)``."""
     from .exudyn_bennett import system_points
 
     started = time.perf_counter()
@@ -140,14 +142,16 @@ def _ffrf_run(label, scene, system, times, q0, setup_s, solve) -> SolverRun:
     return SolverRun(label, np.asarray(times), angles, q, coupler, tracked, torque, setup_s, solve_s, extra)
 
 
-def _quasi_static(system, q0, times):
+def quasi_static_solve(system, q0, times):
+    """Static equilibria at ``times`` (:func:`ffrf.static_solver.quasi_static`)."""
     from ffrf.static_solver import quasi_static
 
     solution = quasi_static(system, q0, times)
     return solution.q, solution.multipliers[:, -1], {"newton_iterations": int(sum(solution.iterations))}
 
 
-def _dynamic(step, rho_inf):
+def dynamic_solve(step, rho_inf):
+    """A ``solve`` for :func:`run_ours`: generalized-alpha from rest with ``step``, one row per step."""
     def solve(system, q0, times):
         from ffrf.generalized_alpha import generalized_alpha
 
@@ -157,7 +161,8 @@ def _dynamic(step, rho_inf):
     return solve
 
 
-def _from_trajectory(label, scene, trajectory, setup_s) -> SolverRun:
+def from_exudyn(label, scene, trajectory, setup_s) -> SolverRun:
+    """A :class:`SolverRun` from an Exudyn :class:`validation.exudyn_bennett.BennettTrajectory`."""
     angles = np.array([scene.drive_angle(float(t)) for t in trajectory.time])
     return SolverRun(label, trajectory.time, angles, trajectory.q, trajectory.coupler, trajectory.tracked,
                      trajectory.torque, setup_s, trajectory.integration_time,
@@ -204,14 +209,14 @@ def validate_bennett(settings: ValidationSettings = ValidationSettings(),
         t0 = time.perf_counter()
         q0 = assemble(scene, convert=convert).q
         assembly_s = time.perf_counter() - t0
-        qs[label] = _ffrf_run(label, scene, system, times, q0, setup_ours, _quasi_static)
+        qs[label] = run_ours(label, scene, system, times, q0, setup_ours, quasi_static_solve)
         qs[label].solve_s += assembly_s
         progress(f"[{settings.variant}] ours ({label}): quasi-static revolution in {qs[label].solve_s:.1f} s")
     t0 = time.perf_counter()
     start = assemble_exudyn_bennett(production, bases)
     assembly_exudyn = time.perf_counter() - t0
     trajectory = quasi_static_exudyn_bennett(production, start, times, bases=bases)
-    qs["exudyn"] = _from_trajectory("exudyn", production, trajectory, setup_bases + trajectory.setup_time)
+    qs["exudyn"] = from_exudyn("exudyn", production, trajectory, setup_bases + trajectory.setup_time)
     qs["exudyn"].solve_s += assembly_exudyn
     progress(f"[{settings.variant}] Exudyn: quasi-static revolution in {qs['exudyn'].solve_s:.1f} s")
 
@@ -220,12 +225,12 @@ def validate_bennett(settings: ValidationSettings = ValidationSettings(),
     if settings.dynamic_t_end > 0:
         n_steps = int(round(settings.dynamic_t_end / settings.step))
         dyn_times = settings.step * np.arange(n_steps + 1)
-        dyn["equivalent"] = _ffrf_run("equivalent", equivalent, equivalent.system, dyn_times,
-                                      qs["equivalent"].q[0], setup_ours, _dynamic(settings.step, settings.rho_inf))
+        dyn["equivalent"] = run_ours("equivalent", equivalent, equivalent.system, dyn_times, qs["equivalent"].q[0],
+                                     setup_ours, dynamic_solve(settings.step, settings.rho_inf))
         progress(f"[{settings.variant}] ours: {n_steps} dynamic steps in {dyn['equivalent'].solve_s:.1f} s")
         trajectory = run_exudyn_bennett(production, start[4], settings.dynamic_t_end, settings.step, settings.rho_inf,
                                         bases=bases)
-        dyn["exudyn"] = _from_trajectory("exudyn", production, trajectory, setup_bases + trajectory.setup_time)
+        dyn["exudyn"] = from_exudyn("exudyn", production, trajectory, setup_bases + trajectory.setup_time)
         progress(f"[{settings.variant}] Exudyn: {n_steps} dynamic steps in {dyn['exudyn'].solve_s:.1f} s")
 
     ideal = ideal_coupler_points(production, qs["production"].drive_angle)

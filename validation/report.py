@@ -22,7 +22,10 @@ PAPER_MAX_COUPLER_DEVIATION_MM = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "
 
 
 def _um(x: float) -> str:
-    return f"{1e6 * x:.3g} um"
+    """A length in the unit that reads best: nm, um or mm."""
+    if abs(x) < 1e-6:
+        return f"{1e9 * x:.3g} nm"
+    return f"{1e6 * x:.3g} um" if abs(x) < 1e-3 else f"{1e3 * x:.4g} mm"
 
 
 def _sci(x: float) -> str:
@@ -74,7 +77,8 @@ def _verdict(m: dict) -> list[str]:
                   f"that Jacobian: Exudyn's joint reactions use the marker angular velocity A(w + T theta_dot), "
                   f"not the derivative of its own constraint equations (A exp(theta~) T theta_dot); the error grows "
                   f"with the bores' elastic rotation theta, large where the links are forced into a misaligned "
-                  f"assembly. Our exact Jacobian is the consistent one (see the energy balance below)."]
+                  f"assembly. Our exact Jacobian is the derivative of the constraint equations (checked against "
+                  f"complex-step differentiation in tests/test_validation/test_bennett_vs_exudyn.py)."]
     return lines
 
 
@@ -120,16 +124,16 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
               "", "![coupler deviation](coupler_deviation.png) ![path](coupler_path.png)",
               "", "![driving torque](driving_torque.png)"]
     lines += ["", "## Trajectories, quasi-static revolution (ours with Exudyn's gravity model vs Exudyn)", "",
-              _table(["sensor", "max |diff|", "RMS", "max / coupler's elastic deviation"],
+              _table(["sensor", "max abs diff", "RMS", "max / coupler's elastic deviation"],
                      [[name, _um(t["max_abs_diff_m"]), _um(t["rms_diff_m"]), _sci(t["relative_to_elastic_deviation"])]
                       for name, t in m["trajectories"].items()]),
-              "", f"Driving torque: max |diff| {1e3 * m['torque']['max_abs_diff_Nm']:.3e} N mm of "
+              "", f"Driving torque: max abs diff {1e3 * m['torque']['max_abs_diff_Nm']:.3e} N mm of "
                   f"{1e3 * m['torque']['max_abs_Nm']:.4g} N mm ({_sci(m['torque']['max_rel_diff'])}).",
               "", "![difference](difference_quasi_static.png)"]
     if "dynamic" in m:
         d = m["dynamic"]
         lines += ["", f"## Dynamic window: 0..{d['t_end']:g} s, step {s.step:g} s, rho_inf {s.rho_inf:g}", "",
-                  _table(["sensor", "max |diff|", "RMS", "max / coupler's elastic deviation"],
+                  _table(["sensor", "max abs diff", "RMS", "max / coupler's elastic deviation"],
                          [[n, _um(t["max_abs_diff_m"]), _um(t["rms_diff_m"]), _sci(t["relative_to_elastic_deviation"])]
                           for n, t in d["trajectories"].items()]),
                   "", f"Driving torque: {_sci(d['torque']['max_rel_diff'])} of its maximum. Constraint residuals "
@@ -149,7 +153,7 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
     md = m["modelling_differences"]
     lines += ["", "## Where the remaining differences come from", "",
               "Each row compares two of our own runs (or ours with Exudyn's) on the quasi-static revolution:", "",
-              _table(["comparison", "max |diff| nodes/coupler", "relative to elastic deviation", "torque"],
+              _table(["comparison", "max abs diff (nodes, coupler)", "relative to elastic deviation", "torque"],
                      [["exact gravity vs Exudyn's LoadMassProportional (modelling)",
                        _um(md["exact_vs_exudyn_gravity"]["max_abs_diff_m"]),
                        _sci(md["exact_vs_exudyn_gravity"]["relative_to_elastic_deviation"]),
