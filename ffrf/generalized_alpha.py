@@ -36,6 +36,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
+from .packed_system import PackedSystem, newton_model
 from .system import MultibodySystem
 
 __all__ = ["AlphaParameters", "IntegrationResult", "NewtonDivergence", "generalized_alpha", "consistent_accelerations"]
@@ -99,14 +100,10 @@ def consistent_accelerations(system: MultibodySystem, q, qd, t: float = 0.0):
     return solution[:n], solution[n:]
 
 
-def _factor_iteration_matrix(system: MultibodySystem, q, qd, qdd, lam, t: float, beta_p: float, gamma_p: float):
+def _factor_iteration_matrix(model: MultibodySystem | PackedSystem, q, qd, qdd, lam, t: float, beta_p: float,
+                             gamma_p: float):
     """Eq. (G3), LU-factored."""
-    jq, jqd = system.body_tangents(q, qd, qdd)
-    tangent = jq + system.constraint_hessian(q, lam, t)
-    cq = system.constraint_jacobian(q, t)
-    matrix = np.block([[system.mass_matrix(q) + beta_p * tangent + gamma_p * jqd, cq.T],
-                       [cq, np.zeros((cq.shape[0], cq.shape[0]))]])
-    return scipy.linalg.lu_factor(matrix, check_finite=False)
+    return scipy.linalg.lu_factor(model.iteration_matrix(q, qd, qdd, lam, t, 1.0, beta_p, gamma_p), check_finite=False)
 
 
 def generalized_alpha(
@@ -121,6 +118,8 @@ def generalized_alpha(
     modified_newton: bool = True,
     output_every: int = 1,
     progress: Callable[[float, float], None] | None = None,
+    *,
+    fast_path: bool = True,
 ) -> IntegrationResult:
     """Integrate from ``t = 0`` to ``t_end`` with fixed steps ``step`` (s).
 
@@ -131,6 +130,9 @@ def generalized_alpha(
     and rebuilt only when an iteration contracts the increment by less than a half (or a
     step fails, which is then retried with a fresh matrix); the converged solution is the
     same, only the work differs. Raises :class:`NewtonDivergence` with the partial results.
+    ``fast_path`` evaluates Newton's residual and matrix with the whole-system kernels of
+    :mod:`ffrf.packed_system` when the system is supported (else, and with ``False``, with the
+    reference Python implementation of :class:`MultibodySystem`; both agree to round-off).
     """
     if step <= 0 or t_end <= 0:
         raise ValueError(f"step and t_end must be positive, got step={step}, t_end={t_end}")
@@ -141,6 +143,7 @@ def generalized_alpha(
     gamma_p = h * par.gamma * (1.0 - par.alpha_f) / (1.0 - par.alpha_m)
     to_accel = (1.0 - par.alpha_f) / (1.0 - par.alpha_m)
     n = system.n_coordinates
+    model = newton_model(system, fast_path)
 
     q, qd = np.array(q0, dtype=float), np.array(qd0, dtype=float)
     if q.shape != (n,) or qd.shape != (n,):
@@ -170,13 +173,12 @@ def generalized_alpha(
                 a_new = accel_base + to_accel * qdd_new
                 q_new = q_base + h * h * par.beta * a_new
                 qd_new = qd_base + h * par.gamma * a_new
-                residual = system.body_residuals(q_new, qd_new, qdd_new) + system.constraint_jacobian(q_new, t).T @ lam_new
-                gap = system.constraint_values(q_new, t)
+                residual, gap = model.residual(q_new, qd_new, qdd_new, lam_new, t)
                 if not (np.all(np.isfinite(residual)) and np.all(np.isfinite(gap))):
                     raise NewtonDivergence(f"NaN in the residual at t = {t:.6g} s (iteration {iteration}); "
                                            "reduce the step or check the model", result(False))
                 if factors is None or not modified_newton or attempt == 1:
-                    factors = _factor_iteration_matrix(system, q_new, qd_new, qdd_new, lam_new, t, beta_p, gamma_p)
+                    factors = _factor_iteration_matrix(model, q_new, qd_new, qdd_new, lam_new, t, beta_p, gamma_p)
                 delta = scipy.linalg.lu_solve(factors, -np.concatenate([residual, gap / beta_p]), check_finite=False)
                 qdd_new += delta[:n]
                 lam_new += delta[n:]

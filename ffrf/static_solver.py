@@ -20,6 +20,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
+from .packed_system import PackedSystem, newton_model
 from .system import MultibodySystem
 
 __all__ = ["StaticSolution", "StaticDivergence", "static_equilibrium", "quasi_static"]
@@ -69,20 +70,19 @@ class _Tangent:
 _SINGULAR = 1e-15  # relative singular value of the equilibrated tangent counted as zero
 
 
-def _factor_tangent(system: MultibodySystem, q: NDArray, lam: NDArray, t: float) -> _Tangent:
-    n = system.n_coordinates
-    zeros = np.zeros(n)
-    cq = system.constraint_jacobian(q, t)
-    jq, _ = system.body_tangents(q, zeros, zeros)
-    matrix = np.block([[jq + system.constraint_hessian(q, lam, t), cq.T], [cq, np.zeros((cq.shape[0], cq.shape[0]))]])
+def _factor_tangent(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float) -> _Tangent:
+    zeros = np.zeros(model.n_coordinates)
+    matrix = model.iteration_matrix(q, zeros, zeros, lam, t, 0.0, 1.0, 0.0)  # Eq. (S1): [K_t + H, C_q^T; C_q, 0]
     # Equilibrate rows and columns before judging singularity and solving: stiffness rows of
     # near-rigid links (E = 1e15 Pa) and unit constraint rows differ by 15 orders of magnitude.
     rows, cols = _equilibration(matrix)
     scaled = rows[:, None] * matrix * cols[None, :]
-    u, singular_values, vt = scipy.linalg.svd(scaled)
+    singular_values = scipy.linalg.svdvals(scaled)  # the singular vectors only when needed (3x cheaper)
     free = int(np.sum(singular_values <= _SINGULAR * singular_values[0]))
     if free == 0:
         return _Tangent(rows, cols, scipy.linalg.lu_factor(scaled, check_finite=False))
+    u, singular_values, vt = scipy.linalg.svd(scaled)
+    free = int(np.sum(singular_values <= _SINGULAR * singular_values[0]))
     # Singular tangents occur at the folded poses of a near-rigid Bennett loop (one more
     # instantaneous freedom); the minimum-norm Newton step still converges there.
     log.debug("static tangent has %d free motion(s) at t = %g; using its pseudo-inverse", free, t)
@@ -91,22 +91,21 @@ def _factor_tangent(system: MultibodySystem, q: NDArray, lam: NDArray, t: float)
     return _Tangent(rows, cols, None, pseudo_inverse, free)
 
 
-def _newton(system: MultibodySystem, q: NDArray, lam: NDArray, t: float, tolerance: float, max_iterations: int,
+def _newton(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float, tolerance: float,
+            max_iterations: int,
             tangent: _Tangent | None = None):
     """Newton from ``(q, lam)``; with a ``tangent`` from an earlier solve it starts as modified
     Newton and refactors whenever an iteration contracts the increment by less than a half."""
-    n = system.n_coordinates
+    n = model.n_coordinates
     zeros = np.zeros(n)
     previous = np.inf
     free_motions = 0
     for iteration in range(1, max_iterations + 1):
-        cq = system.constraint_jacobian(q, t)
-        residual = system.body_residuals(q, zeros, zeros) + cq.T @ lam
-        gap = system.constraint_values(q, t)
+        residual, gap = model.residual(q, zeros, zeros, lam, t)
         if not (np.all(np.isfinite(residual)) and np.all(np.isfinite(gap))):
             raise StaticDivergence(f"NaN in the static residual (iteration {iteration}); check the model and the start")
         if tangent is None:
-            tangent = _factor_tangent(system, q, lam, t)
+            tangent = _factor_tangent(model, q, lam, t)
             free_motions = max(free_motions, tangent.free_motions)
         delta = tangent.solve(-np.concatenate([residual, gap]))
         q = q + delta[:n]
@@ -138,8 +137,12 @@ def static_equilibrium(
     load_steps: int = 1,
     tolerance: float = 1e-10,
     max_iterations: int = 25,
+    *,
+    fast_path: bool = True,
 ) -> StaticSolution:
-    """Equilibrium near ``q0`` at time ``t`` (for prescribed motions), gravity in ``load_steps`` increments."""
+    """Equilibrium near ``q0`` at time ``t`` (for prescribed motions), gravity in ``load_steps`` increments.
+    ``fast_path``: Newton with the whole-system kernels when the system is supported
+    (:func:`ffrf.packed_system.newton_model`); the same solution to round-off."""
     if load_steps < 1:
         raise ValueError(f"load_steps must be >= 1, got {load_steps}")
     q = np.array(q0, dtype=float)
@@ -147,25 +150,25 @@ def static_equilibrium(
     counts = []
     for k in range(1, load_steps + 1):
         scaled = replace(system, gravity=system.gravity * (k / load_steps))
-        q, lam, iterations, _ = _newton(scaled, q, lam, t, tolerance, max_iterations)
+        q, lam, iterations, _ = _newton(newton_model(scaled, fast_path), q, lam, t, tolerance, max_iterations)
         counts.append(iterations)
         log.debug("load step %d/%d converged in %d iterations", k, load_steps, iterations)
     return StaticSolution(q, lam, tuple(counts))
 
 
-def _continue(system, q, lam, t_from: float, t_to: float, tolerance: float, max_iterations: int, tangent,
+def _continue(model, q, lam, t_from: float, t_to: float, tolerance: float, max_iterations: int, tangent,
               depth: int = 0):
     """Equilibrium at ``t_to`` from the one at ``t_from``; a failed step is halved (up to 2^8 parts),
     which carries the solution through near-singular poses such as a stiff Bennett loop's folded one."""
     try:
-        return _newton(system, q, lam, t_to, tolerance, max_iterations, tangent)
+        return _newton(model, q, lam, t_to, tolerance, max_iterations, tangent)
     except StaticDivergence:
         if depth >= 8 or t_to == t_from:
             raise
     t_mid = 0.5 * (t_from + t_to)
     log.debug("quasi-static step %g -> %g halved", t_from, t_to)
-    q, lam, first, tangent = _continue(system, q, lam, t_from, t_mid, tolerance, max_iterations, None, depth + 1)
-    q, lam, second, tangent = _continue(system, q, lam, t_mid, t_to, tolerance, max_iterations, tangent, depth + 1)
+    q, lam, first, tangent = _continue(model, q, lam, t_from, t_mid, tolerance, max_iterations, None, depth + 1)
+    q, lam, second, tangent = _continue(model, q, lam, t_mid, t_to, tolerance, max_iterations, tangent, depth + 1)
     return q, lam, first + second, tangent
 
 
@@ -176,19 +179,22 @@ def quasi_static(
     tolerance: float = 1e-10,
     max_iterations: int = 25,
     progress=None,
+    *,
+    fast_path: bool = True,
 ) -> StaticSolution:
     """A sequence of static equilibria at ``times`` (prescribed motions follow their time laws;
     no inertia), each starting from the previous one. Returns ``q`` and ``multipliers`` with one
-    row per time (``iterations`` per time)."""
+    row per time (``iterations`` per time). ``fast_path`` as in :func:`static_equilibrium`."""
     times = np.asarray(times, dtype=float)
     q = np.array(q0, dtype=float)
     lam = np.zeros(system.n_constraints)
     qs, lams, counts = [], [], []
     tangent = None
+    model = newton_model(system, fast_path)
     t_done = float(times[0])
     for k, t in enumerate(times):
         try:
-            q, lam, iterations, tangent = _continue(system, q, lam, t_done, float(t), tolerance, max_iterations, tangent)
+            q, lam, iterations, tangent = _continue(model, q, lam, t_done, float(t), tolerance, max_iterations, tangent)
         except StaticDivergence as error:
             raise StaticDivergence(f"quasi-static step {k} at t = {t:.6g} s: {error}") from error
         t_done = float(t)

@@ -98,6 +98,24 @@ class MultibodySystem:
             for c in self.all_constraints
         ])
 
+    def residual(self, q, qd, qdd, lam, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        r"""Eq. (G1): ``M qdd - Q + C_q^T lambda`` and ``g(q, t)`` (what Newton drives to zero)."""
+        forces = self.body_residuals(q, qd, qdd) + self.constraint_jacobian(q, t).T @ lam
+        return forces, self.constraint_values(q, t)
+
+    def iteration_matrix(self, q, qd, qdd, lam, t: float, mass_factor: float, beta_p: float,
+                         gamma_p: float) -> NDArray[np.float64]:
+        r"""Eq. (FP6): ``[[c M + beta' (K_t + H) + gamma' D_t, C_q^T], [C_q, 0]]``, with ``c = 1`` for
+        generalized-alpha (Eq. (G3)) and ``c = 0, beta' = 1, gamma' = 0`` for statics (Eq. (S1))."""
+        jq, jqd = self.body_tangents(q, qd, qdd)
+        upper = beta_p * (jq + self.constraint_hessian(q, lam, t))
+        if gamma_p != 0.0:
+            upper += gamma_p * jqd
+        if mass_factor != 0.0:
+            upper += mass_factor * self.mass_matrix(q)
+        cq = self.constraint_jacobian(q, t)
+        return np.block([[upper, cq.T], [cq, np.zeros((cq.shape[0], cq.shape[0]))]])
+
     def body_tangents(self, q, qd, qdd) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Block-diagonal exact ``d(M qdd - Q)/dq`` and ``d(M qdd - Q)/dqd``."""
         n = self.n_coordinates

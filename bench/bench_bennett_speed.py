@@ -1,0 +1,114 @@
+"""Bennett scene speed, reference Python path against the fast path (whole-system numba kernels,
+:mod:`ffrf.packed_system`), in the same process, with the results compared.
+
+For each path: generalized-alpha from the assembled state at rest (``--t-dynamic`` s, step
+``--step``) in ms per step, and the quasi-static revolution (ramp plus one revolution,
+``--outputs`` equilibria, as ``python -m ffrf bennett --quasi-static``) in s. Kernels are warm
+(numba cache); ``--cold`` also times the fast path's first call in a fresh process with an empty
+numba cache (compilation).
+
+BLAS threads: on a small shared machine OpenBLAS threads on ~100 x 100 matrices spin against
+other processes (a 105 x 105 SVD took 0.5 s instead of 8 ms); this script pins BLAS to one
+thread unless ``--blas-threads`` says otherwise.
+
+Run: .venv/bin/python bench/bench_bennett_speed.py [--h 0.006 --modes 4] [--cold] [--skip-quasi-static]
+"""
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+
+def _pin_blas(threads: int) -> None:
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(name, str(threads))
+
+
+_COLD = """
+import time, numpy as np
+started = time.perf_counter()
+from ffrf.bennett_scene import build_bennett
+from ffrf.packed_system import pack_system
+scene = build_bennett("pla", h={h}, n_modes={modes})
+built = time.perf_counter()
+packed = pack_system(scene.system)
+q, z, lam = scene.q_start, np.zeros_like(scene.q_start), np.zeros(scene.system.n_constraints)
+packed.residual(q, z, z, lam, 0.0)
+packed.iteration_matrix(q, z, z, lam, 0.0, 1.0, 1e-6, 1e-3)
+print(time.perf_counter() - built)
+"""
+
+
+def cold_compile_seconds(h: float, modes: int) -> float:
+    """First residual and iteration matrix in a fresh process with an empty numba cache."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=os.getcwd())
+        out = subprocess.run([sys.executable, "-c", _COLD.format(h=h, modes=modes)], env=env, check=True,
+                             capture_output=True, text=True)
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--h", type=float, default=6e-3, help="tetrahedron size (m)")
+    parser.add_argument("--modes", type=int, default=4, help="fixed-interface modes per link")
+    parser.add_argument("--t-dynamic", type=float, default=0.3, help="dynamic run length (s)")
+    parser.add_argument("--step", type=float, default=1e-3, help="generalized-alpha step (s)")
+    parser.add_argument("--outputs", type=int, default=241, help="quasi-static equilibria over the revolution")
+    parser.add_argument("--skip-quasi-static", action="store_true")
+    parser.add_argument("--cold", action="store_true", help="also time numba compilation with an empty cache")
+    parser.add_argument("--blas-threads", type=int, default=1)
+    args = parser.parse_args()
+    _pin_blas(args.blas_threads)
+
+    import numpy as np
+
+    from ffrf.bennett_scene import assemble, build_bennett
+    from ffrf.generalized_alpha import generalized_alpha
+    from ffrf.packed_system import pack_system
+    from ffrf.static_solver import quasi_static
+
+    scene = build_bennett("pla", h=args.h, n_modes=args.modes)
+    system = scene.system
+    q0 = assemble(scene).q
+    print(f"PLA Bennett, h = {1e3 * args.h:g} mm, {args.modes} modes per link: {system.n_coordinates} coordinates, "
+          f"{system.n_constraints} constraints; fast path supported: {pack_system(system) is not None}")
+    generalized_alpha(system, q0, np.zeros_like(q0), 2 * args.step, args.step)  # warm the kernels
+
+    runs = {}
+    for fast in (False, True):
+        result = generalized_alpha(system, q0, np.zeros_like(q0), args.t_dynamic, args.step, fast_path=fast)
+        runs[fast] = result
+    steps = len(runs[True].newton_iterations)
+    print(f"dynamic {args.t_dynamic:g} s, step {1e3 * args.step:g} ms ({steps} steps):")
+    for fast in (False, True):
+        r = runs[fast]
+        print(f"  {'fast     ' if fast else 'reference'}  {1e3 * r.wall_time / steps:8.3f} ms/step  "
+              f"{r.newton_iterations.mean():.2f} iterations/step")
+    print(f"  speed-up {runs[False].wall_time / runs[True].wall_time:.1f}x; max |q_fast - q_ref| = "
+          f"{np.abs(runs[True].q - runs[False].q).max():.1e}, max |lambda| difference relative "
+          f"{np.abs(runs[True].multipliers - runs[False].multipliers).max() / np.abs(runs[False].multipliers).max():.1e}")
+
+    if not args.skip_quasi_static:
+        times = np.linspace(0.0, scene.t_end, args.outputs)
+        solutions, seconds = {}, {}
+        for fast in (False, True):
+            started = time.perf_counter()
+            solutions[fast] = quasi_static(system, q0, times, fast_path=fast)
+            seconds[fast] = time.perf_counter() - started
+        print(f"quasi-static revolution ({scene.t_end:.1f} s of drive, {args.outputs} equilibria):")
+        for fast in (False, True):
+            print(f"  {'fast     ' if fast else 'reference'}  {seconds[fast]:8.2f} s  "
+                  f"{sum(solutions[fast].iterations)} Newton iterations")
+        print(f"  speed-up {seconds[False] / seconds[True]:.1f}x; max |q_fast - q_ref| = "
+              f"{np.abs(solutions[True].q - solutions[False].q).max():.1e}")
+    if args.cold:
+        print(f"numba cold compile (first residual + iteration matrix, empty cache): "
+              f"{cold_compile_seconds(args.h, args.modes):.1f} s")
+
+
+if __name__ == "__main__":
+    main()
