@@ -53,14 +53,15 @@ def main(argv=None) -> dict:
 
     from ffrf.bennett_scene import assemble, build_bennett
     from validation.bennett_validation import dynamic_solve, from_exudyn, run_ours
-    from validation.exudyn_bennett import (assemble_exudyn_bennett, exudyn_convention_system, run_exudyn_bennett,
-                                           twin_bases)
+    from validation.exudyn_bennett import (assemble_exudyn_bennett, bennett_bodies, exudyn_convention_system,
+                                           run_exudyn_bennett)
+    from validation.exudyn_twin import twin_bases
 
     scene = build_bennett(args.variant, h=args.h, n_modes=args.modes).with_exact_gravity(False)
     convert = (lambda s: exudyn_convention_system(s, True)) if args.exudyn_jacobian else None
     system = scene.system if convert is None else convert(scene.system)
     q_ours = assemble(scene, convert=convert).q
-    bases = twin_bases(scene)
+    bases = twin_bases(bennett_bodies(scene))
     start = assemble_exudyn_bennett(scene, bases)
     steps = [float(s) for s in args.steps.split(",")]
     ours, theirs = {}, {}

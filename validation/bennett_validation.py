@@ -43,6 +43,10 @@ __all__ = ["ValidationSettings", "SolverRun", "BennettValidation", "TARGETS", "v
 #: maximum), trajectories (relative to the coupler's elastic deviation from the ideal path).
 TARGETS = {"freq": 1e-8, "mac": 1e-6, "torque": 1e-4, "trajectory": 1e-3}
 
+#: Floor of the trajectory scale (m): an ideally rigid linkage has no elastic deviation to
+#: measure differences against, so they are taken relative to at least a micrometre.
+SCALE_FLOOR_M = 1e-6
+
 
 @dataclass(frozen=True)
 class ValidationSettings:
@@ -178,8 +182,9 @@ def validate_bennett(settings: ValidationSettings = ValidationSettings(),
     from ffrf.bennett_run import ideal_coupler_points
     from ffrf.bennett_scene import assemble, build_bennett
 
-    from .exudyn_bennett import (assemble_exudyn_bennett, exudyn_convention_system, quasi_static_exudyn_bennett,
-                                 run_exudyn_bennett, twin_bases)
+    from .exudyn_bennett import (assemble_exudyn_bennett, bennett_bodies, exudyn_convention_system,
+                                 quasi_static_exudyn_bennett, run_exudyn_bennett)
+    from .exudyn_twin import twin_bases
     from .modes import compare_modes
 
     started = time.perf_counter()
@@ -191,7 +196,7 @@ def validate_bennett(settings: ValidationSettings = ValidationSettings(),
              f"{[l.reduction.n_modes for l in production.links]} modes)")
 
     started = time.perf_counter()
-    bases = twin_bases(production, settings.basis)
+    bases = twin_bases(bennett_bodies(production), settings.basis)
     setup_bases = time.perf_counter() - started
     modes = {}
     for link, basis in zip(production.links, bases):
@@ -242,7 +247,7 @@ def _metrics(settings, production, equivalent, modes, qs, dyn, ideal, exudyn_ver
     from .exudyn_bennett import exudyn_convention_system
 
     deviation = {label: float(np.linalg.norm(run.coupler - ideal, axis=1).max()) for label, run in qs.items()}
-    scale = deviation["exudyn"]  # the coupler's elastic deviation from the ideal path
+    scale = max(deviation["exudyn"], SCALE_FLOOR_M)  # the coupler's elastic deviation from the ideal path
     headline = _trajectory_metrics(qs["equivalent"], qs["exudyn"], scale)
     m: dict = {
         "variant": settings.variant,

@@ -53,9 +53,11 @@ from types import SimpleNamespace
 import numpy as np
 from numpy.typing import NDArray
 
+from .exudyn_twin import ExudynTwin, TwinBasis, q_from_twin, solve_static, static_settings, to_twin_layout
+
 __all__ = [
     "BennettTrajectory",
-    "ExudynTwin",
+    "bennett_bodies",
     "exudyn_convention_system",
     "build_exudyn_twin",
     "run_exudyn_bennett",
@@ -63,9 +65,6 @@ __all__ = [
     "static_exudyn_bennett",
     "assemble_exudyn_bennett",
     "quasi_static_exudyn_bennett",
-    "TwinBasis",
-    "twin_bases",
-    "to_twin_layout",
     "static_ffrf_bennett",
     "compare",
     "probe_marker_offset",
@@ -226,242 +225,45 @@ def _zeta(system, q) -> list:
 # Exudyn twin
 # --------------------------------------------------------------------------------------------
 
-@dataclass
-class ExudynTwin:
-    """An assembled Exudyn system and the item numbers needed to read it back."""
+def bennett_bodies(scene) -> list:
+    """The scene's links as :class:`validation.exudyn_twin.TwinBody` s."""
+    from .exudyn_twin import TwinBody
 
-    sc: object
-    mbs: object
-    objects: list
-    rigid_nodes: list
-    modal_nodes: list
-    reference: list  # per body: reference coordinates of the rigid node (R, ep)
-    markers: dict
-    joints: dict
-    sensors: dict
-    symbolic: bool
-    keep_alive: list = field(default_factory=list)
-    notes: list = field(default_factory=list)  # where the twin is not exactly equivalent
-    bases: list | None = None  # per body TwinBasis (None: our basis)
-
-
-def _interface_of(link, marker):
-    """The interface name of a joint's ``marker`` (the scene may have moved its point, not its name)."""
-    for name, candidate in link.markers.items():
-        if candidate.name == marker.name:
-            return name
-    raise ValueError(f"marker {marker.name!r} is not one of link {link.index}'s interface markers")
-
-
-def _drive_offset_function(scene, frozen_time: float | None):
-    """offsetUserFunction: [0, 0, 0, 0, 0, angle(t)] (the cosine ramp of :class:`ffrf.drives.CosineRamp`)."""
-    import exudyn as exu
-
-    esym = exu.symbolic
-    start = float(scene.start_angle)
-    w, tr = float(scene.drive.omega), float(scene.drive.ramp_time)
-
-    if frozen_time is not None:
-        angle = float(scene.drive_angle(frozen_time))
-
-        def offset(mbs, t, itemNumber, args):
-            return [0.0, 0.0, 0.0, 0.0, 0.0, angle + 0.0 * t]
-        return offset
-
-    def offset(mbs, t, itemNumber, args):
-        during = 0.5 * w * (t - tr / np.pi * esym.sin(np.pi / tr * t))
-        after = 0.5 * w * tr + w * (t - tr)
-        return [0.0, 0.0, 0.0, 0.0, 0.0, start + esym.IfThenElse(t < tr, during, after)]
-    return offset
-
-
-def _drive_offset_python(scene, frozen_time: float | None):
-    def offset(mbs, t, itemNumber, args):
-        return [0.0, 0.0, 0.0, 0.0, 0.0, float(scene.drive_angle(t if frozen_time is None else frozen_time))]
-    return offset
-
-
-@dataclass(frozen=True)
-class TwinBasis:
-    """The mode basis of one body in the twin: Exudyn's own HCB (``source="exudyn"``) or ours."""
-
-    matrix: NDArray[np.float64]  # (3N, m)
-    fixed_interface_frequencies_hz: NDArray[np.float64]
-    source: str
-    setup_s: float
-    to_ours: NDArray[np.float64]  # (m, m): our modal coordinates of the same displacement field
-    from_ours: NDArray[np.float64]
-
-
-def _modal_map(mass, source: NDArray, target: NDArray) -> NDArray[np.float64]:
-    """Mass-orthogonal projection of span(source) onto target's coordinates, (target^T M target)^-1 target^T M source;
-    exact when both span the same space (our and Exudyn's HCB bases do, to 1e-13)."""
-    m_target = target.T @ (mass @ target)
-    return np.linalg.solve(m_target, target.T @ (mass @ source))
-
-
-def twin_bases(scene, source: str = "exudyn") -> list[TwinBasis]:
-    """Per link: Exudyn's own HCB modes on our nodes, M, K, interface node sets and weights
-    (:func:`validation.modes.exudyn_hcb`), or ``source="ffrf"``: our basis as is."""
-    from .modes import exudyn_hcb
-
-    out = []
-    for link in scene.links:
-        ours = np.asarray(link.reduction.basis)
-        if source == "ffrf":
-            eye = np.eye(ours.shape[1])
-            out.append(TwinBasis(ours, link.reduction.fixed_interface_frequencies_hz, "ffrf", 0.0, eye, eye))
-            continue
-        if source != "exudyn":
-            raise ValueError(f"basis source must be 'exudyn' or 'ffrf', got {source!r}")
-        started = time.perf_counter()
-        itfs = list(link.interfaces.values())
-        basis, frequencies = exudyn_hcb(link.fe, [i.nodes for i in itfs], [i.weights for i in itfs],
-                                        link.reduction.fixed_interface_frequencies_hz.size)
-        elapsed = time.perf_counter() - started
-        out.append(TwinBasis(basis, np.sort(frequencies), "exudyn", elapsed,
-                             _modal_map(link.fe.mass, basis, ours), _modal_map(link.fe.mass, ours, basis)))
-    return out
-
-
-def to_twin_layout(scene, q: NDArray, bases: list[TwinBasis] | None) -> NDArray[np.float64]:
-    """Our coordinates with each body's modal part in the twin's basis."""
-    q = np.array(q, dtype=float)
-    if bases is None:
-        return q
-    for k, basis in enumerate(bases):
-        block = scene.system.block(k)
-        q[..., block.start + 7:block.stop] = q[..., block.start + 7:block.stop] @ basis.from_ours.T
-    return q
+    return [TwinBody(f"link{link.index}", link.fe, link.interfaces, link.markers, link.reduction)
+            for link in scene.links]
 
 
 def build_exudyn_twin(scene, q0: NDArray, symbolic: bool = True, frozen_drive_time: float | None = None,
                       system=None, bases: list[TwinBasis] | None = None) -> ExudynTwin:
-    """The Exudyn twin of ``system`` (default ``scene.system``) starting at ``q0`` (our layout,
-    absolute, at rest; modal coordinates in ``bases``, default our own basis).
-
-    ``frozen_drive_time``: evaluate the drive angle at this fixed time (static solves, whose
-    quasi-time would otherwise turn the drive). ``symbolic=False`` uses a Python user function.
-    ``bases``: per body the twin's mode basis (:func:`twin_bases`).
-    """
-    import exudyn as exu
-    import exudyn.itemInterface as eii
-    from exudyn.FEM import ObjectFFRFreducedOrderInterface
-
-    from ffrf.euler_parameters import rotation_matrix
-    from ffrf.joints import GroundFrame, MarkerJoint
-
-    from .exudyn_ffrf import _exudyn_fem
+    """The Exudyn twin (:func:`validation.exudyn_twin.build_twin`) of ``system`` (default
+    ``scene.system``) starting at ``q0``, with the Bennett sensors: the nine tracked nodes
+    (``node0..8``), link 2's two joint points (``coupler_a/b``) and the drive's ``TorqueLocal``."""
+    from .exudyn_twin import DriveLaw, add_marker_sensor, add_node_sensor, build_twin
 
     system = scene.system if system is None else system
-    sc = exu.SystemContainer()
-    mbs = sc.AddSystem()
-    beta = float(scene.settings["beta"])
-    objects, rigid_nodes, modal_nodes, reference = [], [], [], []
-    for k, link in enumerate(scene.links):
-        block = np.asarray(q0[system.block(k)], dtype=float)
-        basis = np.asarray(link.reduction.basis) if bases is None else bases[k].matrix
-        body = SimpleNamespace(nodes=np.asarray(link.fe.nodes), mass=link.fe.mass, stiffness=link.fe.stiffness,
-                               basis=basis)
-        cms = ObjectFFRFreducedOrderInterface(_exudyn_fem(body))
-        info = cms.AddObjectFFRFreducedOrder(
-            mbs, positionRef=[float(v) for v in block[:3]], rotationMatrixRef=rotation_matrix(block[3:7]),
-            gravity=[float(v) for v in scene.gravity], stiffnessProportionalDamping=beta, name=f"link{k}")
-        mbs.SetNodeParameter(info["nGenericODE2"], "initialCoordinates", [float(z) for z in block[7:]])
-        objects.append(info["oFFRFreducedOrder"])
-        rigid_nodes.append(info["nRigidBody"])
-        modal_nodes.append(info["nGenericODE2"])
-        reference.append(np.asarray(mbs.GetNodeParameter(info["nRigidBody"], "referenceCoordinates"), dtype=float))
-
-    ground = mbs.AddObject(eii.ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
-    markers, joints, keep, notes = {}, {}, [], []
-
-    def add_marker(marker, rotation, offset, label):
-        if isinstance(marker, GroundFrame):
-            ht = exu.HT(rotation=marker.rotation @ rotation, translation=marker.point + marker.rotation @ offset)
-            return mbs.AddMarker(eii.MarkerBodyRigid(bodyNumber=ground, localHT=ht, name=label))
-        link = scene.links[marker.body]
-        name = _interface_of(link, marker)
-        itf = link.interfaces[name]
-        if np.any(offset != 0.0) and np.any(marker.rotation_modes != 0.0):
-            # Our marker-frame offset A exp(theta) o has no Exudyn equivalent; Exudyn applies it as A o.
-            notes.append(f"{label}: marker-frame offset {np.linalg.norm(offset) * 1e3:.3g} mm applied in the body frame")
-        # Exudyn's marker point is the interface's weighted centre plus localHT's translation, in the body frame.
-        translation = marker.point - link.markers[name].point + offset
-        return mbs.AddMarker(eii.MarkerSuperElementRigid(
-            bodyNumber=objects[marker.body], meshNodeNumbers=[int(i) for i in itf.nodes],
-            weightingFactors=[float(w) for w in itf.weights], useAlternativeApproach=True, rotationsExponentialMap=2,
-            localHT=exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(translation, float)),
-            name=label))
-
-    used_symbolic = False
-    for c in system.constraints:
-        if not isinstance(c, MarkerJoint):
-            raise TypeError(f"constraint {c.name!r} ({type(c).__name__}) has no Exudyn twin here")
-        key = c.name.split(" ")[0]
-        m0 = add_marker(c.marker0, c.rotation0, c.offset0, f"{key}:m0")
-        m1 = add_marker(c.marker1, c.rotation1, c.offset1, f"{key}:m1")
-        markers[key] = (m0, m1)
-        axes = [int(v) for v in c.locked]
-        joint = mbs.AddObject(eii.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=axes, name=key))
-        joints[key] = joint
-        if c.angle is not None:
-            function = None
-            if symbolic:
-                from exudyn.utilities import CreateSymbolicUserFunction
-
-                try:
-                    function = CreateSymbolicUserFunction(mbs, _drive_offset_function(scene, frozen_drive_time),
-                                                          "offsetUserFunction", joint)
-                    used_symbolic = True
-                except Exception as error:  # pragma: no cover - reported to the caller
-                    keep.append(f"symbolic user function failed: {error!r}")
-                    function = None
-            if function is None:
-                function = _drive_offset_python(scene, frozen_drive_time)
-            mbs.SetObjectParameter(joint, "offsetUserFunction", function)
-            keep.append(function)
-
-    out = exu.OutputVariableType
-    sensors = {}
-    for k in range(len(scene.links)):
-        sensors[f"rigid{k}"] = mbs.AddSensor(eii.SensorNode(nodeNumber=rigid_nodes[k], outputVariableType=out.Coordinates,
-                                                            storeInternal=True, writeToFile=False))
-        sensors[f"modal{k}"] = mbs.AddSensor(eii.SensorNode(nodeNumber=modal_nodes[k], outputVariableType=out.Coordinates,
-                                                            storeInternal=True, writeToFile=False))
+    drive = DriveLaw(float(scene.start_angle), float(scene.drive.omega), float(scene.drive.ramp_time))
+    drives = {c.name: drive for c in system.constraints if getattr(c, "angle", None) is not None}
+    twin = build_twin(bennett_bodies(scene), system, q0, float(scene.settings["beta"]), drives, symbolic,
+                      frozen_drive_time, bases)
     for a, link in enumerate(scene.links[1:]):
         for j, node in enumerate(link.tracked_nodes):
-            sensors[f"node{3 * a + j}"] = mbs.AddSensor(eii.SensorSuperElement(
-                bodyNumber=objects[link.index], meshNodeNumber=int(node), outputVariableType=out.Position,
-                storeInternal=True, writeToFile=False))
-    # coupler: link 2 is marker 1 of joint1 and marker 0 of joint2
-    sensors["coupler_a"] = mbs.AddSensor(eii.SensorMarker(markerNumber=markers["joint1"][1], outputVariableType=out.Position,
-                                                          storeInternal=True, writeToFile=False))
-    sensors["coupler_b"] = mbs.AddSensor(eii.SensorMarker(markerNumber=markers["joint2"][0], outputVariableType=out.Position,
-                                                          storeInternal=True, writeToFile=False))
-    sensors["torque"] = mbs.AddSensor(eii.SensorObject(objectNumber=joints["joint3"], outputVariableType=out.TorqueLocal,
-                                                       storeInternal=True, writeToFile=False))
-    mbs.Assemble()
-    return ExudynTwin(sc, mbs, objects, rigid_nodes, modal_nodes, reference, markers, joints, sensors, used_symbolic, keep,
-                      notes, bases)
+            add_node_sensor(twin, f"node{3 * a + j}", link.index, node)
+    # link 2 is marker 1 of joint1 and marker 0 of joint2
+    add_marker_sensor(twin, "coupler_a", twin.markers["joint1"][1])
+    add_marker_sensor(twin, "coupler_b", twin.markers["joint2"][0])
+    twin.sensors["torque"] = twin.sensors["torque:joint3"]
+    twin.mbs.Assemble()
+    return twin
 
 
-def _q_from_exudyn(twin: ExudynTwin, scene, q0: NDArray, rigid: list, modal: list, our_basis: bool = True) -> NDArray:
-    """Our-layout absolute coordinates from Exudyn's displacement coordinates (rows = times);
-    Euler parameters are given our sign (Exudyn's reference may be -p); modal coordinates in
-    our basis (``our_basis``) or the twin's."""
-    system = scene.system
-    rows = rigid[0].shape[0]
-    q = np.empty((rows, system.n_coordinates))
-    for k in range(len(scene.links)):
-        block = system.block(k)
-        absolute = rigid[k] + twin.reference[k]
-        sign = 1.0 if np.dot(twin.reference[k][3:7], q0[block][3:7]) >= 0 else -1.0
-        absolute[:, 3:7] *= sign
-        q[:, block.start:block.start + 7] = absolute
-        to_ours = twin.bases[k].to_ours if (our_basis and twin.bases is not None) else None
-        q[:, block.start + 7:block.stop] = modal[k] if to_ours is None else modal[k] @ to_ours.T
-    return q
+def _read_twin(twin: ExudynTwin, scene, q0: NDArray) -> dict:
+    """Rows of every Bennett sensor: q (our basis), twin q, coupler, tracked nodes, drive multiplier (dynamic sign)."""
+    from .exudyn_twin import read_twin
+
+    data = read_twin(twin, scene.system, q0)
+    return {"time": data["time"], "q": data["q"], "twin_q": data["twin_q"],
+            "tracked": np.stack([data[f"node{i}"] for i in range(9)], axis=1),
+            "coupler": 0.5 * (data["coupler_a"] + data["coupler_b"]), "torque": data["torque"][:, 2]}
 
 
 def exudyn_settings(t_end: float, step: float, rho_inf: float, tolerance: float = 1e-10):
@@ -472,22 +274,6 @@ def exudyn_settings(t_end: float, step: float, rho_inf: float, tolerance: float 
     plan = SimpleNamespace(n_steps=n_steps, t_end=t_end, rho_inf=rho_inf, step=step)
     s = settings(plan, False, tolerance, tolerance)
     return s
-
-
-def _read_twin(twin: ExudynTwin, scene, q0: NDArray) -> dict:
-    """Every stored sensor row of ``twin`` (time in column 0 stripped): q (our basis), twin q,
-    coupler, tracked nodes, drive multiplier (dynamic sign)."""
-    mbs, sensors = twin.mbs, twin.sensors
-    data = {name: np.asarray(mbs.GetSensorStoredData(number)) for name, number in sensors.items()}
-    n = len(scene.links)
-    rigid = [data[f"rigid{k}"][:, 1:] for k in range(n)]
-    modal = [data[f"modal{k}"][:, 1:] for k in range(n)]
-    return {"time": data["rigid0"][:, 0],
-            "q": _q_from_exudyn(twin, scene, q0, rigid, modal),
-            "twin_q": _q_from_exudyn(twin, scene, q0, rigid, modal, our_basis=False),
-            "tracked": np.stack([data[f"node{i}"][:, 1:] for i in range(9)], axis=1),
-            "coupler": 0.5 * (data["coupler_a"][:, 1:] + data["coupler_b"][:, 1:]),
-            "torque": data["torque"][:, 3]}
 
 
 def _check_times(times: NDArray, expected: NDArray, what: str) -> None:
@@ -543,31 +329,6 @@ def run_ffrf_bennett(scene, system, q0: NDArray, t_end: float, step: float = 1e-
 # Statics
 # --------------------------------------------------------------------------------------------
 
-def _static_settings(load_steps: int, tolerance: float, duration: float = 1.0, load_factor: bool = True):
-    import exudyn as exu
-
-    s = exu.SimulationSettings()
-    s.staticSolver.numberOfLoadSteps = load_steps
-    s.staticSolver.loadStepDuration = duration
-    s.staticSolver.useLoadFactor = load_factor
-    s.staticSolver.adaptiveStep = False
-    s.staticSolver.newton.relativeTolerance = tolerance
-    s.staticSolver.newton.absoluteTolerance = tolerance
-    s.staticSolver.newton.maxIterations = 50
-    s.staticSolver.verboseMode = 0
-    s.linearSolver.solverType = exu.LinearSolverType.EXUdense
-    s.solution.file.write = False
-    return s
-
-
-def _solve_static(twin: ExudynTwin, settings) -> None:
-    import exudyn as exu
-
-    solver = exu.MainSolverStatic()
-    if not solver.SolveSystem(twin.mbs, settings):
-        raise RuntimeError(f"Exudyn SolveStatic failed: {solver.GetErrorString()}")
-
-
 def static_exudyn_bennett(scene, q0: NDArray, t: float = 0.0, load_steps: int = 2, tolerance: float = 1e-10,
                           system=None, bases: list[TwinBasis] | None = None):
     """Exudyn ``SolveStatic`` of the twin of ``system`` from ``q0`` with the drive frozen at ``t``
@@ -576,14 +337,14 @@ def static_exudyn_bennett(scene, q0: NDArray, t: float = 0.0, load_steps: int = 
     import exudyn as exu
 
     twin = build_exudyn_twin(scene, q0, symbolic=False, frozen_drive_time=t, system=system, bases=bases)
-    _solve_static(twin, _static_settings(load_steps, tolerance))
+    solve_static(twin, static_settings(load_steps, tolerance))
     mbs = twin.mbs
     out = exu.OutputVariableType
     n = len(scene.links)
     rigid = [np.atleast_2d(mbs.GetNodeOutput(twin.rigid_nodes[k], out.Coordinates)) for k in range(n)]
     modal = [np.atleast_2d(mbs.GetNodeOutput(twin.modal_nodes[k], out.Coordinates)) for k in range(n)]
-    q = _q_from_exudyn(twin, scene, q0, rigid, modal)[0]
-    twin_q = _q_from_exudyn(twin, scene, q0, rigid, modal, our_basis=False)[0]
+    q = q_from_twin(twin, scene.system, q0, rigid, modal)[0]
+    twin_q = q_from_twin(twin, scene.system, q0, rigid, modal, our_basis=False)[0]
     torque = -float(np.asarray(mbs.GetObjectOutput(twin.joints["joint3"], out.TorqueLocal))[2])
     ca = np.asarray(mbs.GetMarkerOutput(twin.markers["joint1"][1], out.Position))
     cb = np.asarray(mbs.GetMarkerOutput(twin.markers["joint2"][0], out.Position))
@@ -600,7 +361,7 @@ def assemble_exudyn_bennett(scene, bases: list[TwinBasis] | None = None, steps: 
     misalignment = abs(scene.settings["alpha3_deg"] - 90.0)
     if steps is None:
         steps = max(1, int(np.ceil(4 * misalignment))) if misalignment > 1e-12 else 1
-    result = static_exudyn_bennett(scene, to_twin_layout(scene, scene.q_start, bases), 0.0, 2, tolerance,
+    result = static_exudyn_bennett(scene, to_twin_layout(scene.system, scene.q_start, bases), 0.0, 2, tolerance,
                                    scene.with_misalignment(0.0) if misalignment > 1e-12 else scene.system, bases)
     if misalignment > 1e-12:
         for k in range(1, steps + 1):
@@ -619,10 +380,10 @@ def quasi_static_exudyn_bennett(scene, start: tuple, times: NDArray, tolerance: 
         raise ValueError("times must start at 0 and be equally spaced (Exudyn's load steps)")
     started = time.perf_counter()
     twin = build_exudyn_twin(scene, q0, symbolic=True, bases=bases)
-    settings = _static_settings(len(times) - 1, tolerance, duration=float(times[-1]), load_factor=False)
+    settings = static_settings(len(times) - 1, tolerance, duration=float(times[-1]), load_factor=False)
     setup = time.perf_counter() - started
     started = time.perf_counter()
-    _solve_static(twin, settings)
+    solve_static(twin, settings)
     integration = time.perf_counter() - started
     out = _read_twin(twin, scene, q0)
     _check_times(out["time"], times, "static sweep")

@@ -49,8 +49,9 @@ def _verdict(m: dict) -> list[str]:
         f"Exudyn {m['versions']['exudyn']} reduces the links itself.",
         "",
         f"- Quasi-static revolution: coupler point differs by at most {_um(c['max_abs_diff_m'])} "
-        f"({_sci(c['relative_to_elastic_deviation'])} of its {1e3 * m['coupler_deviation_from_ideal_m']['exudyn']:.3g} mm "
-        f"elastic deviation; target {TARGETS['trajectory']:g}), tracked nodes by {_um(worst['max_abs_diff_m'])}, "
+        f"({_sci(c['relative_to_elastic_deviation'])} of its {_um(m['coupler_deviation_from_ideal_m']['exudyn'])} "
+        f"elastic deviation, at least 1 um; target {TARGETS['trajectory']:g}), tracked nodes by "
+        f"{_um(worst['max_abs_diff_m'])}, "
         f"driving torque by {_sci(t['max_rel_diff'])} of its maximum (target {TARGETS['torque']:g}).",
     ]
     if "dynamic" in m:
