@@ -37,7 +37,8 @@ from .generalized_alpha import generalized_alpha
 from .joints import MarkerJoint, joint_pose
 from .static_solver import quasi_static
 
-__all__ = ["BennettResult", "run_bennett", "evaluate_sensors", "ideal_coupler_points", "choose_mode", "write_results"]
+__all__ = ["BennettResult", "run_bennett", "evaluate_sensors", "ideal_coupler_points", "choose_mode", "write_results",
+           "energy_balance"]
 
 log = logging.getLogger(__name__)
 
@@ -142,7 +143,7 @@ def evaluate_sensors(scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray
     out["coupler_deviation"] = out["coupler_point"] - ideal
     curve = ideal_coupler_points(scene, scene.start_angle + np.linspace(0.0, 2 * np.pi, 4000, endpoint=False))
     out["coupler_distance_to_path"] = _distance_to_polyline(out["coupler_point"], curve)
-    out.update(_energy_balance(scene, time, out, qd))
+    out.update(energy_balance(scene, time, out, qd))
     return out
 
 
@@ -153,7 +154,7 @@ def _cumulative_integral(values: NDArray, x: NDArray) -> NDArray:
     return cumulative_simpson(values, x=x, initial=0.0)
 
 
-def _energy_balance(scene: BennettScene, time: NDArray, sensors: dict, qd: NDArray | None) -> dict[str, NDArray]:
+def energy_balance(scene: BennettScene, time: NDArray, sensors: dict, qd: NDArray | None) -> dict[str, NDArray]:
     """Work of the drive (integral of torque over the drive angle), damping dissipation (integral of
     zetad^T D zetad over time) and the balance residual W - (dE_kin + dE_pot + dE_strain + D)."""
     work = _cumulative_integral(sensors["driving_torque"], sensors["drive_angle"])
