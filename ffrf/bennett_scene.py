@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from kinematics import PAPER_A, PAPER_ALPHA, BennettLinkage
 
 from .craig_bampton import CraigBamptonBasis, craig_bampton
-from .drives import CosineRamp, rpm
+from .drives import CosineRamp, RampedAngle, rpm
 from .fe_model import FEModel
 from .flexible_body import FlexibleBody
 from .interfaces import InterfaceNodes, boundary_triangles, interface_from_group
@@ -94,7 +94,8 @@ class BennettScene:
 
     def with_misalignment(self, fraction: float) -> MultibodySystem:
         """The system with the base's joint-3 frame turned by ``fraction`` of the misalignment."""
-        return _system(self.links, self.drive_angle, self.gravity, fraction, self.settings["joint_offsets"])
+        return _system(self.links, RampedAngle(self.start_angle, self.drive), self.gravity, fraction,
+                       self.settings["joint_offsets"])
 
     def with_exact_gravity(self, exact: bool) -> "BennettScene":
         """The same scene with the exact gravity force or Exudyn's simplified one (Eq. (F10))."""
@@ -243,10 +244,7 @@ def build_bennett(
                     exact_gravity=exact_gravity, alpha3_deg=alpha3, material=material.name,
                     joint_offsets=joint_offsets)
 
-    def angle(t: float) -> float:
-        return start_angle + float(drive(t))
-
-    system = _system(links, angle, gravity, 1.0, joint_offsets)
+    system = _system(links, RampedAngle(start_angle, drive), gravity, 1.0, joint_offsets)
     q_start = _start_state(system, linkage, start_angle)
     t_end = drive.time_for_angle(float(drive.angle(ramp_time)) + 2.0 * np.pi * revolutions)
     return BennettScene(variant, links, system, q_start, drive, start_angle, t_end, linkage, settings)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CosineRamp", "rpm"]
+__all__ = ["CosineRamp", "RampedAngle", "rpm"]
 
 
 def rpm(value: float) -> float:
@@ -62,3 +62,15 @@ class CosineRamp:
         from scipy.optimize import brentq
 
         return brentq(lambda t: float(self.angle(t)) - angle, 0.0, self.ramp_time)
+
+
+@dataclass(frozen=True)
+class RampedAngle:
+    """A prescribed joint angle ``start + ramp(t)`` (rad): plain data, so that other tools (the
+    Exudyn twin's symbolic user function) can rebuild the same law."""
+
+    start: float
+    ramp: CosineRamp
+
+    def __call__(self, t: float) -> float:
+        return self.start + float(self.ramp(t))

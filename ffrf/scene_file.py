@@ -59,7 +59,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .craig_bampton import CraigBamptonBasis, craig_bampton
-from .drives import CosineRamp, rpm
+from .drives import CosineRamp, RampedAngle, rpm
 from .errors import FEInputError
 from .euler_parameters import rotation_matrix
 from .fe_model import FEModel
@@ -75,7 +75,7 @@ from .modal_moments import modal_moments
 from .static_solver import quasi_static, static_equilibrium
 from .system import MultibodySystem
 
-__all__ = ["SceneError", "FileScene", "load_scene", "run_scene"]
+__all__ = ["SceneError", "FileScene", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
 
 log = logging.getLogger(__name__)
 
@@ -205,8 +205,7 @@ def _joint(spec: dict, index: dict[str, int], bodies: list[FileBody], joint_offs
         d = _require(spec, "drive", where)
         ramp = CosineRamp(rpm(float(d["rpm"])), float(d.get("ramp_time", 1.0)))
         start = np.radians(float(d.get("start_angle_deg", 0.0)))
-        return driven_revolute_joint(side0, m1, lambda t: start + float(ramp(t)), frame, frame, offset0, offset1,
-                                     name=name)
+        return driven_revolute_joint(side0, m1, RampedAngle(start, ramp), frame, frame, offset0, offset1, name=name)
     raise SceneError(f"{where}: type {kind!r} is unknown; use revolute, fixed or driven_revolute")
 
 
@@ -245,28 +244,20 @@ def load_scene(path: str | Path) -> FileScene:
     return FileScene(settings.get("name", path.stem), tuple(bodies), system, settings, sensors, driven)
 
 
-def run_scene(scene: FileScene, directory: str | Path, progress=None) -> dict:
-    """Static start, then the dynamic or quasi-static run; writes ``results.npz`` and ``metadata.json``."""
+def start_state(scene: FileScene) -> NDArray[np.float64]:
+    """The state the run starts from: the meshes' configuration, statically equilibrated unless
+    ``static_start = false`` (default: static start for quasi-static runs only)."""
     s = scene.settings
-    t_end = float(s.get("t_end", 1.0))
-    outputs = int(s.get("outputs", 101))
-    mode = s.get("mode", "dynamic")
-    started = wallclock.perf_counter()
-    start = static_equilibrium(scene.system, scene.system.initial_state()) if s.get("static_start", mode != "dynamic") \
-        else None
-    q0 = scene.system.initial_state() if start is None else start.q
-    if mode == "quasi_static":
-        solution = quasi_static(scene.system, q0, np.linspace(0.0, t_end, outputs), progress=progress)
-        time, q, lam = np.linspace(0.0, t_end, outputs), solution.q, solution.multipliers
-    elif mode == "dynamic":
-        step = float(s.get("step", 1e-3))
-        every = max(1, int(round(t_end / step / max(outputs - 1, 1))))
-        result = generalized_alpha(scene.system, q0, np.zeros_like(q0), t_end, step, rho_inf=float(s.get("rho_inf", 0.9)),
-                                   output_every=every, progress=progress)
-        time, q, lam = result.time, result.q, result.multipliers
-    else:
-        raise SceneError(f"scene mode {mode!r}: use 'dynamic' or 'quasi_static'")
-    arrays = {"time": time}
+    q0 = scene.system.initial_state()
+    if s.get("static_start", s.get("mode", "dynamic") != "dynamic"):
+        q0 = static_equilibrium(scene.system, q0).q
+    return q0
+
+
+def sensor_arrays(scene: FileScene, q: NDArray, multipliers: NDArray) -> dict[str, NDArray]:
+    """Sensor positions (rows = q's rows) and the multiplier of each driven joint's angle
+    equation, ``<joint>_torque`` (N m, applied to the joint's side 1)."""
+    arrays = {}
     for name, (body, node) in scene.sensors.items():
         block = scene.system.block(body)
         psi = scene.bodies[body].reduction.basis[3 * node:3 * node + 3]
@@ -276,11 +267,40 @@ def run_scene(scene: FileScene, directory: str | Path, progress=None) -> dict:
     rows = scene.system.rows
     for k, constraint in enumerate(scene.system.all_constraints):
         if constraint.name in scene.driven:
-            arrays[f"{constraint.name}_torque"] = lam[:, int(rows[k + 1]) - 1]
+            arrays[f"{constraint.name}_torque"] = multipliers[:, int(rows[k + 1]) - 1]
+    return arrays
+
+
+def simulate_scene(scene: FileScene, q0: NDArray | None = None, progress=None) -> tuple[NDArray, NDArray, NDArray]:
+    """The scene's dynamic or quasi-static run from ``q0`` (default :func:`start_state`):
+    output times, coordinates and multipliers (rows = times)."""
+    s = scene.settings
+    t_end = float(s.get("t_end", 1.0))
+    outputs = int(s.get("outputs", 101))
+    mode = s.get("mode", "dynamic")
+    q0 = start_state(scene) if q0 is None else q0
+    if mode == "quasi_static":
+        times = np.linspace(0.0, t_end, outputs)
+        solution = quasi_static(scene.system, q0, times, progress=progress)
+        return times, solution.q, solution.multipliers
+    if mode == "dynamic":
+        step = float(s.get("step", 1e-3))
+        every = max(1, int(round(t_end / step / max(outputs - 1, 1))))
+        result = generalized_alpha(scene.system, q0, np.zeros_like(q0), t_end, step, rho_inf=float(s.get("rho_inf", 0.9)),
+                                   output_every=every, progress=progress)
+        return result.time, result.q, result.multipliers
+    raise SceneError(f"scene mode {mode!r}: use 'dynamic' or 'quasi_static'")
+
+
+def run_scene(scene: FileScene, directory: str | Path, progress=None) -> dict:
+    """Static start, then the dynamic or quasi-static run; writes ``results.npz`` and ``metadata.json``."""
+    started = wallclock.perf_counter()
+    time, q, lam = simulate_scene(scene, progress=progress)
+    arrays = {"time": time, **sensor_arrays(scene, q, lam)}
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     np.savez(directory / "results.npz", **arrays)
-    metadata = dict(scene=scene.name, settings=s, bodies=[b.name for b in scene.bodies],
+    metadata = dict(scene=scene.name, settings=scene.settings, bodies=[b.name for b in scene.bodies],
                     modes=[b.reduction.n_modes for b in scene.bodies], wall_time_s=wallclock.perf_counter() - started)
     (directory / "metadata.json").write_text(json.dumps(metadata, indent=2, default=str))
     return metadata

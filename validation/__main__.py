@@ -1,8 +1,9 @@
-"""Command line: ``python -m validation report --variant NAME --out DIR`` and
-``python -m validation summary --variants rigid pla pla1 pla2 --out DIR``.
+"""Command line: ``python -m validation report (--variant NAME | --scene SCENE.toml) --out DIR``
+and ``python -m validation summary --variants rigid pla pla1 pla2 --out DIR``.
 
-``report`` cross-validates one built-in Bennett variant against its Exudyn twin and writes
-``DIR/report.md``, ``DIR/metrics.json`` and the figures; ``summary`` does so for several
+``report`` cross-validates one built-in Bennett variant, or a scene file of ``python -m ffrf
+run``, against its Exudyn twin and writes ``DIR/report.md``, ``DIR/metrics.json`` and the
+figures (for a scene file, its own mode and settings are used); ``summary`` does so for several
 variants (``DIR/<variant>/``) and writes ``DIR/summary.md`` in the layout of the paper's
 results. The exit status is 0 whether or not the targets are met (the report says which);
 it is 1 only when a run fails.
@@ -45,13 +46,17 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m validation", description=__doc__.splitlines()[0])
     commands = parser.add_subparsers(dest="command", required=True)
     report = commands.add_parser("report", help="one variant: report.md, metrics.json, figures")
-    report.add_argument("--variant", choices=VARIANTS, default="pla")
+    which = report.add_mutually_exclusive_group()
+    which.add_argument("--variant", choices=VARIANTS, default="pla")
+    which.add_argument("--scene", type=Path, help="a TOML scene file (see ffrf/scene_file.py)")
     _settings_arguments(report)
     summary = commands.add_parser("summary", help="several variants and a summary in the paper's layout")
     summary.add_argument("--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS))
     _settings_arguments(summary)
     args = parser.parse_args(argv)
 
+    if args.command == "report" and args.scene is not None:
+        return _scene_report(args.scene, args.basis, args.out)
     variants = [args.variant] if args.command == "report" else args.variants
     validations = []
     try:
@@ -71,6 +76,20 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     if args.command == "summary":
         print(f"summary: {write_summary(validations, args.out)}")
+    return 0
+
+
+def _scene_report(scene: Path, basis: str, out: Path) -> int:
+    from .exudyn_scene import validate_scene, write_scene_report
+
+    try:
+        validation = validate_scene(scene, basis)
+    except Exception as error:
+        print(f"validation failed: {type(error).__name__}: {error}", file=sys.stderr)
+        return 1
+    path = write_scene_report(validation, out)
+    print(f"[{validation.name}] {'all targets met' if validation.metrics['passed'] else 'targets missed'}; "
+          f"report: {path}")
     return 0
 
 

@@ -53,7 +53,8 @@ from types import SimpleNamespace
 import numpy as np
 from numpy.typing import NDArray
 
-from .exudyn_twin import ExudynTwin, TwinBasis, q_from_twin, solve_static, static_settings, to_twin_layout
+from .exudyn_twin import (ExudynTwin, TwinBasis, exudyn_settings, q_from_twin, solve_static, static_settings,
+                          to_twin_layout)
 
 __all__ = [
     "BennettTrajectory",
@@ -238,13 +239,11 @@ def build_exudyn_twin(scene, q0: NDArray, symbolic: bool = True, frozen_drive_ti
     """The Exudyn twin (:func:`validation.exudyn_twin.build_twin`) of ``system`` (default
     ``scene.system``) starting at ``q0``, with the Bennett sensors: the nine tracked nodes
     (``node0..8``), link 2's two joint points (``coupler_a/b``) and the drive's ``TorqueLocal``."""
-    from .exudyn_twin import DriveLaw, add_marker_sensor, add_node_sensor, build_twin
+    from .exudyn_twin import add_marker_sensor, add_node_sensor, build_twin
 
     system = scene.system if system is None else system
-    drive = DriveLaw(float(scene.start_angle), float(scene.drive.omega), float(scene.drive.ramp_time))
-    drives = {c.name: drive for c in system.constraints if getattr(c, "angle", None) is not None}
-    twin = build_twin(bennett_bodies(scene), system, q0, float(scene.settings["beta"]), drives, symbolic,
-                      frozen_drive_time, bases)
+    twin = build_twin(bennett_bodies(scene), system, q0, float(scene.settings["beta"]), symbolic, frozen_drive_time,
+                      bases)
     for a, link in enumerate(scene.links[1:]):
         for j, node in enumerate(link.tracked_nodes):
             add_node_sensor(twin, f"node{3 * a + j}", link.index, node)
@@ -264,16 +263,6 @@ def _read_twin(twin: ExudynTwin, scene, q0: NDArray) -> dict:
     return {"time": data["time"], "q": data["q"], "twin_q": data["twin_q"],
             "tracked": np.stack([data[f"node{i}"] for i in range(9)], axis=1),
             "coupler": 0.5 * (data["coupler_a"] + data["coupler_b"]), "torque": data["torque"][:, 2]}
-
-
-def exudyn_settings(t_end: float, step: float, rho_inf: float, tolerance: float = 1e-10):
-    """:func:`validation.exudyn_ffrf.exudyn_settings`: generalized-alpha index 3, fixed steps, full Newton."""
-    from .exudyn_ffrf import exudyn_settings as settings
-
-    n_steps = int(round(t_end / step))
-    plan = SimpleNamespace(n_steps=n_steps, t_end=t_end, rho_inf=rho_inf, step=step)
-    s = settings(plan, False, tolerance, tolerance)
-    return s
 
 
 def _check_times(times: NDArray, expected: NDArray, what: str) -> None:

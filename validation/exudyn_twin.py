@@ -13,9 +13,9 @@ a :class:`ffrf.system.MultibodySystem` of :class:`ffrf.joints.MarkerJoint` s, th
   rotation and the joint point's offset from the interface centre, which Exudyn applies in
   the body frame as our default (``joint_offsets="body"``, :func:`ffrf.markers.attach_joint_point`);
   a ground ``MarkerBodyRigid`` for ground frames;
-* per joint a ``GenericJoint`` with our locked axes; a prescribed rotation (cosine ramp,
-  :class:`DriveLaw`) as a *symbolic* ``offsetUserFunction`` (C++ speed; a Python function if
-  the symbolic one cannot be made).
+* per joint a ``GenericJoint`` with our locked axes; a prescribed rotation as its
+  ``offsetUserFunction``: *symbolic* (C++ speed) for the paper's cosine ramp
+  (:class:`ffrf.drives.RampedAngle`), our Python function of time otherwise.
 
 Sensors: the rigid and modal nodes of every body, the ``TorqueLocal`` of every driven joint
 (``torque:<joint>``); callers add their own (:func:`add_node_sensor`, :func:`add_marker_sensor`).
@@ -31,8 +31,11 @@ from types import SimpleNamespace
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["TwinBody", "TwinBasis", "DriveLaw", "ExudynTwin", "twin_bases", "to_twin_layout", "build_twin",
-           "add_node_sensor", "add_marker_sensor", "read_twin", "static_settings", "solve_static", "joint_key"]
+from ffrf.drives import RampedAngle
+
+__all__ = ["TwinBody", "TwinBasis", "ExudynTwin", "twin_bases", "to_twin_layout", "build_twin",
+           "add_node_sensor", "add_marker_sensor", "read_twin", "static_settings", "solve_static", "joint_key",
+           "exudyn_settings", "q_from_twin"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,20 +61,6 @@ class TwinBasis:
     setup_s: float
     to_ours: NDArray[np.float64]  # (m, m): our modal coordinates of the same displacement field
     from_ours: NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class DriveLaw:
-    """A prescribed joint angle: ``start`` plus the cosine ramp of :class:`ffrf.drives.CosineRamp`."""
-
-    start: float
-    omega: float
-    ramp_time: float
-
-    def angle(self, t: float) -> float:
-        from ffrf.drives import CosineRamp
-
-        return self.start + float(CosineRamp(self.omega, self.ramp_time)(t))
 
 
 @dataclass
@@ -141,18 +130,19 @@ def to_twin_layout(system, q: NDArray, bases: list[TwinBasis] | None) -> NDArray
     return q
 
 
-def _drive_function(law: DriveLaw, frozen_time: float | None, symbolic: bool):
-    """offsetUserFunction [0, 0, 0, 0, 0, angle(t)]; symbolic (``exudyn.symbolic``) or plain Python."""
+def _drive_function(angle, frozen_time: float | None, symbolic: bool):
+    """offsetUserFunction [0, 0, 0, 0, 0, angle(t)]: symbolic (``exudyn.symbolic``) for a
+    :class:`ffrf.drives.RampedAngle`, else plain Python calling ``angle``."""
     import exudyn as exu
 
-    if frozen_time is not None or not symbolic:
-        fixed = None if frozen_time is None else law.angle(frozen_time)
+    if frozen_time is not None or not symbolic or not isinstance(angle, RampedAngle):
+        fixed = None if frozen_time is None else float(angle(frozen_time))
 
         def offset(mbs, t, itemNumber, args):
-            return [0.0, 0.0, 0.0, 0.0, 0.0, law.angle(t) if fixed is None else fixed + 0.0 * t]
+            return [0.0, 0.0, 0.0, 0.0, 0.0, float(angle(t)) if fixed is None else fixed + 0.0 * t]
         return offset
     esym = exu.symbolic
-    start, w, tr = float(law.start), float(law.omega), float(law.ramp_time)
+    start, w, tr = float(angle.start), float(angle.ramp.omega), float(angle.ramp.ramp_time)
 
     def offset(mbs, t, itemNumber, args):
         during = 0.5 * w * (t - tr / np.pi * esym.sin(np.pi / tr * t))
@@ -170,12 +160,10 @@ def _interface_name(body: TwinBody, marker) -> str:
                      f"({sorted(body.markers)}); the twin supports rigid interface markers only")
 
 
-def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, drives: dict[str, DriveLaw] | None = None,
-               symbolic: bool = True, frozen_drive_time: float | None = None,
-               bases: list[TwinBasis] | None = None) -> ExudynTwin:
+def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, symbolic: bool = True,
+               frozen_drive_time: float | None = None, bases: list[TwinBasis] | None = None) -> ExudynTwin:
     """The twin of ``system`` at ``q0`` (our layout, absolute, at rest; modal part in ``bases``,
-    default our basis). ``drives``: the law of every joint with a prescribed angle, by joint name.
-    ``frozen_drive_time``: drives held at their angle at this time (static solves, whose quasi-time
+    default our basis). ``frozen_drive_time``: drives held at their angle at this time (static solves, whose quasi-time
     would otherwise turn them). Call ``twin.mbs.Assemble()`` after adding sensors."""
     import exudyn as exu
     import exudyn.itemInterface as eii
@@ -186,7 +174,6 @@ def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, drives:
 
     from .exudyn_ffrf import _exudyn_fem
 
-    drives = {} if drives is None else drives
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
     objects, rigid_nodes, modal_nodes, reference = [], [], [], []
@@ -240,20 +227,18 @@ def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, drives:
         joints[key] = joint
         if c.angle is None:
             continue
-        if c.name not in drives:
-            raise ValueError(f"joint {c.name!r} has a prescribed angle but no DriveLaw for the twin")
         function = None
-        if symbolic and frozen_drive_time is None:
+        if symbolic and frozen_drive_time is None and isinstance(c.angle, RampedAngle):
             from exudyn.utilities import CreateSymbolicUserFunction
 
             try:
-                function = CreateSymbolicUserFunction(mbs, _drive_function(drives[c.name], None, True),
+                function = CreateSymbolicUserFunction(mbs, _drive_function(c.angle, None, True),
                                                       "offsetUserFunction", joint)
                 used_symbolic = True
             except Exception as error:  # pragma: no cover - reported to the caller
                 keep.append(f"symbolic user function failed: {error!r}")
         if function is None:
-            function = _drive_function(drives[c.name], frozen_drive_time, False)
+            function = _drive_function(c.angle, frozen_drive_time, False)
         mbs.SetObjectParameter(joint, "offsetUserFunction", function)
         keep.append(function)
         sensors[f"torque:{key}"] = mbs.AddSensor(eii.SensorObject(
@@ -315,6 +300,14 @@ def read_twin(twin: ExudynTwin, system, q0: NDArray) -> dict[str, NDArray]:
     out["q"] = q_from_twin(twin, system, q0, rigid, modal)
     out["twin_q"] = q_from_twin(twin, system, q0, rigid, modal, our_basis=False)
     return out
+
+
+def exudyn_settings(t_end: float, step: float, rho_inf: float, tolerance: float = 1e-10):
+    """:func:`validation.exudyn_ffrf.exudyn_settings`: generalized-alpha index 3, fixed steps, full Newton."""
+    from .exudyn_ffrf import exudyn_settings as settings
+
+    plan = SimpleNamespace(n_steps=int(round(t_end / step)), t_end=t_end, rho_inf=rho_inf, step=step)
+    return settings(plan, False, tolerance, tolerance)
 
 
 def static_settings(load_steps: int, tolerance: float, duration: float = 1.0, load_factor: bool = True):

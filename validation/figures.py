@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["coupler_deviation_figure", "difference_figure", "torque_figure", "mac_figure", "coupler_path_figure"]
+__all__ = ["coupler_deviation_figure", "difference_figure", "torque_figure", "mac_figure", "coupler_path_figure",
+           "series_difference_figure"]
 
 #: One colour and line style per run label, the same in every figure.
 STYLE = {
@@ -134,5 +135,20 @@ def coupler_path_figure(runs: dict, ideal: NDArray, path: Path, magnify: float =
     ax.set_ylabel("y (mm)")
     ax.set_title(f"Coupler path (deviation x {magnify:g})")
     ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, path)
+
+
+def series_difference_figure(time: NDArray, pairs: dict[str, tuple[NDArray, NDArray]], path: Path,
+                             title: str = "") -> Path:
+    """|a - b| (m, log scale) over time for named pairs of (n, 3) position series."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    for name, (a, b) in pairs.items():
+        ax.semilogy(time, np.maximum(np.linalg.norm(a - b, axis=1), 1e-16), label=name)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("|ours - Exudyn| (m)")
+    ax.set_title(title)
+    ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     return _save(fig, path)

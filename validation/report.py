@@ -15,24 +15,25 @@ import numpy as np
 from . import figures
 from .bennett_validation import TARGETS, BennettValidation
 
-__all__ = ["PAPER_MAX_COUPLER_DEVIATION_MM", "write_report", "write_summary", "identified_dh"]
+__all__ = ["PAPER_MAX_COUPLER_DEVIATION_MM", "write_report", "write_summary", "identified_dh", "format_length",
+           "format_sci", "markdown_table"]
 
 #: The paper's maximum coupler deviations (Results, simulated; rigid: "< 0.001").
 PAPER_MAX_COUPLER_DEVIATION_MM = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}
 
 
-def _um(x: float) -> str:
+def format_length(x: float) -> str:
     """A length in the unit that reads best: nm, um or mm."""
     if abs(x) < 1e-6:
         return f"{1e9 * x:.3g} nm"
     return f"{1e6 * x:.3g} um" if abs(x) < 1e-3 else f"{1e3 * x:.4g} mm"
 
 
-def _sci(x: float) -> str:
+def format_sci(x: float) -> str:
     return f"{x:.2e}"
 
 
-def _table(header: list[str], rows: list[list]) -> str:
+def markdown_table(header: list[str], rows: list[list]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
     return "\n".join(lines)
@@ -48,21 +49,21 @@ def _verdict(m: dict) -> list[str]:
         f"Same mesh, M, K, interfaces, joints, drive, gravity model and solver settings in both solvers; "
         f"Exudyn {m['versions']['exudyn']} reduces the links itself.",
         "",
-        f"- Quasi-static revolution: coupler point differs by at most {_um(c['max_abs_diff_m'])} "
-        f"({_sci(c['relative_to_elastic_deviation'])} of its {_um(m['coupler_deviation_from_ideal_m']['exudyn'])} "
+        f"- Quasi-static revolution: coupler point differs by at most {format_length(c['max_abs_diff_m'])} "
+        f"({format_sci(c['relative_to_elastic_deviation'])} of its {format_length(m['coupler_deviation_from_ideal_m']['exudyn'])} "
         f"elastic deviation, at least 1 um; target {TARGETS['trajectory']:g}), tracked nodes by "
-        f"{_um(worst['max_abs_diff_m'])}, "
-        f"driving torque by {_sci(t['max_rel_diff'])} of its maximum (target {TARGETS['torque']:g}).",
+        f"{format_length(worst['max_abs_diff_m'])}, "
+        f"driving torque by {format_sci(t['max_rel_diff'])} of its maximum (target {TARGETS['torque']:g}).",
     ]
     if "dynamic" in m:
         d = m["dynamic"]
         dw = max(d["trajectories"].values(), key=lambda v: v["max_abs_diff_m"])
         lines.append(f"- Dynamic window (0..{d['t_end']:g} s, generalized-alpha): nodes and coupler within "
-                     f"{_um(dw['max_abs_diff_m'])} ({_sci(dw['relative_to_elastic_deviation'])}), torque "
-                     f"{_sci(d['torque']['max_rel_diff'])}.")
+                     f"{format_length(dw['max_abs_diff_m'])} ({format_sci(dw['relative_to_elastic_deviation'])}), torque "
+                     f"{format_sci(d['torque']['max_rel_diff'])}.")
     freq = max(c["max_rel_freq_diff"] for c in m["modes"].values()) if m["modes"] else float("nan")
     mac = min(c["min_mac_diag"] for c in m["modes"].values()) if m["modes"] else float("nan")
-    lines.append(f"- Modes: fixed-interface frequencies equal to {_sci(freq)} (target {TARGETS['freq']:g}), "
+    lines.append(f"- Modes: fixed-interface frequencies equal to {format_sci(freq)} (target {TARGETS['freq']:g}), "
                  f"smallest diagonal MAC {mac:.12f}.")
     ti, te = m["timing_s"]["inhouse"], m["timing_s"]["exudyn"]
     lines.append(f"- Time: ours {ti['integration']:.1f} s, Exudyn {te['integration']:.1f} s for the quasi-static "
@@ -70,11 +71,11 @@ def _verdict(m: dict) -> list[str]:
                                   f"{te['dynamic_window']:.1f} s" if "dynamic_window" in ti else "") + ".")
     if failed:
         md = m["modelling_differences"]
-        lines += ["", "Missed: " + "; ".join(f"{c['name']} = {_sci(c['value'])} (target {c['target']:g})"
+        lines += ["", "Missed: " + "; ".join(f"{c['name']} = {format_sci(c['value'])} (target {c['target']:g})"
                                              for c in failed) + ".",
                   f"Attribution: with Exudyn's marker rotation Jacobian replicated in our solver the difference to "
-                  f"Exudyn is {_um(md['with_exudyn_jacobian_vs_exudyn']['max_abs_diff_m'])} and "
-                  f"{_sci(md['with_exudyn_jacobian_vs_exudyn']['torque_max_rel_diff'])} in torque, so the gap is "
+                  f"Exudyn is {format_length(md['with_exudyn_jacobian_vs_exudyn']['max_abs_diff_m'])} and "
+                  f"{format_sci(md['with_exudyn_jacobian_vs_exudyn']['torque_max_rel_diff'])} in torque, so the gap is "
                   f"that Jacobian: Exudyn's joint reactions use the marker angular velocity A(w + T theta_dot), "
                   f"not the derivative of its own constraint equations (A exp(theta~) T theta_dot); the error grows "
                   f"with the bores' elastic rotation theta, large where the links are forced into a misaligned "
@@ -110,13 +111,13 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
     lines = [f"# Cross-validation against Exudyn: Bennett linkage, variant `{variant}`", ""]
     lines += _verdict(m)
     lines += ["", "## Checks against the targets", "",
-              _table(["check", "measured", "target", ""],
-                     [[c["name"], _sci(c["value"]), f"{c['target']:g}", "met" if c["passed"] else "**missed**"]
+              markdown_table(["check", "measured", "target", ""],
+                     [[c["name"], format_sci(c["value"]), f"{c['target']:g}", "met" if c["passed"] else "**missed**"]
                       for c in m["checks"]])]
     dev = m["coupler_deviation_from_ideal_m"]
     paper = PAPER_MAX_COUPLER_DEVIATION_MM.get(variant)
     lines += ["", "## Coupler deviation from the ideal path (motion polynomial)", "",
-              _table(["run", "max deviation (mm)", "max driving torque (N mm)"],
+              markdown_table(["run", "max deviation (mm)", "max driving torque (N mm)"],
                      [[figures.STYLE[k]["label"], f"{1e3 * dev_k:.4f}", f"{1e3 * m['max_abs_driving_torque_Nm'][k]:.3f}"]
                       for k, dev_k in (("production", dev["inhouse"]), ("equivalent", dev["inhouse_equivalent"]),
                                        ("exudyn", dev["exudyn"]))]
@@ -125,57 +126,57 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
               "", "![coupler deviation](coupler_deviation.png) ![path](coupler_path.png)",
               "", "![driving torque](driving_torque.png)"]
     lines += ["", "## Trajectories, quasi-static revolution (ours with Exudyn's gravity model vs Exudyn)", "",
-              _table(["sensor", "max abs diff", "RMS", "max / coupler's elastic deviation"],
-                     [[name, _um(t["max_abs_diff_m"]), _um(t["rms_diff_m"]), _sci(t["relative_to_elastic_deviation"])]
+              markdown_table(["sensor", "max abs diff", "RMS", "max / coupler's elastic deviation"],
+                     [[name, format_length(t["max_abs_diff_m"]), format_length(t["rms_diff_m"]), format_sci(t["relative_to_elastic_deviation"])]
                       for name, t in m["trajectories"].items()]),
               "", f"Driving torque: max abs diff {1e3 * m['torque']['max_abs_diff_Nm']:.3e} N mm of "
-                  f"{1e3 * m['torque']['max_abs_Nm']:.4g} N mm ({_sci(m['torque']['max_rel_diff'])}).",
+                  f"{1e3 * m['torque']['max_abs_Nm']:.4g} N mm ({format_sci(m['torque']['max_rel_diff'])}).",
               "", "![difference](difference_quasi_static.png)"]
     if "dynamic" in m:
         d = m["dynamic"]
         lines += ["", f"## Dynamic window: 0..{d['t_end']:g} s, step {s.step:g} s, rho_inf {s.rho_inf:g}", "",
-                  _table(["sensor", "max abs diff", "RMS", "max / coupler's elastic deviation"],
-                         [[n, _um(t["max_abs_diff_m"]), _um(t["rms_diff_m"]), _sci(t["relative_to_elastic_deviation"])]
+                  markdown_table(["sensor", "max abs diff", "RMS", "max / coupler's elastic deviation"],
+                         [[n, format_length(t["max_abs_diff_m"]), format_length(t["rms_diff_m"]), format_sci(t["relative_to_elastic_deviation"])]
                           for n, t in d["trajectories"].items()]),
-                  "", f"Driving torque: {_sci(d['torque']['max_rel_diff'])} of its maximum. Constraint residuals "
-                      f"(our equations): ours {_sci(d['constraint_residual']['inhouse'])}, Exudyn's run "
-                      f"{_sci(d['constraint_residual']['exudyn'])}.",
+                  "", f"Driving torque: {format_sci(d['torque']['max_rel_diff'])} of its maximum. Constraint residuals "
+                      f"(our equations): ours {format_sci(d['constraint_residual']['inhouse'])}, Exudyn's run "
+                      f"{format_sci(d['constraint_residual']['exudyn'])}.",
                   "", "![dynamic difference](difference_dynamic.png)"]
     if v.modes:
         lines += ["", "## Modes (fixed-interface, ours vs Exudyn's own Craig-Bampton on the same matrices)", ""]
         rows = []
         for name, c in v.modes.items():
             for i, (fo, fe) in enumerate(zip(c.frequencies_hz, c.exudyn_frequencies_hz)):
-                rows.append([name, i, f"{fo:.6f}", f"{fe:.6f}", _sci(abs(fo / fe - 1.0)), f"{c.diagonal_mac[i]:.12f}"])
-        lines += [_table(["link", "mode", "ours (Hz)", "Exudyn (Hz)", "rel. diff", "MAC"], rows), "",
+                rows.append([name, i, f"{fo:.6f}", f"{fe:.6f}", format_sci(abs(fo / fe - 1.0)), f"{c.diagonal_mac[i]:.12f}"])
+        lines += [markdown_table(["link", "mode", "ours (Hz)", "Exudyn (Hz)", "rel. diff", "MAC"], rows), "",
                   "Static (constraint) mode spaces: largest principal angle "
-                  + ", ".join(f"{n} {_sci(c.static_space_angle_rad)} rad" for n, c in v.modes.items()) + ".",
+                  + ", ".join(f"{n} {format_sci(c.static_space_angle_rad)} rad" for n, c in v.modes.items()) + ".",
                   "", "![MAC](mac.png)"]
     md = m["modelling_differences"]
     lines += ["", "## Where the remaining differences come from", "",
               "Each row compares two of our own runs (or ours with Exudyn's) on the quasi-static revolution:", "",
-              _table(["comparison", "max abs diff (nodes, coupler)", "relative to elastic deviation", "torque"],
+              markdown_table(["comparison", "max abs diff (nodes, coupler)", "relative to elastic deviation", "torque"],
                      [["exact gravity vs Exudyn's LoadMassProportional (modelling)",
-                       _um(md["exact_vs_exudyn_gravity"]["max_abs_diff_m"]),
-                       _sci(md["exact_vs_exudyn_gravity"]["relative_to_elastic_deviation"]),
-                       _sci(md["exact_vs_exudyn_gravity"]["torque_max_rel_diff"])],
+                       format_length(md["exact_vs_exudyn_gravity"]["max_abs_diff_m"]),
+                       format_sci(md["exact_vs_exudyn_gravity"]["relative_to_elastic_deviation"]),
+                       format_sci(md["exact_vs_exudyn_gravity"]["torque_max_rel_diff"])],
                       ["exact vs Exudyn's marker rotation Jacobian (ours both)",
-                       _um(md["exact_vs_exudyn_marker_jacobian"]["max_abs_diff_m"]),
-                       _sci(md["exact_vs_exudyn_marker_jacobian"]["relative_to_elastic_deviation"]),
-                       _sci(md["exact_vs_exudyn_marker_jacobian"]["torque_max_rel_diff"])],
+                       format_length(md["exact_vs_exudyn_marker_jacobian"]["max_abs_diff_m"]),
+                       format_sci(md["exact_vs_exudyn_marker_jacobian"]["relative_to_elastic_deviation"]),
+                       format_sci(md["exact_vs_exudyn_marker_jacobian"]["torque_max_rel_diff"])],
                       ["ours with both Exudyn choices vs Exudyn (solver only)",
-                       _um(md["with_exudyn_jacobian_vs_exudyn"]["max_abs_diff_m"]),
-                       _sci(md["with_exudyn_jacobian_vs_exudyn"]["relative_to_elastic_deviation"]),
-                       _sci(md["with_exudyn_jacobian_vs_exudyn"]["torque_max_rel_diff"])]]),
+                       format_length(md["with_exudyn_jacobian_vs_exudyn"]["max_abs_diff_m"]),
+                       format_sci(md["with_exudyn_jacobian_vs_exudyn"]["relative_to_elastic_deviation"]),
+                       format_sci(md["with_exudyn_jacobian_vs_exudyn"]["torque_max_rel_diff"])]]),
               "", "Energy balance over the revolution (drive work minus change of gravity and strain energy, "
                   "relative to the work; Simpson over the rows, so limited by the output spacing): ours "
-                  f"{_sci(m['energy_balance_relative']['inhouse'])}, ours with Exudyn's Jacobian "
-                  f"{_sci(m['energy_balance_relative']['inhouse_exudyn_jacobian'])}, Exudyn's run "
-                  f"{_sci(m['energy_balance_relative']['exudyn'])}. Constraint residuals in our equations: ours "
-                  f"{_sci(m['constraint_residual']['inhouse'])}, Exudyn's run {_sci(m['constraint_residual']['exudyn'])}."]
+                  f"{format_sci(m['energy_balance_relative']['inhouse'])}, ours with Exudyn's Jacobian "
+                  f"{format_sci(m['energy_balance_relative']['inhouse_exudyn_jacobian'])}, Exudyn's run "
+                  f"{format_sci(m['energy_balance_relative']['exudyn'])}. Constraint residuals in our equations: ours "
+                  f"{format_sci(m['constraint_residual']['inhouse'])}, Exudyn's run {format_sci(m['constraint_residual']['exudyn'])}."]
     ti, te = m["timing_s"]["inhouse"], m["timing_s"]["exudyn"]
     lines += ["", "## Wall time (s, this machine, same run)", "",
-              _table(["", "set-up", "quasi-static revolution", "dynamic window", "total"],
+              markdown_table(["", "set-up", "quasi-static revolution", "dynamic window", "total"],
                      [["ours", f"{ti['setup']:.2f}", f"{ti['integration']:.2f}", f"{ti.get('dynamic_window', 0):.2f}",
                        f"{ti['total']:.2f}"],
                       ["Exudyn", f"{te['setup']:.2f}", f"{te['integration']:.2f}", f"{te.get('dynamic_window', 0):.2f}",
@@ -213,7 +214,7 @@ def write_summary(validations: list[BennettValidation], directory: str | Path) -
                      ("< " if variant == "rigid" else "") + f"{paper}",
                      f"{1e3 * m['max_abs_driving_torque_Nm']['production']:.2f}",
                      f"{1e3 * m['max_abs_driving_torque_Nm']['exudyn']:.2f}",
-                     _sci(worst), _sci(m["torque"]["max_rel_diff"]), "met" if m["passed"] else "missed (see report)"])
+                     format_sci(worst), format_sci(m["torque"]["max_rel_diff"]), "met" if m["passed"] else "missed (see report)"])
         ours, theirs = identified_dh(v.quasi_static["production"]), identified_dh(v.quasi_static["exudyn"])
         for label, dh in (("ours", ours), ("Exudyn", theirs)):
             dh_rows.append([variant, label] + [f"{a:.3f}" for a in dh["a_mm"]] + [f"{a:.3f}" for a in dh["alpha_deg"]]
@@ -223,12 +224,12 @@ def write_summary(validations: list[BennettValidation], directory: str | Path) -
              "Maximum coupler deviation from the ideal path and maximum driving torque over the revolution "
              "(quasi-static, 1 rpm), as in the paper's results; agreement of the two solvers on the same model "
              "(relative to the coupler's elastic deviation, and of the torque to its maximum).", "",
-             _table(["variant", "ours (mm)", "Exudyn (mm)", "paper (mm)", "torque ours (N mm)", "torque Exudyn (N mm)",
+             markdown_table(["variant", "ours (mm)", "Exudyn (mm)", "paper (mm)", "torque ours (N mm)", "torque Exudyn (N mm)",
                      "trajectory diff", "torque diff", "targets"], rows),
              "", "Our links are parametric (``ffrf.link_geometry``), not the paper's STL parts, so the deviations "
                  "differ from the paper's; the trend with misalignment is the check.", "",
              "## DH parameters identified from the simulated link trajectories (paper's method)", "",
-             _table(["variant", "solver", "a0", "a1", "a2", "a3", "alpha0", "alpha1", "alpha2", "alpha3",
+             markdown_table(["variant", "solver", "a0", "a1", "a2", "a3", "alpha0", "alpha1", "alpha2", "alpha3",
                      "axis-3 twist deviation (deg)"], dh_rows),
              "", "Lengths in mm, angles in degrees. Per-variant reports: "
              + ", ".join(f"[{v.settings.variant}]({v.settings.variant}/report.md)" for v in validations) + ".", ""]

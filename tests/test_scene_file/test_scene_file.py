@@ -1,58 +1,17 @@
 """Scenes from TOML files: the same pendulum as built in Python, a driven parametric link,
 and clear errors for bad scenes."""
 
-import meshio
 import numpy as np
 import pytest
-from body_fixtures import bar_model
 from pendulum_fixtures import pendulum, tip_position
+from scene_fixtures import PENDULUM, write_bar
 
 from ffrf.cli import main
 from ffrf.generalized_alpha import generalized_alpha
 from ffrf.scene_file import SceneError, load_scene, run_scene
 
-PENDULUM = """
-[scene]
-name = "bar pendulum"
-gravity = [0.0, 0.0, -9.81]
-mode = "dynamic"
-t_end = 0.1
-step = 1e-3
-rho_inf = 0.8
-outputs = 101
-
-[[bodies]]
-name = "bar"
-mesh = "bar.vtu"
-unit = "mm"
-material = {E = 1e8, nu = 0.3, rho = 450.0}
-modes = 3
-interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]
-
-[[joints]]
-name = "hinge"
-type = "revolute"
-body0 = "ground"
-body1 = "bar"
-interface1 = "hinge"
-axis = [0.0, 1.0, 0.0]
-
-[[sensors]]
-name = "tip"
-body = "bar"
-point = [0.2, 0.0, 0.0]
-"""
-
-
-def _write_bar(tmp_path):
-    model = bar_model(E=1e8, rho=450.0)
-    meshio.write(tmp_path / "bar.vtu", meshio.Mesh(1e3 * model.mesh.points, [("tetra", model.mesh.tets)]))
-    np.savetxt(tmp_path / "hinge.txt", np.flatnonzero(model.nodes[:, 0] < 1e-9), fmt="%d")
-    return model
-
-
 def test_file_pendulum_equals_the_python_pendulum(tmp_path):
-    _write_bar(tmp_path)
+    write_bar(tmp_path)
     (tmp_path / "scene.toml").write_text(PENDULUM)
     assert main(["run", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "out")]) == 0
     data = np.load(tmp_path / "out" / "results.npz")
@@ -92,7 +51,7 @@ drive = {rpm = 1.0, ramp_time = 1.0}
 
 
 def test_bad_scenes_are_named(tmp_path):
-    _write_bar(tmp_path)
+    write_bar(tmp_path)
     (tmp_path / "bad.toml").write_text(PENDULUM.replace('body1 = "bar"', 'body1 = "rod"'))
     with pytest.raises(SceneError, match="unknown body 'rod'"):
         load_scene(tmp_path / "bad.toml")
