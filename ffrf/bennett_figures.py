@@ -5,7 +5,8 @@ joint 3, both over the drive angle, one curve per run (the paper overlays its va
 The x axis is the drive angle turned since the start of the run (degrees; the ramp's 3 deg plus
 one revolution), so runs and other solvers' curves that start at the same pose line up.
 
-Entry points (all return ``(fig, ax)``; with ``path`` the figure is also saved and closed):
+Entry points (all return ``(fig, ax)``, a bare matplotlib ``Figure`` rendered with Agg; with
+``path`` the figure is also saved):
 
 * :func:`plot_over_drive_angle` ``(series: {label: (angle_rad, values)}, ylabel, path=None)``:
   the generic plot; values are drawn as given (already in display units);
@@ -24,12 +25,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Mapping, Union
 
-import matplotlib
-
-matplotlib.use("Agg")  # files only, no display (also on headless CI)
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from numpy.typing import ArrayLike, NDArray  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure
+from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["Series", "Run", "PAPER_COLORS", "plot_over_drive_angle", "run_sensors", "coupler_deviation_series",
            "driving_torque_series", "plot_coupler_deviation", "plot_driving_torque"]
@@ -76,7 +74,9 @@ def plot_over_drive_angle(series: Mapping[str, Series], ylabel: str, path: str |
                           title: str | None = None, dashed: tuple[str, ...] = ()):
     """One line per ``label: (angle_rad, values)``, x in degrees; labels in ``dashed`` drawn dashed.
     Known variant labels (``rigid``, ``pla``, ...) get :data:`PAPER_COLORS`."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.0), constrained_layout=True)
+    # A bare Figure renders with the Agg canvas: no pyplot state, no display, no global backend switch.
+    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
+    ax = fig.subplots()
     for label, (angle, values) in series.items():
         style = "--" if label in dashed else "-"
         ax.plot(np.degrees(np.asarray(angle, dtype=float)), np.asarray(values, dtype=float), style,
@@ -91,7 +91,6 @@ def plot_over_drive_angle(series: Mapping[str, Series], ylabel: str, path: str |
         ax.legend()
     if path is not None:
         fig.savefig(path, dpi=150)
-        plt.close(fig)
     return fig, ax
 
 
