@@ -36,6 +36,8 @@ __all__ = [
     "mass_matrix",
     "quadratic_velocity",
     "gravity_force",
+    "modal_products",
+    "mass_and_quadratic_velocity",
 ]
 
 
@@ -47,10 +49,26 @@ def _levi_civita(a: int, b: int, c: int) -> float:
 @njit(cache=True)
 def second_moment(zeta: np.ndarray, x2: np.ndarray, c: np.ndarray, d: np.ndarray) -> np.ndarray:
     r"""Eq. (F5): :math:`U_{ab} = \sum_{ij} m_{ij} u^a_i u^b_j = X_{ab} + \zeta\cdot(C_{ab} + C_{ba}) + \zeta^T D_{ab}\zeta`."""
+    return _second_moment(zeta, x2, c, modal_products(d, zeta))
+
+
+@njit(cache=True)
+def modal_products(d: np.ndarray, v: np.ndarray) -> np.ndarray:
+    r""":math:`D_{ab}v` for all components ``a, b`` (3, 3, m): computed once, shared by Eqs. (F5), (F9)."""
+    out = np.empty((3, 3, v.shape[0]), dtype=v.dtype)
+    for a in range(3):
+        for b in range(3):
+            out[a, b] = d[a, b] @ v
+    return out
+
+
+@njit(cache=True)
+def _second_moment(zeta, x2, c, d_zeta):
+    """Eq. (F5) with ``d_zeta = modal_products(d, zeta)``."""
     out = np.empty((3, 3), dtype=zeta.dtype)
     for a in range(3):
         for b in range(3):
-            out[a, b] = x2[a, b] + zeta @ (c[a, b] + c[b, a]) + zeta @ (d[a, b] @ zeta)
+            out[a, b] = x2[a, b] + zeta @ (c[a, b] + c[b, a]) + zeta @ d_zeta[a, b]
     return out
 
 
@@ -92,13 +110,24 @@ def mass_matrix(
     .. math:: M = \begin{bmatrix} mI & -A\tilde s\bar G & A S_1\\ & \bar G^TJ\bar G & \bar G^T M_{\omega\zeta}\\
               \mathrm{sym.} & & \Psi^TM\Psi\end{bmatrix}, \qquad s = S_0 + S_1\zeta.
     """
+    a_mat, g, s, d_zeta, j = _kinematics(p, zeta, s0, s1, x2, c, d)
+    return _mass_matrix(zeta, mass, s1, c, d, reduced_mass, a_mat, g, s, j)
+
+
+@njit(cache=True)
+def _kinematics(p, zeta, s0, s1, x2, c, d):
+    """What Eqs. (F8) and (F9) share: ``A``, ``G``, ``s``, the products ``D_ab zeta`` and ``J``."""
+    d_zeta = modal_products(d, zeta)
+    return (rotation_matrix(p), g_bar(p), s0 + s1 @ zeta, d_zeta,
+            inertia_about_origin(_second_moment(zeta, x2, c, d_zeta)))
+
+
+@njit(cache=True)
+def _mass_matrix(zeta, mass, s1, c, d, reduced_mass, a_mat, g, s, j):
+    """Eq. (F8) from the pieces of :func:`_kinematics`."""
     m = zeta.shape[0]
     n = 7 + m
-    out = np.zeros((n, n), dtype=p.dtype)
-    a_mat = rotation_matrix(p)
-    g = g_bar(p)
-    s = s0 + s1 @ zeta
-    j = inertia_about_origin(second_moment(zeta, x2, c, d))
+    out = np.zeros((n, n), dtype=zeta.dtype)
     for i in range(3):
         out[i, i] = mass
     m_rp = -(a_mat @ skew(s)) @ g
@@ -137,26 +166,29 @@ def quadratic_velocity(
         Q_\zeta &= -\Big(\sum_{ab}\omega_a\omega_b E_{ab} - |\omega|^2\sum_a E_{aa}
               + 2\sum_{abc}\epsilon_{abc}\,\omega_b D_{ac}\dot\zeta\Big), \quad E_{ab} = C_{ab} + D_{ab}\zeta.
     """
-    m = zeta.shape[0]
-    out = np.zeros(7 + m, dtype=p.dtype)
-    a_mat = rotation_matrix(p)
-    g = g_bar(p)
+    a_mat, g, s, d_zeta, j = _kinematics(p, zeta, s0, s1, x2, c, d)
+    return _quadratic_velocity(pd, zetad, s1, c, d, a_mat, g, s, d_zeta, j)
+
+
+@njit(cache=True)
+def _quadratic_velocity(pd, zetad, s1, c, d, a_mat, g, s, d_zeta, j):
+    """Eq. (F9) from the pieces of :func:`_kinematics`."""
+    m = zetad.shape[0]
+    out = np.zeros(7 + m, dtype=pd.dtype)
     omega = g @ pd
     w = skew(omega)
-    s = s0 + s1 @ zeta
     out[0:3] = -(a_mat @ (w @ (w @ s) + 2.0 * (w @ (s1 @ zetad))))
-    j = inertia_about_origin(second_moment(zeta, x2, c, d))
-    n_mat = np.empty((3, 3), dtype=p.dtype)
+    n_mat = np.empty((3, 3), dtype=pd.dtype)
     for a in range(3):
         for b in range(3):
-            n_mat[a, b] = zetad @ c[a, b] + zetad @ (d[a, b] @ zeta)
+            n_mat[a, b] = zetad @ c[a, b] + zetad @ d_zeta[a, b]
     torque = w @ (j @ omega) + 2.0 * (omega * np.trace(n_mat) - n_mat @ omega)
     out[3:7] = -(g.T @ torque)
-    q_zeta = np.zeros(m, dtype=p.dtype)
+    q_zeta = np.zeros(m, dtype=pd.dtype)
     omega2 = omega @ omega
     for a in range(3):
         for b in range(3):
-            e_ab = c[a, b] + d[a, b] @ zeta
+            e_ab = c[a, b] + d_zeta[a, b]
             q_zeta += omega[a] * omega[b] * e_ab
             if a == b:
                 q_zeta -= omega2 * e_ab
@@ -192,3 +224,11 @@ def gravity_force(
     out[3:7] = g_bar(p).T @ (skew(s) @ local_g)
     out[7:] = s1.T @ local_g
     return out
+
+
+@njit(cache=True)
+def mass_and_quadratic_velocity(p, zeta, pd, zetad, mass, s0, s1, x2, c, d, reduced_mass):
+    """Eqs. (F8) and (F9) together, their shared pieces computed once (the body residual needs both)."""
+    a_mat, g, s, d_zeta, j = _kinematics(p, zeta, s0, s1, x2, c, d)
+    return (_mass_matrix(zeta, mass, s1, c, d, reduced_mass, a_mat, g, s, j),
+            _quadratic_velocity(pd, zetad, s1, c, d, a_mat, g, s, d_zeta, j))

@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from .body_kernels import gravity_force, mass_matrix, quadratic_velocity
+from .body_kernels import gravity_force, mass_and_quadratic_velocity, mass_matrix
 from .modal_moments import ModalMoments
 
 __all__ = ["FlexibleBody", "body_residual", "body_jacobians"]
@@ -104,8 +104,11 @@ def body_residual(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
     """Eqs. (F8)-(F11): ``M(q) qdd - Q_v - Q_g + K_r zeta + D_r zetad`` (one dtype throughout)."""
     p, zeta = q[3:7], q[7:]
     pd, zetad = qd[3:7], qd[7:]
-    out = mass_matrix(p, zeta, mass, s0, s1, x2, c, d, mred) @ qdd
-    out -= quadratic_velocity(p, zeta, pd, zetad, s0, s1, x2, c, d)
+    out = np.zeros(q.shape[0], dtype=q.dtype)
+    if np.any(qd != 0) or np.any(qdd != 0):  # at rest (statics) M qdd and Q_v vanish exactly
+        mass_q, velocity_q = mass_and_quadratic_velocity(p, zeta, pd, zetad, mass, s0, s1, x2, c, d, mred)
+        out += mass_q @ qdd
+        out -= velocity_q
     out -= gravity_force(p, zeta, gravity.astype(q.dtype), mass, s0, s1, exact_gravity)
     out[7:] += kred @ zeta + dred @ zetad
     return out

@@ -130,7 +130,8 @@ def _exp_so3_coefficients(c: float):
 @njit(cache=True)
 def exp_so3_hessian(theta: np.ndarray, v: np.ndarray, z: np.ndarray) -> np.ndarray:
     r"""Eq. (FP2): :math:`\partial^2 (z\cdot\exp(\tilde\theta)v)/\partial\theta^2` (3x3, float64), from
-    :math:`\exp(\tilde\theta)v = v + a\,\theta\times v + b\,((\theta\cdot v)\theta - c\,v)`, :math:`c = \theta\cdot\theta`."""
+    :math:`\exp(\tilde\theta)v = v + a\,\theta\times v + b\,((\theta\cdot v)\theta - c\,v)`,
+    :math:`c = \theta\cdot\theta`."""
     c = theta @ theta
     a, a1, a2, b, b1, b2 = _exp_so3_coefficients(c)
     zv, tv, tz = z @ v, theta @ v, theta @ z
@@ -150,7 +151,8 @@ def exp_so3_hessian(theta: np.ndarray, v: np.ndarray, z: np.ndarray) -> np.ndarr
 
 @njit(cache=True)
 def marker_frame_hessian(q, point, position_modes, rotation_modes, rotation, offset, weight_point, weight_axes):
-    r"""Eq. (FP3): :math:`\sum_c w_c\,\partial^2 p_c/\partial q^2 + \sum_k\sum_c W_{ck}\,\partial^2 a_{k,c}/\partial q^2`
+    r"""Eq. (FP3): :math:`\sum_c w_c\,\partial^2 p_c/\partial q^2
+    + \sum_k\sum_c W_{ck}\,\partial^2 a_{k,c}/\partial q^2`
     (n x n, float64) for the joint point ``p`` and axes ``a_k`` of :func:`marker_frame`; ``weight_point``
     is ``w`` (3), column ``k`` of ``weight_axes`` weighs axis ``k``."""
     n = q.shape[0]
