@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
+from scipy.linalg.lapack import dgecon as gecon
 from scipy.linalg.lapack import dgetrs as getrs
 
 from .packed_system import PackedSystem, newton_model
@@ -69,6 +70,7 @@ class _Tangent:
 
 
 _SINGULAR = 1e-15  # relative singular value of the equilibrated tangent counted as zero
+_WELL_CONDITIONED = 1e-10  # reciprocal condition estimate above which the tangent is surely regular
 
 
 def _factor_tangent(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float) -> _Tangent:
@@ -78,10 +80,16 @@ def _factor_tangent(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDAr
     # near-rigid links (E = 1e15 Pa) and unit constraint rows differ by 15 orders of magnitude.
     rows, cols = _equilibration(matrix)
     scaled = rows[:, None] * matrix * cols[None, :]
+    # LU first; only a poorly conditioned tangent (LAPACK's 1-norm estimate) pays for the SVD
+    # that decides whether it is singular.
+    factors = scipy.linalg.lu_factor(scaled, check_finite=False)
+    rcond, _ = gecon(factors[0], np.abs(scaled).sum(axis=0).max(), norm="1")
+    if rcond > _WELL_CONDITIONED:
+        return _Tangent(rows, cols, factors)
     u, singular_values, vt = scipy.linalg.svd(scaled)
     free = int(np.sum(singular_values <= _SINGULAR * singular_values[0]))
     if free == 0:
-        return _Tangent(rows, cols, scipy.linalg.lu_factor(scaled, check_finite=False))
+        return _Tangent(rows, cols, factors)
     # Singular tangents occur at the folded poses of a near-rigid Bennett loop (one more
     # instantaneous freedom); the minimum-norm Newton step still converges there.
     log.debug("static tangent has %d free motion(s) at t = %g; using its pseudo-inverse", free, t)
