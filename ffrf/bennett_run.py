@@ -5,7 +5,9 @@ the base, rad), ``driving_torque`` (N m, applied to link 3 about the joint axis)
 ``coupler_point`` (mean of link 2's two joint points, m), ``joint_angles`` (4 relative
 rotations about the joint axes, rad), ``link{k}_node{j}`` (three tracked surface nodes of
 links 1, 2, 3, m), ``energy_kinetic``, ``energy_strain``, ``energy_potential`` (J) and
-``constraint_residual`` (largest |g|). The ideal coupler point at the same drive angle
+``constraint_residual`` (largest |g|), ``joint_reactions`` (rows x 5 x 6: clamp, joints 0..3;
+force and torque on each joint's side 1 in its joint frame 0, N and N m, :mod:`ffrf.reactions`;
+names in the metadata's ``joint_reaction_names``). The ideal coupler point at the same drive angle
 comes from the motion polynomial (:mod:`kinematics`), giving ``coupler_deviation`` (same
 drive angle) and ``coupler_distance_to_path`` (closest point of the ideal curve).
 
@@ -35,6 +37,7 @@ from .bennett_scene import BennettScene, assemble
 from .euler_parameters import rotation_matrix
 from .generalized_alpha import generalized_alpha
 from .joints import MarkerJoint, joint_pose
+from .reactions import joint_reactions
 from .static_solver import quasi_static
 
 __all__ = ["BennettResult", "run_bennett", "evaluate_sensors", "ideal_coupler_points", "choose_mode", "write_results",
@@ -113,7 +116,7 @@ def evaluate_sensors(scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray
     joints = _joints(scene)
     sensors: dict[str, list] = {k: [] for k in ("drive_angle", "driving_torque", "coupler_point", "joint_angles",
                                                  "energy_kinetic", "energy_strain", "energy_potential",
-                                                 "constraint_residual")}
+                                                 "constraint_residual", "joint_reactions")}
     for k in (1, 2, 3):
         for j in range(3):
             sensors[f"link{k}_node{j}"] = []
@@ -130,6 +133,8 @@ def evaluate_sensors(scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray
         sensors["energy_strain"].append(energies["strain"])
         sensors["energy_potential"].append(energies["potential"])
         sensors["constraint_residual"].append(np.abs(system.constraint_values(qq, float(t))).max())
+        reactions = joint_reactions(system, qq, multipliers[row], float(t))
+        sensors["joint_reactions"].append([np.concatenate([r.force_local, r.torque_local]) for r in reactions.values()])
         for link in scene.links[1:]:
             block = qq[system.block(link.index)]
             psi = link.reduction.basis
@@ -197,6 +202,7 @@ def run_bennett(scene: BennettScene, mode: str = "auto", n_outputs: int = 241, s
     solved = wallclock.perf_counter()
     sensors = evaluate_sensors(scene, times, q, qd, lam)
     metadata = dict(scene.settings, mode=mode, quasi_static_ratio=ratio, t_end=t_end, n_outputs=len(times),
+                    joint_reaction_names=[c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)],
                     step=step if mode == "dynamic" else None, rho_inf=rho_inf if mode == "dynamic" else None,
                     timings_s={"assembly": assembled - started, "solve": solved - assembled,
                                "sensors": wallclock.perf_counter() - solved},

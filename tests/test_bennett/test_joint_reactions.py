@@ -77,3 +77,18 @@ def test_reactions_are_not_trivially_zero():
     clamp = joint_reactions(scene.system, solution.q[0], solution.multipliers[0], 0.0)["clamp"]
     total_weight = sum(link.body.moments.mass for link in scene.links) * 9.81
     assert clamp.force[2] == pytest.approx(total_weight, rel=1e-9)
+
+
+def test_run_bennett_writes_reactions_in_joint_frames():
+    """The ``joint_reactions`` sensor: the drive's torque about its axis is the driving torque,
+    and the clamp carries the linkage's weight (vertical in the clamp's frame, the world's)."""
+    from ffrf.bennett_run import run_bennett
+
+    scene = build_bennett("pla", h=6e-3, n_modes=2)
+    result = run_bennett(scene, mode="quasi_static", n_outputs=5)
+    reactions = result.sensors["joint_reactions"]
+    names = result.metadata["joint_reaction_names"]
+    assert reactions.shape == (5, 5, 6) and names[0] == "clamp" and names[-1] == "joint3 (drive)"
+    np.testing.assert_allclose(reactions[:, -1, 5], result.sensors["driving_torque"], rtol=1e-9)
+    total_weight = sum(link.body.moments.mass for link in scene.links) * 9.81
+    np.testing.assert_allclose(reactions[:, 0, 2], total_weight, rtol=1e-9)
