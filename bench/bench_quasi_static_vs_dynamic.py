@@ -16,7 +16,7 @@ the quasi-static run solves at exactly those times), and it reports
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/bench_quasi_static_vs_dynamic.py --json out/qs_vs_dyn.json
+    PYTHONPATH=. .venv/bin/python bench/bench_quasi_static_vs_dynamic.py --json out/qs_vs_dyn.json --out out/qs_vs_dyn
     PYTHONPATH=. .venv/bin/python bench/bench_quasi_static_vs_dynamic.py --h 6e-3 --modes 4 --step 2e-3
 """
 
@@ -50,8 +50,13 @@ def compare(quasi_static, dynamic, ramp_time: float) -> dict:
     torque_scale = float(np.max(np.abs(qs["driving_torque"])))
     transient = (t >= ramp_time) & (t <= ramp_time + TRANSIENT_WINDOW)
     later = t > ramp_time + TRANSIENT_WINDOW
+    worst = int(np.argmax(coupler))
     return {
         "max_coupler_difference_m": float(coupler.max()),
+        "max_coupler_difference_at": {"t_s": float(t[worst]),
+                                      "drive_angle_since_start_deg": float(np.degrees(qs["drive_angle"][worst]
+                                                                                      - qs["drive_angle"][0]))},
+        "max_torque_difference_at_t_s": float(t[int(np.argmax(np.abs(torque)))]),
         "rms_coupler_difference_m": float(np.sqrt(np.mean(coupler ** 2))),
         "max_coupler_elastic_deviation_m": elastic,
         "max_coupler_difference_relative_to_elastic_deviation": float(coupler.max()) / elastic,
@@ -82,6 +87,8 @@ def main(argv=None) -> dict:
     parser.add_argument("--outputs", type=int, default=611, help="output times (611: every 0.1 s of 61 s)")
     parser.add_argument("--t-end", type=float, default=None, help="shorter run (s); default ramp + revolution")
     parser.add_argument("--json", type=Path)
+    parser.add_argument("--out", type=Path, help="also write both runs (DIR/quasi_static, DIR/dynamic) and "
+                                                  "DIR/difference.png (coupler and torque differences)")
     args = parser.parse_args(argv)
 
     from ffrf.bennett_run import run_bennett
@@ -124,10 +131,27 @@ def main(argv=None) -> dict:
           f"{tr['max_torque_difference_afterwards_Nm']} N m; kinetic energy {tr['kinetic_energy_at_ramp_end_J']:.3e} J")
     print(f"energy balance (relative to the drive work): {report['energy_balance_relative']}")
     print(f"wall times: {report['wall_time_s']}")
+    if args.out:
+        write_outputs(args.out, quasi_static, dynamic)
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(report, indent=2))
     return report
+
+
+def write_outputs(directory: Path, quasi_static, dynamic) -> None:
+    """Both runs' results and the differences over the drive angle (um and N mm)."""
+    from ffrf.bennett_figures import plot_over_drive_angle
+    from ffrf.bennett_run import write_results
+
+    write_results(quasi_static, directory / "quasi_static")
+    write_results(dynamic, directory / "dynamic")
+    angle = quasi_static.sensors["drive_angle"] - quasi_static.sensors["drive_angle"][0]
+    coupler = 1e6 * np.linalg.norm(dynamic.sensors["coupler_point"] - quasi_static.sensors["coupler_point"], axis=1)
+    torque = 1e3 * (dynamic.sensors["driving_torque"] - quasi_static.sensors["driving_torque"])
+    plot_over_drive_angle({"|coupler dynamic - quasi-static| (um)": (angle, coupler),
+                           "torque dynamic - quasi-static (N mm)": (angle, torque)},
+                          "difference", directory / "difference.png", "Dynamic against quasi-static")
 
 
 if __name__ == "__main__":
