@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from .euler_parameters import rotation_derivative, rotation_matrix
 from .marker_kernels import exp_so3_kernel
 
-__all__ = ["BodyMarker", "JOINT_OFFSETS", "attach_joint_point", "rigid_interface_marker", "node_marker", "frame_marker",
+__all__ = ["BodyMarker", "JOINT_OFFSETS", "attach_joint_point", "marker_history", "rigid_interface_marker", "node_marker", "frame_marker",
            "exp_so3"]
 
 #: Where a joint point's offset from its marker lives (see :func:`attach_joint_point`).
@@ -116,6 +116,13 @@ def rigid_interface_marker(
                          "undefined; select nodes spread over a surface")
     rotation_modes = np.linalg.solve(w_matrix, np.einsum("i,iab,ibm->am", w, skews, modes))
     return BodyMarker(body, name, centre + np.asarray(offset, dtype=float), position_modes, rotation_modes)
+
+
+def marker_history(marker: BodyMarker, blocks: NDArray) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """World positions (n, 3) and orientations (n, 3, 3) of ``marker`` for the body's coordinate
+    rows ``blocks`` (n, 7 + m), e.g. ``result.q[:, system.block(marker.body)]``: Eqs. (K1), (K3)."""
+    blocks = np.atleast_2d(np.asarray(blocks, dtype=float))
+    return (np.array([marker.position(b) for b in blocks]), np.array([marker.orientation(b) for b in blocks]))
 
 
 def attach_joint_point(marker: BodyMarker, point: ArrayLike, joint_offsets: str = "body"

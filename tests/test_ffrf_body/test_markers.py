@@ -77,3 +77,29 @@ def test_bad_interfaces_are_named(bar):
         rigid_interface_marker(0, model.nodes, basis, line)
     with pytest.raises(ValueError, match="sum to 1"):
         rigid_interface_marker(0, model.nodes, basis, end, np.ones(end.size))
+
+
+def test_marker_history_and_body_frame_offsets(bar, rng):
+    """``marker_history`` over rows equals the single-state evaluations; ``attach_joint_point``
+    puts the joint point at the given body point in the body frame ("body": the marker moves,
+    no joint offset) or keeps the marker and returns the offset ("marker")."""
+    from ffrf.markers import attach_joint_point, marker_history
+
+    model, end = bar
+    basis = rng.normal(size=(3 * model.nodes.shape[0], 4))
+    marker = rigid_interface_marker(0, model.nodes, basis, end)
+    rows = np.array([np.r_[s[0], s[1], s[2]] for s in (random_state(rng, 4) for _ in range(3))])
+    positions, orientations = marker_history(marker, rows)
+    for q, p, a in zip(rows, positions, orientations):
+        np.testing.assert_allclose(p, marker.position(q), atol=1e-15)
+        np.testing.assert_allclose(a, marker.orientation(q), atol=1e-15)
+    point = marker.point + np.array([0.0, 0.0, 0.0085])
+    moved, offset = attach_joint_point(marker, point, "body")
+    assert np.all(offset == 0) and np.allclose(moved.point, point) and moved.name == marker.name
+    q = rows[0]
+    np.testing.assert_allclose(moved.position(q) - marker.position(q),
+                               rotation_matrix(q[3:7]) @ (point - marker.point), atol=1e-15)
+    same, offset = attach_joint_point(marker, point, "marker")
+    assert same is marker and np.allclose(offset, point - marker.point)
+    with pytest.raises(ValueError, match="joint_offsets"):
+        attach_joint_point(marker, point, "world")
