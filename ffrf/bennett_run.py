@@ -37,6 +37,7 @@ from .bennett_scene import BennettScene, assemble
 from .euler_parameters import rotation_matrix
 from .generalized_alpha import generalized_alpha
 from .joints import MarkerJoint, joint_pose
+from .output import write_csv
 from .reactions import joint_reactions
 from .static_solver import quasi_static
 
@@ -216,9 +217,11 @@ def run_bennett(scene: BennettScene, mode: str = "auto", n_outputs: int = 241, s
 
 
 def write_results(result: BennettResult, directory: str | Path) -> Path:
-    """``DIR/results.npz`` (time + sensors) and ``DIR/metadata.json``."""
+    """``DIR/results.npz`` (time + sensors), the same as ``DIR/results.csv`` (:mod:`ffrf.output`)
+    and ``DIR/metadata.json``."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     np.savez(directory / "results.npz", time=result.time, **result.sensors)
+    write_csv(directory / "results.csv", {"time": result.time, **result.sensors})
     (directory / "metadata.json").write_text(json.dumps(result.metadata, indent=2, default=float))
     return directory

@@ -72,6 +72,7 @@ from .markers import JOINT_OFFSETS, attach_joint_point, rigid_interface_marker
 from .materials import Material
 from .mesh import read_mesh
 from .modal_moments import modal_moments
+from .output import write_csv
 from .static_solver import quasi_static, static_equilibrium
 from .system import MultibodySystem
 
@@ -293,13 +294,15 @@ def simulate_scene(scene: FileScene, q0: NDArray | None = None, progress=None) -
 
 
 def run_scene(scene: FileScene, directory: str | Path, progress=None) -> dict:
-    """Static start, then the dynamic or quasi-static run; writes ``results.npz`` and ``metadata.json``."""
+    """Static start, then the dynamic or quasi-static run; writes ``results.npz``, ``results.csv`` and
+    ``metadata.json``."""
     started = wallclock.perf_counter()
     time, q, lam = simulate_scene(scene, progress=progress)
     arrays = {"time": time, **sensor_arrays(scene, q, lam)}
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     np.savez(directory / "results.npz", **arrays)
+    write_csv(directory / "results.csv", arrays)
     metadata = dict(scene=scene.name, settings=scene.settings, bodies=[b.name for b in scene.bodies],
                     modes=[b.reduction.n_modes for b in scene.bodies], wall_time_s=wallclock.perf_counter() - started)
     (directory / "metadata.json").write_text(json.dumps(metadata, indent=2, default=str))

@@ -51,6 +51,10 @@ def test_results_are_written_with_metadata(runs, tmp_path):
     metadata = json.loads((tmp_path / "metadata.json").read_text())
     assert metadata["variant"] == "pla" and metadata["mode"] == "quasi_static"
     assert metadata["summary"]["max_coupler_deviation_m"] > 0
+    table = np.genfromtxt(tmp_path / "results.csv", delimiter=",", names=True)
+    np.testing.assert_array_equal(table["time"], data["time"])
+    np.testing.assert_array_equal(table["coupler_point_z"], data["coupler_point"][:, 2])
+    np.testing.assert_array_equal(table["joint_reactions_4_5"], data["joint_reactions"][:, 4, 5])
 
 
 def test_energy_balance_closes_quasi_statically():
