@@ -1,5 +1,6 @@
-"""A scene file shared by the scene-file tests and the scene cross-validation: a flexible bar
-(``body_fixtures.bar_model``) hinged at one end, swinging under gravity."""
+"""Scene files shared by the scene-file tests and the scene cross-validation: a flexible bar
+(``body_fixtures.bar_model``) hinged at one end, swinging under gravity, and the paper's
+parametric link 1 turned by a motor at its first bore."""
 
 import meshio
 import numpy as np
@@ -43,3 +44,37 @@ def write_bar(tmp_path):
     meshio.write(tmp_path / "bar.vtu", meshio.Mesh(1e3 * model.mesh.points, [("tetra", model.mesh.tets)]))
     np.savetxt(tmp_path / "hinge.txt", np.flatnonzero(model.nodes[:, 0] < 1e-9), fmt="%d")
     return model
+
+
+def driven_link_scene(axis: str, t_end: float, outputs: int, modes: int, sensor: bool = False) -> str:
+    """Quasi-static parametric PLA link 1 driven at its first bore about ``axis`` (TOML list text)."""
+    text = f"""
+[scene]
+name = "driven link"
+mode = "quasi_static"
+t_end = {t_end}
+outputs = {outputs}
+beta = 0.005
+[[bodies]]
+name = "link1"
+parametric = {{link = 1, h = 0.008}}
+material = {{E = 1.2e9, nu = 0.33, rho = 450.0}}
+modes = {modes}
+interfaces = [{{name = "a", group = "joint0"}}, {{name = "b", group = "joint1"}}]
+[[joints]]
+name = "motor"
+type = "driven_revolute"
+body0 = "ground"
+body1 = "link1"
+interface1 = "a"
+axis = {axis}
+point = [0.0, 0.0, 0.0085]
+drive = {{rpm = 1.0, ramp_time = 1.0}}
+"""
+    if sensor:
+        text += """[[sensors]]
+name = "far_bore"
+body = "link1"
+point = [0.11, 0.0, 0.0]
+"""
+    return text

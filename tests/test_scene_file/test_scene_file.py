@@ -4,7 +4,7 @@ and clear errors for bad scenes."""
 import numpy as np
 import pytest
 from pendulum_fixtures import pendulum, tip_position
-from scene_fixtures import PENDULUM, write_bar
+from scene_fixtures import PENDULUM, driven_link_scene, write_bar
 
 from ffrf.cli import main
 from ffrf.generalized_alpha import generalized_alpha
@@ -22,27 +22,7 @@ def test_file_pendulum_equals_the_python_pendulum(tmp_path):
 
 
 def test_driven_parametric_link(tmp_path):
-    (tmp_path / "link.toml").write_text("""
-[scene]
-mode = "quasi_static"
-t_end = 5.0
-outputs = 6
-[[bodies]]
-name = "link1"
-parametric = {link = 1, h = 0.008}
-material = {E = 1.2e9, nu = 0.33, rho = 450.0}
-modes = 2
-interfaces = [{name = "a", group = "joint0"}, {name = "b", group = "joint1"}]
-[[joints]]
-name = "motor"
-type = "driven_revolute"
-body0 = "ground"
-body1 = "link1"
-interface1 = "a"
-axis = [0.0, 0.0, 1.0]
-point = [0.0, 0.0, 0.0085]
-drive = {rpm = 1.0, ramp_time = 1.0}
-""")
+    (tmp_path / "link.toml").write_text(driven_link_scene("[0.0, 0.0, 1.0]", t_end=5.0, outputs=6, modes=2))
     scene = load_scene(tmp_path / "link.toml")
     run_scene(scene, tmp_path / "out")
     torque = np.load(tmp_path / "out" / "results.npz")["motor_torque"]

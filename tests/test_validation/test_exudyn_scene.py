@@ -13,37 +13,11 @@ import pytest
 
 pytest.importorskip("exudyn", reason="Exudyn is the reference implementation for these cross-checks")
 
-from scene_fixtures import PENDULUM, write_bar  # noqa: E402
+from scene_fixtures import PENDULUM, driven_link_scene, write_bar  # noqa: E402
 
 from validation.__main__ import main  # noqa: E402
 
-DRIVEN = """
-[scene]
-name = "lifted link"
-mode = "quasi_static"
-t_end = 20.0
-outputs = 11
-beta = 0.005
-[[bodies]]
-name = "link1"
-parametric = {link = 1, h = 0.008}
-material = {E = 1.2e9, nu = 0.33, rho = 450.0}
-modes = 3
-interfaces = [{name = "a", group = "joint0"}, {name = "b", group = "joint1"}]
-[[joints]]
-name = "motor"
-type = "driven_revolute"
-body0 = "ground"
-body1 = "link1"
-interface1 = "a"
-axis = [0.0, 1.0, 0.0]
-point = [0.0, 0.0, 0.0085]
-drive = {rpm = 1.0, ramp_time = 1.0}
-[[sensors]]
-name = "far_bore"
-body = "link1"
-point = [0.11, 0.0, 0.0]
-"""
+DRIVEN = driven_link_scene("[0.0, 1.0, 0.0]", t_end=20.0, outputs=11, modes=3, sensor=True)
 
 
 def report(tmp_path, text: str) -> dict:
