@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .exudyn_twin import (ExudynTwin, TwinBasis, exudyn_settings, q_from_twin, solve_static, static_settings,
-                          to_twin_layout)
+                          sweep_settings, to_twin_layout)
 
 __all__ = [
     "BennettTrajectory",
@@ -299,7 +299,7 @@ def run_exudyn_bennett(scene, q0: NDArray, t_end: float, step: float = 1e-3, rho
     return BennettTrajectory(out["time"], out["q"], out["coupler"], out["tracked"], out["torque"],
                              _zeta(scene.system, out["q"]), setup, integration, iterations, _label(twin),
                              {"symbolic": twin.symbolic, "twin_q": out["twin_q"],
-                              "notes": twin.notes + [x for x in twin.keep_alive if isinstance(x, str)]})
+                              "notes": twin.notes})
 
 
 def run_ffrf_bennett(scene, system, q0: NDArray, t_end: float, step: float = 1e-3, rho_inf: float = 0.9,
@@ -369,7 +369,7 @@ def quasi_static_exudyn_bennett(scene, start: tuple, times: NDArray, tolerance: 
         raise ValueError("times must start at 0 and be equally spaced (Exudyn's load steps)")
     started = time.perf_counter()
     twin = build_exudyn_twin(scene, q0, symbolic=True, bases=bases)
-    settings = static_settings(len(times) - 1, tolerance, duration=float(times[-1]), load_factor=False)
+    settings = sweep_settings(times, tolerance)
     setup = time.perf_counter() - started
     started = time.perf_counter()
     solve_static(twin, settings)

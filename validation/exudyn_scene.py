@@ -80,7 +80,7 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
     import exudyn as exu
 
     from .exudyn_twin import (add_node_sensor, build_twin, exudyn_settings, read_twin, solve_static, static_settings,
-                              to_twin_layout)
+                              sweep_settings, to_twin_layout)
 
     s = scene.settings
     mode = s.get("mode", "dynamic")
@@ -110,7 +110,7 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
         if not solver.SolveSystem(twin.mbs, exudyn_settings(t_end, step, float(s.get("rho_inf", 0.9)), tolerance)):
             raise RuntimeError(f"Exudyn did not finish the scene: {solver.GetErrorString()}")
     else:
-        solve_static(twin, static_settings(len(times) - 1, tolerance, duration=t_end, load_factor=False))
+        solve_static(twin, sweep_settings(times, tolerance))
     solve = time.perf_counter() - started
     data = read_twin(twin, scene.system, q0)
     rows = np.array([int(np.argmin(np.abs(data["time"] - t))) for t in times])

@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from ffrf.drives import RampedAngle
 
 __all__ = ["TwinBody", "TwinBasis", "ExudynTwin", "twin_bases", "to_twin_layout", "build_twin",
-           "add_node_sensor", "add_marker_sensor", "read_twin", "static_settings", "solve_static", "joint_key",
+           "add_node_sensor", "add_marker_sensor", "read_twin", "static_settings", "sweep_settings", "solve_static", "joint_key",
            "exudyn_settings", "q_from_twin"]
 
 
@@ -77,7 +77,7 @@ class ExudynTwin:
     joints: dict  # joint key -> object
     sensors: dict
     symbolic: bool
-    keep_alive: list = field(default_factory=list)
+    keep_alive: list = field(default_factory=list)  # user functions Exudyn calls: must live as long as mbs
     notes: list = field(default_factory=list)  # where the twin is not exactly equivalent
     bases: list | None = None  # per body TwinBasis (None: our basis)
 
@@ -236,7 +236,7 @@ def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, symboli
                                                       "offsetUserFunction", joint)
                 used_symbolic = True
             except Exception as error:  # pragma: no cover - reported to the caller
-                keep.append(f"symbolic user function failed: {error!r}")
+                notes.append(f"{key}: symbolic user function failed ({error!r}); Python function used")
         if function is None:
             function = _drive_function(c.angle, frozen_drive_time, False)
         mbs.SetObjectParameter(joint, "offsetUserFunction", function)
@@ -327,6 +327,12 @@ def static_settings(load_steps: int, tolerance: float, duration: float = 1.0, lo
     s.linearSolver.solverType = exu.LinearSolverType.EXUdense
     s.solution.file.write = False
     return s
+
+
+def sweep_settings(times: NDArray, tolerance: float):
+    """``SolveStatic`` settings for equilibria at equally spaced ``times`` from 0: one load step per
+    interval, the drives turned by the quasi-time, loads always fully on (``useLoadFactor=False``)."""
+    return static_settings(len(times) - 1, tolerance, duration=float(times[-1]), load_factor=False)
 
 
 def solve_static(twin: ExudynTwin, settings) -> None:
