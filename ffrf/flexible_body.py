@@ -20,10 +20,12 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from .body_kernels import gravity_force, mass_and_quadratic_velocity, mass_matrix
+from .body_kernels import (gravity_force, inertia_about_origin, mass_and_quadratic_velocity, mass_matrix,
+                           rotation_mode_coupling, second_moment)
+from .euler_parameters import g_bar, rotation_derivative, rotation_matrix
 from .modal_moments import ModalMoments
 
-__all__ = ["FlexibleBody", "body_residual", "body_jacobians"]
+__all__ = ["FlexibleBody", "body_residual", "body_jacobians", "kinetic_energy_gradient", "mass_matrix_rate"]
 
 _COMPLEX_STEP = 1e-30  # any tiny step: complex-step derivatives have no cancellation error
 
@@ -85,6 +87,16 @@ class FlexibleBody:
         qd = np.asarray(qd, float)
         return 0.5 * float(qd @ self.mass_matrix(q) @ qd)
 
+    def kinetic_energy_gradient(self, q: ArrayLike, qd: ArrayLike) -> NDArray[np.float64]:
+        r""":math:`\partial T/\partial q` at fixed velocities (Eq. (V6))."""
+        return kinetic_energy_gradient(np.asarray(q, float), np.asarray(qd, float), self.moments.mass,
+                                       *self._packed[:6])
+
+    def mass_matrix_rate(self, q: ArrayLike, qd: ArrayLike) -> NDArray[np.float64]:
+        r""":math:`\dot M = \sum_k (\partial M/\partial q_k)\dot q_k` (Eq. (V5)), exact by complex step."""
+        return mass_matrix_rate(np.asarray(q, float), np.asarray(qd, float), self.moments.mass,
+                                *self._packed_complex[:6])
+
     def strain_energy(self, q: ArrayLike) -> float:
         zeta = np.asarray(q, float)[7:]
         return 0.5 * float(zeta @ self.stiffness @ zeta)
@@ -133,3 +145,69 @@ def body_jacobians(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred
                                      exact_gravity).imag / _COMPLEX_STEP
         qdc[k] = qd[k]
     return jac_q, jac_qd
+
+
+@njit(cache=True)
+def kinetic_energy_of(q, qd, mass, s0, s1, x2, c, d, mred):
+    r"""Eq. (F8) as a scalar without forming ``M``: with :math:`\bar\omega = \bar G\dot p` and
+    :math:`w = \bar\omega\times s + S_1\dot\zeta` (body-frame rate of the first moment),
+    :math:`T = \tfrac12 m|\dot R|^2 + \dot R\cdot Aw + \tfrac12\bar\omega\cdot J\bar\omega
+    + \bar\omega\cdot M_{\omega\zeta}\dot\zeta + \tfrac12\dot\zeta\cdot\Psi^TM\Psi\dot\zeta`.
+    All arrays share one dtype (complex128 for :func:`kinetic_energy_gradient`)."""
+    p, zeta = q[3:7], q[7:]
+    rd, pd, zetad = qd[0:3], qd[3:7], qd[7:]
+    omega = g_bar(p) @ pd
+    s = s0 + s1 @ zeta
+    w = np.cross(omega, s) + s1 @ zetad
+    inertia = inertia_about_origin(second_moment(zeta, x2, c, d))
+    return (0.5 * mass * (rd @ rd) + rd @ (rotation_matrix(p) @ w) + 0.5 * (omega @ (inertia @ omega))
+            + omega @ (rotation_mode_coupling(zeta, c, d) @ zetad) + 0.5 * (zetad @ (mred @ zetad)))
+
+
+@njit(cache=True)
+def kinetic_energy_gradient(q, qd, mass, s0, s1, x2, c, d, mred):
+    r""":math:`\partial T/\partial q` of :func:`kinetic_energy_of` at fixed ``qd`` (Eq. (V6)), float64:
+
+    .. math::
+        T_R = 0,\qquad T_p = \Big(\frac{\partial(Aw)}{\partial p}\Big)^T\dot R - \bar G(\dot p)^T\tau,
+        \quad \tau = s\times A^T\dot R + J\bar\omega + M_{\omega\zeta}\dot\zeta,\\
+        T_\zeta = S_1^T(A^T\dot R\times\bar\omega) + \sum_{ab}W_{ab}(C_{ab} + D_{ab}\zeta)
+        + \sum_{abc}\epsilon_{abc}\bar\omega_aD_{bc}\dot\zeta,\quad W = |\bar\omega|^2I - \bar\omega\bar\omega^T
+
+    (:math:`\bar\omega = \bar G(p)\dot p = -\bar G(\dot p)p` is linear in each). Needed apart from
+    :func:`body_residual`, whose quadratic velocity vector (Eq. (F9)) equals
+    :math:`\partial T/\partial q - \dot M\dot q` only up to a multiple of ``p``: the normalisation
+    absorbs that in the DAE, but not in Eq. (V2) at the midpoint, where ``p`` is not a unit vector."""
+    p, zeta = q[3:7], q[7:]
+    rd, pd, zetad = qd[0:3], qd[3:7], qd[7:]
+    m = zeta.shape[0]
+    omega = g_bar(p) @ pd
+    s = s0 + s1 @ zeta
+    w = np.cross(omega, s) + s1 @ zetad
+    a_rd = rotation_matrix(p).T @ rd
+    inertia = inertia_about_origin(second_moment(zeta, x2, c, d))
+    tau = np.cross(s, a_rd) + inertia @ omega + rotation_mode_coupling(zeta, c, d) @ zetad
+    out = np.zeros(q.shape[0])
+    out[3:7] = rotation_derivative(p, w).T @ rd - g_bar(pd).T @ tau
+    t_zeta = s1.T @ np.cross(a_rd, omega)
+    w2 = omega @ omega
+    for i in range(3):
+        for j in range(3):
+            weight = (w2 if i == j else 0.0) - omega[i] * omega[j]
+            t_zeta += weight * (c[i, j] + d[i, j] @ zeta)
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                eps = (i - j) * (j - k) * (k - i) / 2.0  # Levi-Civita symbol
+                if eps != 0.0:
+                    t_zeta += eps * omega[i] * (d[j, k] @ zetad)
+    out[7:] = t_zeta
+    return out
+
+
+@njit(cache=True)
+def mass_matrix_rate(q, qd, mass, s0, s1, x2, c, d, mred):
+    r""":math:`\dot M` of Eq. (F8): one complex-step evaluation of ``M`` along ``qd`` (the arrays
+    after ``mass`` complex128)."""
+    qc = q.astype(np.complex128) + 1j * _COMPLEX_STEP * qd.astype(np.complex128)
+    return mass_matrix(qc[3:7], qc[7:], mass, s0, s1, x2, c, d, mred).imag / _COMPLEX_STEP
