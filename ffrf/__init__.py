@@ -5,9 +5,9 @@ Data flow: geometry (:mod:`ffrf.link_geometry`, gmsh OCC) -> linear tetrahedral 
 -> interfaces (:mod:`ffrf.interfaces`) -> Craig-Bampton basis (:mod:`ffrf.craig_bampton`)
 -> modal moments and FFRF body (:mod:`ffrf.modal_moments`, :mod:`ffrf.flexible_body`)
 -> markers and joints (:mod:`ffrf.markers`, :mod:`ffrf.joints`) -> system
-(:mod:`ffrf.system`) -> generalized-alpha or static solution (:mod:`ffrf.generalized_alpha`,
-:mod:`ffrf.static_solver`) -> the Bennett scene and its sensors (:mod:`ffrf.bennett_scene`,
-:mod:`ffrf.bennett_run`). The equations are derived in ``docs/formulation.md``.
+(:mod:`ffrf.system`) -> generalized-alpha, variational midpoint or static solution
+(:mod:`ffrf.generalized_alpha`, :mod:`ffrf.variational_midpoint`, :mod:`ffrf.static_solver`)
+-> the Bennett scene and its sensors (:mod:`ffrf.bennett_scene`, :mod:`ffrf.bennett_run`). The equations are derived in ``docs/formulation.md``.
 This package never imports Exudyn.
 """
 
@@ -37,6 +37,7 @@ from .joints import GroundFrame, MarkerJoint, driven_revolute_joint, fixed_joint
 from .drives import CosineRamp, rpm
 from .system import MultibodySystem
 from .generalized_alpha import IntegrationResult, NewtonDivergence, generalized_alpha
+from .variational_midpoint import variational_midpoint
 from .static_solver import StaticDivergence, StaticSolution, quasi_static, static_equilibrium
 
 __all__ = [
@@ -58,6 +59,6 @@ __all__ = [
     "EulerNormalization", "GroundPerpendicular", "GroundPoint",
     "GroundFrame", "MarkerJoint", "driven_revolute_joint", "fixed_joint", "revolute_joint",
     "CosineRamp", "rpm", "MultibodySystem",
-    "IntegrationResult", "NewtonDivergence", "generalized_alpha",
+    "IntegrationResult", "NewtonDivergence", "generalized_alpha", "variational_midpoint",
     "StaticDivergence", "StaticSolution", "quasi_static", "static_equilibrium",
 ]
