@@ -7,7 +7,8 @@ Data flow: geometry (:mod:`ffrf.link_geometry`, gmsh OCC) -> linear tetrahedral 
 -> markers and joints (:mod:`ffrf.markers`, :mod:`ffrf.joints`) -> system
 (:mod:`ffrf.system`) -> generalized-alpha, variational midpoint or static solution
 (:mod:`ffrf.generalized_alpha`, :mod:`ffrf.variational_midpoint`, :mod:`ffrf.static_solver`)
--> the Bennett scene and its sensors (:mod:`ffrf.bennett_scene`, :mod:`ffrf.bennett_run`). The equations are derived in ``docs/formulation.md``.
+-> the Bennett scene and its sensors (:mod:`ffrf.bennett_scene`, :mod:`ffrf.bennett_run`).
+The equations are derived in ``docs/formulation.md``.
 This package never imports Exudyn.
 """
 
