@@ -24,3 +24,7 @@ def test_example_2_hinge_carries_a_quarter_of_the_weight():
     length, thickness = 0.2, 0.01
     expected = 1 - length**2 / (4 * (length**2 / 3 + thickness**2 / 12))
     assert _run("ex02_rigid_pendulum") == pytest.approx(expected, rel=1e-10)
+
+
+def test_example_3_tumbling_bar_keeps_its_angular_momentum():
+    assert _run("ex03_tumbling_flexible_bar") < 1e-11
