@@ -48,7 +48,7 @@ from .link_geometry import LinkGeometry, bennett_axes, mesh_link, paper_link_axe
 from .markers import JOINT_OFFSETS, BodyMarker, attach_joint_point, rigid_interface_marker
 from .materials import PLA, RIGID, Material
 from .modal_moments import modal_moments
-from .static_solver import static_equilibrium
+from .static_solver import StaticDivergence, static_equilibrium
 from .system import MultibodySystem
 
 __all__ = ["VARIANTS", "LinkModel", "BennettScene", "build_bennett", "assemble", "joint_frame"]
@@ -260,7 +260,18 @@ def assemble(scene: BennettScene, steps: int | None = None, t: float = 0.0,
         if steps is None else steps
     convert = (lambda system: system) if convert is None else convert
     q = scene.q_start
-    solution = static_equilibrium(convert(scene.with_misalignment(0.0)), q, t=t, load_steps=2)
-    for k in range(1, steps + 1):
-        solution = static_equilibrium(convert(scene.with_misalignment(k / steps)), solution.q, t=t)
+    k = 0
+    try:
+        solution = static_equilibrium(convert(scene.with_misalignment(0.0)), q, t=t, load_steps=2)
+        for k in range(1, steps + 1):
+            solution = static_equilibrium(convert(scene.with_misalignment(k / steps)), solution.q, t=t)
+    except StaticDivergence as error:
+        # Name the scene and the continuation step: the solver's own message knows neither.
+        alpha3 = scene.settings["alpha3_deg"]
+        gap = float(np.abs(scene.system.constraint_values(scene.q_start, t)).max())
+        raise StaticDivergence(
+            f"static assembly of the Bennett scene (alpha_3 = {alpha3:g} deg, {abs(alpha3 - 90.0):g} deg from a closing "
+            f"loop) failed at continuation step {k}/{steps} (gravity and the joint gap of {gap:.3g} at the start "
+            f"pose): {error}. The links must absorb this misfit elastically from the ideal start pose; check alpha_3 "
+            "(the paper's prototypes: 90 to 92 deg) or, for a large misfit, give Newton more iterations") from error
     return solution
