@@ -3,9 +3,12 @@
 
 For each path: generalized-alpha from the assembled state at rest (``--t-dynamic`` s, step
 ``--step``) in ms per step, and the quasi-static revolution (ramp plus one revolution,
-``--outputs`` equilibria, as ``python -m ffrf bennett --quasi-static``) in s. Kernels are warm
-(numba cache); ``--cold`` also times the fast path's first call in a fresh process with an empty
-numba cache (compilation).
+``--outputs`` equilibria, as ``python -m ffrf bennett --quasi-static``) in s and Newton
+iterations per pose; the fast path's quasi-static run is also timed without the predictor and
+secant updates (``predictor_order=0, secant=False``: plain modified Newton from the previous
+equilibrium, Eqs. (S2), (S3) of ``docs/formulation.md``). Kernels are warm (numba cache);
+``--cold`` also times the fast path's first calls in a fresh process with an empty numba cache
+(compilation: residual, iteration matrix, one generalized-alpha step and one quasi-static pose).
 
 BLAS threads: on a small shared machine OpenBLAS threads on ~100 x 100 matrices spin against
 other processes (a 105 x 105 SVD took 0.5 s instead of 8 ms); this script pins BLAS to one
@@ -38,12 +41,17 @@ packed = pack_system(scene.system)
 q, z, lam = scene.q_start, np.zeros_like(scene.q_start), np.zeros(scene.system.n_constraints)
 packed.residual(q, z, z, lam, 0.0)
 packed.iteration_matrix(q, z, z, lam, 0.0, 1.0, 1e-6, 1e-3)
+from ffrf.generalized_alpha import generalized_alpha
+from ffrf.static_solver import quasi_static
+generalized_alpha(scene.system, q, z, 2e-4, 1e-4)
+quasi_static(scene.system, q, np.array([0.0, 0.1]))
 print(time.perf_counter() - built)
 """
 
 
 def cold_compile_seconds(h: float, modes: int) -> float:
-    """First residual and iteration matrix in a fresh process with an empty numba cache."""
+    """First residual, iteration matrix, dynamic step and static pose in a fresh process with an
+    empty numba cache."""
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=os.getcwd())
         out = subprocess.run([sys.executable, "-c", _COLD.format(h=h, modes=modes)], env=env, check=True,
@@ -97,17 +105,22 @@ def main() -> None:
 
     if not args.skip_quasi_static:
         times = np.linspace(0.0, scene.t_end, args.outputs)
+        variants = {"reference": dict(fast_path=False), "fast, plain modified Newton": dict(
+            predictor_order=0, secant=False), "fast": dict()}
         solutions, seconds = {}, {}
-        for fast in (False, True):
+        for label, options in variants.items():
             started = time.perf_counter()
-            solutions[fast] = quasi_static(system, q0, times, fast_path=fast)
-            seconds[fast] = time.perf_counter() - started
+            solutions[label] = quasi_static(system, q0, times, **options)
+            seconds[label] = time.perf_counter() - started
         print(f"quasi-static revolution ({scene.t_end:.1f} s of drive, {args.outputs} equilibria):")
-        for fast in (False, True):
-            print(f"  {'fast     ' if fast else 'reference'}  {seconds[fast]:8.2f} s  "
-                  f"{sum(solutions[fast].iterations)} Newton iterations")
-        print(f"  speed-up {seconds[False] / seconds[True]:.1f}x; max |q_fast - q_ref| = "
-              f"{np.abs(solutions[True].q - solutions[False].q).max():.1e}")
+        for label in variants:
+            iterations = solutions[label].iterations
+            print(f"  {label:28s} {seconds[label]:8.2f} s  {sum(iterations)} Newton iterations "
+                  f"({np.mean(iterations):.2f} per pose)")
+        ref, fast = solutions["reference"], solutions["fast"]
+        print(f"  speed-up {seconds['reference'] / seconds['fast']:.1f}x; max |q_fast - q_ref| = "
+              f"{np.abs(fast.q - ref.q).max():.1e}, driving torque relative "
+              f"{np.abs(fast.multipliers[:, -1] - ref.multipliers[:, -1]).max() / np.abs(ref.multipliers[:, -1]).max():.1e}")
     if args.cold:
         print(f"numba cold compile (first residual + iteration matrix, empty cache): "
               f"{cold_compile_seconds(args.h, args.modes):.1f} s")

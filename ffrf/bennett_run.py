@@ -36,9 +36,10 @@ from .assembly_stress import AssemblyStress, scene_assembly_stress
 from .bennett_scene import BennettScene, assemble
 from .euler_parameters import rotation_matrix
 from .generalized_alpha import generalized_alpha
-from .joints import MarkerJoint, joint_pose
+from .joints import MarkerJoint
 from .output import write_csv
-from .reactions import joint_reactions
+from .packed_system import newton_model
+from .reactions import _cross, joint_poses, joint_reactions
 from .static_solver import quasi_static
 
 __all__ = ["BennettResult", "run_bennett", "evaluate_sensors", "ideal_coupler_points", "choose_mode", "inertia_number",
@@ -106,12 +107,11 @@ def _joints(scene: BennettScene) -> list[MarkerJoint]:
 
 
 def _joint_state(joint: MarkerJoint, scene: BennettScene, q: NDArray):
-    blocks = [q[scene.system.block(i)] for i in joint.bodies]
-    q0, q1 = (None, blocks[0]) if len(blocks) == 1 else blocks
-    p0, axes0 = joint_pose(joint.marker0, q0, joint.rotation0, joint.offset0)
-    p1, axes1 = joint_pose(joint.marker1, q1, joint.rotation1, joint.offset1)
-    angle = np.arctan2(np.cross(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0])
-    return p0, p1, angle
+    """Joint points of both sides, the relative angle about z0, and the poses (for the reactions)."""
+    poses = joint_poses(joint, [q[scene.system.block(i)] for i in joint.bodies])
+    p0, axes0, p1, axes1 = poses
+    angle = np.arctan2(_cross(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0])
+    return p0, p1, angle, poses
 
 
 def ideal_coupler_points(scene: BennettScene, drive_angles: NDArray) -> NDArray[np.float64]:
@@ -124,10 +124,14 @@ def ideal_coupler_points(scene: BennettScene, drive_angles: NDArray) -> NDArray[
 def _distance_to_polyline(points: NDArray, curve: NDArray) -> NDArray[np.float64]:
     start, end = curve, np.roll(curve, -1, axis=0)
     seg = end - start
+    seg2 = np.einsum("ij,ij->i", seg, seg)
     out = np.empty(len(points))
-    for k, p in enumerate(points):
-        s = np.clip(np.einsum("ij,ij->i", p - start, seg) / np.einsum("ij,ij->i", seg, seg), 0.0, 1.0)
-        out[k] = np.min(np.linalg.norm(start + s[:, None] * seg - p, axis=1))
+    chunk = 32  # points per vectorised block: (32, segments, 3) temporaries of a few MB
+    for k in range(0, len(points), chunk):
+        rel = points[k:k + chunk, None, :] - start[None]
+        s = np.clip(np.einsum("cij,ij->ci", rel, seg) / seg2, 0.0, 1.0)
+        gap = rel - s[..., None] * seg
+        out[k:k + chunk] = np.sqrt(np.min(np.einsum("cij,cij->ci", gap, gap), axis=1))
     return out
 
 
@@ -135,6 +139,7 @@ def evaluate_sensors(scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray
                      multipliers: NDArray) -> dict[str, NDArray]:
     """All sensors of the module docstring at every output row."""
     system = scene.system
+    model = newton_model(system)  # its constraint values: the fast path's kernel when supported
     joints = _joints(scene)
     sensors: dict[str, list] = {k: [] for k in ("drive_angle", "driving_torque", "coupler_point", "joint_angles",
                                                  "energy_kinetic", "energy_strain", "energy_potential",
@@ -146,7 +151,7 @@ def evaluate_sensors(scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray
         qq = q[row]
         sensors["drive_angle"].append(scene.drive_angle(float(t)))
         sensors["driving_torque"].append(multipliers[row, -1])
-        states = [_joint_state(j, scene, qq) for j in joints]
+        states = [_joint_state(j, scene, qq) for j in joints]  # poses reused by the reactions below
         sensors["joint_angles"].append([s[2] for s in states])
         # Link 2 is the far side of joint 1 and the near side of joint 2 (marker 1 and marker 0).
         sensors["coupler_point"].append(0.5 * (states[1][1] + states[2][0]))
@@ -154,8 +159,8 @@ def evaluate_sensors(scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray
         sensors["energy_kinetic"].append(energies["kinetic"])
         sensors["energy_strain"].append(energies["strain"])
         sensors["energy_potential"].append(energies["potential"])
-        sensors["constraint_residual"].append(np.abs(system.constraint_values(qq, float(t))).max())
-        reactions = joint_reactions(system, qq, multipliers[row], float(t))
+        sensors["constraint_residual"].append(np.abs(model.constraint_values(qq, float(t))).max())
+        reactions = joint_reactions(system, qq, multipliers[row], float(t), {j.name: s[3] for j, s in zip(joints, states)})
         sensors["joint_reactions"].append([np.concatenate([r.force_local, r.torque_local]) for r in reactions.values()])
         for link in scene.links[1:]:
             block = qq[system.block(link.index)]

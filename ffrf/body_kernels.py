@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from .euler_parameters import g_bar, rotation_matrix, skew
+from .small_linalg import dot, mat_mat, mat_vec, vec_mat
 
 __all__ = [
     "second_moment",
@@ -58,7 +59,7 @@ def modal_products(d: np.ndarray, v: np.ndarray) -> np.ndarray:
     out = np.empty((3, 3, v.shape[0]), dtype=v.dtype)
     for a in range(3):
         for b in range(3):
-            out[a, b] = d[a, b] @ v
+            out[a, b] = mat_vec(d[a, b], v)
     return out
 
 
@@ -68,7 +69,7 @@ def _second_moment(zeta, x2, c, d_zeta):
     out = np.empty((3, 3), dtype=zeta.dtype)
     for a in range(3):
         for b in range(3):
-            out[a, b] = x2[a, b] + zeta @ (c[a, b] + c[b, a]) + zeta @ d_zeta[a, b]
+            out[a, b] = x2[a, b] + dot(zeta, c[a, b] + c[b, a]) + dot(zeta, d_zeta[a, b])
     return out
 
 
@@ -89,7 +90,7 @@ def rotation_mode_coupling(zeta: np.ndarray, c: np.ndarray, d: np.ndarray) -> np
             for cc in range(3):
                 eps = _levi_civita(a, b, cc)
                 if eps != 0.0:
-                    out[a] += eps * (c[cc, b] + zeta @ d[b, cc])
+                    out[a] += eps * (c[cc, b] + vec_mat(zeta, d[b, cc]))
     return out
 
 
@@ -118,7 +119,7 @@ def mass_matrix(
 def _kinematics(p, zeta, s0, s1, x2, c, d):
     """What Eqs. (F8) and (F9) share: ``A``, ``G``, ``s``, the products ``D_ab zeta`` and ``J``."""
     d_zeta = modal_products(d, zeta)
-    return (rotation_matrix(p), g_bar(p), s0 + s1 @ zeta, d_zeta,
+    return (rotation_matrix(p), g_bar(p), s0 + mat_vec(s1, zeta), d_zeta,
             inertia_about_origin(_second_moment(zeta, x2, c, d_zeta)))
 
 
@@ -130,10 +131,10 @@ def _mass_matrix(zeta, mass, s1, c, d, reduced_mass, a_mat, g, s, j):
     out = np.zeros((n, n), dtype=zeta.dtype)
     for i in range(3):
         out[i, i] = mass
-    m_rp = -(a_mat @ skew(s)) @ g
-    m_rz = a_mat @ s1
-    m_pp = g.T @ j @ g
-    m_pz = g.T @ rotation_mode_coupling(zeta, c, d)
+    m_rp = -mat_mat(mat_mat(a_mat, skew(s)), g)
+    m_rz = mat_mat(a_mat, s1)
+    m_pp = mat_mat(mat_mat(g.T, j), g)
+    m_pz = mat_mat(g.T, rotation_mode_coupling(zeta, c, d))
     out[0:3, 3:7] = m_rp
     out[3:7, 0:3] = m_rp.T
     out[0:3, 7:] = m_rz
@@ -175,17 +176,17 @@ def _quadratic_velocity(pd, zetad, s1, c, d, a_mat, g, s, d_zeta, j):
     """Eq. (F9) from the pieces of :func:`_kinematics`."""
     m = zetad.shape[0]
     out = np.zeros(7 + m, dtype=pd.dtype)
-    omega = g @ pd
+    omega = mat_vec(g, pd)
     w = skew(omega)
-    out[0:3] = -(a_mat @ (w @ (w @ s) + 2.0 * (w @ (s1 @ zetad))))
+    out[0:3] = -mat_vec(a_mat, mat_vec(w, mat_vec(w, s)) + 2.0 * mat_vec(w, mat_vec(s1, zetad)))
     n_mat = np.empty((3, 3), dtype=pd.dtype)
     for a in range(3):
         for b in range(3):
-            n_mat[a, b] = zetad @ c[a, b] + zetad @ d_zeta[a, b]
-    torque = w @ (j @ omega) + 2.0 * (omega * np.trace(n_mat) - n_mat @ omega)
-    out[3:7] = -(g.T @ torque)
+            n_mat[a, b] = dot(zetad, c[a, b]) + dot(zetad, d_zeta[a, b])
+    torque = mat_vec(w, mat_vec(j, omega)) + 2.0 * (omega * np.trace(n_mat) - mat_vec(n_mat, omega))
+    out[3:7] = -vec_mat(torque, g)
     q_zeta = np.zeros(m, dtype=pd.dtype)
-    omega2 = omega @ omega
+    omega2 = dot(omega, omega)
     for a in range(3):
         for b in range(3):
             e_ab = c[a, b] + d_zeta[a, b]
@@ -195,7 +196,7 @@ def _quadratic_velocity(pd, zetad, s1, c, d, a_mat, g, s, d_zeta, j):
             for cc in range(3):
                 eps = _levi_civita(a, b, cc)
                 if eps != 0.0:
-                    q_zeta += 2.0 * eps * omega[b] * (d[a, cc] @ zetad)
+                    q_zeta += 2.0 * eps * omega[b] * mat_vec(d[a, cc], zetad)
     out[7:] = -q_zeta
     return out
 
@@ -218,11 +219,11 @@ def gravity_force(
     m = zeta.shape[0]
     out = np.zeros(7 + m, dtype=p.dtype)
     a_mat = rotation_matrix(p)
-    local_g = a_mat.T @ gravity
-    s = s0 + s1 @ zeta if exact else s0 + 0.0 * (s1 @ zeta)
+    local_g = vec_mat(gravity, a_mat)
+    s = s0 + mat_vec(s1, zeta) if exact else s0 + 0.0 * mat_vec(s1, zeta)
     out[0:3] = mass * gravity
-    out[3:7] = g_bar(p).T @ (skew(s) @ local_g)
-    out[7:] = s1.T @ local_g
+    out[3:7] = vec_mat(mat_vec(skew(s), local_g), g_bar(p))
+    out[7:] = vec_mat(local_g, s1)
     return out
 
 

@@ -75,7 +75,7 @@ def rotation_derivative(p: np.ndarray, u: np.ndarray) -> np.ndarray:
     out = np.empty((3, 4), dtype=p.dtype)
     pv = p[1:]
     cross = np.cross(pv, u)
-    dot = pv @ u
+    dot = pv[0] * u[0] + pv[1] * u[1] + pv[2] * u[2]
     for i in range(3):
         out[i, 0] = 2.0 * (p[0] * u[i] + cross[i])
         for j in range(3):

@@ -24,6 +24,7 @@ from .body_kernels import (gravity_force, inertia_about_origin, mass_and_quadrat
                            rotation_mode_coupling, second_moment)
 from .euler_parameters import g_bar, rotation_derivative, rotation_matrix
 from .modal_moments import ModalMoments
+from .small_linalg import mat_vec
 
 __all__ = ["FlexibleBody", "body_residual", "body_jacobians", "kinetic_energy_gradient", "mass_matrix_rate"]
 
@@ -119,10 +120,10 @@ def body_residual(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
     out = np.zeros(q.shape[0], dtype=q.dtype)
     if np.any(qd != 0) or np.any(qdd != 0):  # at rest (statics) M qdd and Q_v vanish exactly
         mass_q, velocity_q = mass_and_quadratic_velocity(p, zeta, pd, zetad, mass, s0, s1, x2, c, d, mred)
-        out += mass_q @ qdd
+        out += mat_vec(mass_q, qdd)
         out -= velocity_q
     out -= gravity_force(p, zeta, gravity.astype(q.dtype), mass, s0, s1, exact_gravity)
-    out[7:] += kred @ zeta + dred @ zetad
+    out[7:] += mat_vec(kred, zeta) + mat_vec(dred, zetad)
     return out
 
 

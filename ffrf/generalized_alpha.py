@@ -37,6 +37,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 from scipy.linalg.lapack import dgetrs as getrs
 
+from .newton_kernels import CONVERGED, EXHAUSTED, NOT_FINITE, REFACTOR
 from .packed_system import PackedSystem, newton_model
 from .system import MultibodySystem
 
@@ -164,6 +165,34 @@ class _Newton:
     factored_step: float = 0.0
 
 
+def _fast_iterations(newton: _Newton, model: PackedSystem, t: float, h: float, beta_p: float, gamma_p: float,
+                     bases: tuple, qdd: NDArray, lam: NDArray, refactor_each: bool) -> tuple[int, int, float, float]:
+    """The Newton iterations of :func:`_step` on the fast path: jitted runs between factorisations
+    (:func:`ffrf.newton_kernels.alpha_iterations`), same tests and order as the Python loop.
+    Updates ``qdd`` and ``lam`` in place; returns ``(status, iterations, increment, gap)``."""
+    q_base, qd_base, accel_base, to_accel = bases
+    par = newton.par
+    used, previous = 0, np.inf
+    increment = gap_max = np.inf
+    while used < newton.max_iterations:
+        if newton.factors is None or refactor_each:
+            accel = accel_base + to_accel * qdd
+            newton.factors = _factor_iteration_matrix(model, q_base + h * h * par.beta * accel,
+                                                      qd_base + h * par.gamma * accel, qdd, lam, t, beta_p, gamma_p)
+            newton.factored_step = h
+        limit = 1 if refactor_each else newton.max_iterations - used
+        status, count, increment, gap_max = model.alpha_iterations(
+            newton.factors, q_base, qd_base, accel_base, to_accel, h * h * par.beta, h * par.gamma, beta_p, gamma_p,
+            qdd, lam, t, newton.tolerance, limit, previous)
+        used += count
+        if status in (CONVERGED, NOT_FINITE):
+            return status, used, increment, gap_max
+        if status == REFACTOR:
+            newton.factors = None  # poor contraction: rebuild the iteration matrix
+        previous = increment
+    return EXHAUSTED, used, increment, gap_max
+
+
 def _step(newton: _Newton, state: _State, t: float, h: float):
     """One generalized-alpha step of length ``h`` to time ``t`` (Eqs. (G2), (G3)). Returns the new
     state and the Newton iterations, or ``(None, iterations, diagnostics)`` if Newton failed."""
@@ -181,6 +210,22 @@ def _step(newton: _Newton, state: _State, t: float, h: float):
     diagnostics = ""
     for attempt in range(2 if newton.modified else 1):
         qdd_new, lam_new = state.qdd.copy(), state.lam.copy()
+        if isinstance(model, PackedSystem):
+            status, used, increment, gap_max = _fast_iterations(
+                newton, model, t, h, beta_p, gamma_p, (q_base, qd_base, accel_base, to_accel), qdd_new, lam_new,
+                refactor_each=not newton.modified or attempt == 1)
+            if status == CONVERGED:
+                accel = accel_base + to_accel * qdd_new
+                new = _State(q_base + h * h * par.beta * accel, qd_base + h * par.gamma * accel, qdd_new, accel,
+                             lam_new)
+                return new, total + used, ""
+            if status == NOT_FINITE:
+                return None, total + used, f"NaN in the residual (iteration {used})"
+            total += newton.max_iterations
+            newton.factors = None
+            diagnostics = (f"largest constraint residual {gap_max:.3e}, last acceleration increment "
+                           f"{increment:.3e}")
+            continue
         previous = np.inf
         for iteration in range(1, newton.max_iterations + 1):
             a_new = accel_base + to_accel * qdd_new

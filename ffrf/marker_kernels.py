@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from .euler_parameters import rotation_derivative, rotation_matrix, skew
+from .small_linalg import dot, mat_mat, mat_vec, vec_mat
 
 __all__ = ["exp_so3_kernel", "exp_so3_tangent_kernel", "marker_frame", "exp_so3_hessian", "marker_frame_hessian"]
 
@@ -28,7 +29,7 @@ __all__ = ["exp_so3_kernel", "exp_so3_tangent_kernel", "marker_frame", "exp_so3_
 @njit(cache=True)
 def exp_so3_kernel(theta: np.ndarray) -> np.ndarray:
     """Rodrigues' formula, Eq. (K3) (Taylor series below |theta|^2 = 1e-8)."""
-    phi2 = theta @ theta
+    phi2 = dot(theta, theta)
     s = skew(theta)
     if abs(phi2) < 1e-8:
         a = 1.0 - phi2 / 6.0
@@ -37,13 +38,13 @@ def exp_so3_kernel(theta: np.ndarray) -> np.ndarray:
         phi = np.sqrt(phi2)
         a = np.sin(phi) / phi
         b = (1.0 - np.cos(phi)) / phi2
-    return np.eye(3) + a * s + b * (s @ s)
+    return np.eye(3) + a * s + b * mat_mat(s, s)
 
 
 @njit(cache=True)
 def exp_so3_tangent_kernel(theta: np.ndarray) -> np.ndarray:
     """Right Jacobian T(theta) of the exponential map."""
-    phi2 = theta @ theta
+    phi2 = dot(theta, theta)
     s = skew(theta)
     if abs(phi2) < 1e-8:
         a = 0.5 - phi2 / 24.0
@@ -52,7 +53,7 @@ def exp_so3_tangent_kernel(theta: np.ndarray) -> np.ndarray:
         phi = np.sqrt(phi2)
         a = (1.0 - np.cos(phi)) / phi2
         b = (phi - np.sin(phi)) / (phi2 * phi)
-    return np.eye(3) - a * s + b * (s @ s)
+    return np.eye(3) - a * s + b * mat_mat(s, s)
 
 
 @njit(cache=True)
@@ -62,8 +63,8 @@ def _marker_state(q, point, position_modes, rotation_modes):
     theta = np.zeros(3, dtype=q.dtype)
     local = point.copy()
     if q.shape[0] > 7:
-        theta = rotation_modes @ q[7:]
-        local = point + position_modes @ q[7:]
+        theta = mat_vec(rotation_modes, q[7:])
+        local = point + mat_vec(position_modes, q[7:])
     return a_body, theta, local, exp_so3_kernel(theta), exp_so3_tangent_kernel(theta)
 
 
@@ -73,24 +74,25 @@ def marker_frame(q, point, position_modes, rotation_modes, rotation, offset):
     n = q.shape[0]
     m = n - 7
     a_body, theta, local, turn, tangent = _marker_state(q, point, position_modes, rotation_modes)
-    turned_offset = turn @ offset
+    turned_offset = mat_vec(turn, offset)
     body_point = local + turned_offset
-    position = q[:3] + a_body @ body_point
-    axes_local = turn @ rotation
-    axes = a_body @ axes_local
+    position = q[:3] + mat_vec(a_body, body_point)
+    axes_local = mat_mat(turn, rotation)
+    axes = mat_mat(a_body, axes_local)
+    a_turn = mat_mat(a_body, turn)
     d_position = np.zeros((3, n), dtype=q.dtype)
     d_axes = np.zeros((3, 3, n), dtype=q.dtype)
     for i in range(3):
         d_position[i, i] = 1.0
     d_position[:, 3:7] = rotation_derivative(q[3:7], body_point)
     if m > 0:
-        a_turn = a_body @ turn
-        d_position[:, 7:] = a_body @ position_modes - ((a_turn @ skew(offset)) @ tangent) @ rotation_modes
+        d_position[:, 7:] = (mat_mat(a_body, position_modes)
+                             - mat_mat(mat_mat(mat_mat(a_turn, skew(offset)), tangent), rotation_modes))
     for k in range(3):
         w = axes_local[:, k].copy()
         d_axes[k, :, 3:7] = rotation_derivative(q[3:7], w)
         if m > 0:
-            d_axes[k, :, 7:] = -(((a_body @ turn) @ skew(rotation[:, k].copy())) @ tangent) @ rotation_modes
+            d_axes[k, :, 7:] = -mat_mat(mat_mat(mat_mat(a_turn, skew(rotation[:, k])), tangent), rotation_modes)
     return position, axes, d_position, d_axes
 
 
@@ -132,10 +134,10 @@ def exp_so3_hessian(theta: np.ndarray, v: np.ndarray, z: np.ndarray) -> np.ndarr
     r"""Eq. (FP2): :math:`\partial^2 (z\cdot\exp(\tilde\theta)v)/\partial\theta^2` (3x3, float64), from
     :math:`\exp(\tilde\theta)v = v + a\,\theta\times v + b\,((\theta\cdot v)\theta - c\,v)`,
     :math:`c = \theta\cdot\theta`."""
-    c = theta @ theta
+    c = dot(theta, theta)
     a, a1, a2, b, b1, b2 = _exp_so3_coefficients(c)
-    zv, tv, tz = z @ v, theta @ v, theta @ z
-    s1 = z @ np.cross(theta, v)
+    zv, tv, tz = dot(z, v), dot(theta, v), dot(theta, z)
+    s1 = dot(z, np.cross(theta, v))
     g1 = np.cross(v, z)
     s2 = tv * tz - c * zv
     g2 = v * tz + z * tv - 2.0 * zv * theta
@@ -165,24 +167,25 @@ def marker_frame_hessian(q, point, position_modes, rotation_modes, rotation, off
     for v in range(4):
         if v == 0:  # the joint point: u = x_bar + P zeta + E o
             w, direction = weight_point, offset
-            u = local + turn @ offset
+            u = local + mat_vec(turn, offset)
         else:  # axis k = v - 1: u = E R e_k
             w, direction = weight_axes[:, v - 1].copy(), rotation[:, v - 1].copy()
-            u = turn @ direction
+            u = mat_vec(turn, direction)
         # A(p) u is quadratic in p: its p-Hessian is constant, d/dp_b of Eq. (R3) is (R3) at p = e_b.
         for bb in range(4):
-            out[3:7, 3 + bb] += rotation_derivative(unit[bb].copy(), u).T @ w
+            out[3:7, 3 + bb] += vec_mat(w, rotation_derivative(unit[bb], u))
         if m == 0:
             continue
-        u_zeta = -(((turn @ skew(direction)) @ tangent) @ rotation_modes)
+        u_zeta = -mat_mat(mat_mat(mat_mat(turn, skew(direction)), tangent), rotation_modes)
         if v == 0:
             u_zeta += position_modes
         # (R3) is linear in u: the mixed p-zeta block is sum_c (dA u/dp at u = e_c)^T w  du_c/dzeta.
         d_transposed = np.empty((4, 3))
         for cc in range(3):
-            d_transposed[:, cc] = rotation_derivative(pe, basis3[cc].copy()).T @ w
-        mixed = d_transposed @ u_zeta
+            d_transposed[:, cc] = vec_mat(w, rotation_derivative(pe, basis3[cc]))
+        mixed = mat_mat(d_transposed, u_zeta)
         out[3:7, 7:] += mixed
         out[7:, 3:7] += mixed.T
-        out[7:, 7:] += rotation_modes.T @ exp_so3_hessian(theta, direction, a_body.T @ w) @ rotation_modes
+        out[7:, 7:] += mat_mat(mat_mat(rotation_modes.T, exp_so3_hessian(theta, direction, vec_mat(w, a_body))),
+                               rotation_modes)
     return out

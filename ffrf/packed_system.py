@@ -29,6 +29,7 @@ from .constraints import EulerNormalization
 from .flexible_body import FlexibleBody
 from .joints import GroundFrame, MarkerJoint
 from .markers import BodyMarker
+from .newton_kernels import alpha_iterations
 from .system import MultibodySystem
 from .system_kernels import (EULER, MARKER_JOINT, system_body_tangents, system_hessian, system_iteration_matrix,
                              system_jacobian, system_mass_matrix, system_residual)
@@ -68,6 +69,17 @@ class PackedSystem:
         """Eq. (FP6): ``[[c M + beta' (K_t + H) + gamma' D_t, C_q^T], [C_q, 0]]``."""
         return system_iteration_matrix(self.bodies, self.joints, _vector(q), _vector(qd), _vector(qdd), _vector(lam),
                                        self.gravity, self.phi(t), float(mass_factor), float(beta_p), float(gamma_p))
+
+    def alpha_iterations(self, factors: tuple, q_base, qd_base, accel_base, to_accel: float, h2_beta: float,
+                         h_gamma: float, beta_p: float, gamma_p: float, qdd: NDArray, lam: NDArray, t: float,
+                         tolerance: float, max_iterations: int, previous: float) -> tuple[int, int, float, float]:
+        """Generalized-alpha Newton iterations with fixed LU ``factors`` of Eq. (FP6), in one kernel call
+        (:func:`ffrf.newton_kernels.alpha_iterations`; ``qdd`` and ``lam`` updated in place)."""
+        status, count, increment, gap = alpha_iterations(
+            self.bodies, self.joints, self.gravity, self.phi(t), factors[0], factors[1], _vector(q_base),
+            _vector(qd_base), _vector(accel_base), float(to_accel), float(h2_beta), float(h_gamma), float(beta_p),
+            float(gamma_p), qdd, lam, float(tolerance), int(max_iterations), float(previous))
+        return int(status), int(count), float(increment), float(gap)
 
     def body_residuals(self, q, qd, qdd) -> NDArray[np.float64]:
         """Eqs. (F8)-(F11) for all bodies: ``M qdd - Q``."""

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from .joints import MarkerJoint, joint_pose
 from .system import MultibodySystem
 
-__all__ = ["JointReaction", "joint_reaction", "joint_reactions"]
+__all__ = ["JointReaction", "joint_poses", "joint_reaction", "joint_reactions"]
 
 
 @dataclass(frozen=True)
@@ -49,15 +49,28 @@ class JointReaction:
         return self.frame.T @ self.torque
 
 
-def joint_reaction(joint: MarkerJoint, blocks: list[NDArray], multipliers: NDArray, t: float) -> JointReaction:
-    """The wrench of the module docstring for one joint; ``blocks`` as for ``joint.value``."""
+def _cross(a: NDArray, b: NDArray) -> NDArray[np.float64]:
+    """``a x b`` of two 3-vectors (``np.cross`` costs ~20 us per call in its axis handling)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def joint_poses(joint: MarkerJoint, blocks: list[NDArray]) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Joint point and axes of side 0 and of side 1 (``blocks`` as for ``joint.value``)."""
     q0, q1 = (None, blocks[0]) if len(blocks) == 1 else blocks
-    _, axes0 = joint_pose(joint.marker0, q0, joint.rotation0, joint.offset0)
+    p0, axes0 = joint_pose(joint.marker0, q0, joint.rotation0, joint.offset0)
     p1, axes1 = joint_pose(joint.marker1, q1, joint.rotation1, joint.offset1)
+    return p0, axes0, p1, axes1
+
+
+def joint_reaction(joint: MarkerJoint, blocks: list[NDArray], multipliers: NDArray, t: float,
+                   poses: tuple | None = None) -> JointReaction:
+    """The wrench of the module docstring for one joint; ``blocks`` as for ``joint.value``;
+    ``poses``: :func:`joint_poses` of these blocks if the caller has them already."""
+    _, axes0, p1, axes1 = joint_poses(joint, blocks) if poses is None else poses
     if joint.angle is not None:
         phi = joint.angle(t)
         x0 = np.cos(phi) * axes0[:, 0] + np.sin(phi) * axes0[:, 1]
-        axes0 = np.column_stack([x0, np.cross(axes0[:, 2], x0), axes0[:, 2]])
+        axes0 = np.column_stack([x0, _cross(axes0[:, 2], x0), axes0[:, 2]])
     lam = np.asarray(multipliers, dtype=float)
     row = 0
     if all(joint.locked[:3]):
@@ -72,16 +85,19 @@ def joint_reaction(joint: MarkerJoint, blocks: list[NDArray], multipliers: NDArr
     torque = np.zeros(3)
     pairs = [(2, 1)] * joint.locked[3] + [(2, 0)] * joint.locked[4] + [(0, 1)] * joint.locked[5]
     for k0, k1 in pairs:
-        torque -= lam[row] * np.cross(axes1[:, k1], axes0[:, k0])
+        torque -= lam[row] * _cross(axes1[:, k1], axes0[:, k0])
         row += 1
     return JointReaction(p1, force, torque, axes0)
 
 
-def joint_reactions(system: MultibodySystem, q: NDArray, multipliers: NDArray, t: float) -> dict[str, JointReaction]:
-    """Every :class:`~ffrf.joints.MarkerJoint` of ``system`` at one state, by joint name."""
+def joint_reactions(system: MultibodySystem, q: NDArray, multipliers: NDArray, t: float,
+                    poses: dict[str, tuple] | None = None) -> dict[str, JointReaction]:
+    """Every :class:`~ffrf.joints.MarkerJoint` of ``system`` at one state, by joint name; ``poses``:
+    :func:`joint_poses` by joint name, for the joints the caller has them for."""
     out = {}
     for k, c in enumerate(system.all_constraints):
         if isinstance(c, MarkerJoint):
             lam = multipliers[int(system.rows[k]):int(system.rows[k + 1])]
-            out[c.name] = joint_reaction(c, [q[system.block(i)] for i in c.bodies], lam, t)
+            known = None if poses is None else poses.get(c.name)
+            out[c.name] = joint_reaction(c, [q[system.block(i)] for i in c.bodies], lam, t, known)
     return out

@@ -9,6 +9,10 @@ solved by Newton with the exact tangent :math:`[K_t + H,\ C_q^T;\ C_q,\ 0]`. Gra
 applied in ``load_steps`` increments (load continuation); each increment starts from the
 previous equilibrium. A singular tangent means the system can still move freely (a
 mechanism or an unconstrained body): the error says so and names the remedy.
+
+Quasi-static sequences start each Newton solve from the polynomial through the last equilibria
+(Eq. (S2)) and improve the kept tangent with Broyden's secant updates between refactorisations
+(Eq. (S3)); both change the iterates, not the equations solved.
 """
 
 from __future__ import annotations
@@ -98,15 +102,50 @@ def _factor_tangent(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDAr
     return _Tangent(rows, cols, None, pseudo_inverse, free)
 
 
+class _Secant:
+    r"""Broyden's ("good") secant updates of a kept tangent, Eq. (S3), in the product form of
+    Kelley (1995, Alg. 7.3.1 ``brsol``): the updated inverse is never formed, only the steps
+    taken since the last refactorisation are stored. Inner products are taken in the
+    equilibrated unknowns (``weights = 1 / cols^2``) so that lengths and forces mix sensibly."""
+
+    _RESTART = 1e-2  # |1 - s_n.z / s_n.s_n| below this: the update is nearly singular, start over
+    _MEMORY = 20  # steps kept before the memory restarts (each costs two dot products per iteration)
+
+    def __init__(self, weights: NDArray):
+        self.weights = weights
+        self.steps: list[NDArray] = []
+
+    def step(self, newton_step: NDArray) -> NDArray:
+        """The Broyden step from the kept tangent's step ``-H_0 F(x)``; the result is remembered."""
+        z = newton_step
+        steps, w = self.steps, self.weights
+        if steps:
+            for s_j, s_next in zip(steps[:-1], steps[1:]):
+                z = z + s_next * ((w * s_j) @ z) / ((w * s_j) @ s_j)
+            s_n = steps[-1]
+            denominator = 1.0 - ((w * s_n) @ z) / ((w * s_n) @ s_n)
+            if abs(denominator) < self._RESTART or len(steps) >= self._MEMORY:
+                steps.clear()
+                z = newton_step
+            else:
+                z = z / denominator
+        steps.append(z)
+        return z
+
+
 def _newton(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float, tolerance: float,
             max_iterations: int,
-            tangent: _Tangent | None = None):
+            tangent: _Tangent | None = None, secant: bool = False):
     """Newton from ``(q, lam)``; with a ``tangent`` from an earlier solve it starts as modified
-    Newton and refactors whenever an iteration contracts the increment by less than a half."""
+    Newton and refactors whenever an iteration contracts the increment by less than a half.
+    ``secant``: Broyden-update the kept tangent (Eq. (S3)) and refactor only when an increment
+    grows (a secant step need not contract monotonically)."""
     n = model.n_coordinates
     zeros = np.zeros(n)
     previous = np.inf
     free_motions = 0
+    updates = None
+    refactor_above = 1.0 if secant else 0.5
     for iteration in range(1, max_iterations + 1):
         residual, gap = model.residual(q, zeros, zeros, lam, t)
         if not (np.all(np.isfinite(residual)) and np.all(np.isfinite(gap))):
@@ -114,7 +153,12 @@ def _newton(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: 
         if tangent is None:
             tangent = _factor_tangent(model, q, lam, t)
             free_motions = max(free_motions, tangent.free_motions)
+            updates = None
         delta = tangent.solve(-np.concatenate([residual, gap]))
+        if secant and tangent.factors is not None:  # a pseudo-inverse (singular tangent) is used as is
+            if updates is None:
+                updates = _Secant(1.0 / tangent.cols ** 2)
+            delta = updates.step(delta)
         q = q + delta[:n]
         lam = lam + delta[n:]
         increment = np.abs(delta[:n]).max()
@@ -125,7 +169,7 @@ def _newton(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: 
         if (increment <= tolerance * scale and np.abs(gap).max() <= tolerance
                 and (multipliers_settled or increment <= 1e3 * np.finfo(float).eps * scale)):
             return q, lam, iteration, tangent
-        if increment > 0.5 * previous:
+        if increment > refactor_above * previous:
             tangent = None
         previous = increment
     if free_motions:
@@ -164,19 +208,36 @@ def static_equilibrium(
 
 
 def _continue(model, q, lam, t_from: float, t_to: float, tolerance: float, max_iterations: int, tangent,
-              depth: int = 0):
-    """Equilibrium at ``t_to`` from the one at ``t_from``; a failed step is halved (up to 2^8 parts),
-    which carries the solution through near-singular poses such as a stiff Bennett loop's folded one."""
+              depth: int = 0, start: tuple[NDArray, NDArray] | None = None, secant: bool = False):
+    """Equilibrium at ``t_to`` from the one at ``t_from`` (Newton starts from ``start`` if given, a
+    predicted ``(q, lam)``); a failed step is halved (up to 2^8 parts) from the equilibrium at
+    ``t_from``, which carries the solution through near-singular poses such as a stiff Bennett
+    loop's folded one."""
+    q_start, lam_start = (q, lam) if start is None else start
     try:
-        return _newton(model, q, lam, t_to, tolerance, max_iterations, tangent)
+        return _newton(model, q_start, lam_start, t_to, tolerance, max_iterations, tangent, secant)
     except StaticDivergence:
         if depth >= 8 or t_to == t_from:
             raise
     t_mid = 0.5 * (t_from + t_to)
     log.debug("quasi-static step %g -> %g halved", t_from, t_to)
-    q, lam, first, tangent = _continue(model, q, lam, t_from, t_mid, tolerance, max_iterations, None, depth + 1)
-    q, lam, second, tangent = _continue(model, q, lam, t_mid, t_to, tolerance, max_iterations, tangent, depth + 1)
+    q, lam, first, tangent = _continue(model, q, lam, t_from, t_mid, tolerance, max_iterations, None, depth + 1,
+                                       secant=secant)
+    q, lam, second, tangent = _continue(model, q, lam, t_mid, t_to, tolerance, max_iterations, tangent, depth + 1,
+                                        secant=secant)
     return q, lam, first + second, tangent
+
+
+def extrapolation_weights(times: NDArray, t: float) -> NDArray[np.float64]:
+    r"""Eq. (S2): Lagrange weights :math:`\ell_i(t) = \prod_{j\ne i}(t - t_j)/(t_i - t_j)` of the
+    polynomial through values at ``times``, evaluated at ``t``."""
+    times = np.asarray(times, dtype=float)
+    weights = np.ones(times.size)
+    for i in range(times.size):
+        for j in range(times.size):
+            if j != i:
+                weights[i] *= (t - times[j]) / (times[i] - times[j])
+    return weights
 
 
 def quasi_static(
@@ -188,10 +249,17 @@ def quasi_static(
     progress=None,
     *,
     fast_path: bool = True,
+    predictor_order: int = 2,
+    secant: bool = True,
 ) -> StaticSolution:
     """A sequence of static equilibria at ``times`` (prescribed motions follow their time laws;
-    no inertia), each starting from the previous one. Returns ``q`` and ``multipliers`` with one
-    row per time (``iterations`` per time). ``fast_path`` as in :func:`static_equilibrium`."""
+    no inertia). Returns ``q`` and ``multipliers`` with one row per time (``iterations`` per time).
+    ``fast_path`` as in :func:`static_equilibrium`. Newton starts from the polynomial of degree
+    ``predictor_order`` through the last equilibria (Eq. (S2); 0: the previous equilibrium) and,
+    with ``secant``, Broyden-updates the kept tangent (Eq. (S3)); the equilibria are the same
+    to the Newton tolerance."""
+    if predictor_order < 0:
+        raise ValueError(f"predictor_order must be >= 0, got {predictor_order}")
     times = np.asarray(times, dtype=float)
     q = np.array(q0, dtype=float)
     lam = np.zeros(system.n_constraints)
@@ -200,8 +268,14 @@ def quasi_static(
     model = newton_model(system, fast_path)
     t_done = float(times[0])
     for k, t in enumerate(times):
+        known = min(predictor_order + 1, k)
+        start = None
+        if known >= 2 and np.all(np.diff(times[k - known:k]) != 0.0):
+            weights = extrapolation_weights(times[k - known:k], float(t))
+            start = (weights @ np.asarray(qs[k - known:k]), weights @ np.asarray(lams[k - known:k]))
         try:
-            q, lam, iterations, tangent = _continue(model, q, lam, t_done, float(t), tolerance, max_iterations, tangent)
+            q, lam, iterations, tangent = _continue(model, q, lam, t_done, float(t), tolerance, max_iterations, tangent,
+                                                    start=start, secant=secant)
         except StaticDivergence as error:
             raise StaticDivergence(f"quasi-static step {k} at t = {t:.6g} s: {error}") from error
         t_done = float(t)

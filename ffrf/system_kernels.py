@@ -36,6 +36,7 @@ from numba import njit
 from .body_kernels import mass_matrix
 from .flexible_body import body_jacobians, body_residual
 from .marker_kernels import marker_frame, marker_frame_hessian
+from .small_linalg import dot, mat_mat, vec_mat
 
 __all__ = ["system_residual", "system_jacobian", "system_hessian", "system_body_tangents", "system_mass_matrix",
            "system_iteration_matrix"]
@@ -130,13 +131,13 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
     else:  # (J1), components of J_0^T (p_1 - p_0)
         for i in range(3):
             if locked[i]:
-                values[row] = axes0[:, i] @ gap
-                rows[row] = axes0[:, i] @ d_gap + gap @ da0[i]
+                values[row] = dot(axes0[:, i], gap)
+                rows[row] = vec_mat(axes0[:, i], d_gap) + vec_mat(gap, da0[i])
                 if want_hessian:
                     w_a0[:, i] += lam[row] * gap
                     w_p1 += lam[row] * axes0[:, i]
                     w_p0 -= lam[row] * axes0[:, i]
-                    product = da0[i].T @ d_gap
+                    product = mat_mat(da0[i].T, d_gap)
                     hessian += lam[row] * (product + product.T)
                 row += 1
     for r in range(3):  # (J2)-(J3): z0.y1, z0.x1, x0'.y1
@@ -149,13 +150,13 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
         x = c0 * axes0[:, k0] + c1 * axes0[:, 1]
         dx = c0 * da0[k0] + c1 * da0[1]
         y = axes1[:, k1]
-        values[row] = x @ y
-        rows[row] = x @ da1[k1] + y @ dx
+        values[row] = dot(x, y)
+        rows[row] = vec_mat(x, da1[k1]) + vec_mat(y, dx)
         if want_hessian:
             w_a0[:, k0] += c0 * lam[row] * y
             w_a0[:, 1] += c1 * lam[row] * y
             w_a1[:, k1] += lam[row] * x
-            product = dx.T @ da1[k1]
+            product = mat_mat(dx.T, da1[k1])
             hessian += lam[row] * (product + product.T)
         row += 1
     if want_hessian:  # Eq. (FP5): second derivatives of each side's point and axes, weighted
@@ -170,7 +171,7 @@ def _euler(joints, j, q, offsets):
     """Eq. (R2) normalisation p.p - 1 of body ``joints[2][j]``: value and its Jacobian on ``p``."""
     start = offsets[joints[2][j]] + 3
     p = q[start:start + 4]
-    return p @ p - 1.0, 2.0 * p, start
+    return dot(p, p) - 1.0, 2.0 * p, start
 
 
 @njit(cache=True)
@@ -198,7 +199,7 @@ def _constraints(joints, offsets, q, phi, lam, want_jacobian, want_hessian, n):
         lam_j = lam[r0:r0 + size]
         vals, rows, block, index = _marker_joint(joints, j, q, offsets, phi, lam_j, want_hessian)
         values[r0:r0 + size] = vals
-        contribution = rows.T @ lam_j
+        contribution = vec_mat(lam_j, rows)
         for a in range(index.shape[0]):
             forces[index[a]] += contribution[a]
             if want_jacobian:

@@ -92,3 +92,20 @@ def test_run_bennett_writes_reactions_in_joint_frames():
     np.testing.assert_allclose(reactions[:, -1, 5], result.sensors["driving_torque"], rtol=1e-9)
     total_weight = sum(link.body.moments.mass for link in scene.links) * 9.81
     np.testing.assert_allclose(reactions[:, 0, 2], total_weight, rtol=1e-9)
+
+
+def test_reactions_from_supplied_poses_equal_the_computed_ones():
+    """evaluate_sensors hands its joint poses to joint_reactions; the wrenches must not change."""
+    from ffrf.joints import MarkerJoint
+    from ffrf.reactions import joint_poses
+
+    scene, times, solution = equilibria("pla")
+    system = scene.system
+    q, lam, t = solution.q[1], solution.multipliers[1], times[1]
+    poses = {c.name: joint_poses(c, [q[system.block(i)] for i in c.bodies])
+             for c in system.constraints if isinstance(c, MarkerJoint) and c.name != "clamp"}
+    plain, reused = joint_reactions(system, q, lam, t), joint_reactions(system, q, lam, t, poses)
+    assert plain.keys() == reused.keys() and len(poses) == 4
+    for name in plain:
+        for field in ("point", "force", "torque", "frame"):
+            np.testing.assert_array_equal(getattr(reused[name], field), getattr(plain[name], field))

@@ -135,6 +135,18 @@ def test_quasi_static_equilibria_agree(bennett):
     np.testing.assert_allclose(fast.multipliers[:, -1], ref.multipliers[:, -1], rtol=1e-8)  # driving torque
 
 
+def test_predictor_and_secant_updates_find_the_same_equilibria_in_fewer_iterations(bennett):
+    """Eqs. (S2)-(S3) change only Newton's iterates: the equilibria agree to the Newton tolerance
+    with plain modified Newton from the previous equilibrium, and take fewer iterations."""
+    scene, q_assembled = bennett
+    times = np.linspace(0.0, scene.drive.time_for_angle(np.radians(60.0)), 13)
+    plain = quasi_static(scene.system, q_assembled, times, predictor_order=0, secant=False)
+    faster = quasi_static(scene.system, q_assembled, times)
+    np.testing.assert_allclose(faster.q, plain.q, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(faster.multipliers[:, -1], plain.multipliers[:, -1], rtol=1e-8)
+    assert sum(faster.iterations) < sum(plain.iterations)
+
+
 class _OverridingJoint(MarkerJoint):
     """A subclass with its own equations (as validation's ExudynMarkerJoint): only it knows them."""
 

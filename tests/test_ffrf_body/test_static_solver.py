@@ -88,3 +88,39 @@ def test_quasi_static_drive_follows_the_prescribed_angle():
     solution = quasi_static(driven, driven.initial_state(), times)
     mass = 450.0 * 0.2 * 0.02 * 0.01
     np.testing.assert_allclose(solution.multipliers[:, -1], -mass * 9.81 * 0.1 * np.cos(times), atol=1e-12)
+
+
+def test_extrapolation_weights_reproduce_a_quadratic():
+    """Eq. (S2): three Lagrange weights extrapolate any quadratic exactly (unequal spacing too)."""
+    from ffrf.static_solver import extrapolation_weights
+
+    times = np.array([0.3, 0.7, 1.6])
+    values = np.array([[2.0 - 3.0 * t + 0.5 * t ** 2, np.sin(1.0) * t ** 2] for t in times])
+    weights = extrapolation_weights(times, 2.1)
+    np.testing.assert_allclose(weights @ values, [2.0 - 6.3 + 0.5 * 2.1 ** 2, np.sin(1.0) * 2.1 ** 2], rtol=1e-13)
+    np.testing.assert_allclose(extrapolation_weights(times[1:], 1.0), [2.0 / 3.0, 1.0 / 3.0], rtol=1e-14)
+
+
+def test_secant_steps_equal_broyden_with_the_dense_updated_matrix():
+    """Eq. (S3): the product form gives the steps of good Broyden with the explicit weighted update
+    B += (y - B s) s^T W / (s^T W s), on a small nonlinear system started with a poor tangent."""
+    from ffrf.static_solver import _Secant
+
+    rng = np.random.default_rng(3)
+    a = np.eye(4) * 3.0 + 0.3 * rng.standard_normal((4, 4))
+
+    def f(x):
+        return a @ x + 0.1 * x ** 3 - 1.0
+
+    b0 = a + 0.2 * rng.standard_normal((4, 4))
+    weights = np.array([1.0, 4.0, 0.25, 2.0])
+    secant = _Secant(weights)
+    x_product, x_dense, b = np.zeros(4), np.zeros(4), b0.copy()
+    for _ in range(9):
+        step_product = secant.step(np.linalg.solve(b0, -f(x_product)))
+        step_dense = np.linalg.solve(b, -f(x_dense))
+        np.testing.assert_allclose(step_product, step_dense, rtol=1e-9, atol=1e-13)
+        y = f(x_dense + step_dense) - f(x_dense)
+        b = b + np.outer(y - b @ step_dense, weights * step_dense) / (step_dense @ (weights * step_dense))
+        x_product, x_dense = x_product + step_product, x_dense + step_dense
+    assert np.abs(f(x_product)).max() < 1e-11  # and it converged without refactoring
