@@ -93,7 +93,8 @@ class BennettScene:
     settings: dict = field(default_factory=dict)
 
     def with_misalignment(self, fraction: float) -> MultibodySystem:
-        """The system with the base's joint-3 frame turned by ``fraction`` of the misalignment."""
+        """The system with the base's joint-3 frame turned, and its joint point moved, by
+        ``fraction`` of the misalignment (0: link 3's nominal axis, 1: the base's own bore axis)."""
         return _system(self.links, RampedAngle(self.start_angle, self.drive), self.gravity, fraction,
                        self.settings["joint_offsets"])
 
@@ -168,6 +169,10 @@ def _system(links, drive_angle, gravity, misalignment: float, joint_offsets: str
         frame_far = joint_frame(z_far)
         z_near = _axis(near, name)
         point_near = _joint_point(near, name)
+        if i == 3:
+            # Continuation moves the base's joint point, as it turns its frame (below), from link
+            # 3's nominal point to the point on the base's own (misaligned) bore axis.
+            point_far = point_near + misalignment * (point_far - point_near)
         marker_near, offset_near = attach_joint_point(marker_near, point_near, joint_offsets)
         marker_far, offset_far = attach_joint_point(marker_far, point_far, joint_offsets)
         if i != 3:
@@ -234,8 +239,10 @@ def build_bennett(
     if joint_offsets not in JOINT_OFFSETS:
         raise ValueError(f"joint_offsets must be one of {JOINT_OFFSETS}, got {joint_offsets!r}")
     material, alpha3 = VARIANTS[variant]
-    axes = bennett_axes(alpha3)
-    links = tuple(_build_link(k, axes, material, h, order, n_modes, beta, exact_gravity) for k in range(4))
+    # Only the base is misaligned: it carries its own (closing) h3; link 3 keeps the nominal h3.
+    axes, nominal = bennett_axes(alpha3), bennett_axes(90.0)
+    links = tuple(_build_link(k, nominal if k == 3 else axes, material, h, order, n_modes, beta, exact_gravity)
+                  for k in range(4))
     drive = CosineRamp(omega, ramp_time)
     linkage = BennettLinkage(PAPER_A, PAPER_ALPHA)
     gravity = np.asarray(gravity, dtype=float)

@@ -128,11 +128,14 @@ def body_residual(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
 
 
 @njit(cache=True)
-def body_jacobians(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity):
-    """Complex-step Jacobians of :func:`body_residual`; the constant arrays must be complex128."""
+def body_jacobians(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity,
+                   velocity=True):
+    """Complex-step Jacobians of :func:`body_residual`; the constant arrays must be complex128.
+    ``velocity=False`` leaves ``df/dqd`` zero: statics does not use it, and its columns are the
+    expensive ones (a complex velocity switches on ``M`` and ``Q_v`` in every evaluation)."""
     n = q.shape[0]
     jac_q = np.empty((n, n))
-    jac_qd = np.empty((n, n))
+    jac_qd = np.zeros((n, n))
     qc = q.astype(np.complex128)
     qdc = qd.astype(np.complex128)
     qddc = qdd.astype(np.complex128)
@@ -141,6 +144,8 @@ def body_jacobians(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred
         jac_q[:, k] = body_residual(qc, qdc, qddc, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
                                     exact_gravity).imag / _COMPLEX_STEP
         qc[k] = q[k]
+        if not velocity:
+            continue
         qdc[k] += 1j * _COMPLEX_STEP
         jac_qd[:, k] = body_residual(qc, qdc, qddc, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
                                      exact_gravity).imag / _COMPLEX_STEP

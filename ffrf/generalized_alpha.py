@@ -37,7 +37,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 from scipy.linalg.lapack import dgetrs as getrs
 
-from .newton_kernels import CONVERGED, EXHAUSTED, NOT_FINITE, REFACTOR
+from .newton_kernels import CONVERGED, EXHAUSTED, NEAR_TOLERANCE, NOT_FINITE, REFACTOR
 from .packed_system import PackedSystem, newton_model
 from .system import MultibodySystem
 
@@ -242,15 +242,17 @@ def _step(newton: _Newton, state: _State, t: float, h: float):
             qdd_new += delta[:n]
             lam_new += delta[n:]
             increment = np.abs(delta[:n]).max()
-            if (beta_p * increment <= newton.tolerance * max(1.0, np.abs(q_new).max())
-                    and gamma_p * increment <= newton.tolerance * max(1.0, np.abs(qd_new).max())
+            position_scale = newton.tolerance * max(1.0, np.abs(q_new).max())
+            velocity_scale = newton.tolerance * max(1.0, np.abs(qd_new).max())
+            if (beta_p * increment <= position_scale and gamma_p * increment <= velocity_scale
                     and np.abs(gap).max() <= newton.tolerance):
                 accel = accel_base + to_accel * qdd_new
                 new = _State(q_base + h * h * par.beta * accel, qd_base + h * par.gamma * accel, qdd_new, accel,
                              lam_new)
                 return new, total + iteration, ""
-            if increment > 0.5 * previous:
-                newton.factors = None  # poor contraction: rebuild the iteration matrix
+            if increment > 0.5 * previous and (beta_p * increment > NEAR_TOLERANCE * position_scale
+                                               or gamma_p * increment > NEAR_TOLERANCE * velocity_scale):
+                newton.factors = None  # poor contraction far from convergence: rebuild the iteration matrix
             previous = increment
         total += newton.max_iterations
         newton.factors = None
@@ -283,8 +285,9 @@ def generalized_alpha(
     (``gamma' |dqdd|``) are below ``tolerance`` times ``max(1, |q|)`` and ``max(1, |qd|)`` and the
     constraints hold to ``tolerance`` (their own units, m or dimensionless). With
     ``modified_newton`` the factorised iteration matrix is kept across iterations and steps
-    and rebuilt only when an iteration contracts the increment by less than a half (or a
-    step fails, which is then retried with a fresh matrix); the converged solution is the
+    and rebuilt only when an iteration contracts the increment by less than a half while the
+    increment is still ``NEAR_TOLERANCE`` (100) times above the tolerance (or a step fails, which
+    is then retried with a fresh matrix); the converged solution is the
     same, only the work differs. Raises :class:`NewtonDivergence` with the partial results.
     ``fast_path`` evaluates Newton's residual and matrix with the whole-system kernels of
     :mod:`ffrf.packed_system` when the system is supported (else, and with ``False``, with the

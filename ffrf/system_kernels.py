@@ -244,15 +244,15 @@ def system_hessian(bodies, joints, q, lam, phi):
 
 
 @njit(cache=True)
-def system_body_tangents(bodies, q, qd, qdd, gravity):
-    """Block-diagonal exact ``d(M qdd - Q)/dq`` and ``d(M qdd - Q)/dqd``."""
+def system_body_tangents(bodies, q, qd, qdd, gravity, velocity=True):
+    """Block-diagonal exact ``d(M qdd - Q)/dq`` and ``d(M qdd - Q)/dqd`` (zero with ``velocity=False``)."""
     offsets = bodies[0]
     n = offsets[-1]
     jac_q, jac_qd = np.zeros((n, n)), np.zeros((n, n))
     for b in range(offsets.shape[0] - 1):
         s, e = offsets[b], offsets[b + 1]
         moments = _moments(bodies[4], bodies[5], b, e - s - 7)
-        jq, jqd = body_jacobians(q[s:e], qd[s:e], qdd[s:e], gravity, bodies[1][b], *moments, bodies[2][b])
+        jq, jqd = body_jacobians(q[s:e], qd[s:e], qdd[s:e], gravity, bodies[1][b], *moments, bodies[2][b], velocity)
         jac_q[s:e, s:e] = jq
         jac_qd[s:e, s:e] = jqd
     return jac_q, jac_qd
@@ -278,7 +278,7 @@ def system_iteration_matrix(bodies, joints, q, qd, qdd, lam, gravity, phi, mass_
     n = q.shape[0]
     _, jacobian, _, hessian = _constraints(joints, bodies[0], q, phi, lam, True, True, n)
     k = jacobian.shape[0]
-    jac_q, jac_qd = system_body_tangents(bodies, q, qd, qdd, gravity)
+    jac_q, jac_qd = system_body_tangents(bodies, q, qd, qdd, gravity, gamma_p != 0.0)
     out = np.zeros((n + k, n + k))
     out[:n, :n] = beta_p * (jac_q + hessian)
     if gamma_p != 0.0:

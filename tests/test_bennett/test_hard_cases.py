@@ -178,3 +178,16 @@ def test_large_misalignment_fails_with_clear_error():
     scene = hard_cases.make_scene(PLA, 110.0, **COARSE)
     with pytest.raises(StaticDivergence, match=r"alpha_3 = 110 deg.*continuation step"):
         assemble(scene)
+
+
+def test_long_quasi_static_steps_reach_the_same_equilibria_as_short_ones():
+    """Seven equilibria over a whole revolution (60 deg of drive apart) must be the ones a fine
+    sequence passes through: a predictor or tangent update must not jump to another equilibrium."""
+    from ffrf.bennett_scene import assemble, build_bennett
+    from ffrf.static_solver import quasi_static
+
+    scene = build_bennett("pla", h=0.006, n_modes=2)  # where Broyden updates once jumped (secant=True)
+    start = assemble(scene).q
+    fine = quasi_static(scene.system, start, np.linspace(0.0, 61.0, 241))
+    coarse = quasi_static(scene.system, start, np.linspace(0.0, 61.0, 7))
+    np.testing.assert_allclose(coarse.q, fine.q[::40], atol=1e-8)
