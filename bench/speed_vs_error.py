@@ -144,6 +144,18 @@ def _scene(order: int, h: float, modes: int, cache: dict | None):
     return built
 
 
+def _exudyn_assembled(scene) -> tuple:
+    """Exudyn's reduction and static assembly of ``scene``, timed: ``(memory mark, bases, set-up s,
+    assembled start, assembly s, perf_counter at the assembly's start)``."""
+    from validation.exudyn_bennett import assemble_exudyn_bennett
+
+    mem = _memory_start()
+    bases, setup = _exudyn_setup(scene)
+    started = time.perf_counter()
+    start = assemble_exudyn_bennett(scene, bases)
+    return mem, bases, setup, start, time.perf_counter() - started, started
+
+
 def run_quasi_static(order: int, h: float, modes: int, times: np.ndarray, exudyn: bool,
                      scene_cache: dict | None = None) -> dict:
     """Both solvers' quasi-static runs at ``times`` on one discretisation."""
@@ -158,13 +170,9 @@ def run_quasi_static(order: int, h: float, modes: int, times: np.ndarray, exudyn
                    "assembly_s": timings["assembly"], **_memory_stop(mem), "time": result.time,
                    "coupler": result.sensors["coupler_point"], "torque": result.sensors["driving_torque"]}
     if exudyn:
-        from validation.exudyn_bennett import assemble_exudyn_bennett, quasi_static_exudyn_bennett
+        from validation.exudyn_bennett import quasi_static_exudyn_bennett
 
-        mem = _memory_start()
-        bases, setup = _exudyn_setup(scene)
-        started = time.perf_counter()
-        start = assemble_exudyn_bennett(scene, bases)
-        assembly = time.perf_counter() - started
+        mem, bases, setup, start, assembly, started = _exudyn_assembled(scene)
         trajectory = quasi_static_exudyn_bennett(scene, start, times, bases=bases)
         solve = time.perf_counter() - started
         # the twin's build inside the sweep is set-up, as for the dynamic runs
@@ -191,13 +199,9 @@ def run_dynamic(order: int, h: float, modes: int, step: float, rho: float, t_end
     out["ffrf"] = {"setup_s": setup, "integration_s": assembly + run.solve_s, "assembly_s": assembly,
                    **_memory_stop(mem), "time": run.time, "coupler": run.coupler, "torque": run.torque}
     if exudyn:
-        from validation.exudyn_bennett import assemble_exudyn_bennett, run_exudyn_bennett
+        from validation.exudyn_bennett import run_exudyn_bennett
 
-        mem = _memory_start()
-        bases, setup = _exudyn_setup(scene)
-        started = time.perf_counter()
-        start = assemble_exudyn_bennett(scene, bases)
-        assembly = time.perf_counter() - started
+        mem, bases, setup, start, assembly, _ = _exudyn_assembled(scene)
         trajectory = run_exudyn_bennett(scene, start[4], t_end, step, rho, bases=bases)
         out["exudyn"] = {"setup_s": setup + trajectory.setup_time, "integration_s": assembly + trajectory.integration_time,
                          "assembly_s": assembly, **_memory_stop(mem), "time": trajectory.time,

@@ -44,3 +44,32 @@ def nodal_velocities(nodes, basis, r_dot, p, zeta, pd, zetad):
     u = nodes + (basis @ zeta).reshape(n, 3)
     w = (basis @ zetad).reshape(n, 3)
     return (r_dot + (np.cross(omega, u) + w) @ a.T).reshape(-1)
+
+
+def free_bar(name: str = "bar"):
+    """The soft bar (E = 1e8 Pa, 450 kg/m^3) with Craig-Bampton modes of both end faces (2 fixed-
+    interface modes), undamped: ``(model, basis, end node sets, body)``."""
+    from ffrf.craig_bampton import craig_bampton
+    from ffrf.flexible_body import FlexibleBody
+    from ffrf.modal_moments import modal_moments
+
+    model = bar_model(E=1e8, rho=450.0)
+    ends = [np.flatnonzero(model.nodes[:, 0] < 1e-9), np.flatnonzero(model.nodes[:, 0] > 0.2 - 1e-9)]
+    basis = craig_bampton(model, ends, 2)
+    body = FlexibleBody(name, modal_moments(model.nodes, model.mass, basis.basis), basis.reduced_stiffness,
+                        0.0 * basis.reduced_stiffness)
+    return model, basis.basis, ends, body
+
+
+def tumbling_start(body):
+    """A one-body system of ``body`` thrown at 0.1 m/s, spun at (0.5, 1, 5) rad/s (body frame),
+    its modes excited at random (1e-5): ``(system, q0, qd0)``."""
+    from ffrf.system import MultibodySystem
+
+    system = MultibodySystem((body,))
+    q0 = system.initial_state()
+    qd0 = np.zeros_like(q0)
+    qd0[:3] = [0.1, 0.0, 0.0]
+    qd0[3:7] = 0.25 * g_bar(q0[3:7]).T @ np.array([0.5, 1.0, 5.0])  # G G^T = 4 I
+    q0[7:] = 1e-5 * np.random.default_rng(0).normal(size=body.n_modes)
+    return system, q0, qd0
