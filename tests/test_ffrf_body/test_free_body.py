@@ -3,7 +3,8 @@ energy are invariants of the exact motion; generalized-alpha keeps them to secon
 
 Generalized-alpha is not a momentum- or energy-conserving scheme for the nonlinear FFRF
 equations (Exudyn's solver is the same scheme), so the check is that the drifts are small and
-fall as h^2; conservation to round-off would need an energy-momentum integrator."""
+fall as h^2. Conservation to round-off is the variational midpoint integrator's
+(test_variational_midpoint.py)."""
 
 import numpy as np
 from body_fixtures import free_bar, nodal_velocities, tumbling_start
