@@ -39,7 +39,8 @@ from .generalized_alpha import generalized_alpha
 from .joints import MarkerJoint
 from .output import write_csv
 from .packed_system import newton_model
-from .reactions import _cross, joint_poses, joint_reactions
+from .reactions import joint_poses, joint_reactions
+from .small_linalg import cross3
 from .static_solver import quasi_static
 
 __all__ = ["BennettResult", "run_bennett", "evaluate_sensors", "ideal_coupler_points", "choose_mode", "inertia_number",
@@ -106,12 +107,10 @@ def _joints(scene: BennettScene) -> list[MarkerJoint]:
     return [c for c in scene.system.constraints if isinstance(c, MarkerJoint) and c.name != "clamp"]
 
 
-def _joint_state(joint: MarkerJoint, scene: BennettScene, q: NDArray):
-    """Joint points of both sides, the relative angle about z0, and the poses (for the reactions)."""
-    poses = joint_poses(joint, [q[scene.system.block(i)] for i in joint.bodies])
-    p0, axes0, p1, axes1 = poses
-    angle = np.arctan2(_cross(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0])
-    return p0, p1, angle, poses
+def _relative_angle(poses: tuple) -> float:
+    """Rotation of side 1 against side 0 about z0 (rad), from :func:`ffrf.reactions.joint_poses`."""
+    _, axes0, _, axes1 = poses
+    return float(np.arctan2(cross3(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0]))
 
 
 def ideal_coupler_points(scene: BennettScene, drive_angles: NDArray) -> NDArray[np.float64]:
@@ -151,16 +150,17 @@ def evaluate_sensors(scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray
         qq = q[row]
         sensors["drive_angle"].append(scene.drive_angle(float(t)))
         sensors["driving_torque"].append(multipliers[row, -1])
-        states = [_joint_state(j, scene, qq) for j in joints]  # poses reused by the reactions below
-        sensors["joint_angles"].append([s[2] for s in states])
-        # Link 2 is the far side of joint 1 and the near side of joint 2 (marker 1 and marker 0).
-        sensors["coupler_point"].append(0.5 * (states[1][1] + states[2][0]))
+        # (p0, axes0, p1, axes1) per joint, reused by the reactions below
+        poses = {j.name: joint_poses(j, [qq[system.block(i)] for i in j.bodies]) for j in joints}
+        sensors["joint_angles"].append([_relative_angle(poses[j.name]) for j in joints])
+        # Link 2 is the far side of joint 1 and the near side of joint 2 (point p1 and point p0).
+        sensors["coupler_point"].append(0.5 * (poses[joints[1].name][2] + poses[joints[2].name][0]))
         energies = system.energies(qq, np.zeros_like(qq) if qd is None else qd[row])
         sensors["energy_kinetic"].append(energies["kinetic"])
         sensors["energy_strain"].append(energies["strain"])
         sensors["energy_potential"].append(energies["potential"])
         sensors["constraint_residual"].append(np.abs(model.constraint_values(qq, float(t))).max())
-        reactions = joint_reactions(system, qq, multipliers[row], float(t), {j.name: s[3] for j, s in zip(joints, states)})
+        reactions = joint_reactions(system, qq, multipliers[row], float(t), poses)
         sensors["joint_reactions"].append([np.concatenate([r.force_local, r.torque_local]) for r in reactions.values()])
         for link in scene.links[1:]:
             block = qq[system.block(link.index)]

@@ -20,8 +20,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from .body_kernels import (gravity_force, inertia_about_origin, mass_and_quadratic_velocity, mass_matrix,
-                           rotation_mode_coupling, second_moment)
+from .body_kernels import (_levi_civita, gravity_force, inertia_about_origin, mass_and_quadratic_velocity,
+                           mass_matrix, rotation_mode_coupling, second_moment)
 from .euler_parameters import g_bar, rotation_derivative, rotation_matrix
 from .modal_moments import ModalMoments
 from .small_linalg import mat_vec
@@ -104,8 +104,6 @@ class FlexibleBody:
 
     def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> float:
         """Gravity potential -g . (m R + A s), Eq. (F10) (exact first moment)."""
-        from .euler_parameters import rotation_matrix
-
         q = np.asarray(q, float)
         mm = self.moments
         s = mm.s0 + mm.s1 @ q[7:]
@@ -154,18 +152,24 @@ def body_jacobians(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred
 
 
 @njit(cache=True)
+def _kinetic_terms(q, qd, s0, s1, x2, c, d):
+    """What Eqs. (V6) and (F8) as a scalar share: ``omega_bar = G(p) pd``, the first moment
+    ``s``, its body-frame rate ``w = omega_bar x s + S1 zetad`` and the inertia ``J`` (Eq. (F6))."""
+    zeta = q[7:]
+    omega = g_bar(q[3:7]) @ qd[3:7]
+    s = s0 + s1 @ zeta
+    return omega, s, np.cross(omega, s) + s1 @ qd[7:], inertia_about_origin(second_moment(zeta, x2, c, d))
+
+
+@njit(cache=True)
 def kinetic_energy_of(q, qd, mass, s0, s1, x2, c, d, mred):
     r"""Eq. (F8) as a scalar without forming ``M``: with :math:`\bar\omega = \bar G\dot p` and
     :math:`w = \bar\omega\times s + S_1\dot\zeta` (body-frame rate of the first moment),
     :math:`T = \tfrac12 m|\dot R|^2 + \dot R\cdot Aw + \tfrac12\bar\omega\cdot J\bar\omega
     + \bar\omega\cdot M_{\omega\zeta}\dot\zeta + \tfrac12\dot\zeta\cdot\Psi^TM\Psi\dot\zeta`.
     All arrays share one dtype (complex128 for :func:`kinetic_energy_gradient`)."""
-    p, zeta = q[3:7], q[7:]
-    rd, pd, zetad = qd[0:3], qd[3:7], qd[7:]
-    omega = g_bar(p) @ pd
-    s = s0 + s1 @ zeta
-    w = np.cross(omega, s) + s1 @ zetad
-    inertia = inertia_about_origin(second_moment(zeta, x2, c, d))
+    p, zeta, rd, zetad = q[3:7], q[7:], qd[0:3], qd[7:]
+    omega, s, w, inertia = _kinetic_terms(q, qd, s0, s1, x2, c, d)
     return (0.5 * mass * (rd @ rd) + rd @ (rotation_matrix(p) @ w) + 0.5 * (omega @ (inertia @ omega))
             + omega @ (rotation_mode_coupling(zeta, c, d) @ zetad) + 0.5 * (zetad @ (mred @ zetad)))
 
@@ -186,12 +190,8 @@ def kinetic_energy_gradient(q, qd, mass, s0, s1, x2, c, d, mred):
     absorbs that in the DAE, but not in Eq. (V2) at the midpoint, where ``p`` is not a unit vector."""
     p, zeta = q[3:7], q[7:]
     rd, pd, zetad = qd[0:3], qd[3:7], qd[7:]
-    m = zeta.shape[0]
-    omega = g_bar(p) @ pd
-    s = s0 + s1 @ zeta
-    w = np.cross(omega, s) + s1 @ zetad
+    omega, s, w, inertia = _kinetic_terms(q, qd, s0, s1, x2, c, d)
     a_rd = rotation_matrix(p).T @ rd
-    inertia = inertia_about_origin(second_moment(zeta, x2, c, d))
     tau = np.cross(s, a_rd) + inertia @ omega + rotation_mode_coupling(zeta, c, d) @ zetad
     out = np.zeros(q.shape[0])
     out[3:7] = rotation_derivative(p, w).T @ rd - g_bar(pd).T @ tau
@@ -204,7 +204,7 @@ def kinetic_energy_gradient(q, qd, mass, s0, s1, x2, c, d, mred):
     for i in range(3):
         for j in range(3):
             for k in range(3):
-                eps = (i - j) * (j - k) * (k - i) / 2.0  # Levi-Civita symbol
+                eps = _levi_civita(i, j, k)
                 if eps != 0.0:
                     t_zeta += eps * omega[i] * (d[j, k] @ zetad)
     out[7:] = t_zeta

@@ -208,6 +208,12 @@ def _step(newton: _Newton, state: _State, t: float, h: float):
     accel_base = (par.alpha_f * state.qdd - par.alpha_m * state.accel) / (1.0 - par.alpha_m)
     total = 0  # Newton iterations of this step, retries included
     diagnostics = ""
+
+    def accepted(qdd_new: NDArray, lam_new: NDArray) -> _State:
+        """The state at t from the converged unknowns (Eq. (G2))."""
+        accel = accel_base + to_accel * qdd_new
+        return _State(q_base + h * h * par.beta * accel, qd_base + h * par.gamma * accel, qdd_new, accel, lam_new)
+
     for attempt in range(2 if newton.modified else 1):
         qdd_new, lam_new = state.qdd.copy(), state.lam.copy()
         if isinstance(model, PackedSystem):
@@ -215,10 +221,7 @@ def _step(newton: _Newton, state: _State, t: float, h: float):
                 newton, model, t, h, beta_p, gamma_p, (q_base, qd_base, accel_base, to_accel), qdd_new, lam_new,
                 refactor_each=not newton.modified or attempt == 1)
             if status == CONVERGED:
-                accel = accel_base + to_accel * qdd_new
-                new = _State(q_base + h * h * par.beta * accel, qd_base + h * par.gamma * accel, qdd_new, accel,
-                             lam_new)
-                return new, total + used, ""
+                return accepted(qdd_new, lam_new), total + used, ""
             if status == NOT_FINITE:
                 return None, total + used, f"NaN in the residual (iteration {used})"
             total += newton.max_iterations
@@ -246,10 +249,7 @@ def _step(newton: _Newton, state: _State, t: float, h: float):
             velocity_scale = newton.tolerance * max(1.0, np.abs(qd_new).max())
             if (beta_p * increment <= position_scale and gamma_p * increment <= velocity_scale
                     and np.abs(gap).max() <= newton.tolerance):
-                accel = accel_base + to_accel * qdd_new
-                new = _State(q_base + h * h * par.beta * accel, qd_base + h * par.gamma * accel, qdd_new, accel,
-                             lam_new)
-                return new, total + iteration, ""
+                return accepted(qdd_new, lam_new), total + iteration, ""
             if increment > 0.5 * previous and (beta_p * increment > NEAR_TOLERANCE * position_scale
                                                or gamma_p * increment > NEAR_TOLERANCE * velocity_scale):
                 newton.factors = None  # poor contraction far from convergence: rebuild the iteration matrix

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .joints import MarkerJoint, joint_pose
+from .small_linalg import cross3
 from .system import MultibodySystem
 
 __all__ = ["JointReaction", "joint_poses", "joint_reaction", "joint_reactions"]
@@ -49,11 +50,6 @@ class JointReaction:
         return self.frame.T @ self.torque
 
 
-def _cross(a: NDArray, b: NDArray) -> NDArray[np.float64]:
-    """``a x b`` of two 3-vectors (``np.cross`` costs ~20 us per call in its axis handling)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 def joint_poses(joint: MarkerJoint, blocks: list[NDArray]) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Joint point and axes of side 0 and of side 1 (``blocks`` as for ``joint.value``)."""
     q0, q1 = (None, blocks[0]) if len(blocks) == 1 else blocks
@@ -70,7 +66,7 @@ def joint_reaction(joint: MarkerJoint, blocks: list[NDArray], multipliers: NDArr
     if joint.angle is not None:
         phi = joint.angle(t)
         x0 = np.cos(phi) * axes0[:, 0] + np.sin(phi) * axes0[:, 1]
-        axes0 = np.column_stack([x0, _cross(axes0[:, 2], x0), axes0[:, 2]])
+        axes0 = np.column_stack([x0, cross3(axes0[:, 2], x0), axes0[:, 2]])
     lam = np.asarray(multipliers, dtype=float)
     row = 0
     if all(joint.locked[:3]):
@@ -85,7 +81,7 @@ def joint_reaction(joint: MarkerJoint, blocks: list[NDArray], multipliers: NDArr
     torque = np.zeros(3)
     pairs = [(2, 1)] * joint.locked[3] + [(2, 0)] * joint.locked[4] + [(0, 1)] * joint.locked[5]
     for k0, k1 in pairs:
-        torque -= lam[row] * _cross(axes1[:, k1], axes0[:, k0])
+        torque -= lam[row] * cross3(axes1[:, k1], axes0[:, k0])
         row += 1
     return JointReaction(p1, force, torque, axes0)
 

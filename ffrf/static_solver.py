@@ -11,8 +11,9 @@ previous equilibrium. A singular tangent means the system can still move freely 
 mechanism or an unconstrained body): the error says so and names the remedy.
 
 Quasi-static sequences start each Newton solve from the polynomial through the last equilibria
-(Eq. (S2)) and improve the kept tangent with Broyden's secant updates between refactorisations
-(Eq. (S3)); both change the iterates, not the equations solved.
+(Eq. (S2)); Broyden's secant updates of the kept tangent between refactorisations (Eq. (S3)) are
+an option, off by default (see :func:`quasi_static`). Both change the iterates, not the
+equations solved.
 """
 
 from __future__ import annotations

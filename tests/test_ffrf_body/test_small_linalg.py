@@ -4,7 +4,7 @@
 import numpy as np
 import pytest
 
-from ffrf.small_linalg import dot, mat_mat, mat_vec, vec_mat
+from ffrf.small_linalg import cross3, dot, mat_mat, mat_vec, vec_mat
 
 
 @pytest.mark.parametrize("dtype", [np.float64, np.complex128])
@@ -26,3 +26,9 @@ def test_products_equal_numpy(rng, dtype):
     assert mat_mat(a, empty).shape == (4, 0) and mat_vec(empty, np.zeros(0, dtype=dtype)).tolist() == [0, 0, 0]
     assert dot(np.zeros(0, dtype=dtype), np.zeros(0, dtype=dtype)) == 0
     assert mat_vec(a, v).dtype == dtype and vec_mat(v, b).dtype == dtype
+
+
+def test_cross3_is_the_cross_product():
+    rng = np.random.default_rng(5)
+    a, b = rng.normal(size=3), rng.normal(size=3)
+    np.testing.assert_allclose(cross3(a, b), np.cross(a, b), rtol=0, atol=1e-15)
