@@ -134,16 +134,37 @@ class _Secant:
         return z
 
 
+def _not_converged(increments: list[float], gap: float, tolerance: float, advice: str) -> StaticDivergence:
+    """The error for Newton out of iterations. Converging (the increments shrink, on average by
+    0.7 or better per iteration): more iterations would do, and the message estimates how many at
+    the mean rate. Otherwise the start or the load path must change (``advice``, the caller's remedy)."""
+    first, last = increments[0], increments[-1]
+    n = len(increments)
+    rate = (last / first) ** (1.0 / (n - 1)) if n >= 2 and first > 0.0 else 1.0
+    if rate < 0.7 and last < increments[-2]:
+        more = int(np.ceil(np.log(tolerance / last) / np.log(rate))) if last > tolerance else 1
+        return StaticDivergence(
+            f"static Newton was converging but ran out of iterations: the increment fell from {first:.3e} to {last:.3e} "
+            f"in {n} iterations (x{rate:.2f} per iteration; tolerance {tolerance:.1e}, constraint residual {gap:.3e}); "
+            f"raise max_iterations (about {more} more at this rate), or loosen the tolerance if the increments stall "
+            "at round-off")
+    return StaticDivergence(
+        f"static Newton did not converge in {n} iterations: increments {first:.3e} first, {last:.3e} last, "
+        f"constraint residual {gap:.3e}; {advice}")
+
+
 def _newton(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float, tolerance: float,
             max_iterations: int,
-            tangent: _Tangent | None = None, secant: bool = False):
+            tangent: _Tangent | None = None, secant: bool = False, advice: str = "start closer to the equilibrium"):
     """Newton from ``(q, lam)``; with a ``tangent`` from an earlier solve it starts as modified
     Newton and refactors whenever an iteration contracts the increment by less than a half.
     ``secant``: Broyden-update the kept tangent (Eq. (S3)) and refactor only when an increment
-    grows (a secant step need not contract monotonically)."""
+    grows (a secant step need not contract monotonically). ``advice`` ends the error message
+    when Newton diverges or stalls."""
     n = model.n_coordinates
     zeros = np.zeros(n)
     previous = np.inf
+    increments = []
     free_motions = 0
     updates = None
     refactor_above = 1.0 if secant else 0.5
@@ -163,6 +184,7 @@ def _newton(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: 
         q = q + delta[:n]
         lam = lam + delta[n:]
         increment = np.abs(delta[:n]).max()
+        increments.append(increment)
         scale = max(1.0, np.abs(q).max())
         multipliers_settled = np.abs(delta[n:]).max(initial=0.0) <= tolerance * max(1.0, np.abs(lam).max(initial=0.0))
         # Multipliers of (nearly) redundant constraints, as in near-rigid closed loops, are fixed only to
@@ -177,9 +199,7 @@ def _newton(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: 
         raise StaticDivergence(
             f"the static tangent is singular ({free_motions} free motion(s)) and Newton found no equilibrium: the "
             "system is a mechanism or a body is not held; prescribe the drive or add the missing support")
-    raise StaticDivergence(
-        f"static Newton did not converge in {max_iterations} iterations: last increment {increment:.3e}, "
-        f"constraint residual {np.abs(gap).max():.3e}; use more load_steps or a better start")
+    raise _not_converged(increments, float(np.abs(gap).max()), tolerance, advice)
 
 
 def static_equilibrium(
@@ -202,10 +222,16 @@ def static_equilibrium(
     counts = []
     for k in range(1, load_steps + 1):
         scaled = replace(system, gravity=system.gravity * (k / load_steps))
-        q, lam, iterations, _ = _newton(newton_model(scaled, fast_path), q, lam, t, tolerance, max_iterations)
+        q, lam, iterations, _ = _newton(newton_model(scaled, fast_path), q, lam, t, tolerance, max_iterations,
+                                        advice=f"apply gravity in more load_steps (now {load_steps}) or start "
+                                               "closer to the equilibrium")
         counts.append(iterations)
         log.debug("load step %d/%d converged in %d iterations", k, load_steps, iterations)
     return StaticSolution(q, lam, tuple(counts))
+
+
+_PATH_ADVICE = ("the step was already halved 8 times, so the equilibrium path may end here (a limit point, or a "
+                "drive that leaves the assembled branch): check the prescribed motion's range and the misfit")
 
 
 def _continue(model, q, lam, t_from: float, t_to: float, tolerance: float, max_iterations: int, tangent,
@@ -216,8 +242,9 @@ def _continue(model, q, lam, t_from: float, t_to: float, tolerance: float, max_i
     ``t_from``, which carries the solution through near-singular poses such as a stiff Bennett
     loop's folded one."""
     q_start, lam_start = (q, lam) if start is None else start
+    advice = _PATH_ADVICE if depth >= 8 else "the start is not near an equilibrium at this time: assemble it first"
     try:
-        return _newton(model, q_start, lam_start, t_to, tolerance, max_iterations, tangent, secant)
+        return _newton(model, q_start, lam_start, t_to, tolerance, max_iterations, tangent, secant, advice)
     except StaticDivergence:
         if depth >= 8 or t_to == t_from:
             raise
@@ -225,7 +252,7 @@ def _continue(model, q, lam, t_from: float, t_to: float, tolerance: float, max_i
         # Broyden updates of a tangent from far away can stall on a long step; plain modified
         # Newton with a fresh tangent from the last equilibrium comes before halving
         try:
-            return _newton(model, q, lam, t_to, tolerance, max_iterations, None, False)
+            return _newton(model, q, lam, t_to, tolerance, max_iterations, None, False, advice)
         except StaticDivergence:
             pass
     t_mid = 0.5 * (t_from + t_to)

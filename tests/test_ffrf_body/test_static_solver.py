@@ -64,6 +64,25 @@ def test_hinged_bar_hangs_straight_down():
     assert -solution.multipliers[3] == pytest.approx(450.0 * 0.2 * 0.02 * 0.01 * 9.81, rel=1e-10)
 
 
+def test_newton_out_of_iterations_says_whether_it_was_converging():
+    """Out of iterations while the increments shrink steadily, the error says so and estimates the
+    iterations still needed; the estimate is checked by running with that many. With a single
+    iteration nothing shows convergence, and the advice is the load path (gravity in load steps)."""
+    import re
+
+    system, _, _, hinge = pendulum(n_modes=0)
+    q0 = system.initial_state()
+    tilt = np.radians(-70.0) / 2
+    q0[3:7] = [np.cos(-tilt), 0.0, np.sin(-tilt), 0.0]
+    q0[:3] = hinge - rotation_matrix(q0[3:7]) @ hinge
+    with pytest.raises(StaticDivergence, match="was converging but ran out of iterations") as info:
+        static_equilibrium(system, q0, max_iterations=4)
+    more = int(re.search(r"about (\d+) more", str(info.value)).group(1))
+    assert sum(static_equilibrium(system, q0, max_iterations=4 + more + 1).iterations) <= 4 + more + 1
+    with pytest.raises(StaticDivergence, match=r"did not converge in 1 iterations.*more load_steps \(now 1\)"):
+        static_equilibrium(system, q0, max_iterations=1)
+
+
 def test_free_body_is_refused_with_a_clear_message():
     model, _, psi, system = _cantilever(1)
     free = MultibodySystem(system.bodies, (), gravity=GRAVITY)
