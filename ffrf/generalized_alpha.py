@@ -37,7 +37,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 from scipy.linalg.lapack import dgetrs as getrs
 
-from .newton_kernels import CONVERGED, EXHAUSTED, NEAR_TOLERANCE, NOT_FINITE, REFACTOR
+from .newton_kernels import CONVERGED, EXHAUSTED, NOT_FINITE, REFACTOR, should_refactor
 from .packed_system import PackedSystem, newton_model
 from .system import MultibodySystem
 
@@ -183,7 +183,7 @@ def _fast_iterations(newton: _Newton, model: PackedSystem, t: float, h: float, b
         limit = 1 if refactor_each else newton.max_iterations - used
         status, count, increment, gap_max = model.alpha_iterations(
             newton.factors, q_base, qd_base, accel_base, to_accel, h * h * par.beta, h * par.gamma, beta_p, gamma_p,
-            qdd, lam, t, newton.tolerance, limit, previous)
+            qdd, lam, t, newton.tolerance, limit, previous, used)
         used += count
         if status in (CONVERGED, NOT_FINITE):
             return status, used, increment, gap_max
@@ -250,8 +250,7 @@ def _step(newton: _Newton, state: _State, t: float, h: float):
             if (beta_p * increment <= position_scale and gamma_p * increment <= velocity_scale
                     and np.abs(gap).max() <= newton.tolerance):
                 return accepted(qdd_new, lam_new), total + iteration, ""
-            if increment > 0.5 * previous and (beta_p * increment > NEAR_TOLERANCE * position_scale
-                                               or gamma_p * increment > NEAR_TOLERANCE * velocity_scale):
+            if should_refactor(iteration, increment, previous, beta_p, gamma_p, position_scale, velocity_scale):
                 newton.factors = None  # poor contraction far from convergence: rebuild the iteration matrix
             previous = increment
         total += newton.max_iterations

@@ -72,13 +72,14 @@ class PackedSystem:
 
     def alpha_iterations(self, factors: tuple, q_base, qd_base, accel_base, to_accel: float, h2_beta: float,
                          h_gamma: float, beta_p: float, gamma_p: float, qdd: NDArray, lam: NDArray, t: float,
-                         tolerance: float, max_iterations: int, previous: float) -> tuple[int, int, float, float]:
+                         tolerance: float, max_iterations: int, previous: float, done: int = 0
+                         ) -> tuple[int, int, float, float]:
         """Generalized-alpha Newton iterations with fixed LU ``factors`` of Eq. (FP6), in one kernel call
         (:func:`ffrf.newton_kernels.alpha_iterations`; ``qdd`` and ``lam`` updated in place)."""
         status, count, increment, gap = alpha_iterations(
             self.bodies, self.joints, self.gravity, self.phi(t), factors[0], factors[1], _vector(q_base),
             _vector(qd_base), _vector(accel_base), float(to_accel), float(h2_beta), float(h_gamma), float(beta_p),
-            float(gamma_p), qdd, lam, float(tolerance), int(max_iterations), float(previous))
+            float(gamma_p), qdd, lam, float(tolerance), int(max_iterations), float(previous), int(done))
         return int(status), int(count), float(increment), float(gap)
 
     def body_residuals(self, q, qd, qdd) -> NDArray[np.float64]:
