@@ -35,7 +35,7 @@ import time, numpy as np
 started = time.perf_counter()
 from ffrf.bennett_scene import build_bennett
 from ffrf.packed_system import pack_system
-scene = build_bennett("pla", h={h}, n_modes={modes})
+scene = build_bennett("pla", h={h}, order=1, n_modes={modes})
 built = time.perf_counter()
 packed = pack_system(scene.system)
 q, z, lam = scene.q_start, np.zeros_like(scene.q_start), np.zeros(scene.system.n_constraints)
@@ -79,7 +79,7 @@ def main() -> None:
     from ffrf.packed_system import pack_system
     from ffrf.static_solver import quasi_static
 
-    scene = build_bennett("pla", h=args.h, n_modes=args.modes)
+    scene = build_bennett("pla", h=args.h, order=1, n_modes=args.modes)
     system = scene.system
     q0 = assemble(scene).q
     print(f"PLA Bennett, h = {1e3 * args.h:g} mm, {args.modes} modes per link: {system.n_coordinates} coordinates, "

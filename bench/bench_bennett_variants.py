@@ -10,8 +10,8 @@ overlays ``DIR/coupler_deviation.png`` and ``DIR/driving_torque.png``.
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/bench_bennett_variants.py --json out/variants_h4_m8.json
-    PYTHONPATH=. .venv/bin/python bench/bench_bennett_variants.py --h 0.002 --modes 32 --json out/variants_paper.json
+    PYTHONPATH=. .venv/bin/python bench/bench_bennett_variants.py --json out/variants_default.json
+    PYTHONPATH=. .venv/bin/python bench/bench_bennett_variants.py --order 1 --h 0.002 --modes 32 --json out/variants_paper.json
 """
 
 from __future__ import annotations
@@ -30,13 +30,13 @@ if str(ROOT) not in sys.path:
 PAPER_MAX_DEVIATION_MM = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}
 
 
-def run_variant(variant: str, h: float, modes: int, outputs: int, out: Path | None) -> dict:
+def run_variant(variant: str, h: float, order: int, modes: int, outputs: int, out: Path | None) -> dict:
     """Build and run one variant quasi-statically; the row of the table (SI and display units)."""
     from ffrf.bennett_run import run_bennett, write_results
     from ffrf.bennett_scene import build_bennett
 
     clock = time.perf_counter()
-    scene = build_bennett(variant, h=h, n_modes=modes)
+    scene = build_bennett(variant, h=h, order=order, n_modes=modes)
     built = time.perf_counter()
     result = run_bennett(scene, mode="quasi_static", n_outputs=outputs)
     ran = time.perf_counter()
@@ -73,8 +73,9 @@ def table(rows: list[dict]) -> str:
 
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--h", type=float, default=4e-3, help="maximum tetrahedron edge (m); paper 0.002")
-    parser.add_argument("--modes", type=int, default=8, help="fixed-interface modes per link; paper 32")
+    parser.add_argument("--h", type=float, default=6e-3, help="maximum tetrahedron edge (m); paper 0.002")
+    parser.add_argument("--order", type=int, choices=(1, 2), default=2, help="tetrahedron order; paper 1")
+    parser.add_argument("--modes", type=int, default=4, help="fixed-interface modes per link; paper 32")
     parser.add_argument("--outputs", type=int, default=241, help="quasi-static output times over ramp + revolution")
     parser.add_argument("--variants", default="rigid,pla,pla1,pla2")
     parser.add_argument("--out", type=Path, help="also write each run and the overlaid figures here")
@@ -84,7 +85,7 @@ def main(argv=None) -> dict:
     started = time.perf_counter()
     rows = []
     for variant in args.variants.split(","):
-        rows.append(run_variant(variant, args.h, args.modes, args.outputs, args.out))
+        rows.append(run_variant(variant, args.h, args.order, args.modes, args.outputs, args.out))
         r = rows[-1]
         print(f"{variant}: {r['max_coupler_deviation_mm']:.4f} mm (paper {r['paper_max_deviation_mm']}), "
               f"{r['max_abs_driving_torque_Nmm']:.3f} N mm, {r['assembly_max_von_mises_MPa']:.3f} MPa, "
@@ -96,10 +97,10 @@ def main(argv=None) -> dict:
         runs = {r["variant"]: r["result"] for r in rows}
         plot_coupler_deviation(runs, args.out / "coupler_deviation.png")
         plot_driving_torque(runs, args.out / "driving_torque.png")
-    report = {"h": args.h, "modes": args.modes, "outputs": args.outputs,
+    report = {"h": args.h, "order": args.order, "modes": args.modes, "outputs": args.outputs,
               "total_wall_time_s": time.perf_counter() - started,
               "rows": [{k: v for k, v in r.items() if k != "result"} for r in rows]}
-    print(f"\nh = {1e3 * args.h:g} mm, {args.modes} modes, {args.outputs} quasi-static outputs:\n")
+    print(f"\nP{args.order}, h = {1e3 * args.h:g} mm, {args.modes} modes, {args.outputs} quasi-static outputs:\n")
     print(table(rows))
     print(f"\ntotal wall time {report['total_wall_time_s']:.1f} s")
     if args.json:

@@ -1,6 +1,6 @@
 """Benchmark and comparison: our FFRF solver against the Exudyn twin of the flexible Bennett scene.
 
-Builds ``build_bennett(variant, h, n_modes=modes, exact_gravity=False)``, runs Exudyn's twin
+Builds ``build_bennett(variant, h, order=1, n_modes=modes, exact_gravity=False)``, runs Exudyn's twin
 (``validation.exudyn_bennett``) and our generalized-alpha on three systems from ``scene.q_start``
 over ``--t-end`` with ``--step``:
 
@@ -59,7 +59,7 @@ def main(argv=None) -> dict:
                                            static_exudyn_bennett, static_ffrf_bennett)
 
     started = time.perf_counter()
-    scene = build_bennett(args.variant, h=args.h, n_modes=args.modes, exact_gravity=False)
+    scene = build_bennett(args.variant, h=args.h, order=1, n_modes=args.modes, exact_gravity=False)
     build = time.perf_counter() - started
     out = {"variant": args.variant, "h": args.h, "modes": args.modes, "t_end": args.t_end, "step": args.step,
            "rho_inf": args.rho_inf, "exudyn": exudyn.__version__, "build_s": build,
@@ -68,7 +68,7 @@ def main(argv=None) -> dict:
            "n_coordinates": scene.system.n_coordinates, "n_constraints": scene.system.n_constraints}
     print(f"scene {args.variant}: h = {args.h}, modes {out['modes_per_link']}, nodes {out['nodes_per_link']}, "
           f"built in {build:.1f} s", flush=True)
-    marker_scene = build_bennett(args.variant, h=args.h, n_modes=args.modes, exact_gravity=False,
+    marker_scene = build_bennett(args.variant, h=args.h, order=1, n_modes=args.modes, exact_gravity=False,
                                  joint_offsets="marker")
     systems = {"production": scene.system, "marker": marker_scene.system,
                "exudyn": exudyn_convention_system(scene.system, exudyn_jacobian=True)}

@@ -95,7 +95,7 @@ def main(argv=None) -> dict:
     from ffrf.bennett_scene import build_bennett
 
     started = time.perf_counter()
-    scene = build_bennett(args.variant, h=args.h, n_modes=args.modes)
+    scene = build_bennett(args.variant, h=args.h, order=1, n_modes=args.modes)
     built = time.perf_counter()
     t_end = scene.t_end if args.t_end is None else args.t_end
     # Output every `every` steps; the quasi-static run then solves at the same times.

@@ -57,7 +57,7 @@ def main(argv=None) -> dict:
                                            run_exudyn_bennett)
     from validation.exudyn_twin import twin_bases
 
-    scene = build_bennett(args.variant, h=args.h, n_modes=args.modes).with_exact_gravity(False)
+    scene = build_bennett(args.variant, h=args.h, order=1, n_modes=args.modes).with_exact_gravity(False)
     convert = (lambda s: exudyn_convention_system(s, True)) if args.exudyn_jacobian else None
     system = scene.system if convert is None else convert(scene.system)
     q_ours = assemble(scene, convert=convert).q

@@ -54,7 +54,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 #: Coarse discretisation for the cases that do not study the discretisation itself.
-COARSE = dict(h=6e-3, n_modes=4)
+COARSE = dict(h=6e-3, order=1, n_modes=4)
 
 
 # --------------------------------------------------------------------------------------------
@@ -561,7 +561,7 @@ def case_soft(ctx: Context) -> None:
     verdicts, limits = [], []
     for E in moduli:
         material = Material(E, PLA.nu, PLA.rho, f"PLA-like E={E:g}")
-        scene = make_scene(material, h=6e-3, n_modes=8)
+        scene = make_scene(material, h=6e-3, order=1, n_modes=8)
         out = simulate(ctx, scene, f"E = {E:g} Pa", "quasi_static", scene.t_end, n_outputs=37 if ctx.quick else 73,
                        add=False)
         if len(out.time):
@@ -594,7 +594,7 @@ def case_modes_mesh(ctx: Context) -> None:
         started = time.perf_counter()
         label = f"h = {1e3 * h:g} mm, {modes} modes"
         try:
-            scene = make_scene(None, h=h, n_modes=modes)
+            scene = make_scene(None, h=h, order=1, n_modes=modes)
         except Exception as error:  # noqa: BLE001
             ctx.add(Row(ctx.case, label, "build", error=f"build failed: {type(error).__name__}: {error}",
                         wall_s=time.perf_counter() - started))

@@ -19,11 +19,11 @@ mesh coordinates are world coordinates at t = 0 (as in the built-in Bennett scen
 
     [[bodies]]
     name = "link"
-    mesh = "link.msh"                 # any meshio volume mesh; or: parametric = {link = 1, alpha3_deg = 90, h = 0.004}
+    mesh = "link.msh"                 # any meshio volume mesh; or: parametric = {link = 1, alpha3_deg = 90, h = 0.006}
     unit = "mm"                       # optional, scales the mesh to metres
     material = {E = 1.2e9, nu = 0.33, rho = 450.0}
-    order = 1
-    modes = 8
+    order = 2                         # default 2: linear tetrahedra are too stiff in bending
+    modes = 4
     interfaces = [                    # the first is the body's frame interface
         {name = "bore0", group = "joint0"},
         {name = "bore1", cylinder = {point = [0.1, 0, 0], direction = [0, 0, 1], radius = 0.0095, axial_extent = [-0.01, 0.01]}},
@@ -121,7 +121,7 @@ def _mesh(entry: dict, base: Path, where: str):
         spec = entry["parametric"]
         first, second, names = paper_link_axes(int(_require(spec, "link", where)),
                                                bennett_axes(float(spec.get("alpha3_deg", 90.0))))
-        mesh, _ = mesh_link(first, second, h=float(spec.get("h", 4e-3)), names=names, mount=int(spec["link"]) == 0,
+        mesh, _ = mesh_link(first, second, h=float(spec.get("h", 6e-3)), names=names, mount=int(spec["link"]) == 0,
                             name=entry["name"])
         return mesh
     raise SceneError(f"{where}: give either mesh = \"file\" or parametric = {{link = ...}}")
@@ -146,7 +146,7 @@ def _body(entry: dict, base: Path, beta: float, exact_gravity: bool) -> tuple[Fi
     name = _require(entry, "name", "a [[bodies]] entry")
     m = _require(entry, "material", where)
     material = Material(float(m["E"]), float(m["nu"]), float(m["rho"]), name=f"{name} material")
-    fe = FEModel.from_tet_mesh(_mesh(entry, base, where), material, int(entry.get("order", 1)))
+    fe = FEModel.from_tet_mesh(_mesh(entry, base, where), material, int(entry.get("order", 2)))
     specs = _require(entry, "interfaces", where)
     if not specs:
         raise SceneError(f"{where}: list at least one interface (the first is the body's frame)")
@@ -154,7 +154,7 @@ def _body(entry: dict, base: Path, beta: float, exact_gravity: bool) -> tuple[Fi
     for spec in specs:
         interface = _interface(fe, spec, base, where)
         interfaces[interface.name] = interface
-    reduction = craig_bampton(fe, list(interfaces.values()), int(entry.get("modes", 8)))
+    reduction = craig_bampton(fe, list(interfaces.values()), int(entry.get("modes", 4)))
     body = FlexibleBody(name, modal_moments(fe.nodes, fe.mass, reduction.basis), reduction.reduced_stiffness,
                         beta * reduction.reduced_stiffness, exact_gravity)
     return FileBody(name, fe, interfaces, reduction), body

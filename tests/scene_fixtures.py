@@ -21,6 +21,7 @@ name = "bar"
 mesh = "bar.vtu"
 unit = "mm"
 material = {E = 1e8, nu = 0.3, rho = 450.0}
+order = 1
 modes = 3
 interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]
 
@@ -59,6 +60,7 @@ beta = 0.005
 name = "link1"
 parametric = {{link = 1, h = 0.008}}
 material = {{E = 1.2e9, nu = 0.33, rho = 450.0}}
+order = 1
 modes = {modes}
 interfaces = [{{name = "a", group = "joint0"}}, {{name = "b", group = "joint1"}}]
 [[joints]]

@@ -17,7 +17,7 @@ from ffrf.bennett_run import run_bennett
 from ffrf.bennett_scene import assemble, build_bennett
 from ffrf.euler_parameters import rotation_matrix
 
-COARSE = dict(h=6e-3, n_modes=2)
+COARSE = dict(h=6e-3, order=1, n_modes=2)
 
 
 def full_static_displacement(link, block: np.ndarray, gravity: np.ndarray) -> np.ndarray:

@@ -62,7 +62,7 @@ def test_bennett_command_writes_figures_and_assembly(tmp_path, monkeypatch, caps
 
     full_run = bennett_run.run_bennett
     monkeypatch.setattr(bennett_run, "run_bennett", lambda scene, **kw: full_run(scene, **kw, t_end=2.0))
-    code = cli.main(["bennett", "--variant", "pla1", "--h", "6e-3", "--modes", "2", "--outputs", "5",
+    code = cli.main(["bennett", "--variant", "pla1", "--h", "6e-3", "--order", "1", "--modes", "2", "--outputs", "5",
                      "--quasi-static", "--out", str(tmp_path)])
     assert code == 0
     for name in ("results.npz", "metadata.json", "assembly.vtu", "coupler_deviation.png", "driving_torque.png"):

@@ -10,7 +10,7 @@ import pytest
 from ffrf.bennett_run import run_bennett, write_results
 from ffrf.bennett_scene import build_bennett
 
-COARSE = dict(h=6e-3, n_modes=2)
+COARSE = dict(h=6e-3, order=1, n_modes=2)
 
 
 @pytest.fixture(scope="module")

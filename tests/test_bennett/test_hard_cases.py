@@ -25,7 +25,7 @@ from ffrf.drives import rpm  # noqa: E402
 from ffrf.materials import PLA, RIGID, Material  # noqa: E402
 from ffrf.static_solver import StaticDivergence  # noqa: E402
 
-COARSE = dict(h=8e-3, n_modes=2)
+COARSE = dict(h=8e-3, order=1, n_modes=2)
 
 
 @pytest.fixture
@@ -186,7 +186,7 @@ def test_long_quasi_static_steps_reach_the_same_equilibria_as_short_ones():
     from ffrf.bennett_scene import assemble, build_bennett
     from ffrf.static_solver import quasi_static
 
-    scene = build_bennett("pla", h=0.006, n_modes=2)  # where Broyden updates once jumped (secant=True)
+    scene = build_bennett("pla", h=0.006, order=1, n_modes=2)  # where Broyden updates once jumped (secant=True)
     start = assemble(scene).q
     fine = quasi_static(scene.system, start, np.linspace(0.0, 61.0, 241))
     coarse = quasi_static(scene.system, start, np.linspace(0.0, 61.0, 7))

@@ -17,7 +17,7 @@ from ffrf.static_solver import quasi_static
 
 @lru_cache(maxsize=None)
 def equilibria(variant: str):
-    scene = build_bennett(variant, h=6e-3, n_modes=2)
+    scene = build_bennett(variant, h=6e-3, order=1, n_modes=2)
     q0 = assemble(scene).q
     times = np.array([0.0, 10.0, 30.0])
     return scene, times, quasi_static(scene.system, q0, times)
@@ -84,7 +84,7 @@ def test_run_bennett_writes_reactions_in_joint_frames():
     and the clamp carries the linkage's weight (vertical in the clamp's frame, the world's)."""
     from ffrf.bennett_run import run_bennett
 
-    scene = build_bennett("pla", h=6e-3, n_modes=2)
+    scene = build_bennett("pla", h=6e-3, order=1, n_modes=2)
     result = run_bennett(scene, mode="quasi_static", n_outputs=5)
     reactions = result.sensors["joint_reactions"]
     names = result.metadata["joint_reaction_names"]

@@ -32,7 +32,7 @@ class _Unpacked:
 
 @pytest.fixture(scope="module")
 def bennett():
-    scene = build_bennett("pla", h=6e-3, n_modes=2)
+    scene = build_bennett("pla", h=6e-3, order=1, n_modes=2)
     return scene.system, assemble(scene).q
 
 

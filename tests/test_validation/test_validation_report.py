@@ -21,7 +21,7 @@ from kinematics import PAPER_A, PAPER_ALPHA  # noqa: E402
 from validation.__main__ import main  # noqa: E402
 from validation.modes import frequency_clusters, mass_mac  # noqa: E402
 
-ARGS = ["--h", "6e-3", "--modes", "2", "--outputs", "25", "--dynamic-window", "0.1"]
+ARGS = ["--h", "6e-3", "--order", "1", "--modes", "2", "--outputs", "25", "--dynamic-window", "0.1", "--step", "1e-3"]
 REQUIRED_KEYS = ("modes", "trajectories", "torque", "coupler_deviation_from_ideal_m", "timing_s", "versions",
                  "settings", "checks", "passed")
 
