@@ -9,7 +9,7 @@ so they are at equal accuracy when their coupler paths agree (printed). Timings:
 assembly, and time integration apart, in ms per step; our factorisations of the iteration
 matrix are counted. BLAS is pinned to one thread.
 
-Run: .venv/bin/python bench/full_revolution.py [--order 1 --h 0.004 --modes 8] [--step 0.004]
+Run: .venv/bin/python bench/full_revolution.py [--order 2 --h 0.006 --modes 4] [--step 0.004]
      [--no-exudyn] [--json out/full_revolution.json]
 """
 
@@ -48,9 +48,9 @@ def _count_factorisations():
 
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--order", type=int, default=1)
-    parser.add_argument("--h", type=float, default=4e-3, help="mesh size (m)")
-    parser.add_argument("--modes", type=int, default=8)
+    parser.add_argument("--order", type=int, default=2, help="tetrahedron order (default: the scene's)")
+    parser.add_argument("--h", type=float, default=6e-3, help="mesh size (m)")
+    parser.add_argument("--modes", type=int, default=4)
     parser.add_argument("--step", type=float, default=4e-3)
     parser.add_argument("--rho-inf", type=float, default=0.9)
     parser.add_argument("--t-end", type=float, default=None, help="default: ramp + one revolution")

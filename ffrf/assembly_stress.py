@@ -5,19 +5,18 @@ misalignment of the variants ``pla1``/``pla2`` closed elastically by continuatio
 carries the elastic displacement :math:`u = \Psi\zeta` in its body frame (Eq. (HCB-3),
 ``docs/formulation.md``). Per link this module reports
 
-* the element von Mises stress of the P1 strains of :math:`u`
-  (:mod:`ffrf.component_modes_post`), its largest value, the centroid of that element (body
+* the von Mises stress of each element, the largest of its four corner values
+  (:meth:`ffrf.fe_model.FEModel.vertex_strains`: constant in a P1 element, linear in a P2 one,
+  so its extremes are at the corners), its largest value, the centroid of that element (body
   coordinates, which are the mesh's coordinates) and the nearest interface (bore or mounting
   face) with its distance;
-* the strain energy :math:`\tfrac12\sum_e V_e\,\varepsilon_e:\sigma_e`, which for P1 elements
-  equals :math:`\tfrac12 u^T K u = \tfrac12\zeta^T K_{red}\zeta` (checked in the tests);
+* the strain energy :math:`\tfrac12 u^T K u = \tfrac12\zeta^T K_{red}\zeta`;
 * the reactions of the joints on its bores from the multipliers: the first three rows of a
   :class:`~ffrf.joints.MarkerJoint` are the world force (N), the further rotation rows the
   moments about the joint's x and y axes (N m; Eq. (J2)), and a driven joint's last row the
   driving torque.
 
-P2 models are evaluated with the P1 strains of their vertex displacements (an approximation;
-the scenes run P1 by default). The pure functions take plain arrays; :func:`scene_assembly_stress`
+The pure functions take plain arrays; :func:`scene_assembly_stress`
 adapts a Bennett scene (duck-typed: ``links[k].fe``, ``.reduction``, ``.interfaces``) and
 :func:`write_assembly_vtu` writes the deformed assembly for ParaView.
 """
@@ -32,9 +31,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .component_modes_post import element_strains, von_mises_stress
+from .fe_model import FEModel
 from .mesh import signed_volumes
 
-__all__ = ["LinkStress", "AssemblyStress", "element_von_mises", "strain_energy_density", "nodal_average",
+__all__ = ["LinkStress", "AssemblyStress", "element_von_mises", "nodal_average",
            "nearest_feature", "link_stress", "joint_reactions", "scene_assembly_stress", "write_assembly_vtu"]
 
 
@@ -93,14 +93,6 @@ def element_von_mises(nodes: ArrayLike, tets: ArrayLike, displacement: ArrayLike
     return von_mises_stress(element_strains(nodes, tets, displacement), E, nu)
 
 
-def strain_energy_density(strains: ArrayLike, E: float, nu: float) -> NDArray[np.float64]:
-    r"""Strain energy per volume :math:`\tfrac12\varepsilon:\sigma = \mu\,\varepsilon:\varepsilon
-    + \tfrac{\lambda}{2}(\operatorname{tr}\varepsilon)^2` (J/m^3), isotropic Hooke."""
-    eps = np.asarray(strains, dtype=float)
-    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
-    return mu * np.sum(eps * eps, axis=(-2, -1)) + 0.5 * lam * np.trace(eps, axis1=-2, axis2=-1) ** 2
-
-
 def nodal_average(n_points: int, tets: ArrayLike, element_values: ArrayLike, volumes: ArrayLike) -> NDArray[np.float64]:
     """Volume-weighted average of element values at the vertices (for ParaView point data)."""
     tets = np.asarray(tets, dtype=np.int64)
@@ -120,22 +112,19 @@ def nearest_feature(point: ArrayLike, features: Mapping[str, ArrayLike]) -> tupl
     return name, distances[name]
 
 
-def link_stress(index: int, nodes: ArrayLike, tets: ArrayLike, displacement: ArrayLike, E: float, nu: float,
-                features: Mapping[str, ArrayLike]) -> LinkStress:
+def link_stress(index: int, fe: FEModel, displacement: ArrayLike, features: Mapping[str, ArrayLike]) -> LinkStress:
     """Von Mises field, its maximum and where, and the strain energy of one link.
 
-    ``nodes`` (N, 3) reference coordinates of the tetrahedra's vertices, ``displacement`` (N, 3)
-    elastic displacements in the same axes, ``features``: name -> (k, 3) coordinates of the nodes
-    of each interface (bores, mounting face).
+    ``fe`` the link's FE model, ``displacement`` (N, 3) elastic displacements of all its nodes
+    (midside nodes included for P2) in the mesh axes, ``features``: name -> (k, 3) coordinates of
+    the nodes of each interface (bores, mounting face).
     """
-    nodes = np.asarray(nodes, dtype=float)
-    tets = np.asarray(tets, dtype=np.int64)
-    strains = element_strains(nodes, tets, displacement)
-    stress = von_mises_stress(strains, E, nu)
+    u = np.asarray(displacement, dtype=float).reshape(-1)
+    stress = von_mises_stress(fe.vertex_strains(u), fe.material.E, fe.material.nu).max(axis=1)
     worst = int(np.argmax(stress))
-    centroid = nodes[tets[worst]].mean(axis=0)
+    centroid = fe.nodes[fe.mesh.tets[worst]].mean(axis=0)
     name, distance = nearest_feature(centroid, features)
-    energy = float(np.sum(np.abs(signed_volumes(nodes, tets)) * strain_energy_density(strains, E, nu)))
+    energy = 0.5 * float(u @ (fe.stiffness @ u))
     return LinkStress(index, float(stress[worst]), centroid, name, distance, energy, stress)
 
 
@@ -158,12 +147,6 @@ def joint_reactions(names: Sequence[str], sizes: Sequence[int], driven: Sequence
     return out
 
 
-def _vertex_displacement(link, zeta: NDArray) -> NDArray[np.float64]:
-    """Elastic displacement Psi zeta (body frame) at the mesh vertices (P2: midside nodes dropped)."""
-    n = len(link.fe.mesh.points)
-    return (link.reduction.basis @ zeta).reshape(-1, 3)[:n]
-
-
 def scene_assembly_stress(scene, q: ArrayLike, multipliers: ArrayLike | None = None) -> AssemblyStress:
     """:func:`link_stress` of every link of ``scene`` at coordinates ``q``; with ``multipliers``
     (ordered as ``scene.system.all_constraints``) also the reactions of the joints on each link."""
@@ -183,10 +166,8 @@ def scene_assembly_stress(scene, q: ArrayLike, multipliers: ArrayLike | None = N
     out = []
     for link in scene.links:
         zeta = q[system.block(link.index)][7:]
-        n = len(link.fe.mesh.points)
-        features = {name: link.fe.nodes[itf.nodes[itf.nodes < n]] for name, itf in link.interfaces.items()}
-        stress = link_stress(link.index, link.fe.nodes[:n], link.fe.mesh.tets, _vertex_displacement(link, zeta),
-                             link.fe.material.E, link.fe.material.nu, features)
+        features = {name: link.fe.nodes[itf.nodes] for name, itf in link.interfaces.items()}
+        stress = link_stress(link.index, link.fe, link.reduction.basis @ zeta, features)
         own = {name: r for name, r in reactions.items() if link.index in bodies_of[name]}
         out.append(LinkStress(stress.link, stress.max_von_mises_pa, stress.max_location_m, stress.nearest_feature,
                               stress.feature_distance_m, stress.strain_energy_j, stress.element_von_mises, own))

@@ -124,6 +124,25 @@ class FEModel:
         weighted = m_xx @ self.nodes  # column j: M_xx x_j
         return float(ones @ m_xx @ ones), ones @ weighted, self.nodes.T @ weighted
 
+    def vertex_strains(self, displacement: ArrayLike) -> NDArray[np.float64]:
+        """Small-strain tensors eps = (H + H^T)/2 at the four vertices of every tetrahedron, shape
+        (n_tets, 4, 3, 3), for nodal ``displacement`` (N, 3) or (3N,): scikit-fem's gradients of
+        the P1 or P2 field evaluated at the reference element's corners. For P1 the four are equal;
+        for P2 the strain is linear in each straight-sided element, so its extremes are at corners."""
+        from skfem import Basis, MeshTet
+
+        u = np.asarray(displacement, dtype=float).reshape(-1)
+        if u.shape[0] != self.n_dofs:
+            raise FEInputError(f"{self.mesh.name}: displacement of length {u.shape[0]} does not match "
+                               f"{self.n_dofs} DOFs")
+        sk_mesh = MeshTet(np.ascontiguousarray(self.mesh.points.T), np.ascontiguousarray(self.mesh.tets.T))
+        corners = np.array([[0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+        basis = Basis(sk_mesh, _vector_element(self.order), quadrature=(corners, np.full(4, 1.0 / 24.0)))
+        field_dofs = np.empty(basis.N)
+        field_dofs[_node_dof_permutation(basis, len(self.mesh.points), len(self.edges))] = u
+        gradient = np.moveaxis(np.asarray(basis.interpolate(field_dofs).grad), (2, 3), (0, 1))  # H_ij = du_i/dx_j
+        return 0.5 * (gradient + np.swapaxes(gradient, -1, -2))
+
     def interleaved(self, values: ArrayLike) -> NDArray[np.float64]:
         """Reshape a DOF vector (3N,) into nodal vectors (N, 3)."""
         values = np.asarray(values)
@@ -144,13 +163,19 @@ def _node_dof_permutation(basis, n_vertices: int, n_edges: int) -> NDArray[np.in
     return perm
 
 
+def _vector_element(order: int):
+    from skfem import ElementTetP1, ElementTetP2, ElementVector
+
+    return ElementVector(ElementTetP1() if order == 1 else ElementTetP2())
+
+
 def _assemble(mesh: TetMesh, material: Material, order: int):
-    from skfem import Basis, BilinearForm, ElementTetP1, ElementTetP2, ElementVector, MeshTet, asm
+    from skfem import Basis, BilinearForm, MeshTet, asm
     from skfem.helpers import dot
     from skfem.models.elasticity import lame_parameters, linear_elasticity
 
     sk_mesh = MeshTet(np.ascontiguousarray(mesh.points.T), np.ascontiguousarray(mesh.tets.T))
-    element = ElementVector(ElementTetP1() if order == 1 else ElementTetP2())
+    element = _vector_element(order)
     # On straight-sided tets the strain of a P_k field is of degree k-1, so the
     # stiffness integrand has degree 2(k-1) and the mass integrand degree 2k:
     # these quadrature orders are exact (and 4x cheaper than one order for both).

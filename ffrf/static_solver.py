@@ -91,7 +91,12 @@ def _factor_tangent(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDAr
     rcond, _ = gecon(factors[0], np.abs(scaled).sum(axis=0).max(), norm="1")
     if rcond > _WELL_CONDITIONED:
         return _Tangent(rows, cols, factors)
-    u, singular_values, vt = scipy.linalg.svd(scaled)
+    if not np.all(np.isfinite(scaled)):
+        raise StaticDivergence(f"the static tangent at t = {t:g} is not finite; check the model's stiffness and start")
+    try:
+        u, singular_values, vt = scipy.linalg.svd(scaled)
+    except np.linalg.LinAlgError:  # LAPACK's divide and conquer can fail where the slower QR iteration succeeds
+        u, singular_values, vt = scipy.linalg.svd(scaled, lapack_driver="gesvd")
     free = int(np.sum(singular_values <= _SINGULAR * singular_values[0]))
     if free == 0:
         return _Tangent(rows, cols, factors)

@@ -49,6 +49,28 @@ def test_constant_strain_energy(cylinder_10mm, order):
     assert u @ model.stiffness @ u == pytest.approx(expected, rel=1e-12)
 
 
+@pytest.mark.parametrize("order", [1, 2])
+def test_vertex_strains_of_an_interpolated_field_are_exact(cylinder_10mm, order):
+    """A field of the element's own degree is interpolated exactly, so the strains at the corners
+    are the analytic ones there: u = A x (P1 and P2, constant strain) and, for P2, the quadratic
+    u_i = B_ijk x_j x_k, whose gradient is H_ij = (B_ijk + B_ikj) x_k."""
+    model = FEModel.from_tet_mesh(cylinder_10mm, PLA, order)
+    rng = np.random.default_rng(7)
+    a = 1e-3 * rng.standard_normal((3, 3))
+    b = 1e-2 * rng.standard_normal((3, 3, 3)) if order == 2 else np.zeros((3, 3, 3))
+    x = model.nodes
+    u = x @ a.T + np.einsum("ijk,nj,nk->ni", b, x, x)
+    corners = cylinder_10mm.points[cylinder_10mm.tets]  # (n_tets, 4, 3)
+    h = a + np.einsum("ijk,tck->tcij", b + np.swapaxes(b, 1, 2), corners)
+    expected = 0.5 * (h + np.swapaxes(h, -1, -2))
+    strains = model.vertex_strains(u)
+    assert strains.shape == (len(cylinder_10mm.tets), 4, 3, 3)
+    # the quadrature points are the reference corners; their order within an element is scikit-fem's
+    for tet_strains, tet_expected in zip(strains[:50], expected[:50]):
+        for corner in tet_expected:
+            assert np.min(np.abs(tet_strains - corner).max(axis=(1, 2))) < 1e-12 * np.abs(expected).max()
+
+
 def test_matrices_symmetric_csr_and_node_layout(cylinder_10mm):
     model = FEModel.from_tet_mesh(cylinder_10mm, PLA, 2)
     for matrix in (model.mass, model.stiffness):
