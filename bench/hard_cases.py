@@ -672,7 +672,7 @@ CASES: dict[str, Callable[[Context], None]] = {
 
 #: Wall-time budget of each case's process (s), full and quick.
 BUDGET = {"near_rigid": (900, 240), "misalignment": (900, 240), "speed": (1800, 300), "long_run": (2400, 300),
-          "soft": (900, 240), "modes_mesh": (2400, 300), "singular": (900, 240)}
+          "soft": (900, 240), "modes_mesh": (3600, 300), "singular": (900, 240)}
 
 
 # --------------------------------------------------------------------------------------------

@@ -251,7 +251,7 @@ def _step(newton: _Newton, state: _State, t: float, h: float):
                     and np.abs(gap).max() <= newton.tolerance):
                 return accepted(qdd_new, lam_new), total + iteration, ""
             if should_refactor(iteration, increment, previous, beta_p, gamma_p, position_scale, velocity_scale):
-                newton.factors = None  # poor contraction far from convergence: rebuild the iteration matrix
+                newton.factors = None  # rebuild the iteration matrix at the next iteration
             previous = increment
         total += newton.max_iterations
         newton.factors = None
