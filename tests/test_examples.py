@@ -28,3 +28,13 @@ def test_example_2_hinge_carries_a_quarter_of_the_weight():
 
 def test_example_3_tumbling_bar_keeps_its_angular_momentum():
     assert _run("ex03_tumbling_flexible_bar") < 1e-11
+
+
+def test_example_4_clamp_carries_the_weight_and_a_revolution_does_no_net_work():
+    """Statics of the quasi-static flexible linkage: the clamp, its only support, carries m g in
+    every pose; over one closed revolution gravity returns the drive's work (measured: clamp
+    force m g to 7e-16, net work 8e-12 of the integral of |torque|)."""
+    out = _run("ex04_flexible_bennett")
+    assert out["turned"] == pytest.approx(2 * np.pi, abs=1e-9)
+    np.testing.assert_allclose(out["clamp_over_weight"], 1.0, atol=1e-8)
+    assert abs(out["net_work_relative"]) < 1e-6
