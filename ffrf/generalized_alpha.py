@@ -193,9 +193,21 @@ def _fast_iterations(newton: _Newton, model: PackedSystem, t: float, h: float, b
     return EXHAUSTED, used, increment, gap_max
 
 
-def _step(newton: _Newton, state: _State, t: float, h: float):
-    """One generalized-alpha step of length ``h`` to time ``t`` (Eqs. (G2), (G3)). Returns the new
-    state and the Newton iterations, or ``(None, iterations, diagnostics)`` if Newton failed."""
+def _predicted_unknowns(state: _State, h: float, before: tuple | None) -> tuple[NDArray, NDArray]:
+    """Eq. (G6): Newton's start for ``(qdd, lambda)`` at the end of a step of length ``h``, the
+    linear extrapolation from the state and ``before = (qdd, lambda, h)`` of the accepted step that
+    led to it; without ``before``, the state's own values."""
+    if before is None:
+        return state.qdd.copy(), state.lam.copy()
+    qdd_before, lam_before, h_before = before
+    ratio = h / h_before
+    return state.qdd + ratio * (state.qdd - qdd_before), state.lam + ratio * (state.lam - lam_before)
+
+
+def _step(newton: _Newton, state: _State, t: float, h: float, before: tuple | None = None):
+    """One generalized-alpha step of length ``h`` to time ``t`` (Eqs. (G2), (G3)), Newton starting
+    from the prediction (G6) with ``before`` (a retry starts from the state's own values). Returns
+    the new state and the Newton iterations, or ``(None, iterations, diagnostics)`` if Newton failed."""
     par, model = newton.par, newton.model
     beta_p = h * h * par.beta * (1.0 - par.alpha_f) / (1.0 - par.alpha_m)
     gamma_p = h * par.gamma * (1.0 - par.alpha_f) / (1.0 - par.alpha_m)
@@ -215,7 +227,7 @@ def _step(newton: _Newton, state: _State, t: float, h: float):
         return _State(q_base + h * h * par.beta * accel, qd_base + h * par.gamma * accel, qdd_new, accel, lam_new)
 
     for attempt in range(2 if newton.modified else 1):
-        qdd_new, lam_new = state.qdd.copy(), state.lam.copy()
+        qdd_new, lam_new = _predicted_unknowns(state, h, before if attempt == 0 else None)
         if isinstance(model, PackedSystem):
             status, used, increment, gap_max = _fast_iterations(
                 newton, model, t, h, beta_p, gamma_p, (q_base, qd_base, accel_base, to_accel), qdd_new, lam_new,
@@ -307,6 +319,7 @@ def generalized_alpha(
         raise ValueError(f"initial state must have {n} coordinates, got {q.shape} and {qd.shape}")
     qdd, lam = consistent_accelerations(system, q, qd, 0.0)
     state = _State(q, qd, qdd, qdd.copy(), lam)
+    before = None  # (qdd, lambda, h) of the accepted step before ``state``, for Newton's start (G6)
     history = {"time": [0.0], "q": [q.copy()], "qd": [qd.copy()], "qdd": [qdd.copy()], "lam": [lam.copy()]}
     iterations, step_sizes = [], []
     started = wallclock.perf_counter()
@@ -323,11 +336,12 @@ def generalized_alpha(
     if step_control is None:
         for k in range(1, n_steps + 1):
             t = k * h
-            new, count, diagnostics = _step(newton, state, t, h)
+            new, count, diagnostics = _step(newton, state, t, h, before)
             if new is None:
                 raise NewtonDivergence(
                     f"Newton did not converge at t = {t:.6g} s after {max_iterations} iterations: {diagnostics}; "
                     "reduce the step size or check the constraints", result(False))
+            before = (state.qdd, state.lam, h)
             state = new
             iterations.append(count)
             step_sizes.append(h)
@@ -345,7 +359,7 @@ def generalized_alpha(
         landing = h_try >= target - t - 1e-12 * max(1.0, target)
         if landing:
             h_try = target - t
-        new, count, diagnostics = _step(newton, state, target if landing else t + h_try, h_try)
+        new, count, diagnostics = _step(newton, state, target if landing else t + h_try, h_try, before)
         ratio = np.inf if new is None else step_control.error_ratio(par.beta, h_try, new.qdd, state.qdd, new.q)
         if new is None or ratio > 1.0:
             if h_try <= step_control.min_step * (1.0 + 1e-12):
@@ -356,6 +370,7 @@ def generalized_alpha(
             trial = max(step_control.min_step, 0.5 * h_try if new is None else step_control.next_step(h_try, ratio))
             continue
         t = target if landing else t + h_try
+        before = (state.qdd, state.lam, h_try)
         state = new
         iterations.append(count)
         step_sizes.append(h_try)

@@ -68,3 +68,18 @@ def test_flexible_pendulum_is_second_order_and_keeps_its_constraints():
     full = generalized_alpha(system, q0, np.zeros_like(q0), 0.05, 1e-3, rho_inf=0.8, modified_newton=False)
     assert full.newton_iterations.max() <= 4
     np.testing.assert_allclose(full.q[-1], results[1e-3].q[50], atol=1e-12)
+
+
+def test_newton_start_extrapolates_linear_histories_exactly():
+    """Eq. (G6): unknowns that are linear in time are predicted exactly, also across unequal steps."""
+    import sys
+
+    module = sys.modules["ffrf.generalized_alpha"]
+    a, b = np.array([1.0, -2.0, 0.5]), np.array([3.0, 0.25, -1.0])
+    t_before, t_now, h = 0.3, 0.35, 0.02
+    state = module._State(None, None, a + b * t_now, None, 2 * a - b * t_now)
+    qdd, lam = module._predicted_unknowns(state, h, (a + b * t_before, 2 * a - b * t_before, t_now - t_before))
+    np.testing.assert_allclose(qdd, a + b * (t_now + h), rtol=1e-14)
+    np.testing.assert_allclose(lam, 2 * a - b * (t_now + h), rtol=1e-14)
+    same_qdd, _ = module._predicted_unknowns(state, h, None)
+    np.testing.assert_array_equal(same_qdd, state.qdd)
