@@ -196,11 +196,12 @@ def _fast_iterations(newton: _Newton, model: PackedSystem, t: float, h: float, b
 def _predicted_unknowns(state: _State, h: float, before: tuple | None) -> tuple[NDArray, NDArray]:
     """Eq. (G6): Newton's start for ``(qdd, lambda)`` at the end of a step of length ``h``, the
     linear extrapolation from the state and ``before = (qdd, lambda, h)`` of the accepted step that
-    led to it; without ``before``, the state's own values."""
-    if before is None:
+    led to it. Without ``before``, or after a much shorter step (one cut to land on an output, whose
+    difference quotient would amplify Newton's tolerance), the state's own values."""
+    ratio = 0.0 if before is None else h / before[2]
+    if not 0.0 < ratio <= 2.0:
         return state.qdd.copy(), state.lam.copy()
-    qdd_before, lam_before, h_before = before
-    ratio = h / h_before
+    qdd_before, lam_before, _ = before
     return state.qdd + ratio * (state.qdd - qdd_before), state.lam + ratio * (state.lam - lam_before)
 
 

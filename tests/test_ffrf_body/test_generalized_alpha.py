@@ -83,3 +83,6 @@ def test_newton_start_extrapolates_linear_histories_exactly():
     np.testing.assert_allclose(lam, 2 * a - b * (t_now + h), rtol=1e-14)
     same_qdd, _ = module._predicted_unknowns(state, h, None)
     np.testing.assert_array_equal(same_qdd, state.qdd)
+    # after a step more than twice shorter (cut to land on an output) nothing is extrapolated
+    short = (a + b * (t_now - 1e-6), 2 * a - b * (t_now - 1e-6), 1e-6)
+    np.testing.assert_array_equal(module._predicted_unknowns(state, h, short)[0], state.qdd)
