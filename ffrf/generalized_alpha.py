@@ -39,6 +39,7 @@ from scipy.linalg.lapack import dgetrs as getrs
 
 from .newton_kernels import CONVERGED, EXHAUSTED, NOT_FINITE, REFACTOR, should_refactor
 from .packed_system import PackedSystem, newton_model
+from .static_solver import extrapolation_weights
 from .system import MultibodySystem
 
 __all__ = ["AlphaParameters", "IntegrationResult", "NewtonDivergence", "StepControl", "generalized_alpha",
@@ -188,7 +189,7 @@ def _fast_iterations(newton: _Newton, model: PackedSystem, t: float, h: float, b
         if status in (CONVERGED, NOT_FINITE):
             return status, used, increment, gap_max
         if status == REFACTOR:
-            newton.factors = None  # poor contraction: rebuild the iteration matrix
+            newton.factors = None  # should_refactor asked for a new iteration matrix
         previous = increment
     return EXHAUSTED, used, increment, gap_max
 
@@ -198,11 +199,11 @@ def _predicted_unknowns(state: _State, h: float, before: tuple | None) -> tuple[
     linear extrapolation from the state and ``before = (qdd, lambda, h)`` of the accepted step that
     led to it. Without ``before``, or after a much shorter step (one cut to land on an output, whose
     difference quotient would amplify Newton's tolerance), the state's own values."""
-    ratio = 0.0 if before is None else h / before[2]
-    if not 0.0 < ratio <= 2.0:
+    if before is None or not 0.0 < h / before[2] <= 2.0:
         return state.qdd.copy(), state.lam.copy()
-    qdd_before, lam_before, _ = before
-    return state.qdd + ratio * (state.qdd - qdd_before), state.lam + ratio * (state.lam - lam_before)
+    qdd_before, lam_before, h_before = before
+    weights = extrapolation_weights(np.array([-h_before, 0.0]), h)  # the line through both steps' values
+    return weights[0] * qdd_before + weights[1] * state.qdd, weights[0] * lam_before + weights[1] * state.lam
 
 
 def _step(newton: _Newton, state: _State, t: float, h: float, before: tuple | None = None):
@@ -297,10 +298,9 @@ def generalized_alpha(
     (``gamma' |dqdd|``) are below ``tolerance`` times ``max(1, |q|)`` and ``max(1, |qd|)`` and the
     constraints hold to ``tolerance`` (their own units, m or dimensionless). With
     ``modified_newton`` the factorised iteration matrix is kept across iterations and steps
-    and rebuilt only when an iteration contracts the increment by less than a half while the
-    increment is still ``NEAR_TOLERANCE`` (100) times above the tolerance (or a step fails, which
-    is then retried with a fresh matrix); the converged solution is the
-    same, only the work differs. Raises :class:`NewtonDivergence` with the partial results.
+    and rebuilt when :func:`ffrf.newton_kernels.should_refactor` asks for it (Eq. (G3) in
+    ``docs/formulation.md``) or a step fails, which is then retried with a fresh matrix; each step
+    starts from the prediction (G6). The converged solution is the same, only the work differs. Raises :class:`NewtonDivergence` with the partial results.
     ``fast_path`` evaluates Newton's residual and matrix with the whole-system kernels of
     :mod:`ffrf.packed_system` when the system is supported (else, and with ``False``, with the
     reference Python implementation of :class:`MultibodySystem`; both agree to round-off).
