@@ -18,19 +18,18 @@ equations solved.
 
 from __future__ import annotations
 
+import itertools
 import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import NDArray
-from scipy.linalg.lapack import dgecon as gecon
-from scipy.linalg.lapack import dgetrs as getrs
 
 from .packed_system import PackedSystem, newton_model
+from .rank_revealing import FactoredMatrix, factor
 from .system import MultibodySystem
 
-__all__ = ["StaticSolution", "StaticDivergence", "static_equilibrium", "quasi_static"]
+__all__ = ["StaticDivergence", "StaticSolution", "quasi_static", "static_equilibrium"]
 
 log = logging.getLogger(__name__)
 
@@ -48,64 +47,22 @@ class StaticSolution:
     iterations: tuple[int, ...]
 
 
-def _equilibration(matrix: NDArray) -> tuple[NDArray, NDArray]:
-    """Row and column scalings 1/sqrt(max |a|) (one Ruiz pass; zero rows and columns keep 1)."""
-    row_max, col_max = np.abs(matrix).max(axis=1), np.abs(matrix).max(axis=0)
-    rows = 1.0 / np.sqrt(np.where(row_max > 0, row_max, 1.0))
-    cols = 1.0 / np.sqrt(np.where(col_max > 0, col_max, 1.0))
-    return rows, cols
+def _factor_tangent(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float) -> FactoredMatrix:
+    """Eq. (S1)'s tangent [K_t + H, C_q^T; C_q, 0], factored by the rank rule of Eq. (R1).
 
-
-@dataclass
-class _Tangent:
-    """An equilibrated tangent kept between Newton iterations (modified Newton): LU factors,
-    or, when it is numerically singular, its pseudo-inverse and the number of free motions."""
-
-    rows: NDArray
-    cols: NDArray
-    factors: tuple | None
-    pseudo_inverse: NDArray | None = None
-    free_motions: int = 0
-
-    def solve(self, rhs: NDArray) -> NDArray:
-        scaled = self.rows * rhs
-        if self.factors is not None:
-            return self.cols * getrs(*self.factors, scaled)[0]  # what lu_solve calls, without its wrapper
-        return self.cols * (self.pseudo_inverse @ scaled)
-
-
-_SINGULAR = 1e-15  # relative singular value of the equilibrated tangent counted as zero
-_WELL_CONDITIONED = 1e-10  # reciprocal condition estimate above which the tangent is surely regular
-
-
-def _factor_tangent(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float) -> _Tangent:
+    A singular tangent (free motions of a mechanism, redundant constraints, the folded poses of a
+    near-rigid Bennett loop) is solved by its truncated pseudo-inverse: the minimum-norm Newton
+    step still converges there."""
     zeros = np.zeros(model.n_coordinates)
-    matrix = model.iteration_matrix(q, zeros, zeros, lam, t, 0.0, 1.0, 0.0)  # Eq. (S1): [K_t + H, C_q^T; C_q, 0]
-    # Equilibrate rows and columns before judging singularity and solving: stiffness rows of
-    # near-rigid links (E = 1e15 Pa) and unit constraint rows differ by 15 orders of magnitude.
-    rows, cols = _equilibration(matrix)
-    scaled = rows[:, None] * matrix * cols[None, :]
-    # LU first; only a poorly conditioned tangent (LAPACK's 1-norm estimate) pays for the SVD
-    # that decides whether it is singular.
-    factors = scipy.linalg.lu_factor(scaled, check_finite=False)
-    rcond, _ = gecon(factors[0], np.abs(scaled).sum(axis=0).max(), norm="1")
-    if rcond > _WELL_CONDITIONED:
-        return _Tangent(rows, cols, factors)
-    if not np.all(np.isfinite(scaled)):
-        raise StaticDivergence(f"the static tangent at t = {t:g} is not finite; check the model's stiffness and start")
+    matrix = model.iteration_matrix(q, zeros, zeros, lam, t, 0.0, 1.0, 0.0)
     try:
-        u, singular_values, vt = scipy.linalg.svd(scaled)
-    except np.linalg.LinAlgError:  # LAPACK's divide and conquer can fail where the slower QR iteration succeeds
-        u, singular_values, vt = scipy.linalg.svd(scaled, lapack_driver="gesvd")
-    free = int(np.sum(singular_values <= _SINGULAR * singular_values[0]))
-    if free == 0:
-        return _Tangent(rows, cols, factors)
-    # Singular tangents occur at the folded poses of a near-rigid Bennett loop (one more
-    # instantaneous freedom); the minimum-norm Newton step still converges there.
-    log.debug("static tangent has %d free motion(s) at t = %g; using its pseudo-inverse", free, t)
-    keep = singular_values > _SINGULAR * singular_values[0]
-    pseudo_inverse = (vt[keep].T / singular_values[keep]) @ u[:, keep].T
-    return _Tangent(rows, cols, None, pseudo_inverse, free)
+        tangent = factor(matrix, what=f"static tangent at t = {t:g}")
+    except FloatingPointError as error:
+        raise StaticDivergence(f"{error}; check the model's stiffness and the start") from error
+    if tangent.rank_deficiency:
+        log.debug("static tangent has %d free motion(s) at t = %g; using its pseudo-inverse",
+                  tangent.rank_deficiency, t)
+    return tangent
 
 
 class _Secant:
@@ -126,7 +83,7 @@ class _Secant:
         z = newton_step
         steps, w = self.steps, self.weights
         if steps:
-            for s_j, s_next in zip(steps[:-1], steps[1:]):
+            for s_j, s_next in itertools.pairwise(steps):
                 z = z + s_next * ((w * s_j) @ z) / ((w * s_j) @ s_j)
             s_n = steps[-1]
             denominator = 1.0 - ((w * s_n) @ z) / ((w * s_n) @ s_n)
@@ -160,7 +117,7 @@ def _not_converged(increments: list[float], gap: float, tolerance: float, advice
 
 def _newton(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float, tolerance: float,
             max_iterations: int,
-            tangent: _Tangent | None = None, secant: bool = False, advice: str = "start closer to the equilibrium"):
+            tangent: FactoredMatrix | None = None, secant: bool = False, advice: str = "start closer to the equilibrium"):
     """Newton from ``(q, lam)``; with a ``tangent`` from an earlier solve it starts as modified
     Newton and refactors whenever an iteration contracts the increment by less than a half.
     ``secant``: Broyden-update the kept tangent (Eq. (S3)) and refactor only when an increment
@@ -179,7 +136,7 @@ def _newton(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: 
             raise StaticDivergence(f"NaN in the static residual (iteration {iteration}); check the model and the start")
         if tangent is None:
             tangent = _factor_tangent(model, q, lam, t)
-            free_motions = max(free_motions, tangent.free_motions)
+            free_motions = max(free_motions, tangent.rank_deficiency)
             updates = None
         delta = tangent.solve(-np.concatenate([residual, gap]))
         if secant and tangent.factors is not None:  # a pseudo-inverse (singular tangent) is used as is

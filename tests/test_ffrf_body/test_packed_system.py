@@ -7,16 +7,12 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from body_fixtures import bar_model
+from body_fixtures import two_bar_chain
 from pendulum_fixtures import pendulum
 
 from ffrf.bennett_scene import assemble, build_bennett
-from ffrf.craig_bampton import craig_bampton
-from ffrf.flexible_body import FlexibleBody
 from ffrf.generalized_alpha import generalized_alpha
-from ffrf.joints import GroundFrame, MarkerJoint, driven_revolute_joint, revolute_joint
-from ffrf.markers import frame_marker, rigid_interface_marker
-from ffrf.modal_moments import modal_moments
+from ffrf.joints import MarkerJoint
 from ffrf.packed_system import newton_model, pack_system
 from ffrf.static_solver import quasi_static, static_equilibrium
 from ffrf.system import MultibodySystem
@@ -28,35 +24,9 @@ def bennett():
     return scene, assemble(scene).q
 
 
-def _bar(name: str, n_modes: int = 3):
-    model = bar_model(E=1e8, rho=450.0)
-    ends = [np.flatnonzero(model.nodes[:, 0] < 1e-9), np.flatnonzero(model.nodes[:, 0] > 0.2 - 1e-9)]
-    basis = craig_bampton(model, ends, n_modes)
-    body = FlexibleBody(name, modal_moments(model.nodes, model.mass, basis.basis), basis.reduced_stiffness,
-                        0.01 * basis.reduced_stiffness)
-    return model, basis.basis, ends, body
-
-
 @pytest.fixture(scope="module")
 def chain():
-    """Two flexible bars: bar 0 on a driven revolute to the ground (frame marker, offsets, turned
-    frames), bar 1 on bar 0's far bore by a joint locking a subset (tx, tz, rx, rz) with a prescribed
-    angle, between rigid interface markers with offsets: every branch of Eqs. (J1)-(J3)."""
-    model, psi, ends, body0 = _bar("bar0")
-    _, _, _, body1 = _bar("bar1")
-    rng = np.random.default_rng(7)
-    turn = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    turn *= np.sign(np.linalg.det(turn))
-    ground = GroundFrame(np.array([0.0, 0.01, 0.005]), turn)
-    drive = driven_revolute_joint(ground, frame_marker(0, body0.n_modes, (0.0, 0.01, 0.005)),
-                                  lambda t: 0.3 * np.sin(2 * t), rotation1=turn, offset0=np.array([0.0, 0.0, 0.002]),
-                                  offset1=np.array([0.0, 0.0, 0.002]), name="drive")
-    far0 = rigid_interface_marker(0, model.nodes, psi, ends[1], name="bar0:far")
-    near1 = rigid_interface_marker(1, model.nodes, psi, ends[0], name="bar1:near")
-    hinge = revolute_joint(far0, near1, offset0=np.array([0.001, 0.0, 0.003]), offset1=np.array([-0.2, 0.0, 0.002]))
-    subset = MarkerJoint(hinge.bodies, "subset", hinge.marker0, hinge.marker1, turn, turn.T, hinge.offset0,
-                         hinge.offset1, (True, False, True, True, False, True), lambda t: 0.1 * t)
-    return MultibodySystem((body0, body1), (drive, subset), gravity=np.array([0.0, 0.0, -9.81]))
+    return two_bar_chain()
 
 
 def _random_state(rng, system, q, scale):

@@ -1,0 +1,141 @@
+"""The rank rule of ffrf/rank_revealing.py (docs/formulation.md, Eq. (R1)): the verdict "singular,
+with so many free motions" and the solutions do not change under round-off, on synthetic matrices
+with a known null space and on the static tangents of the test fixtures."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from body_fixtures import two_bar_chain
+
+from ffrf.bennett_scene import assemble, build_bennett
+from ffrf.rank_revealing import equilibration, factor, rank_tolerance, singular_values
+from ffrf.static_solver import StaticDivergence, static_equilibrium
+
+ROUND_OFF = 1e-15  # relative perturbation of every entry: what another BLAS kernel's rounding can change
+
+
+def _perturbed(rng, matrix):
+    return matrix * (1.0 + ROUND_OFF * rng.uniform(-1.0, 1.0, size=matrix.shape))
+
+
+def _singular_matrix(rng, n=40, deficiency=3):
+    """A badly scaled n x n matrix of known rank n - deficiency, its null space and its range."""
+    u = np.linalg.qr(rng.normal(size=(n, n)))[0]
+    v = np.linalg.qr(rng.normal(size=(n, n)))[0]
+    sigma = np.logspace(0, -6, n)
+    sigma[n - deficiency:] = 0.0
+    scales = 10.0 ** rng.uniform(-8, 8, size=n)  # rows of stiffness and of constraints
+    return scales[:, None] * ((u * sigma) @ v.T), v[:, n - deficiency:], scales[:, None] * u[:, :n - deficiency]
+
+
+def test_synthetic_rank_is_the_same_under_round_off(rng):
+    matrix, _, range_ = _singular_matrix(rng)
+    verdicts = {factor(_perturbed(rng, matrix)).rank_deficiency for _ in range(100)}
+    assert verdicts == {3}
+    regular = matrix + np.diag(10.0 ** rng.uniform(-8, 8, size=40))
+    assert {factor(_perturbed(rng, regular)).rank_deficiency for _ in range(20)} == {0}
+
+
+def test_singular_solve_is_the_minimum_norm_least_squares_solution(rng):
+    """For a consistent right-hand side, A x = b, and x has no component in the null space of the
+    equilibrated matrix (the minimum-norm solution in the equilibrated unknowns)."""
+    matrix, _, range_ = _singular_matrix(rng)
+    rhs = range_ @ rng.normal(size=range_.shape[1])
+    solved = factor(matrix)
+    x = solved.solve(rhs)
+    assert np.abs(matrix @ x - rhs).max() <= 1e-8 * np.abs(rhs).max()
+    rows, cols = equilibration(matrix)
+    _, _, vt = np.linalg.svd(rows[:, None] * matrix * cols[None, :])
+    null_scaled = vt[-3:].T
+    assert np.abs(null_scaled.T @ (x / cols)).max() <= 1e-10 * np.abs(x / cols).max()
+
+
+def test_non_finite_matrix_is_refused():
+    matrix = np.eye(3)
+    matrix[1, 2] = np.nan
+    with pytest.raises(FloatingPointError, match="not finite"):
+        factor(matrix, what="test matrix")
+
+
+@pytest.fixture(scope="module")
+def chain():
+    return two_bar_chain()
+
+
+def _static_tangent(system, q):
+    zeros = np.zeros(system.n_coordinates)
+    return system.iteration_matrix(q, zeros, zeros, np.zeros(system.n_constraints), 0.0, 0.0, 1.0, 0.0)
+
+
+def test_chain_tangent_has_two_free_motions_on_every_rounding(rng, chain):
+    """Bar 1 keeps a free translation and a free rotation: two zero singular values, computed at
+    round-off (measured <= 1.3e-15 of the largest), well below the threshold n eps (9.8e-15)."""
+    weightless = replace(chain, gravity=np.zeros(3))  # gravity would stiffen bar 1's free rotation
+    tangent = _static_tangent(weightless, chain.initial_state(positions=[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]]))
+    rows, cols = equilibration(tangent)
+    sigma = singular_values(rows[:, None] * tangent * cols[None, :], compute_uv=False)
+    relative = sigma / sigma[0]
+    assert relative[-1] < relative[-2] < 0.2 * rank_tolerance(sigma.size)
+    assert relative[-3] > 1e6 * rank_tolerance(sigma.size)  # measured 1.4e-2: the bars' softest direction
+    assert {factor(_perturbed(rng, tangent)).rank_deficiency for _ in range(50)} == {2}
+
+
+class _RoundedModel:
+    """The chain with every static tangent perturbed by round-off, as another BLAS kernel would."""
+
+    def __init__(self, system, rng):
+        self.system, self.rng = system, rng
+
+    def __getattr__(self, name):
+        return getattr(self.system, name)
+
+    def iteration_matrix(self, *args):
+        return _perturbed(self.rng, self.system.iteration_matrix(*args))
+
+
+def test_chain_equilibrium_is_the_same_under_round_off(chain, monkeypatch):
+    """The issue's failure: on some kernels the free motions' singular values landed just above the
+    old threshold (1e-15), their inverse entered the Newton step, and Newton ran out of iterations.
+    Now the same equilibrium (to the Newton tolerance) comes out under ten different roundings, and
+    with gravity the mechanism is reported as one (no equilibrium exists: bar 1 swings freely)."""
+    import ffrf.static_solver as static_solver
+
+    weightless = replace(chain, gravity=np.zeros(3))
+    q0 = chain.initial_state(positions=[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]])
+    reference = static_equilibrium(weightless, q0, fast_path=False).q
+    for seed in range(10):
+        monkeypatch.setattr(static_solver, "newton_model",
+                            lambda system, fast, seed=seed: _RoundedModel(system, np.random.default_rng(seed)))
+        q = static_equilibrium(weightless, q0).q
+        assert np.abs(q - reference).max() <= 1e-10 * np.abs(reference).max()
+        assert np.abs(weightless.constraint_values(q, 0.0)).max() <= 1e-10
+    monkeypatch.undo()
+    with pytest.raises(StaticDivergence, match=r"singular \(1 free motion"):
+        static_equilibrium(chain, q0, fast_path=False)
+
+
+def test_near_rigid_bennett_keeps_its_small_physical_singular_values(monkeypatch):
+    """Links of 1e15 Pa make three constraints of the closed loop nearly redundant; their singular
+    values (measured 1.9e-10 of the largest at the assembly, down to 6.0e-13 along a revolution)
+    are physics, not round-off: they must stay above the threshold n eps (2.3e-14 at n = 105), so
+    that no tangent of the revolution is taken as singular."""
+    import ffrf.static_solver as static_solver
+
+    scene = build_bennett("rigid", h=6e-3, order=1, n_modes=4)
+    assembly = assemble(scene)
+    smallest, deficiencies = [], []
+
+    def recording_factor(matrix, what="matrix"):
+        rows, cols = equilibration(matrix)
+        sigma = singular_values(rows[:, None] * matrix * cols[None, :], compute_uv=False)
+        smallest.append(sigma[-1] / sigma[0])
+        factored = factor(matrix, what)
+        deficiencies.append(factored.rank_deficiency)
+        return factored
+
+    monkeypatch.setattr(static_solver, "factor", recording_factor)
+    static_solver.quasi_static(scene.system, assembly.q, np.linspace(0.0, scene.t_end, 121))
+    assert min(smallest) < 1e-11  # the hard regime is reached (measured 6.0e-13)
+    assert min(smallest) > 10.0 * rank_tolerance(scene.system.n_coordinates + scene.system.n_constraints)
+    assert set(deficiencies) == {0}
