@@ -30,7 +30,7 @@ def _singular_matrix(rng, n=40, deficiency=3):
 
 
 def test_synthetic_rank_is_the_same_under_round_off(rng):
-    matrix, _, range_ = _singular_matrix(rng)
+    matrix, _, _ = _singular_matrix(rng)
     verdicts = {factor(_perturbed(rng, matrix)).rank_deficiency for _ in range(100)}
     assert verdicts == {3}
     regular = matrix + np.diag(10.0 ** rng.uniform(-8, 8, size=40))
@@ -99,7 +99,7 @@ def test_chain_equilibrium_is_the_same_under_round_off(chain, monkeypatch):
     old threshold (1e-15), their inverse entered the Newton step, and Newton ran out of iterations.
     Now the same equilibrium (to the Newton tolerance) comes out under ten different roundings, and
     with gravity the mechanism is reported as one (no equilibrium exists: bar 1 swings freely)."""
-    import ffrf.static_solver as static_solver
+    from ffrf import static_solver
 
     weightless = replace(chain, gravity=np.zeros(3))
     q0 = chain.initial_state(positions=[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]])
@@ -120,7 +120,7 @@ def test_near_rigid_bennett_keeps_its_small_physical_singular_values(monkeypatch
     values (measured 1.9e-10 of the largest at the assembly, down to 6.0e-13 along a revolution)
     are physics, not round-off: they must stay above the threshold n eps (2.3e-14 at n = 105), so
     that no tangent of the revolution is taken as singular."""
-    import ffrf.static_solver as static_solver
+    from ffrf import static_solver
 
     scene = build_bennett("rigid", h=6e-3, order=1, n_modes=4)
     assembly = assemble(scene)
