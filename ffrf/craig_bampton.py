@@ -22,8 +22,9 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigh
-from scipy.sparse.linalg import LinearOperator, eigsh, splu
+from scipy.sparse.linalg import LinearOperator, splu
 
+from .eigen import fix_signs, shift_invert_eigsh
 from .errors import FEInputError, InterfaceError
 
 __all__ = [
@@ -247,7 +248,7 @@ def _ritz_cleanup(stiffness, mass, vectors: NDArray):
     """Rayleigh-Ritz on the computed subspace: exact M-orthonormality, sorted, deterministic signs."""
     values, q = eigh(vectors.T @ (stiffness @ vectors), vectors.T @ (mass @ vectors))
     vectors = vectors @ q
-    return values, vectors * np.where(np.abs(vectors).max(axis=0) == vectors.max(axis=0), 1.0, -1.0)
+    return values, fix_signs(vectors)
 
 
 def _verified_lanczos(stiffness, mass, n: int, solve, verify_count: bool):
@@ -256,9 +257,7 @@ def _verified_lanczos(stiffness, mass, n: int, solve, verify_count: bool):
     request = min(n + guard, size - 1)
     inverse = LinearOperator(stiffness.shape, matvec=solve, dtype=float)
     for _ in range(4):
-        values, vectors = eigsh(stiffness, k=request, M=mass, sigma=0.0, which="LM", OPinv=inverse)
-        order = np.argsort(values)
-        values, vectors = values[order], vectors[:, order]
+        values, vectors = shift_invert_eigsh(stiffness, mass, request, 0.0, inverse)
         gaps = np.flatnonzero(values[n:] > values[n - 1:-1] * (1.0 + _CLUSTER_REL_GAP)) + n
         if not verify_count or request == size - 1:
             return values, vectors
@@ -391,6 +390,6 @@ def _orthonormalized(basis: NDArray, m_red: NDArray, k_red: NDArray):
     """Psi V with K_red V = M_red V Lambda, V^T M_red V = I (eq. (HCB-7)); the span, and hence the
     reference condition (e.g. zero on the frame interface), is unchanged."""
     values, v = eigh(k_red, m_red)
-    v = v * np.where(np.abs(v).max(axis=0) == v.max(axis=0), 1.0, -1.0)  # deterministic sign
+    v = fix_signs(v)
     labels = [f"orthonormal {i + 1} ({f:.6g} Hz)" for i, f in enumerate(np.sqrt(np.clip(values, 0, None)) / 2 / np.pi)]
     return basis @ v, _symmetric(v.T @ m_red @ v), _symmetric(v.T @ k_red @ v), labels

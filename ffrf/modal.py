@@ -14,12 +14,12 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
-from scipy.sparse.linalg import eigsh
 
+from .eigen import fix_signs, shift_invert_eigsh
 from .errors import FEInputError
 from .fe_model import FEModel
 
-__all__ = ["Modes", "free_free_modes", "clamped_modes", "eigenvalue_scale"]
+__all__ = ["Modes", "clamped_modes", "eigenvalue_scale", "free_free_modes"]
 
 logger = logging.getLogger(__name__)
 
@@ -59,9 +59,8 @@ def _lowest_eigenpairs(stiffness: sp.spmatrix, mass: sp.spmatrix, k: int, sigma:
     if k >= stiffness.shape[0] - 1:
         raise FEInputError(f"{k} modes requested but the model has only {stiffness.shape[0]} free DOFs; "
                            "refine the mesh or ask for fewer modes")
-    values, vectors = eigsh(stiffness.tocsc(), k=k, M=mass.tocsc(), sigma=sigma, which="LM")
-    order = np.argsort(values)
-    return values[order], vectors[:, order]
+    values, vectors = shift_invert_eigsh(stiffness.tocsc(), mass.tocsc(), k, sigma)
+    return values, fix_signs(vectors)
 
 
 def free_free_modes(model: FEModel, n_modes: int = 10, *, n_rigid_expected: int = 6) -> Modes:
