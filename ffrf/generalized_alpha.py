@@ -29,21 +29,24 @@ from __future__ import annotations
 
 import logging
 import time as wallclock
+import warnings
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
+from scipy.linalg.lapack import dgecon as gecon
 from scipy.linalg.lapack import dgetrs as getrs
 
 from .newton_kernels import CONVERGED, EXHAUSTED, NOT_FINITE, REFACTOR, should_refactor
 from .packed_system import PackedSystem, newton_model
+from .rank_revealing import WELL_CONDITIONED, factor
 from .static_solver import extrapolation_weights
 from .system import MultibodySystem
 
-__all__ = ["AlphaParameters", "IntegrationResult", "NewtonDivergence", "StepControl", "generalized_alpha",
-           "consistent_accelerations"]
+__all__ = ["AlphaParameters", "IntegrationResult", "NewtonDivergence", "SingularIterationMatrix", "StepControl",
+           "generalized_alpha", "consistent_accelerations"]
 
 log = logging.getLogger(__name__)
 
@@ -93,22 +96,50 @@ class NewtonDivergence(RuntimeError):
         self.partial = partial
 
 
+class SingularIterationMatrix(NewtonDivergence):
+    """The iteration matrix (G3) has zero singular values by the rank rule (R1): no step can be solved."""
+
+
 def consistent_accelerations(system: MultibodySystem, q, qd, t: float = 0.0):
-    r"""Solve :math:`[M\ C_q^T; C_q\ 0][\ddot q; \lambda] = [Q; -(C_q\dot q)_q\dot q]` (Eq. (G4))."""
+    r"""Solve :math:`[M\ C_q^T; C_q\ 0][\ddot q; \lambda] = [Q; -(C_q\dot q)_q\dot q]` (Eq. (G4)).
+
+    With redundant constraints (a closed loop of rigid bodies) the matrix is singular by the rank
+    rule (R1); the accelerations are still unique, and the multipliers are the minimum-norm ones."""
     n, k = system.n_coordinates, system.n_constraints
     mass = system.mass_matrix(q)
     forces = -system.body_residuals(q, qd, np.zeros(n))  # M*0 - Q = -Q
     cq = system.constraint_jacobian(q, t)
     matrix = np.block([[mass, cq.T], [cq, np.zeros((k, k))]])
     rhs = np.concatenate([forces, -system.constraint_acceleration_term(q, qd, t)])
-    solution = np.linalg.solve(matrix, rhs)
+    solution = factor(matrix, what="consistent-acceleration matrix").solve(rhs)
     return solution[:n], solution[n:]
 
 
 def _factor_iteration_matrix(model: MultibodySystem | PackedSystem, q, qd, qdd, lam, t: float, beta_p: float,
                              gamma_p: float):
-    """Eq. (G3), LU-factored."""
-    return scipy.linalg.lu_factor(model.iteration_matrix(q, qd, qdd, lam, t, 1.0, beta_p, gamma_p), check_finite=False)
+    """Eq. (G3), LU-factored. A poorly conditioned matrix (LAPACK's estimate) is judged by the rank
+    rule (R1); a singular one stops the run, since LU's solve would only spread inf and NaN."""
+    matrix = model.iteration_matrix(q, qd, qdd, lam, t, 1.0, beta_p, gamma_p)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)  # decided below, by the rank rule
+        factors = scipy.linalg.lu_factor(matrix, check_finite=False)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rcond = gecon(factors[0], np.abs(matrix).sum(axis=0).max(), norm="1")[0]
+    if not rcond > WELL_CONDITIONED:
+        try:
+            deficiency = factor(matrix, what=f"iteration matrix at t = {t:g}").rank_deficiency
+        except FloatingPointError as error:
+            raise _Singular(str(error)) from error
+        if deficiency:
+            raise _Singular(
+                f"the iteration matrix at t = {t:.6g} s is singular ({deficiency} zero singular value(s)): "
+                "redundant constraints (a closed loop of rigid bodies) or a coordinate without mass or stiffness; "
+                "give the links modes, or remove the redundant joint directions")
+    return factors
+
+
+class _Singular(Exception):
+    """Raised inside a step; :func:`generalized_alpha` turns it into :class:`SingularIterationMatrix`."""
 
 
 @dataclass(frozen=True)
@@ -334,10 +365,16 @@ def generalized_alpha(
                                  np.array(history["qdd"]), np.array(history["lam"]), np.array(iterations, dtype=np.int64),
                                  wallclock.perf_counter() - started, complete, np.array(step_sizes))
 
+    def guarded_step(t_new: float, h_new: float):
+        try:
+            return _step(newton, state, t_new, h_new, before)
+        except _Singular as error:
+            raise SingularIterationMatrix(str(error), result(False)) from None
+
     if step_control is None:
         for k in range(1, n_steps + 1):
             t = k * h
-            new, count, diagnostics = _step(newton, state, t, h, before)
+            new, count, diagnostics = guarded_step(t, h)
             if new is None:
                 raise NewtonDivergence(
                     f"Newton did not converge at t = {t:.6g} s after {max_iterations} iterations: {diagnostics}; "
@@ -360,7 +397,7 @@ def generalized_alpha(
         landing = h_try >= target - t - 1e-12 * max(1.0, target)
         if landing:
             h_try = target - t
-        new, count, diagnostics = _step(newton, state, target if landing else t + h_try, h_try, before)
+        new, count, diagnostics = guarded_step(target if landing else t + h_try, h_try)
         ratio = np.inf if new is None else step_control.error_ratio(par.beta, h_try, new.qdd, state.qdd, new.q)
         if new is None or ratio > 1.0:
             if h_try <= step_control.min_step * (1.0 + 1e-12):

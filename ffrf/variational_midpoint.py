@@ -35,10 +35,10 @@ import time as wallclock
 from typing import Callable
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import NDArray
 
 from .generalized_alpha import IntegrationResult, NewtonDivergence, consistent_accelerations
+from .rank_revealing import FactoredMatrix, factor
 from .system import MultibodySystem
 
 __all__ = ["variational_midpoint", "velocities_from_momenta", "momenta_from_velocities"]
@@ -68,7 +68,7 @@ def velocities_from_momenta(system: MultibodySystem, q: NDArray, p: NDArray, t: 
     cq = system.constraint_jacobian(q, t)
     matrix = np.block([[system.mass_matrix(q), cq.T], [cq, np.zeros((k, k))]])
     rhs = np.concatenate([p, -_constraint_rates(system, q, t)])
-    return np.linalg.solve(matrix, rhs)[:n]
+    return factor(matrix, what="momentum-to-velocity matrix").solve(rhs)[:n]
 
 
 def _midpoint_forces(system: MultibodySystem, q: NDArray, v: NDArray) -> NDArray[np.float64]:
@@ -86,7 +86,7 @@ def _midpoint_forces(system: MultibodySystem, q: NDArray, v: NDArray) -> NDArray
 
 def _newton_matrix(system: MultibodySystem, q_mid: NDArray, v: NDArray, h: float, cq_start: NDArray,
                    cq_end: NDArray):
-    r"""Eq. (V5), LU-factored: :math:`[[M + \tfrac h2 (D_t - \dot M) + \tfrac{h^2}4 K_t, C_q(q_k)^T],
+    r"""Eq. (V5), factored by the rank rule (R1) (redundant constraints give minimum-norm steps): :math:`[[M + \tfrac h2 (D_t - \dot M) + \tfrac{h^2}4 K_t, C_q(q_k)^T],
     [C_q(q_{k+1}), 0]]` from the body tangents of generalized-alpha (:math:`K_t, D_t` at zero
     acceleration). It leaves out :math:`\tfrac{h^2}4\partial(\dot M\dot q)/\partial q`, which is
     :math:`O(h^2|\dot q|^2)` against ``M``, so modified Newton contracts by about that factor."""
@@ -97,11 +97,11 @@ def _newton_matrix(system: MultibodySystem, q_mid: NDArray, v: NDArray, h: float
         s = system.block(i)
         upper[s, s] -= 0.5 * h * body.mass_matrix_rate(q_mid[s], v[s])
     k = cq_start.shape[0]
-    return scipy.linalg.lu_factor(np.block([[upper, cq_start.T], [cq_end, np.zeros((k, k))]]), check_finite=False)
+    return factor(np.block([[upper, cq_start.T], [cq_end, np.zeros((k, k))]]), what="midpoint Newton matrix")
 
 
 def _step(system: MultibodySystem, q0: NDArray, p0: NDArray, t0: float, h: float, q_guess: NDArray,
-          scaled_lam: NDArray, tolerance: float, max_iterations: int, factors: tuple | None):
+          scaled_lam: NDArray, tolerance: float, max_iterations: int, factors: FactoredMatrix | None):
     r"""Solve Eq. (V2) for :math:`q_{k+1}` and :math:`\mu = h^2\lambda_k` (the scaled unknowns keep
     the matrix of Eq. (V5) well conditioned for any h) by modified Newton, starting from the
     factorised matrix of an earlier step when given. Returns ``(q1, mu, p1, iterations,
@@ -132,9 +132,12 @@ def _step(system: MultibodySystem, q0: NDArray, p0: NDArray, t0: float, h: float
             p1 = p0 + h * forces - cq0.T @ mu / h
             return q1, mu, p1, iteration, factors
         if factors is None or residual > _REBUILD_CONTRACTION * previous:  # contraction poor: rebuild
-            factors = _newton_matrix(system, q_mid, v, h, cq0, system.constraint_jacobian(q1, t1))
+            try:
+                factors = _newton_matrix(system, q_mid, v, h, cq0, system.constraint_jacobian(q1, t1))
+            except FloatingPointError as error:
+                return None, None, None, f"{error} (iteration {iteration})", None
         previous = residual
-        delta = scipy.linalg.lu_solve(factors, -np.concatenate([momentum_gap, gap]), check_finite=False)
+        delta = factors.solve(-np.concatenate([momentum_gap, gap]))
         q1 += delta[:n]
         mu += delta[n:]
     return None, None, None, (f"momentum residual {residual:.3e} (scale {momentum_scale:.3e}), largest constraint "

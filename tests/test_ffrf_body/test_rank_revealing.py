@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from body_fixtures import two_bar_chain
+from pendulum_fixtures import pendulum
 
 from ffrf.bennett_scene import assemble, build_bennett
 from ffrf.rank_revealing import equilibration, factor, rank_tolerance, singular_values
@@ -139,3 +140,36 @@ def test_near_rigid_bennett_keeps_its_small_physical_singular_values(monkeypatch
     assert min(smallest) < 1e-11  # the hard regime is reached (measured 6.0e-13)
     assert min(smallest) > 10.0 * rank_tolerance(scene.system.n_coordinates + scene.system.n_constraints)
     assert set(deficiencies) == {0}
+
+
+def test_redundant_hinge_gives_unique_accelerations_and_shared_reactions():
+    """A rigid pendulum held by the same hinge twice: the constraint matrix of Eq. (G4) is
+    singular (5 redundant rows), the accelerations are still those of the single hinge, and the
+    minimum-norm multipliers split the single hinge's reaction equally between the two copies."""
+    from ffrf.generalized_alpha import consistent_accelerations
+
+    system = pendulum(n_modes=0)[0]
+    twice = replace(system, constraints=system.constraints + system.constraints)
+    q = system.initial_state()
+    qd = np.zeros_like(q)
+    qdd_single, lam_single = consistent_accelerations(system, q, qd)
+    qdd_twice, lam_twice = consistent_accelerations(twice, q, qd)
+    np.testing.assert_allclose(qdd_twice, qdd_single, rtol=0, atol=1e-12 * np.abs(qdd_single).max())
+    # multipliers: the Euler-parameter normalisation first (not repeated), then each hinge copy
+    hinge = lam_single[1:]
+    assert lam_twice.size == 1 + 2 * hinge.size
+    np.testing.assert_allclose(lam_twice[0], lam_single[0], rtol=1e-12)
+    for copy in (lam_twice[1:1 + hinge.size], lam_twice[1 + hinge.size:]):
+        np.testing.assert_allclose(copy, 0.5 * hinge, rtol=0, atol=1e-12 * np.abs(hinge).max())
+
+
+def test_singular_iteration_matrix_stops_the_run_with_partial_results():
+    from ffrf.generalized_alpha import SingularIterationMatrix, generalized_alpha
+
+    system = pendulum(n_modes=0)[0]
+    twice = replace(system, constraints=system.constraints + system.constraints)
+    q = system.initial_state()
+    with pytest.raises(SingularIterationMatrix, match=r"singular \(\d+ zero singular value") as info:
+        generalized_alpha(twice, q, np.zeros_like(q), 0.01, 1e-3)
+    assert not info.value.partial.complete
+    assert info.value.partial.q.shape == (1, q.size)  # the start, kept
