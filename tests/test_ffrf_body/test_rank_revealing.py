@@ -2,7 +2,11 @@
 with so many free motions" and the solutions do not change under round-off, on synthetic matrices
 with a known null space and on the static tangents of the test fixtures."""
 
+import os
+import subprocess
+import sys
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -173,3 +177,54 @@ def test_singular_iteration_matrix_stops_the_run_with_partial_results():
         generalized_alpha(twice, q, np.zeros_like(q), 0.01, 1e-3)
     assert not info.value.partial.complete
     assert info.value.partial.q.shape == (1, q.size)  # the start, kept
+
+
+_KERNEL_RUN = """
+import sys
+sys.path[:0] = [{tests!r}]
+from dataclasses import replace
+import numpy as np
+from body_fixtures import two_bar_chain
+from ffrf.generalized_alpha import generalized_alpha
+from ffrf.static_solver import static_equilibrium
+chain = two_bar_chain()
+q0 = chain.initial_state(positions=[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]])
+q0 = static_equilibrium(replace(chain, gravity=np.zeros(3)), q0).q
+run = generalized_alpha(chain, q0, np.zeros_like(q0), 0.05, 1e-3)
+np.savez({out!r}, q0=q0, q=run.q)
+"""
+
+
+def _run_in_process(path, kernel: str | None):
+    """Run _KERNEL_RUN in a fresh Python with OpenBLAS's ``kernel`` (None: the one it detects)."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
+    if kernel is not None:
+        env["OPENBLAS_CORETYPE"] = kernel
+    script = _KERNEL_RUN.format(tests=str(Path(__file__).resolve().parents[1]), out=str(path))
+    return subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def detected_kernel_run(tmp_path_factory):
+    path = tmp_path_factory.mktemp("kernels") / "detected.npz"
+    result = _run_in_process(path, None)
+    assert result.returncode == 0, result.stderr[-2000:]
+    return np.load(path)
+
+
+@pytest.mark.parametrize("kernel", ["Haswell", "Zen", "Sandybridge", "Prescott"])
+def test_chain_results_agree_across_blas_kernels(kernel, tmp_path, detected_kernel_run):
+    """The issue's reproduction, run in a fresh process per OpenBLAS kernel (Haswell and Zen
+    failed before the rank rule) and compared with the kernel OpenBLAS detects on this CPU: the
+    equilibrium and the dynamic trajectory from it agree to the Newton tolerance (measured: at
+    most 1e-12 m apart)."""
+    env = dict(os.environ, OPENBLAS_CORETYPE=kernel)
+    probe = subprocess.run([sys.executable, "-c", "import numpy as np; np.linalg.solve(np.eye(3) + 1, np.ones(3))"],
+                           env=env, capture_output=True, timeout=120)
+    if probe.returncode != 0:
+        pytest.skip(f"this CPU cannot execute OpenBLAS's {kernel} kernel")  # not a failure of our code
+    result = _run_in_process(tmp_path / "run.npz", kernel)
+    assert result.returncode == 0, result.stderr[-2000:]
+    theirs = np.load(tmp_path / "run.npz")
+    np.testing.assert_allclose(theirs["q0"], detected_kernel_run["q0"], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(theirs["q"], detected_kernel_run["q"], rtol=0, atol=1e-10)
