@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import FEInputError
 from .materials import Material
-from .mesh import TetMesh, check_mesh
+from .mesh import TetMesh, check_mesh, oriented
 
 __all__ = ["FEModel", "rigid_body_modes"]
 
@@ -77,9 +77,11 @@ class FEModel:
 
     @classmethod
     def from_tet_mesh(cls, mesh: TetMesh, material: Material, order: int = 1) -> "FEModel":
-        """Assemble the model of a checked :class:`TetMesh` (see :func:`ffrf.mesh.check_mesh`)."""
+        """Assemble the model of a checked :class:`TetMesh` (see :func:`ffrf.mesh.check_mesh`); a mesh in the
+        opposite node order is reoriented with a warning (:func:`ffrf.mesh.oriented`)."""
         if order not in (1, 2):
             raise FEInputError(f"{mesh.name}: element order {order!r} is not supported; use 1 (P1) or 2 (P2)")
+        mesh = oriented(mesh)
         check_mesh(mesh)
         nodes, mass, stiffness, edges = _assemble(mesh, material, order)
         logger.info("%s: P%d model with %d nodes, %d DOFs", mesh.name, order, len(nodes), 3 * len(nodes))

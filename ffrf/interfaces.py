@@ -13,11 +13,17 @@ triangles whose three nodes are all in the set count).
   Its Basis and Fundamentals, 7th ed., sec. 6.3.5, uniform load on quadratic
   triangles), so corner weights are 0 there. Weighted averages of interface
   motion then use midside nodes only, which is exact for the surface integral.
+
+One rule for every selector (group, cylinder, node list or nodes file): the
+weights come from the boundary triangles the selection spans, unless the user
+gives a weight per node explicitly.
 """
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -31,10 +37,14 @@ __all__ = [
     "boundary_triangles",
     "interface_from_group",
     "interface_from_nodes",
+    "interface_from_nodes_file",
     "interface_from_triangles",
     "interface_in_cylinder",
     "triangles_in_cylinder",
+    "triangles_spanned_by",
 ]
+
+logger = logging.getLogger(__name__)
 
 # Relative size of the second singular value below which a node cloud is a line.
 _COLLINEAR_REL_TOL = 1e-9
@@ -133,30 +143,87 @@ def _check_not_collinear(name: str, model: FEModel, nodes: NDArray[np.int64]) ->
                              "it cannot transmit a moment about that line, select a surface patch instead")
 
 
+def triangles_spanned_by(mesh: TetMesh, nodes: ArrayLike) -> NDArray[np.int64]:
+    """Boundary triangles whose three vertices are all in ``nodes`` (indices of ``mesh.points``)."""
+    inside = np.zeros(len(mesh.points), dtype=bool)
+    vertices = np.asarray(nodes, dtype=np.int64)
+    inside[vertices[vertices < len(mesh.points)]] = True
+    tris = boundary_triangles(mesh)
+    return tris[inside[tris].all(axis=1)]
+
+
 def interface_from_nodes(model: FEModel, name: str, nodes: ArrayLike,
                          weights: ArrayLike | None = None) -> InterfaceNodes:
     """Interface from an explicit node list (e.g. a user's box selection).
 
-    Without ``weights`` every node gets the same weight; given weights are
-    normalised to sum 1. Prefer surface triangles (:func:`interface_from_triangles`)
-    when the nodes lie on a curved or unevenly meshed surface.
+    Without ``weights`` the rule of every selector applies: area weights of the
+    boundary triangles the nodes span (:func:`triangles_spanned_by`, then
+    :func:`interface_from_triangles`, which adds a P2 model's midside nodes);
+    listed nodes on no spanned triangle stay in the set with weight 0. Given
+    ``weights`` are used as they are, normalised to sum 1.
     """
     nodes = np.asarray(nodes, dtype=np.int64).reshape(-1)
     if nodes.size == 0:
         raise InterfaceError(f"interface {name!r} of {model.mesh.name}: the node set is empty; "
                              "check the selection and the units (metres)")
     if nodes.min() < 0 or nodes.max() >= len(model.nodes):
-        raise InterfaceError(f"interface {name!r} of {model.mesh.name}: node index out of range [0, {len(model.nodes)})")
+        raise InterfaceError(f"interface {name!r} of {model.mesh.name}: node index out of range "
+                             f"[0, {len(model.nodes)}); indices are 0-based")
     unique, first = np.unique(nodes, return_index=True)
     if len(unique) != len(nodes):
         raise InterfaceError(f"interface {name!r} of {model.mesh.name}: {len(nodes) - len(unique)} duplicate nodes; "
                              "pass each node once")
-    w = np.ones(len(nodes)) if weights is None else np.asarray(weights, dtype=float).reshape(-1)
-    if w.shape != nodes.shape or np.any(w < 0.0) or not w.sum() > 0.0:
-        raise InterfaceError(f"interface {name!r} of {model.mesh.name}: weights must be {len(nodes)} non-negative "
-                             "numbers with a positive sum")
+    if weights is None:
+        return _area_weighted(model, name, unique)
+    w = np.asarray(weights, dtype=float).reshape(-1)
+    if w.shape != nodes.shape or not np.all(np.isfinite(w)) or np.any(w < 0.0) or not w.sum() > 0.0:
+        raise InterfaceError(f"interface {name!r} of {model.mesh.name}: weights must be {len(nodes)} finite "
+                             "non-negative numbers with a positive sum")
     _check_not_collinear(name, model, unique[w[first] > 0.0])
     return InterfaceNodes(name, unique, w[first] / w.sum(), float("nan"))
+
+
+def _area_weighted(model: FEModel, name: str, nodes: NDArray[np.int64]) -> InterfaceNodes:
+    """Area weights of the boundary triangles spanned by ``nodes``; other listed nodes get weight 0."""
+    tris = triangles_spanned_by(model.mesh, nodes)
+    if len(tris) == 0:
+        raise InterfaceError(f"interface {name!r} of {model.mesh.name}: its {len(nodes)} nodes span no boundary "
+                             "triangle, so they carry no surface area; select surface nodes, or give a weight "
+                             "per node (second column of a nodes_file)")
+    surface = interface_from_triangles(model, name, tris)
+    extra = np.setdiff1d(nodes, surface.nodes)
+    if extra.size == 0:
+        return surface
+    logger.warning("interface %r of %s: %d listed nodes lie on no spanned boundary triangle; they stay in the "
+                   "interface with weight 0", name, model.mesh.name, extra.size)
+    all_nodes = np.union1d(surface.nodes, extra)
+    weights = np.zeros(len(all_nodes))
+    weights[np.searchsorted(all_nodes, surface.nodes)] = surface.weights
+    return InterfaceNodes(name, all_nodes, weights, surface.area)
+
+
+def interface_from_nodes_file(model: FEModel, name: str, path: str | Path) -> InterfaceNodes:
+    """Interface from a text file of 0-based node indices, one per line, with an optional second
+    column of weights (otherwise area weights, as :func:`interface_from_nodes`)."""
+    path = Path(path)
+    if not path.is_file():
+        raise InterfaceError(f"interface {name!r}: nodes_file {path} not found; give a path relative to the scene file")
+    if not path.read_text().strip():
+        raise InterfaceError(f"interface {name!r}: nodes_file {path} is empty; write one node index per line")
+    try:
+        table = np.loadtxt(path, ndmin=2)
+    except ValueError as error:
+        raise InterfaceError(f"interface {name!r}: nodes_file {path} is not a table of numbers ({error}); "
+                             "write one node index per line, optionally followed by its weight") from error
+    if table.shape[1] > 2:
+        raise InterfaceError(f"interface {name!r}: nodes_file {path} has {table.shape[1]} columns; write one "
+                             "node index per line, optionally followed by its weight")
+    indices = table[:, 0]
+    if not np.all(indices == np.round(indices)):
+        raise InterfaceError(f"interface {name!r}: nodes_file {path} lists non-integer node indices; the first "
+                             "column holds 0-based node indices")
+    weights = table[:, 1] if table.shape[1] == 2 else None
+    return interface_from_nodes(model, name, indices.astype(np.int64), weights)
 
 
 def interface_from_group(model: FEModel, name: str, group: str | None = None) -> InterfaceNodes:

@@ -12,6 +12,7 @@ Conventions (stated once for the package):
 from __future__ import annotations
 
 import logging
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -28,6 +29,7 @@ __all__ = [
     "MAX_LINK_EXTENT_M",
     "signed_volumes",
     "orient_positive",
+    "oriented",
     "mesh_quality",
     "quality_summary",
     "check_mesh",
@@ -131,6 +133,38 @@ def orient_positive(points: ArrayLike, tets: ArrayLike) -> NDArray[np.int64]:
     return tets
 
 
+def _degenerate(points: NDArray, tets: NDArray, volumes: NDArray) -> NDArray[np.bool_]:
+    """Tetrahedra flatter than ``_DEGENERATE_REL_VOLUME`` (mean edge length)^3: no orientation, no stiffness."""
+    mean_edge = float(np.sqrt(_edge_lengths_squared(points, tets)).mean())
+    return np.abs(volumes) <= _DEGENERATE_REL_VOLUME * mean_edge**3
+
+
+def oriented(mesh: TetMesh) -> TetMesh:
+    """``mesh`` in the positive node order; an all-inverted mesh is flipped with a warning, a mix is refused.
+
+    A mesh written in the opposite convention (as NGsolve and some exporters do) has every
+    tetrahedron inverted: that is a convention, so it is fixed. A mesh with both signs is broken
+    (folded or tangled elements) and no node swap repairs it. Degenerate tetrahedra have no sign;
+    :func:`check_mesh` refuses them.
+    """
+    if len(mesh.tets) == 0 or mesh.tets.min() < 0 or mesh.tets.max() >= len(mesh.points):
+        return mesh  # check_mesh names these errors
+    volumes = signed_volumes(mesh.points, mesh.tets)
+    signed = ~_degenerate(mesh.points, mesh.tets, volumes)
+    inverted = signed & (volumes < 0.0)
+    if not inverted.any():
+        return mesh
+    if inverted.sum() < signed.sum():
+        first = np.flatnonzero(inverted)[:3]
+        centroids = mesh.points[mesh.tets[first]].mean(axis=1)
+        raise MeshError(f"{mesh.name}: {int(inverted.sum())} of {int(signed.sum())} tetrahedra are inverted and "
+                        f"the others are not (first {first.tolist()} at {np.round(centroids, 6).tolist()} m): a "
+                        "folded or tangled mesh; remesh it")
+    warnings.warn(f"{mesh.name}: every tetrahedron has the opposite node order (negative volume); swapped "
+                  "nodes 2 and 3 of each", UserWarning, stacklevel=2)
+    return TetMesh(mesh.points, orient_positive(mesh.points, mesh.tets), dict(mesh.groups), mesh.name)
+
+
 def mesh_quality(points: ArrayLike, tets: ArrayLike) -> NDArray[np.float64]:
     """Mean-ratio quality of each tetrahedron.
 
@@ -185,8 +219,7 @@ def check_mesh(mesh: TetMesh) -> None:
         raise MeshError(f"{mesh.name}: the mesh is {extent:.4g} m long (> {MAX_LINK_EXTENT_M} m): "
                         "suspicious units, did you pass millimetres? use unit='mm'")
     vol = signed_volumes(mesh.points, mesh.tets)
-    mean_edge = float(np.sqrt(_edge_lengths_squared(mesh.points, mesh.tets)).mean())
-    degenerate = np.flatnonzero(np.abs(vol) <= _DEGENERATE_REL_VOLUME * mean_edge**3)
+    degenerate = np.flatnonzero(_degenerate(mesh.points, mesh.tets, vol))
     if degenerate.size:
         raise MeshError(f"{mesh.name}: {degenerate.size} degenerate (flat) tetrahedra, first {degenerate[:5].tolist()} "
                         f"with volume {vol[degenerate[0]]:.3g} m^3; remesh or remove sliver elements")
@@ -194,7 +227,7 @@ def check_mesh(mesh: TetMesh) -> None:
     if inverted.size:
         raise MeshError(f"{mesh.name}: {inverted.size} of {len(vol)} tetrahedra are inverted (negative volume), "
                         f"first {inverted[:5].tolist()}; if the whole mesh uses the opposite node order, "
-                        "fix it with ffrf.mesh.orient_positive(points, tets)")
+                        "fix it with ffrf.mesh.oriented(mesh) or ffrf.mesh.orient_positive(points, tets)")
     n_parts, labels = _face_adjacency_components(mesh.tets)
     if n_parts > 1:
         sizes = np.bincount(labels)

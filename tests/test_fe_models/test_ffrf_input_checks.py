@@ -44,6 +44,8 @@ def test_from_mesh_rejects_bad_material():
 def test_inverted_element_is_reported_with_remedy():
     points, tets = UNIT_TET
     with pytest.raises(MeshError, match="inverted.*orient_positive"):
+        check_mesh(TetMesh(points, tets[:, [0, 2, 1, 3]]))
+    with pytest.warns(UserWarning, match="opposite node order"):  # FEModel orients a consistent mesh itself
         FEModel.from_mesh(points, tets[:, [0, 2, 1, 3]], 1e9, 0.3, 450.0)
     fixed = orient_positive(points, tets[:, [0, 2, 1, 3]])
     assert FEModel.from_mesh(points, fixed, 1e9, 0.3, 450.0).total_mass == pytest.approx(450.0 * 1e-6 / 6)
@@ -105,6 +107,8 @@ def test_empty_and_collinear_node_interfaces():
     edge_nodes = np.flatnonzero((np.abs(points[:, 1]) < 1e-12) & (np.abs(points[:, 2]) < 1e-12))
     assert len(edge_nodes) >= 3
     with pytest.raises(InterfaceError, match="collinear"):
+        interface_from_nodes(model, "edge", edge_nodes, np.ones(len(edge_nodes)))
+    with pytest.raises(InterfaceError, match="span no boundary triangle"):
         interface_from_nodes(model, "edge", edge_nodes)
     face = np.flatnonzero(np.abs(points[:, 0]) < 1e-12)
     ok = interface_from_nodes(model, "face", face)
