@@ -100,7 +100,7 @@ def test_coupler_path_is_closed_and_on_the_motion():
 def test_factorisation_by_rational_linkages_recovers_all_four_axes():
     """Independent check: Rational Linkages factorises our C(t) two ways; the factors' axes are
     h0, h1 (one branch) and h3, h2 (the other branch) of the paper's linkage."""
-    rl = pytest.importorskip("rational_linkages", reason="rational_linkages is a test extra: pip install .[test]")
+    import rational_linkages as rl
     bennett = BennettLinkage.paper()
     curve = rl.RationalCurve.from_coeffs(bennett.motion_polynomial().coefficients.T.copy())
     factorisations = curve.factorize()

@@ -9,8 +9,15 @@ moments to round-off.
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from reduction_fixtures import (RHO_PLA, SmallFEModel, assemble, bar_model, end_faces, plate_with_bores,
-                                surface_area_weights)
+from reduction_fixtures import (
+    RHO_PLA,
+    SmallFEModel,
+    assemble,
+    bar_model,
+    end_faces,
+    plate_with_bores,
+    surface_area_weights,
+)
 
 from ffrf.craig_bampton import craig_bampton
 from ffrf.invariants import inertia_invariants, is_isotropic_mass, nodal_tilde
@@ -126,7 +133,6 @@ def test_nodal_tilde_is_the_cross_product(rng):
 
 
 def test_invariants_equal_exudyn_object_ffrf_reduced_order_interface(small):
-    pytest.importorskip("exudyn", reason="Exudyn is the reference implementation for this cross-check")
     from exudyn.FEM import FEMinterface, ObjectFFRFreducedOrderInterface
 
     model, red = small

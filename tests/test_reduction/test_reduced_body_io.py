@@ -8,8 +8,14 @@ import ffrf.reduced_io as reduced_io
 from ffrf.component_modes_post import element_strains, mode_displacements, von_mises_stress
 from ffrf.craig_bampton import craig_bampton
 from ffrf.invariants import inertia_invariants
-from ffrf.reduced_io import (FORMAT_VERSION, ReducedBodyFileError, cached_craig_bampton, load_reduced_body,
-                             reduction_fingerprint, save_reduced_body)
+from ffrf.reduced_io import (
+    FORMAT_VERSION,
+    ReducedBodyFileError,
+    cached_craig_bampton,
+    load_reduced_body,
+    reduction_fingerprint,
+    save_reduced_body,
+)
 
 
 @pytest.fixture(scope="module")

@@ -25,14 +25,17 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-import pytest
 
-pytest.importorskip("exudyn", reason="Exudyn is the reference implementation for these cross-checks")
-
-from ffrf.bennett_scene import assemble, build_bennett  # noqa: E402
-from validation.exudyn_bennett import (compare, exudyn_convention_system, probe_marker_offset,  # noqa: E402
-                                       run_exudyn_bennett, run_ffrf_bennett, static_exudyn_bennett,
-                                       static_ffrf_bennett)
+from ffrf.bennett_scene import assemble, build_bennett
+from validation.exudyn_bennett import (
+    compare,
+    exudyn_convention_system,
+    probe_marker_offset,
+    run_exudyn_bennett,
+    run_ffrf_bennett,
+    static_exudyn_bennett,
+    static_ffrf_bennett,
+)
 
 STEP, T_END, RHO_INF = 1e-3, 0.2, 0.9
 #: Issue 7 targets: driving torque (relative) and coupler / tracked nodes (relative to the elastic motion).

@@ -2,20 +2,16 @@
 
 Two scenes of ``tests/test_scene_file``: the flexible bar pendulum (dynamic, from the meshes'
 configuration) and a parametric PLA link driven about a horizontal axis through its first bore
-(quasi-static, static start: the drive about a horizontal axis lifts the link against gravity). Measured when
-written: sensors 1e-15 of their travel, torque 1e-12 relative, frequencies 1e-14.
+(quasi-static, static start: the drive about a horizontal axis lifts the link against gravity). Each test holds its own
+thresholds, about 100x what was measured on 2026-11-24 (AMD EPYC).
 """
 
 import json
 
 import numpy as np
-import pytest
+from scene_fixtures import PENDULUM, driven_link_scene, write_bar
 
-pytest.importorskip("exudyn", reason="Exudyn is the reference implementation for these cross-checks")
-
-from scene_fixtures import PENDULUM, driven_link_scene, write_bar  # noqa: E402
-
-from validation.__main__ import main  # noqa: E402
+from validation.__main__ import main
 
 DRIVEN = driven_link_scene("[0.0, 1.0, 0.0]", t_end=20.0, outputs=11, modes=3, sensor=True)
 
@@ -30,16 +26,21 @@ def report(tmp_path, text: str) -> dict:
 def test_dynamic_bar_pendulum_scene(tmp_path):
     write_bar(tmp_path)
     m = report(tmp_path, PENDULUM)
-    assert m["passed"], [c for c in m["checks"] if not c["passed"]]
+    assert m["modes"]["bar"]["max_rel_freq_diff"] < 1e-10  # measured 1.1e-12
+    assert 1.0 - m["modes"]["bar"]["min_mac_diag"] < 2e-13  # measured 1.8e-15
     tip = m["sensors"]["tip"]
     assert tip["travel_m"] > 1e-3  # the bar swings
-    assert tip["max_abs_diff_m"] < 1e-6 * tip["travel_m"]
+    assert tip["max_abs_diff_m"] < 6e-10 * tip["travel_m"]  # measured 6.2e-12 of the travel
 
 
 def test_quasi_static_driven_link_scene(tmp_path):
     m = report(tmp_path, DRIVEN)
-    assert m["passed"], [c for c in m["checks"] if not c["passed"]]
+    assert m["modes"]["link1"]["max_rel_freq_diff"] < 5e-13  # measured 3.8e-15
+    assert 1.0 - m["modes"]["link1"]["min_mac_diag"] < 2e-13  # measured 2.2e-16
     torque = m["torques"]["motor"]
     assert torque["max_abs_Nm"] > 1e-3  # lifting the link against gravity
-    assert m["sensors"]["far_bore"]["travel_m"] > 0.01
+    assert torque["max_rel_diff"] < 1e-7  # measured 8.6e-10
+    far_bore = m["sensors"]["far_bore"]
+    assert far_bore["travel_m"] > 0.01
+    assert far_bore["max_abs_diff_m"] < 3e-9 * far_bore["travel_m"]  # measured 3.3e-11 of the travel
     assert np.isfinite(m["exact_gravity_effect"]["far_bore"])

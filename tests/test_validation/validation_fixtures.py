@@ -13,11 +13,24 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
-from validation.exudyn_ffrf import (ReducedBody, Scene, TrajectoryResult, bar_body, free_body_scene, pendulum_scene,
-                                    run_exudyn, run_ffrf)
+from validation.exudyn_ffrf import (
+    ReducedBody,
+    Scene,
+    TrajectoryResult,
+    bar_body,
+    free_body_scene,
+    pendulum_scene,
+    run_exudyn,
+    run_ffrf,
+)
 
-#: Requirement of the issue: max |difference| of tracked positions below 1e-6 x bar length.
-RELATIVE_POSITION_TOLERANCE = 1e-6
+# Agreement of the two solvers, about 100x the largest difference measured on 2026-11-24 (AMD EPYC):
+#: tracked node and frame positions (m); measured 2.8e-12 m on the 0.2 m bar.
+POSITION_TOLERANCE_M = 3e-10
+#: Euler parameters (dimensionless); measured 8.9e-12.
+EULER_TOLERANCE = 1e-9
+#: modal coordinates, relative to their largest magnitude; measured 5.8e-10.
+MODAL_RELATIVE_TOLERANCE = 5e-8
 #: Stiffness-proportional damping of the pendulum scene (s), the same in both solvers.
 PENDULUM_BETA = 1e-3
 #: Number of fixed-interface modes (the basis has 6 + this many columns).
@@ -83,7 +96,8 @@ def rigid_pendulum_tip(body: ReducedBody, scene: Scene, times: NDArray[np.float6
     sol = solve_ivp(rhs, (0.0, times[-1]), [0.0, 0.0], t_eval=times, rtol=1e-11, atol=1e-13, method="DOP853")
     phi = sol.y[0]
     x, y, z = body.nodes[node]
-    return np.column_stack([x * np.cos(phi) + z * np.sin(phi), np.full_like(phi, y), -x * np.sin(phi) + z * np.cos(phi)])
+    return np.column_stack([x * np.cos(phi) + z * np.sin(phi), np.full_like(phi, y),
+                            -x * np.sin(phi) + z * np.cos(phi)])
 
 
 def centre_of_mass_path(body: ReducedBody, result: TrajectoryResult) -> NDArray[np.float64]:
