@@ -100,12 +100,17 @@ def test_report_states_the_verdict_first_and_links_its_figures():
 
 def test_summary_identifies_the_paper_linkage_from_both_solvers():
     """DH parameters identified (paper's method) from our and Exudyn's simulated link trajectories:
-    the PLA links sag by tens of micrometres, so a_i and alpha_i land near the paper's table."""
+    the PLA links sag by tens of micrometres, so a_i and alpha_i land near the paper's table (measured
+    0.011 mm and 0.024 deg away on this coarse scene, thresholds well below the paper's 0.134 mm effect),
+    and the two solvers' trajectories give the same parameters (measured 2e-6 mm and 1.4e-6 deg apart)."""
     data = json.loads((summary_folder() / "summary.json").read_text())
+    identified = data["pla"]["identified"]
     for solver in ("inhouse", "exudyn"):
-        dh = data["pla"]["identified"][solver]
-        assert np.allclose(dh["a_mm"], 1e3 * np.asarray(PAPER_A), atol=0.2)
-        assert np.allclose(np.abs(dh["alpha_deg"]), np.abs(np.degrees(PAPER_ALPHA)), atol=0.2)
+        dh = identified[solver]
+        assert np.allclose(dh["a_mm"], 1e3 * np.asarray(PAPER_A), atol=0.03)
+        assert np.allclose(np.abs(dh["alpha_deg"]), np.abs(np.degrees(PAPER_ALPHA)), atol=0.05)
+    for key in ("a_mm", "d_mm", "alpha_deg"):
+        assert np.allclose(identified["inhouse"][key], identified["exudyn"][key], atol=1e-4), key
     text = (summary_folder() / "summary.md").read_text()
     assert "| pla |" in text and "0.211" in text
 
