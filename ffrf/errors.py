@@ -7,7 +7,7 @@ and a remedy.
 
 from __future__ import annotations
 
-__all__ = ["FEInputError", "MeshError", "InterfaceError", "MaterialError", "GeometryError"]
+__all__ = ["FEInputError", "MeshError", "InterfaceError", "MaterialError", "GeometryError", "SceneError"]
 
 
 class FEInputError(ValueError):
@@ -28,3 +28,7 @@ class MaterialError(FEInputError):
 
 class GeometryError(FEInputError):
     """Impossible parametric link geometry (parallel axes, overlapping housings, ...)."""
+
+
+class SceneError(FEInputError):
+    """A scene file that cannot be built; the message names the entry and the fix."""

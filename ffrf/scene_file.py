@@ -26,8 +26,9 @@ mesh coordinates are world coordinates at t = 0 (as in the built-in Bennett scen
     modes = 4
     interfaces = [                    # the first is the body's frame interface
         {name = "bore0", group = "joint0"},
-        {name = "bore1", cylinder = {point = [0.1, 0, 0], direction = [0, 0, 1], radius = 0.0095, axial_extent = [-0.01, 0.01]}},
-        {name = "pad", nodes_file = "pad_nodes.txt"},
+        {name = "bore1", cylinder = {point = [0.1, 0, 0], direction = [0, 0, 1], radius = 0.0095,
+                                     axial_extent = [-0.01, 0.01]}},
+        {name = "pad", nodes_file = "pad_nodes.txt"},   # 0-based node indices, optional 2nd column: weights
     ]
 
     [[joints]]
@@ -43,7 +44,12 @@ mesh coordinates are world coordinates at t = 0 (as in the built-in Bennett scen
     [[sensors]]
     name = "tip"
     body = "link"
-    point = [0.2, 0.0, 0.0]           # the mesh node nearest to this point (world, t = 0)
+    point = [0.2, 0.0, 0.0]           # the mesh node nearest to this point (world, t = 0); or node = index
+
+Every interface selector weights its nodes by the surface area of the boundary triangles they span
+(``ffrf.interfaces``), unless a ``nodes_file`` gives a weight per node in a second column. The file is
+checked against :mod:`ffrf.scene_schema` before anything is built: an unknown or misspelt key, a wrong
+type or an impossible value is a :class:`SceneError` naming the key, where it is and the fix.
 """
 
 from __future__ import annotations
@@ -60,29 +66,26 @@ from numpy.typing import NDArray
 
 from .craig_bampton import CraigBamptonBasis, craig_bampton
 from .drives import CosineRamp, RampedAngle, rpm
-from .errors import FEInputError
+from .errors import SceneError
 from .euler_parameters import rotation_matrix
 from .fe_model import FEModel
 from .flexible_body import FlexibleBody
 from .generalized_alpha import generalized_alpha
-from .interfaces import InterfaceNodes, interface_from_group, interface_from_nodes, interface_in_cylinder
+from .interfaces import InterfaceNodes, interface_from_group, interface_from_nodes_file, interface_in_cylinder
 from .joints import GroundFrame, MarkerJoint, driven_revolute_joint, fixed_joint, revolute_joint
 from .link_geometry import bennett_axes, mesh_link, paper_link_axes
-from .markers import JOINT_OFFSETS, attach_joint_point, rigid_interface_marker
+from .markers import attach_joint_point, rigid_interface_marker
 from .materials import Material
 from .mesh import read_mesh
 from .modal_moments import modal_moments
 from .output import write_csv
+from .scene_schema import check_scene
 from .static_solver import quasi_static, static_equilibrium
 from .system import MultibodySystem
 
 __all__ = ["SceneError", "FileScene", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
 
 log = logging.getLogger(__name__)
-
-
-class SceneError(FEInputError):
-    """A scene file that cannot be built; the message names the entry and the fix."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,54 +108,38 @@ class FileScene:
     driven: tuple[str, ...]
 
 
-def _require(table: dict, key: str, where: str):
-    if key not in table:
-        raise SceneError(f"{where}: missing required key {key!r}")
-    return table[key]
-
-
 def _mesh(entry: dict, base: Path, where: str):
     if "mesh" in entry:
         path = base / entry["mesh"]
-        if not path.exists():
-            raise SceneError(f"{where}: mesh file {path} not found")
+        if not path.is_file():
+            raise SceneError(f"{where}: mesh file {path} not found; give a path relative to the scene file")
         return read_mesh(path, unit=entry.get("unit"))
-    if "parametric" in entry:
-        spec = entry["parametric"]
-        first, second, names = paper_link_axes(int(_require(spec, "link", where)),
-                                               bennett_axes(float(spec.get("alpha3_deg", 90.0))))
-        mesh, _ = mesh_link(first, second, h=float(spec.get("h", 6e-3)), names=names, mount=int(spec["link"]) == 0,
-                            name=entry["name"])
-        return mesh
-    raise SceneError(f"{where}: give either mesh = \"file\" or parametric = {{link = ...}}")
+    spec = entry["parametric"]
+    first, second, names = paper_link_axes(spec["link"], bennett_axes(float(spec.get("alpha3_deg", 90.0))))
+    mesh, _ = mesh_link(first, second, h=float(spec.get("h", 6e-3)), names=names, mount=spec["link"] == 0,
+                        name=entry["name"])
+    return mesh
 
 
-def _interface(fe: FEModel, spec: dict, base: Path, where: str) -> InterfaceNodes:
-    name = _require(spec, "name", where)
+def _interface(fe: FEModel, spec: dict, base: Path) -> InterfaceNodes:
+    name = spec["name"]
     if "group" in spec:
         return interface_from_group(fe, name, spec["group"])
     if "cylinder" in spec:
         c = spec["cylinder"]
         return interface_in_cylinder(fe, name, c["point"], c["direction"], float(c["radius"]),
                                      tuple(c["axial_extent"]), float(c.get("tolerance", 1e-4)))
-    if "nodes_file" in spec:
-        nodes = np.loadtxt(base / spec["nodes_file"], dtype=np.int64, ndmin=1)
-        return interface_from_nodes(fe, name, nodes)
-    raise SceneError(f"{where}, interface {name!r}: select it by group, cylinder or nodes_file")
+    return interface_from_nodes_file(fe, name, base / spec["nodes_file"])
 
 
 def _body(entry: dict, base: Path, beta: float, exact_gravity: bool) -> tuple[FileBody, FlexibleBody]:
-    where = f"body {entry.get('name', '?')!r}"
-    name = _require(entry, "name", "a [[bodies]] entry")
-    m = _require(entry, "material", where)
+    name = entry["name"]
+    m = entry["material"]
     material = Material(float(m["E"]), float(m["nu"]), float(m["rho"]), name=f"{name} material")
-    fe = FEModel.from_tet_mesh(_mesh(entry, base, where), material, int(entry.get("order", 2)))
-    specs = _require(entry, "interfaces", where)
-    if not specs:
-        raise SceneError(f"{where}: list at least one interface (the first is the body's frame)")
+    fe = FEModel.from_tet_mesh(_mesh(entry, base, f"body {name!r}"), material, entry.get("order", 2))
     interfaces = {}
-    for spec in specs:
-        interface = _interface(fe, spec, base, where)
+    for spec in entry["interfaces"]:
+        interface = _interface(fe, spec, base)
         interfaces[interface.name] = interface
     reduction = craig_bampton(fe, list(interfaces.values()), int(entry.get("modes", 4)))
     body = FlexibleBody(name, modal_moments(fe.nodes, fe.mass, reduction.basis), reduction.reduced_stiffness,
@@ -168,20 +155,14 @@ def _joint_frame(axis) -> NDArray:
 
 def _joint(spec: dict, index: dict[str, int], bodies: list[FileBody], joint_offsets: str) -> MarkerJoint:
     name = spec.get("name", "joint")
-    where = f"joint {name!r}"
     kind = spec.get("type", "revolute")
 
-    def marker(side: str):
-        body_name = _require(spec, f"body{side}", where)
+    def marker(side: str):  # the scene schema has checked the body and interface names
+        body_name = spec[f"body{side}"]
         if body_name == "ground":
             return None
-        if body_name not in index:
-            raise SceneError(f"{where}: unknown body {body_name!r}; bodies are {sorted(index)}")
         body = bodies[index[body_name]]
-        interface_name = _require(spec, f"interface{side}", where)
-        if interface_name not in body.interfaces:
-            raise SceneError(f"{where}: body {body_name!r} has no interface {interface_name!r}; it has "
-                             f"{sorted(body.interfaces)}")
+        interface_name = spec[f"interface{side}"]
         itf = body.interfaces[interface_name]
         return rigid_interface_marker(index[body_name], body.fe.nodes, body.reduction.basis, itf.nodes, itf.weights,
                                       name=f"{body_name}:{interface_name}")
@@ -189,8 +170,6 @@ def _joint(spec: dict, index: dict[str, int], bodies: list[FileBody], joint_offs
     m0, m1 = marker("0"), marker("1")
     if m1 is None:
         m0, m1 = m1, m0
-    if m1 is None:
-        raise SceneError(f"{where}: at least one side must be a body")
     frame = _joint_frame(spec.get("axis", [0.0, 0.0, 1.0]))
     point = np.asarray(spec.get("point", m1.point), dtype=float)
     if m0 is None:
@@ -202,12 +181,10 @@ def _joint(spec: dict, index: dict[str, int], bodies: list[FileBody], joint_offs
         return revolute_joint(side0, m1, frame, frame, offset0, offset1, name=name)
     if kind == "fixed":
         return fixed_joint(side0, m1, frame, frame, offset0, offset1, name=name)
-    if kind == "driven_revolute":
-        d = _require(spec, "drive", where)
-        ramp = CosineRamp(rpm(float(d["rpm"])), float(d.get("ramp_time", 1.0)))
-        start = np.radians(float(d.get("start_angle_deg", 0.0)))
-        return driven_revolute_joint(side0, m1, RampedAngle(start, ramp), frame, frame, offset0, offset1, name=name)
-    raise SceneError(f"{where}: type {kind!r} is unknown; use revolute, fixed or driven_revolute")
+    d = spec["drive"]  # driven_revolute, the only other type the schema admits
+    ramp = CosineRamp(rpm(float(d["rpm"])), float(d.get("ramp_time", 1.0)))
+    start = np.radians(float(d.get("start_angle_deg", 0.0)))
+    return driven_revolute_joint(side0, m1, RampedAngle(start, ramp), frame, frame, offset0, offset1, name=name)
 
 
 def load_scene(path: str | Path) -> FileScene:
@@ -217,32 +194,40 @@ def load_scene(path: str | Path) -> FileScene:
         data = tomllib.loads(path.read_text())
     except (OSError, tomllib.TOMLDecodeError) as error:
         raise SceneError(f"{path}: cannot read the scene ({error})") from error
+    check_scene(data, path.name)
     settings = dict(data.get("scene", {}))
     beta = float(settings.get("beta", 0.0))
-    built = [_body(entry, path.parent, beta, bool(settings.get("exact_gravity", True))) for entry in data.get("bodies", [])]
-    if not built:
-        raise SceneError(f"{path}: no [[bodies]]")
+    built = [_body(entry, path.parent, beta, settings.get("exact_gravity", True)) for entry in data["bodies"]]
     bodies = [b for b, _ in built]
     index = {b.name: k for k, b in enumerate(bodies)}
-    if len(index) != len(bodies):
-        raise SceneError(f"{path}: body names must be unique")
     joint_offsets = settings.get("joint_offsets", "body")
-    if joint_offsets not in JOINT_OFFSETS:
-        raise SceneError(f"{path}: [scene] joint_offsets must be one of {JOINT_OFFSETS}, got {joint_offsets!r}")
     joints = [_joint(spec, index, bodies, joint_offsets) for spec in data.get("joints", [])]
     system = MultibodySystem(tuple(body for _, body in built), tuple(joints),
                              gravity=np.asarray(settings.get("gravity", [0.0, 0.0, -9.81]), dtype=float))
-    sensors = {}
-    for spec in data.get("sensors", []):
-        name = _require(spec, "name", "a [[sensors]] entry")
-        body = _require(spec, "body", f"sensor {name!r}")
-        if body not in index:
-            raise SceneError(f"sensor {name!r}: unknown body {body!r}; bodies are {sorted(index)}")
-        nodes = bodies[index[body]].fe.nodes
-        node = int(spec["node"]) if "node" in spec else int(np.argmin(np.linalg.norm(nodes - spec["point"], axis=1)))
-        sensors[name] = (index[body], node)
+    sensors = {spec["name"]: (index[spec["body"]], _sensor_node(spec, bodies[index[spec["body"]]].fe))
+               for spec in data.get("sensors", [])}
     driven = tuple(j.name for j in joints if j.angle is not None)
     return FileScene(settings.get("name", path.stem), tuple(bodies), system, settings, sensors, driven)
+
+
+#: A sensor point farther than this fraction of its body's bounding-box diagonal from every node is a mistake.
+SENSOR_REACH = 0.1
+
+
+def _sensor_node(spec: dict, fe: FEModel) -> int:
+    """The node a sensor reads: given, or the node nearest to its point (which must lie on the body)."""
+    if "node" in spec:
+        if spec["node"] >= len(fe.nodes):
+            raise SceneError(f"sensor {spec['name']!r}: node {spec['node']} does not exist; body {spec['body']!r} "
+                             f"has nodes 0 to {len(fe.nodes) - 1}")
+        return spec["node"]
+    distances = np.linalg.norm(fe.nodes - np.asarray(spec["point"], dtype=float), axis=1)
+    size = float(np.linalg.norm(np.ptp(fe.nodes, axis=0)))
+    if distances.min() > SENSOR_REACH * size:
+        raise SceneError(f"sensor {spec['name']!r}: point {spec['point']} is {distances.min():.4g} m from the nearest "
+                         f"node of body {spec['body']!r} (body size {size:.4g} m); give a point on the body, in "
+                         "metres and world coordinates at t = 0")
+    return int(np.argmin(distances))
 
 
 def start_state(scene: FileScene) -> NDArray[np.float64]:
@@ -287,8 +272,8 @@ def simulate_scene(scene: FileScene, q0: NDArray | None = None, progress=None) -
     if mode == "dynamic":
         step = float(s.get("step", 1e-3))
         every = max(1, int(round(t_end / step / max(outputs - 1, 1))))
-        result = generalized_alpha(scene.system, q0, np.zeros_like(q0), t_end, step, rho_inf=float(s.get("rho_inf", 0.9)),
-                                   output_every=every, progress=progress)
+        result = generalized_alpha(scene.system, q0, np.zeros_like(q0), t_end, step,
+                                   rho_inf=float(s.get("rho_inf", 0.9)), output_every=every, progress=progress)
         return result.time, result.q, result.multipliers
     raise SceneError(f"scene mode {mode!r}: use 'dynamic' or 'quasi_static'")
 

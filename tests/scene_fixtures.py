@@ -77,6 +77,6 @@ drive = {{rpm = 1.0, ramp_time = 1.0}}
         text += """[[sensors]]
 name = "far_bore"
 body = "link1"
-point = [0.11, 0.0, 0.0]
+point = [-0.11, 0.0, 0.0]               # the second bore (joint1) of link 1
 """
     return text

@@ -35,12 +35,12 @@ def test_dynamic_bar_pendulum_scene(tmp_path):
 
 def test_quasi_static_driven_link_scene(tmp_path):
     m = report(tmp_path, DRIVEN)
-    assert m["modes"]["link1"]["max_rel_freq_diff"] < 5e-13  # measured 3.8e-15
-    assert 1.0 - m["modes"]["link1"]["min_mac_diag"] < 2e-13  # measured 2.2e-16
+    assert m["modes"]["link1"]["max_rel_freq_diff"] < 5e-13  # measured 4.9e-15
+    assert 1.0 - m["modes"]["link1"]["min_mac_diag"] < 2e-13  # measured 6.7e-16
     torque = m["torques"]["motor"]
     assert torque["max_abs_Nm"] > 1e-3  # lifting the link against gravity
     assert torque["max_rel_diff"] < 1e-7  # measured 8.6e-10
     far_bore = m["sensors"]["far_bore"]
     assert far_bore["travel_m"] > 0.01
-    assert far_bore["max_abs_diff_m"] < 3e-9 * far_bore["travel_m"]  # measured 3.3e-11 of the travel
+    assert far_bore["max_abs_diff_m"] < 3e-9 * far_bore["travel_m"]  # measured 4.2e-11 of the travel
     assert np.isfinite(m["exact_gravity_effect"]["far_bore"])
