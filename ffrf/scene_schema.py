@@ -21,6 +21,10 @@ from .markers import JOINT_OFFSETS
 __all__ = ["Key", "SCHEMA", "check_scene"]
 
 JOINT_TYPES = ("revolute", "fixed", "driven_revolute")
+#: Runs beyond these sizes are typing mistakes, not studies: they would not finish (or not fit in memory).
+MAX_TIME_STEPS = 10_000_000
+MAX_OUTPUTS = 1_000_000
+PARAMETRIC_H_RANGE = (5e-4, 0.05)  # m: finer meshes of a whole link do not fit in memory
 MESH_UNITS = ("m", "mm")
 MODES = ("dynamic", "quasi_static")
 
@@ -76,7 +80,7 @@ def _nonzero(value) -> str | None:
 MATERIAL = {"E": Key("number", True, _positive), "nu": Key("number", True, _between(-1.0, 0.5, closed=False)),
             "rho": Key("number", True, _positive)}
 PARAMETRIC = {"link": Key("integer", True, _one_of((0, 1, 2, 3))), "alpha3_deg": Key("number"),
-              "h": Key("number", False, _positive)}
+              "h": Key("number", False, _between(*PARAMETRIC_H_RANGE, closed=True))}
 CYLINDER = {"point": Key("vector3", True), "direction": Key("vector3", True, _nonzero_vector),
             "radius": Key("number", True, _positive), "axial_extent": Key("pair", True, _ordered_pair),
             "tolerance": Key("number", False, _positive)}
@@ -96,7 +100,7 @@ SENSOR = {"name": Key("string", True), "body": Key("string", True), "point": Key
 SETTINGS = {"name": Key("string"), "gravity": Key("vector3"), "beta": Key("number", False, _non_negative),
             "mode": Key("string", False, _one_of(MODES)), "t_end": Key("number", False, _positive),
             "step": Key("number", False, _positive), "rho_inf": Key("number", False, _between(0.0, 1.0, closed=True)),
-            "outputs": Key("integer", False, _at_least(2)),
+            "outputs": Key("integer", False, _between(2, MAX_OUTPUTS, closed=True)),
             "joint_offsets": Key("string", False, _one_of(JOINT_OFFSETS)), "exact_gravity": Key("boolean"),
             "static_start": Key("boolean")}
 #: The whole document: ``[scene]``, ``[[bodies]]``, ``[[joints]]``, ``[[sensors]]``.
@@ -209,9 +213,17 @@ def _check_joint(joint: dict, interfaces: Mapping[str, set[str]], where: str) ->
                              f"{sorted(interfaces[body])}")
 
 
+def _check_run_size(settings: dict, where: str) -> None:
+    steps = settings.get("t_end", 1.0) / settings.get("step", 1e-3)
+    if settings.get("mode", "dynamic") == "dynamic" and steps > MAX_TIME_STEPS:
+        raise SceneError(f"{where}: t_end / step = {steps:.3g} time steps (more than {MAX_TIME_STEPS:.0e}); check "
+                         "the units (seconds) or split the run")
+
+
 def check_scene(document: dict, where: str = "scene") -> None:
     """Raise :class:`SceneError` for the first thing in a parsed scene file that is not allowed."""
     _check_table(document, SCHEMA, where)
+    _check_run_size(document.get("scene", {}), f"{where}, scene")
     bodies, joints, sensors = document["bodies"], document.get("joints", []), document.get("sensors", [])
     if not bodies:
         raise SceneError(f"{where}: no [[bodies]]; a scene needs at least one body")

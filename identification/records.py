@@ -58,6 +58,15 @@ def _link_index(name: str) -> int | None:
     return int(match.group(1)) if match else None
 
 
+def _numbers(cells: list[str], path: Path, line: int) -> list[float]:
+    """A data row of a Vicon export as floats (empty cells: NaN, a missing frame)."""
+    try:
+        return [float(c) if c.strip() else np.nan for c in cells]
+    except ValueError as error:
+        raise IdentificationError(f"{path}, line {line}: {error}; data rows hold numbers or empty cells only") \
+            from error
+
+
 def read_vicon_csv(path: str | Path, segments: dict[str, int] | None = None, unit: str = "mm") -> LinkRecord:
     """Read a Vicon Nexus segment export: a title row, the frame rate, a row of segment names,
     a header ``Frame, Sub Frame, RX, RY, RZ, TX, TY, TZ, ...`` and a row of units; missing
@@ -68,7 +77,7 @@ def read_vicon_csv(path: str | Path, segments: dict[str, int] | None = None, uni
     path = Path(path)
     scale = {"mm": 1e-3, "m": 1.0}.get(unit)
     if scale is None:
-        raise ValueError(f"unit must be 'mm' or 'm', got {unit!r}")
+        raise IdentificationError(f"unit must be 'mm' or 'm', got {unit!r}")
     with path.open(newline="") as handle:
         rows = list(csv.reader(handle))
     header_row = next((i for i, r in enumerate(rows) if r and r[0].strip().lower() == "frame"), None)
@@ -83,8 +92,10 @@ def read_vicon_csv(path: str | Path, segments: dict[str, int] | None = None, uni
             except ValueError:
                 continue
     data_rows = [r for r in rows[header_row + 2:] if r and r[0].strip()]
-    table = np.array([[float(c) if c.strip() else np.nan for c in r[: len(header)]] + [np.nan] * (len(header) - len(r))
-                      for r in data_rows])
+    if not data_rows:
+        raise IdentificationError(f"{path}: no data rows below the header and unit rows; export the trajectories")
+    table = np.array([_numbers(r[: len(header)], path, header_row + 3 + k) + [np.nan] * (len(header) - len(r))
+                      for k, r in enumerate(data_rows)])
     points: dict[int, NDArray] = {}
     for column, name in enumerate(names):
         if not name.strip():

@@ -1,0 +1,90 @@
+"""Every class of bad scene-file input gets a one-line SceneError naming the key, where it is and the fix.
+
+Each case edits the valid bar-pendulum scene of ``scene_fixtures`` by one text replacement; the
+schema refuses it before any body is built, so the cases are cheap."""
+
+import pytest
+from scene_fixtures import PENDULUM, write_bar
+
+from ffrf.errors import FEInputError, MaterialError, SceneError
+from ffrf.scene_file import load_scene
+
+CASES = {
+    # class: (replace this, by this, expected words in the message)
+    "unknown table": ("[[sensors]]", "[[sensor]]", ["unknown key 'sensor'", "did you mean 'sensors'"]),
+    "misspelt setting": ("gravity =", "gravty =", ["scene.toml, scene", "'gravty'", "did you mean 'gravity'"]),
+    "misspelt drive key": ('type = "revolute"', 'type = "driven_revolute"\ndrive = {rpmm = 1.0}',
+                           ["joints[0] 'hinge', drive", "'rpmm'", "did you mean 'rpm'"]),
+    "string for a number": ("t_end = 0.1", 't_end = "0.1"', ["'t_end' must be a number", "'0.1'"]),
+    "boolean for a number": ("step = 1e-3", "step = true", ["'step' must be a number"]),
+    "nan": ("step = 1e-3", "step = nan", ["'step' must be finite"]),
+    "infinite gravity": ("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, 0.0, -inf]", ["'gravity' must be finite"]),
+    "vector of wrong length": ("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, -9.81]",
+                               ["'gravity' must be a list of 3 numbers"]),
+    "zero step": ("step = 1e-3", "step = 0.0", ["'step' must be > 0"]),
+    "negative end time": ("t_end = 0.1", "t_end = -1.0", ["'t_end' must be > 0"]),
+    "too few outputs": ("outputs = 101", "outputs = 1", ["'outputs' must lie in [2, 1e+06]"]),
+    "run too long": ("t_end = 0.1", "t_end = 1e5", ["1e+08 time steps", "check the units"]),
+    "rho_inf out of range": ("rho_inf = 0.8", "rho_inf = 1.5", ["'rho_inf' must lie in [0, 1]"]),
+    "unknown mode": ('mode = "dynamic"', 'mode = "static"', ["'mode' must be one of", "quasi_static"]),
+    "negative Young's modulus": ("E = 1e8", "E = -1e8", ["bodies[0] 'bar', material", "'E' must be > 0"]),
+    "zero density": ("rho = 450.0", "rho = 0.0", ["'rho' must be > 0"]),
+    "Poisson ratio 0.5": ("nu = 0.3", "nu = 0.5", ["'nu' must lie in (-1, 0.5)"]),
+    "missing material": ("material = {E = 1e8, nu = 0.3, rho = 450.0}\n", "",
+                         ["missing required key 'material'"]),
+    "unknown unit": ('unit = "mm"', 'unit = "inch"', ["'unit' must be one of ['m', 'mm']"]),
+    "element order 3": ("order = 1", "order = 3", ["'order' must be one of [1, 2]"]),
+    "negative mode count": ("modes = 3", "modes = -1", ["'modes' must be >= 0"]),
+    "no interface": ('interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]', "interfaces = []",
+                     ["list at least one interface"]),
+    "two selectors": ('nodes_file = "hinge.txt"}', 'nodes_file = "hinge.txt", group = "end"}',
+                      ["exactly one of group, cylinder or nodes_file"]),
+    "zero joint axis": ("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 0.0]", ["'axis' has zero length"]),
+    "unknown joint type": ('type = "revolute"', 'type = "prismatic"', ["'type' must be one of", "driven_revolute"]),
+    "drive on a plain revolute": ('type = "revolute"', 'type = "revolute"\ndrive = {rpm = 1.0}',
+                                  ["a revolute joint has no drive"]),
+    "driven joint without drive": ('type = "revolute"', 'type = "driven_revolute"', ["needs drive = {rpm"]),
+    "zero drive speed": ('type = "revolute"', 'type = "driven_revolute"\ndrive = {rpm = 0.0}', ["'rpm' must not be 0"]),
+    "unknown body in a joint": ('body1 = "bar"', 'body1 = "rod"', ["unknown body 'rod'", "bodies are ['bar']"]),
+    "unknown interface": ('interface1 = "hinge"', 'interface1 = "bore"', ["no interface 'bore'", "['hinge']"]),
+    "duplicate body names": ("[[joints]]", '[[bodies]]\nname = "bar"\nmesh = "bar.vtu"\nmaterial = {E = 1e8, '
+                             'nu = 0.3, rho = 450.0}\ninterfaces = [{name = "a", group = "g"}]\n[[joints]]',
+                             ["two bodies are named 'bar'"]),
+    "sensor on an unknown body": ('body = "bar"\npoint', 'body = "beam"\npoint', ["sensors[0] 'tip'",
+                                                                                 "unknown body 'beam'"]),
+    "sensor point and node": ("point = [0.2, 0.0, 0.0]", "point = [0.2, 0.0, 0.0]\nnode = 3",
+                              ["exactly one of point"]),
+    "missing mesh file": ('mesh = "bar.vtu"', 'mesh = "missing.vtu"', ["missing.vtu not found"]),
+    "not TOML": ("[scene]", "[scene", ["cannot read the scene"]),
+}
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_bad_scene_is_refused_with_a_clear_message(tmp_path, case):
+    old, new, words = CASES[case]
+    assert PENDULUM.count(old) >= 1, "the case must edit the valid scene"
+    write_bar(tmp_path)
+    (tmp_path / "scene.toml").write_text(PENDULUM.replace(old, new, 1))
+    with pytest.raises(SceneError) as error:
+        load_scene(tmp_path / "scene.toml")
+    message = str(error.value)
+    assert "\n" not in message
+    for word in words:
+        assert word in message, (word, message)
+
+
+def test_sensor_point_off_the_body_is_refused(tmp_path):
+    write_bar(tmp_path)
+    (tmp_path / "scene.toml").write_text(PENDULUM.replace("point = [0.2, 0.0, 0.0]", "point = [0.2, 0.5, 0.0]"))
+    with pytest.raises(SceneError, match=r"sensor 'tip': point .* is 0.4\d* m from the nearest node of body 'bar'"):
+        load_scene(tmp_path / "scene.toml")
+
+
+def test_material_is_checked_outside_scene_files_too():
+    from ffrf.materials import Material
+
+    for arguments, words in [((-1.0, 0.3, 1.0), "E"), ((1e9, 0.5, 1.0), "nu"), ((1e9, 0.3, 0.0), "rho"),
+                             ((float("nan"), 0.3, 1.0), "E")]:
+        with pytest.raises(MaterialError, match=words):
+            Material(*arguments, name="test")
+    assert issubclass(SceneError, FEInputError) and issubclass(MaterialError, FEInputError)
