@@ -13,7 +13,6 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-
 from .errors import FEInputError
 from .fe_model import FEModel
 from .interfaces import interface_from_group
@@ -52,6 +51,16 @@ def link_summary(model: FEModel, geometry, interfaces) -> dict:
     }
 
 
+def _output_folder(path: Path) -> Path:
+    """Create ``--out`` before the work, so that an unwritable folder fails at once, not after a long run."""
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise FEInputError(f"cannot write to --out {path} ({error.strerror}); give a folder you can write to") \
+            from error
+    return path
+
+
 def _configure_mesh(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--link", type=int, choices=(0, 1, 2, 3), required=True, help="link index, 0 = base")
     parser.add_argument("--alpha3-deg", type=float, default=90.0, help="base-link twist alpha_3 in degrees")
@@ -67,7 +76,7 @@ def _run_mesh(args: argparse.Namespace) -> int:
                                mount=args.link == 0, name=stem)
     model = FEModel.from_tet_mesh(mesh, PLA, args.order)
     interfaces = [interface_from_group(model, group) for group in sorted(mesh.groups)]
-    args.out.mkdir(parents=True, exist_ok=True)
+    _output_folder(args.out)
     vtu = write_vtu(args.out / f"{stem}.vtu", mesh)
     summary = link_summary(model, geometry, interfaces)
     summary.update(link=args.link, alpha3_deg=args.alpha3_deg, h_m=args.h, vtu=vtu.name)
@@ -123,6 +132,7 @@ def _run_bennett(args: argparse.Namespace) -> int:
     from .bennett_scene import build_bennett
 
     started = time.perf_counter()
+    _output_folder(args.out)
     print(f"Building the {args.variant} Bennett scene: 4 links, h = {1e3 * args.h:g} mm, P{args.order}, "
           f"{args.modes} fixed-interface modes per link ...", file=sys.stderr)
     scene = build_bennett(args.variant, h=args.h, order=args.order, n_modes=args.modes,
@@ -148,8 +158,9 @@ def _run_bennett(args: argparse.Namespace) -> int:
     plot_driving_torque({args.variant: result}, args.out / "driving_torque.png")
     summary = result.summary()
     paper = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}[args.variant]
-    print(f"{args.variant}: max coupler deviation from the ideal path {1e3 * summary['max_coupler_deviation_m']:.4f} mm "
-          f"at the same drive angle, {1e3 * summary['max_coupler_distance_to_path_m']:.4f} mm to the closest point "
+    print(f"{args.variant}: max coupler deviation from the ideal path "
+          f"{1e3 * summary['max_coupler_deviation_m']:.4f} mm at the same drive angle, "
+          f"{1e3 * summary['max_coupler_distance_to_path_m']:.4f} mm to the closest point "
           f"(paper: below {paper} mm); max driving torque {1e3 * summary['max_abs_driving_torque_Nm']:.3f} N mm; "
           f"largest constraint residual {summary['max_constraint_residual']:.1e}; energy balance closed to "
           f"{summary['energy_balance_relative']:.1e} of the drive work; wall time "
@@ -170,9 +181,10 @@ def _run_scene_file(args: argparse.Namespace) -> int:
     from .scene_file import load_scene, run_scene
 
     scene = load_scene(args.scene)
+    out = _output_folder(args.out)  # after the scene's checks: a refused scene leaves no folder behind
     print(f"Scene {scene.name!r}: {len(scene.bodies)} bodies, {len(scene.system.constraints)} joints, "
           f"{scene.system.n_coordinates} coordinates", file=sys.stderr)
-    metadata = run_scene(scene, args.out, progress=_progress_printer())
+    metadata = run_scene(scene, out, progress=_progress_printer())
     print(f"{scene.name}: wall time {metadata['wall_time_s']:.1f} s -> {args.out}")
     return 0
 

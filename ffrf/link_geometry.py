@@ -94,6 +94,9 @@ def bennett_axes(alpha3_deg: float = 90.0) -> tuple[Axis, Axis, Axis, Axis]:
     """
     from kinematics import PAPER_A, PAPER_ALPHA, open_loop_axes
 
+    if not np.isfinite(alpha3_deg):
+        raise GeometryError(f"base-link twist alpha3_deg={alpha3_deg!r} is not a finite angle; give it in degrees, "
+                            "e.g. 90 (paper: 90, 91, 92)")
     alpha = np.array(PAPER_ALPHA)
     alpha[3] = np.radians(alpha3_deg)
     axes, closing_axis = open_loop_axes(PAPER_A, alpha)
@@ -230,7 +233,8 @@ def _classify_surfaces(gmsh, geometry_axes, centers, design: LinkDesign, mount) 
             rel = pts - center
             t = rel @ axis.direction
             r = np.linalg.norm(rel - np.outer(t, axis.direction), axis=1)
-            if np.all(np.abs(r - design.bore_radius) < tol) and np.all(np.abs(t) <= 0.5 * _bore_cut_length(design) + tol):
+            on_bore = np.all(np.abs(r - design.bore_radius) < tol)
+            if on_bore and np.all(np.abs(t) <= 0.5 * _bore_cut_length(design) + tol):
                 found[i].append(tag)
         if mount is not None and np.all(np.abs((pts - mount[0]) @ mount[1]) < tol):
             found["mount"].append(tag)

@@ -275,9 +275,11 @@ def read_mesh(path: str | Path, *, unit: str | None = None, scale: float | None 
     path = Path(path)
     if path.suffix.lower() == ".stl":
         raise MeshError(f"{path}: an STL file is a surface; use ffrf.meshing.mesh_stl to fill it with tetrahedra")
+    if not path.is_file():
+        raise MeshError(f"{path}: mesh file not found")
     try:
         raw = meshio.read(path)
-    except Exception as exc:  # meshio raises a variety of types
+    except (Exception, SystemExit) as exc:  # meshio raises a variety of types, and exits on some broken files
         raise MeshError(f"{path}: meshio cannot read it ({exc}); convert to .msh, .vtu or .inp") from exc
     tet_blocks = [c.data[:, :4] for c in raw.cells if c.type in ("tetra", "tetra10")]
     if not tet_blocks:

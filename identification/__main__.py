@@ -2,7 +2,9 @@
 
 Identifies the DH parameters of the Bennett loop from motion-capture exports or simulation
 results (one per run; several runs give mean and standard deviation) and prints the
-table in the paper's layout, or JSON (metres and radians) with ``--json``.
+table in the paper's layout, or JSON (metres and radians) with ``--json``. Bad input (a missing,
+binary or broken file, a non-finite twist, a zero window) is one line ``error: ...`` on stderr
+and exit status 2.
 """
 
 from __future__ import annotations
@@ -36,6 +38,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print JSON instead of the table")
     parser.add_argument("--out", type=Path, help="also write dh_table.md, dh_table.csv and axis_fits.png here")
     args = parser.parse_args(argv)
+    if not np.all(np.isfinite(args.alpha_deg)):  # argparse accepts "nan" and "inf" as floats
+        print(f"error: --alpha-deg {args.alpha_deg} must be 4 finite twists in degrees, e.g. the paper's "
+              f"{np.degrees(PAPER_ALPHA).round(3).tolist()}", file=sys.stderr)
+        return 2
 
     try:
         records = [read_vicon_csv(p, unit=args.unit) for p in args.vicon] if args.vicon else \

@@ -13,6 +13,7 @@ import csv
 import logging
 import re
 import warnings
+import zipfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -41,7 +42,8 @@ class LinkRecord:
         n = self.time.shape[0]
         for link, p in self.points.items():
             if p.ndim != 3 or p.shape[0] != n or p.shape[2] != 3:
-                raise IdentificationError(f"{self.source}: link {link} positions have shape {p.shape}, expected ({n}, k, 3)")
+                raise IdentificationError(f"{self.source}: link {link} positions have shape {p.shape}, "
+                                          f"expected ({n}, k, 3)")
         if not self.segments:
             object.__setattr__(self, "segments", ((0, n),))
 
@@ -78,11 +80,16 @@ def read_vicon_csv(path: str | Path, segments: dict[str, int] | None = None, uni
     scale = {"mm": 1e-3, "m": 1.0}.get(unit)
     if scale is None:
         raise IdentificationError(f"unit must be 'mm' or 'm', got {unit!r}")
-    with path.open(newline="") as handle:
-        rows = list(csv.reader(handle))
+    try:
+        with path.open(newline="") as handle:
+            rows = list(csv.reader(handle))
+    except UnicodeDecodeError as error:  # a binary file (a .c3d or .x2d) given for the CSV export
+        raise IdentificationError(f"{path}: not a text file ({error.reason} at byte {error.start}); give the Vicon "
+                                  "segment export as CSV") from error
     header_row = next((i for i, r in enumerate(rows) if r and r[0].strip().lower() == "frame"), None)
     if header_row is None or header_row < 1:
-        raise IdentificationError(f"{path}: no 'Frame, Sub Frame, ...' header row found; is this a Vicon segment export?")
+        raise IdentificationError(f"{path}: no 'Frame, Sub Frame, ...' header row found; is this a Vicon segment "
+                                  "export?")
     names, header = rows[header_row - 1], [h.strip().upper() for h in rows[header_row]]
     rate = None
     for r in rows[:header_row - 1]:
@@ -119,15 +126,28 @@ def read_simulation_result(directory: str | Path) -> LinkRecord:
     path = Path(directory) / "results.npz"
     if not path.exists():
         raise IdentificationError(f"{path} not found: run a simulation first (python -m ffrf bennett --out DIR)")
-    data = np.load(path)
+    data = _npz_arrays(path)
     if "time" not in data:
         raise IdentificationError(f"{path} has no 'time' array")
     points = {}
     for link in (1, 2, 3):
-        keys = sorted(k for k in data.files if re.fullmatch(rf"link{link}_node\d+", k))
+        keys = sorted(k for k in data if re.fullmatch(rf"link{link}_node\d+", k))
         if keys:
             points[link] = np.stack([data[k] for k in keys], axis=1)
     return LinkRecord(np.asarray(data["time"], dtype=float), points, str(path))
+
+
+def _npz_arrays(path: Path) -> dict[str, NDArray]:
+    """Every array of an ``.npz`` archive, read now so that a damaged member fails here, by name."""
+    try:
+        archive = np.load(path)
+        if not isinstance(archive, np.lib.npyio.NpzFile):  # a bare .npy array renamed
+            raise ValueError("one array, not an archive of named arrays")
+        with archive:
+            return {name: archive[name] for name in archive.files}
+    except (OSError, ValueError, zipfile.BadZipFile) as error:  # damaged, pickled objects, or not numpy at all
+        raise IdentificationError(f"{path} cannot be read as a results archive ({type(error).__name__}: "
+                                  f"{error}); write it again with python -m ffrf bennett --out DIR") from error
 
 
 def clean_record(record: LinkRecord, gap_factor: float = 1.5) -> LinkRecord:
@@ -171,7 +191,8 @@ def moving_average(record: LinkRecord, window: int = 10) -> LinkRecord:
     the plane, so the fitted axes are unchanged.
     """
     if window < 1:
-        raise ValueError(f"window must be >= 1 frame, got {window}")
+        raise IdentificationError(f"moving-average window must be >= 1 frame, got {window}; give --window 1 (no "
+                                  "filter) or more")
     if window == 1:
         return record
     left, right = window // 2, window - 1 - window // 2

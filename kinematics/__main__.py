@@ -3,6 +3,8 @@
 Prints the DH table, the joint axes as in the paper, the configuration curve and the
 motion polynomial of the Bennett linkage, and writes the ideal coupler path (CSV, PNG and
 JSON) to ``DIR``. With a misaligned base twist it reports that the rigid loop cannot move.
+Bad input (a non-finite twist, too few points, an unwritable ``DIR``) is one line ``error: ...``
+on stderr and exit status 2.
 """
 
 from __future__ import annotations
@@ -52,13 +54,22 @@ def _print_bennett(linkage: BennettLinkage, out: Path, n: int) -> None:
     summary = {
         "a_m": list(linkage.a),
         "alpha_rad": list(linkage.alpha),
-        "axes": [{"direction": l.direction.tolist(), "moment": l.moment.tolist()} for l in linkage.axes],
+        "axes": [{"direction": line.direction.tolist(), "moment": line.moment.tolist()} for line in linkage.axes],
         "configuration_ratios": k.tolist(),
         "motion_polynomial": linkage.motion_polynomial().coefficients.tolist(),
         "coupler_point_m": linkage.coupler_point().tolist(),
     }
     (out / "kinematics.json").write_text(json.dumps(summary, indent=2))
     print(f"Wrote {out / 'coupler_path.png'}, {out / 'coupler_path.csv'} and {out / 'kinematics.json'}")
+
+
+def _argument_problem(alpha3_deg: float, points: int) -> str | None:
+    """What is wrong with the command line's numbers (None if nothing); argparse takes "nan" as a float."""
+    if not np.isfinite(alpha3_deg):
+        return f"--alpha3-deg {alpha3_deg} is not a finite angle; give the base twist in degrees, e.g. 90"
+    if points < 4:  # the mobility scan of a misaligned loop samples points // 4 driver angles
+        return f"--points {points}: sample the coupler path at 4 points or more (default 720)"
+    return None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -69,6 +80,10 @@ def main(argv: list[str] | None = None) -> int:
     bennett.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     bennett.add_argument("--points", type=int, default=720, help="samples of the coupler path")
     args = parser.parse_args(argv)
+    problem = _argument_problem(args.alpha3_deg, args.points)
+    if problem is not None:
+        print(f"error: {problem}", file=sys.stderr)
+        return 2
 
     a = np.array(PAPER_A)
     alpha = np.array(PAPER_ALPHA)
@@ -84,8 +99,14 @@ def main(argv: list[str] | None = None) -> int:
         report = rigid_mobility(a, alpha, n_angles=args.points // 4)
         print(report.summary())
         return 0
-    print("Bennett conditions hold: a0 = a2, a1 = a3, alpha0 = alpha2, alpha1 = alpha3, a0/sin(alpha0) = a1/sin(alpha1)")
-    _print_bennett(linkage, args.out, args.points)
+    print("Bennett conditions hold: a0 = a2, a1 = a3, alpha0 = alpha2, alpha1 = alpha3, "
+          "a0/sin(alpha0) = a1/sin(alpha1)")
+    try:
+        _print_bennett(linkage, args.out, args.points)
+    except OSError as error:  # --out names a file, or a folder we may not write to
+        print(f"error: cannot write to --out {args.out} ({error.strerror}); give a folder you can write to",
+              file=sys.stderr)
+        return 2
     return 0
 
 

@@ -6,7 +6,7 @@ schema refuses it before any body is built, so the cases are cheap."""
 import pytest
 from scene_fixtures import PENDULUM, write_bar
 
-from ffrf.errors import FEInputError, MaterialError, SceneError
+from ffrf.errors import FEInputError, MaterialError, MeshError, SceneError
 from ffrf.scene_file import load_scene
 
 CASES = {
@@ -88,3 +88,12 @@ def test_material_is_checked_outside_scene_files_too():
         with pytest.raises(MaterialError, match=words):
             Material(*arguments, name="test")
     assert issubclass(SceneError, FEInputError) and issubclass(MaterialError, FEInputError)
+
+
+def test_unreadable_mesh_file_is_a_mesh_error(tmp_path):
+    """meshio exits the interpreter on some broken files; the scene gets a MeshError instead."""
+    write_bar(tmp_path)
+    (tmp_path / "bar.vtu").write_text("garbage")
+    (tmp_path / "scene.toml").write_text(PENDULUM)
+    with pytest.raises(MeshError, match="bar.vtu: meshio cannot read it"):
+        load_scene(tmp_path / "scene.toml")
