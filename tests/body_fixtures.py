@@ -46,6 +46,30 @@ def nodal_velocities(nodes, basis, r_dot, p, zeta, pd, zetad):
     return (r_dot + (np.cross(omega, u) + w) @ a.T).reshape(-1)
 
 
+def potential_energy(system, q) -> float:
+    r"""Strain plus gravity energy of a state (J), from the state alone:
+
+    .. math:: V = \sum_k \tfrac12 \zeta_k^T K_k \zeta_k - m_k\,g\cdot c_k,\qquad
+              c_k = R_k + A(p_k)\,(s_0 + S_1 \zeta_k) / m_k
+
+    (``zeta_k``: modal coordinates of body k, ``K_k`` its reduced stiffness, ``c_k`` its centre of
+    mass from the modal moments ``s0``, ``s1``). For virtual-work checks of drive torques."""
+    energy = 0.0
+    for k, body in enumerate(system.bodies):
+        block = q[system.block(k)]
+        moments, zeta = body.moments, block[7:]
+        centre = block[:3] + rotation_matrix(block[3:7]) @ (moments.s0 + moments.s1 @ zeta) / moments.mass
+        energy += 0.5 * zeta @ body.stiffness @ zeta - moments.mass * system.gravity @ centre
+    return float(energy)
+
+
+def five_point_slope(values, step: float) -> float:
+    """dV/dx at the middle of five equally spaced values: (V_-2 - 8 V_-1 + 8 V_1 - V_2) / (12 h),
+    truncation error -h^4 V^(5) / 30."""
+    v = np.asarray(values, dtype=float)
+    return float((v[0] - 8 * v[1] + 8 * v[3] - v[4]) / (12 * step))
+
+
 def free_bar(name: str = "bar"):
     """The soft bar (E = 1e8 Pa, 450 kg/m^3) with Craig-Bampton modes of both end faces (2 fixed-
     interface modes), undamped: ``(model, basis, end node sets, body)``."""

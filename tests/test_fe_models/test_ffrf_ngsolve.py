@@ -15,7 +15,10 @@ import scipy.sparse as sp
 from ffrf import PLA, FEModel, mesh_link, paper_link_axes
 from ffrf.meshing import configure_meshing, gmsh_session, mesh_current_model
 
-RTOL = 2e-12  # measured: K 4.4e-15, M 2.0e-14 (2026-11-24, AMD EPYC)
+#: Largest relative entry difference, about 100x the largest measured over the four cases on 2026-11-24
+#: (AMD EPYC; the same under OPENBLAS_CORETYPE=Sandybridge and Prescott).
+K_RTOL = 5e-13  # measured 4.4e-15 (link, P2); 3.6e-16 to 4.5e-16 on the others
+M_RTOL = 2e-12  # measured 2.0e-14 (cylinder, P1); 1.6e-14 to 2.0e-14 on the others
 
 
 @pytest.fixture(scope="module")
@@ -135,5 +138,5 @@ def test_mass_and_stiffness_equal_ngsolve(request, which, order):
     dk = _relative_difference(k_from_ffrf, k_ng)
     dm = _relative_difference(m_from_ffrf, m_ng)
     print(f"{which} P{order}: max relative difference K {dk:.2e}, M {dm:.2e} ({model.n_dofs} DOFs)")
-    assert dk < RTOL
-    assert dm < RTOL
+    assert dk < K_RTOL
+    assert dm < M_RTOL

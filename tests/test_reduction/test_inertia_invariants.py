@@ -145,7 +145,9 @@ def test_invariants_equal_exudyn_object_ffrf_reduced_order_interface(small):
     names = {"theta": "inertiaLocal", "m_phit_psi": "mPhitTPsi", "m_phit_psi_tilde": "mPhitTPsiTilde",
              "m_x_tilde_psi": "mXRefTildePsi", "m_x_tilde_psi_tilde": "mXRefTildePsiTilde",
              "m_psi_tilde_psi": "mPsiTildePsi", "m_psi_tilde_psi_tilde": "mPsiTildePsiTilde"}
+    # Thresholds about 100x the largest value measured on 2026-11-24 (AMD EPYC, and under
+    # OPENBLAS_CORETYPE=Sandybridge and Prescott).
     for ours, theirs in names.items():
-        assert relative_error(getattr(inv, ours), getattr(exudyn, theirs)) < 1e-12, ours
-    assert abs(inv.mass / exudyn.totalMass - 1) < 1e-13
-    assert relative_error(inv.center_of_mass, exudyn.chiU) < 1e-13
+        assert relative_error(getattr(inv, ours), getattr(exudyn, theirs)) < 7e-14, ours  # measured 6.7e-16
+    assert abs(inv.mass / exudyn.totalMass - 1) < 1e-13  # measured 6.7e-16
+    assert relative_error(inv.center_of_mass, exudyn.chiU) < 1e-13  # measured 6.9e-16

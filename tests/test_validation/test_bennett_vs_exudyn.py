@@ -112,23 +112,26 @@ def test_the_window_exercises_elasticity_and_the_drive():
 # ---------------------------------------------------------------------------------------------
 
 def test_with_exudyn_conventions_the_solvers_agree_to_round_off():
+    """Thresholds about 100x the values measured on 2026-11-24 (AMD EPYC; the same to a factor 1.5
+    under OPENBLAS_CORETYPE=Sandybridge and Prescott)."""
     d = differences("exudyn")
-    assert d["coupler_m"] < 1e-12
-    assert d["tracked_m"] < 1e-12
-    assert d["zeta_relative"] < 1e-9
-    assert d["torque_relative"] < 1e-7  # limited by Exudyn's Newton on the multipliers (measured 1e-9)
+    assert d["coupler_m"] < 1.5e-14  # measured 1.4e-16 m
+    assert d["tracked_m"] < 3e-14  # measured 2.5e-16 m
+    assert d["zeta_relative"] < 5e-10  # measured 4.7e-12
+    assert d["torque_relative"] < 1e-7  # limited by Exudyn's Newton on the multipliers (measured 1.4e-9 to 2.1e-9)
     q_ours, q_theirs = ffrf_run("exudyn").q, exudyn_run().q
-    assert np.abs(q_ours - q_theirs).max() < 1e-12
+    assert np.abs(q_ours - q_theirs).max() < 1.5e-13  # measured 1.5e-15
 
 
 def test_production_system_meets_the_issue_targets():
-    """Our exact marker Jacobian against Exudyn's (same offset convention): measured coupler 4e-5
-    and torque 2e-6 of their scales on this scene, within the issue's 1e-3 and 1e-4."""
+    """Our exact marker Jacobian against Exudyn's (same offset convention): measured coupler 4.3e-5,
+    tracked nodes 7.1e-5 and torque 2.4e-6 of their scales on this scene (2026-11-24), within the
+    issue's 1e-3 and 1e-4, which are 14x to 42x the measured values."""
     d = differences("production")
     assert d["torque_relative"] < TORQUE_TARGET
     assert d["coupler_m"] < TRAJECTORY_TARGET * d["coupler_motion_m"]
     assert d["tracked_m"] < TRAJECTORY_TARGET * d["tracked_motion_m"]
-    assert d["coupler_m"] < 1e-7  # well below a micrometre
+    assert d["coupler_m"] < 1e-7  # well below a micrometre; measured 1.95e-9 m
     # and the comparison does resolve the Jacobian difference (far above round-off)
     assert d["coupler_m"] > 1e3 * differences("exudyn")["coupler_m"]
 
@@ -154,10 +157,10 @@ def test_static_equilibrium_agrees_with_exudyn_solve_static():
     s = scene()
     q_e, torque_e, coupler_e, tracked_e = exudyn_static()
     q_o, torque_o, coupler_o, tracked_o = static_ffrf_bennett(s, system("exudyn"), s.q_start)
-    assert np.abs(q_o - q_e).max() < 1e-12
-    assert np.abs(coupler_o - coupler_e).max() < 1e-12
-    assert np.abs(tracked_o - tracked_e).max() < 1e-12
-    assert abs(torque_o) > 1e-5 and abs(torque_o - torque_e) < 1e-9 * abs(torque_o)
+    assert np.abs(q_o - q_e).max() < 5e-14  # measured 5.3e-16
+    assert np.abs(coupler_o - coupler_e).max() < 8e-15  # measured 7.6e-17 m
+    assert np.abs(tracked_o - tracked_e).max() < 2e-14  # measured 1.7e-16 m
+    assert abs(torque_o) > 1e-5 and abs(torque_o - torque_e) < 1.5e-11 * abs(torque_o)  # measured 1.5e-13
 
 
 def test_production_assembly_against_exudyn_statics():
@@ -167,10 +170,10 @@ def test_production_assembly_against_exudyn_statics():
     s = scene()
     q_e, torque_e, coupler_e, _ = exudyn_static()
     solution = assemble(s)
-    assert abs(solution.multipliers[-1] - torque_e) < 1e-4 * abs(torque_e)
+    assert abs(solution.multipliers[-1] - torque_e) < 5e-5 * abs(torque_e)  # measured 5.0e-7
     q_p, _, coupler_p, _ = static_ffrf_bennett(s, s.system, s.q_start)
-    assert np.abs(coupler_p - coupler_e).max() < 1e-8
-    assert np.abs(q_p - q_e).max() < 1e-6 * max(1.0, np.abs(q_e).max())
+    assert np.abs(coupler_p - coupler_e).max() < 2e-8  # measured 1.95e-9 m
+    assert np.abs(q_p - q_e).max() < 1e-6 * max(1.0, np.abs(q_e).max())  # measured 6.0e-8
     _, torque_m, coupler_m, _ = static_ffrf_bennett(scene("marker"), system("marker"), s.q_start)
     assert np.abs(coupler_m - coupler_e).max() > 1e-7
     assert abs(torque_m - torque_e) > 1e-4 * abs(torque_e)

@@ -18,9 +18,14 @@ DRIVEN = driven_link_scene("[0.0, 1.0, 0.0]", t_end=20.0, outputs=11, modes=3, s
 
 def report(tmp_path, text: str) -> dict:
     (tmp_path / "scene.toml").write_text(text)
-    assert main(["report", "--scene", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "report")]) == 0
+    code = main(["report", "--scene", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "report")])
+    assert code in (0, 1), f"the validation run failed (exit {code})"
     assert (tmp_path / "report" / "report.md").read_text().startswith("# Cross-validation against Exudyn: scene")
-    return json.loads((tmp_path / "report" / "metrics.json").read_text())
+    m = json.loads((tmp_path / "report" / "metrics.json").read_text())
+    # Exit 2 is a failed run; 0 or 1 is validation's own verdict (SCENE_TARGETS), which the tests do not adopt:
+    # they hold their own thresholds and only check that the exit code states the verdict.
+    assert code == (0 if m["passed"] else 1), code
+    return m
 
 
 def test_dynamic_bar_pendulum_scene(tmp_path):

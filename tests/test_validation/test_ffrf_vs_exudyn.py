@@ -105,20 +105,21 @@ def test_pendulum_difference_is_far_below_the_discretization_error_at_two_steps(
     for ours, theirs in ((ours_c, theirs_c), (ours_f, theirs_f)):
         difference = max_difference(ours.tracked, theirs.tracked)
         assert difference < POSITION_TOLERANCE_M
-        assert difference < 1e-3 * ours_err
-    assert abs(ours_err - theirs_err) < 1e-6 * theirs_err
+        assert difference < 2e-5 * ours_err  # measured 2.3e-7 (ours_err 1.07e-5 m)
+    assert abs(ours_err - theirs_err) < 1e-6 * theirs_err  # measured 7.4e-8
 
 
 def test_exact_gravity_moment_is_resolved_by_the_comparison():
     """Sensitivity: with the exact deformation-dependent gravity moment (exact_gravity=True, which
     Exudyn's LoadMassProportional leaves out) our tip differs from Exudyn's by more than the
-    tolerance, so the comparison does see a modelling difference of that size."""
+    tolerance (measured 3.2e-7 m against 2.8e-13 m with the same gravity model), so the comparison does
+    see a modelling difference of that size."""
     scene = dataclasses.replace(pendulum(), t_end=0.5)
     theirs = exudyn_run(scene)
     ours_same = ffrf_run(scene)
     ours_exact = run_ffrf(scene, exact_gravity=True)
     assert max_difference(ours_same.tracked, theirs.tracked) < POSITION_TOLERANCE_M
-    assert max_difference(ours_exact.tracked, theirs.tracked) > POSITION_TOLERANCE_M
+    assert max_difference(ours_exact.tracked, theirs.tracked) > 100 * POSITION_TOLERANCE_M
 
 
 # ---------------------------------------------------------------------------------------------
