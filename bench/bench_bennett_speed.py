@@ -1,5 +1,5 @@
 """Bennett scene speed, reference Python path against the fast path (whole-system numba kernels,
-:mod:`ffrf.packed_system`), in the same process, with the results compared.
+:mod:`ffrf.system.packed_system`), in the same process, with the results compared.
 
 For each path: generalized-alpha from the assembled state at rest (``--t-dynamic`` s, step
 ``--step``) in ms per step, and the quasi-static revolution (ramp plus one revolution,
@@ -33,16 +33,16 @@ def _pin_blas(threads: int) -> None:
 _COLD = """
 import time, numpy as np
 started = time.perf_counter()
-from ffrf.bennett_scene import build_bennett
-from ffrf.packed_system import pack_system
+from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.system.packed_system import pack_system
 scene = build_bennett("pla", h={h}, order=1, n_modes={modes})
 built = time.perf_counter()
 packed = pack_system(scene.system)
 q, z, lam = scene.q_start, np.zeros_like(scene.q_start), np.zeros(scene.system.n_constraints)
 packed.residual(q, z, z, lam, 0.0)
 packed.iteration_matrix(q, z, z, lam, 0.0, 1.0, 1e-6, 1e-3)
-from ffrf.generalized_alpha import generalized_alpha
-from ffrf.static_solver import quasi_static
+from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.solvers.static_solver import quasi_static
 generalized_alpha(scene.system, q, z, 2e-4, 1e-4)
 quasi_static(scene.system, q, np.array([0.0, 0.1]))
 print(time.perf_counter() - built)
@@ -54,8 +54,9 @@ def cold_compile_seconds(h: float, modes: int) -> float:
     empty numba cache."""
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=os.getcwd())
-        out = subprocess.run([sys.executable, "-c", _COLD.format(h=h, modes=modes)], env=env, check=True,
-                             capture_output=True, text=True)
+        out = subprocess.run(
+            [sys.executable, "-c", _COLD.format(h=h, modes=modes)], env=env, check=True, capture_output=True, text=True
+        )
     return float(out.stdout.strip().splitlines()[-1])
 
 
@@ -74,16 +75,18 @@ def main() -> None:
 
     import numpy as np
 
-    from ffrf.bennett_scene import assemble, build_bennett
-    from ffrf.generalized_alpha import generalized_alpha
-    from ffrf.packed_system import pack_system
-    from ffrf.static_solver import quasi_static
+    from ffrf.scenes.bennett_scene import assemble, build_bennett
+    from ffrf.solvers.generalized_alpha import generalized_alpha
+    from ffrf.solvers.static_solver import quasi_static
+    from ffrf.system.packed_system import pack_system
 
     scene = build_bennett("pla", h=args.h, order=1, n_modes=args.modes)
     system = scene.system
     q0 = assemble(scene).q
-    print(f"PLA Bennett, h = {1e3 * args.h:g} mm, {args.modes} modes per link: {system.n_coordinates} coordinates, "
-          f"{system.n_constraints} constraints; fast path supported: {pack_system(system) is not None}")
+    print(
+        f"PLA Bennett, h = {1e3 * args.h:g} mm, {args.modes} modes per link: {system.n_coordinates} coordinates, "
+        f"{system.n_constraints} constraints; fast path supported: {pack_system(system) is not None}"
+    )
     for fast in (False, True):  # load (or compile) both paths' kernels before timing
         generalized_alpha(system, q0, np.zeros_like(q0), 2 * args.step, args.step, fast_path=fast)
         quasi_static(system, q0, np.array([0.0, 1.0]), fast_path=fast)
@@ -96,17 +99,24 @@ def main() -> None:
     print(f"dynamic {args.t_dynamic:g} s, step {1e3 * args.step:g} ms ({steps} steps):")
     for fast in (False, True):
         r = runs[fast]
-        print(f"  {'fast     ' if fast else 'reference'}  {1e3 * r.wall_time / steps:8.3f} ms/step  "
-              f"{r.newton_iterations.mean():.2f} iterations/step")
+        print(
+            f"  {'fast     ' if fast else 'reference'}  {1e3 * r.wall_time / steps:8.3f} ms/step  "
+            f"{r.newton_iterations.mean():.2f} iterations/step"
+        )
     lam_ref = runs[False].multipliers
-    print(f"  speed-up {runs[False].wall_time / runs[True].wall_time:.1f}x; max |q_fast - q_ref| = "
-          f"{np.abs(runs[True].q - runs[False].q).max():.1e}, max |lambda| difference relative "
-          f"{np.abs(runs[True].multipliers - lam_ref).max() / np.abs(lam_ref).max():.1e}")
+    print(
+        f"  speed-up {runs[False].wall_time / runs[True].wall_time:.1f}x; max |q_fast - q_ref| = "
+        f"{np.abs(runs[True].q - runs[False].q).max():.1e}, max |lambda| difference relative "
+        f"{np.abs(runs[True].multipliers - lam_ref).max() / np.abs(lam_ref).max():.1e}"
+    )
 
     if not args.skip_quasi_static:
         times = np.linspace(0.0, scene.t_end, args.outputs)
-        variants = {"reference": dict(fast_path=False), "fast, plain modified Newton": dict(
-            predictor_order=0, secant=False), "fast": dict()}
+        variants = {
+            "reference": dict(fast_path=False),
+            "fast, plain modified Newton": dict(predictor_order=0, secant=False),
+            "fast": dict(),
+        }
         solutions, seconds = {}, {}
         for label, options in variants.items():
             started = time.perf_counter()
@@ -115,15 +125,21 @@ def main() -> None:
         print(f"quasi-static revolution ({scene.t_end:.1f} s of drive, {args.outputs} equilibria):")
         for label in variants:
             iterations = solutions[label].iterations
-            print(f"  {label:28s} {seconds[label]:8.2f} s  {sum(iterations)} Newton iterations "
-                  f"({np.mean(iterations):.2f} per pose)")
+            print(
+                f"  {label:28s} {seconds[label]:8.2f} s  {sum(iterations)} Newton iterations "
+                f"({np.mean(iterations):.2f} per pose)"
+            )
         ref, fast = solutions["reference"], solutions["fast"]
-        print(f"  speed-up {seconds['reference'] / seconds['fast']:.1f}x; max |q_fast - q_ref| = "
-              f"{np.abs(fast.q - ref.q).max():.1e}, driving torque relative "
-              f"{np.abs(fast.multipliers[:, -1] - ref.multipliers[:, -1]).max() / np.abs(ref.multipliers[:, -1]).max():.1e}")
+        print(
+            f"  speed-up {seconds['reference'] / seconds['fast']:.1f}x; max |q_fast - q_ref| = "
+            f"{np.abs(fast.q - ref.q).max():.1e}, driving torque relative "
+            f"{np.abs(fast.multipliers[:, -1] - ref.multipliers[:, -1]).max() / np.abs(ref.multipliers[:, -1]).max():.1e}"
+        )
     if args.cold:
-        print(f"numba cold compile (first residual + iteration matrix, empty cache): "
-              f"{cold_compile_seconds(args.h, args.modes):.1f} s")
+        print(
+            f"numba cold compile (first residual + iteration matrix, empty cache): "
+            f"{cold_compile_seconds(args.h, args.modes):.1f} s"
+        )
 
 
 if __name__ == "__main__":

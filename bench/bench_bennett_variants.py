@@ -3,7 +3,7 @@ at one discretisation, side by side with the paper's maximum coupler deviations 
 
 For each variant: the largest coupler deviation from the ideal point at the same drive angle and
 the largest distance to the ideal path (mm), the largest |driving torque| (N mm), the largest
-von Mises stress of the assembled state (MPa, :mod:`ffrf.assembly_stress`) and the wall times
+von Mises stress of the assembled state (MPa, :mod:`ffrf.output.assembly_stress`) and the wall times
 (build = gmsh + scikit-fem + Craig-Bampton of the four links; run = assembly + quasi-static
 solve + sensors). ``--out DIR`` also writes each run (``DIR/<variant>/``) and the paper-style
 overlays ``DIR/coupler_deviation.png`` and ``DIR/driving_torque.png``.
@@ -32,8 +32,8 @@ PAPER_MAX_DEVIATION_MM = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2
 
 def run_variant(variant: str, h: float, order: int, modes: int, outputs: int, out: Path | None) -> dict:
     """Build and run one variant quasi-statically; the row of the table (SI and display units)."""
-    from ffrf.bennett_run import run_bennett, write_results
-    from ffrf.bennett_scene import build_bennett
+    from ffrf.scenes.bennett_run import run_bennett, write_results
+    from ffrf.scenes.bennett_scene import build_bennett
 
     clock = time.perf_counter()
     scene = build_bennett(variant, h=h, order=order, n_modes=modes)
@@ -43,31 +43,38 @@ def run_variant(variant: str, h: float, order: int, modes: int, outputs: int, ou
     if out is not None:
         write_results(result, out / variant)
     summary = result.summary()
-    return {"variant": variant, "result": result,
-            "max_coupler_deviation_mm": 1e3 * summary["max_coupler_deviation_m"],
-            "max_distance_to_path_mm": 1e3 * summary["max_coupler_distance_to_path_m"],
-            "paper_max_deviation_mm": PAPER_MAX_DEVIATION_MM[variant],
-            "max_abs_driving_torque_Nmm": 1e3 * summary["max_abs_driving_torque_Nm"],
-            "assembly_max_von_mises_MPa": 1e-6 * result.assembly.as_dict()["max_von_mises_pa"],
-            "assembly_von_mises_per_link_MPa": [1e-6 * link.max_von_mises_pa for link in result.assembly.links],
-            "assembly_strain_energy_mJ": 1e3 * result.assembly.as_dict()["strain_energy_j"],
-            "max_constraint_residual": summary["max_constraint_residual"],
-            "energy_balance_relative": summary["energy_balance_relative"],
-            "n_coordinates": scene.system.n_coordinates,
-            "nodes_per_link": [len(link.fe.nodes) for link in scene.links],
-            "wall_time_s": {"build": built - clock, "run": ran - built, **result.metadata["timings_s"]}}
+    return {
+        "variant": variant,
+        "result": result,
+        "max_coupler_deviation_mm": 1e3 * summary["max_coupler_deviation_m"],
+        "max_distance_to_path_mm": 1e3 * summary["max_coupler_distance_to_path_m"],
+        "paper_max_deviation_mm": PAPER_MAX_DEVIATION_MM[variant],
+        "max_abs_driving_torque_Nmm": 1e3 * summary["max_abs_driving_torque_Nm"],
+        "assembly_max_von_mises_MPa": 1e-6 * result.assembly.as_dict()["max_von_mises_pa"],
+        "assembly_von_mises_per_link_MPa": [1e-6 * link.max_von_mises_pa for link in result.assembly.links],
+        "assembly_strain_energy_mJ": 1e3 * result.assembly.as_dict()["strain_energy_j"],
+        "max_constraint_residual": summary["max_constraint_residual"],
+        "energy_balance_relative": summary["energy_balance_relative"],
+        "n_coordinates": scene.system.n_coordinates,
+        "nodes_per_link": [len(link.fe.nodes) for link in scene.links],
+        "wall_time_s": {"build": built - clock, "run": ran - built, **result.metadata["timings_s"]},
+    }
 
 
 def table(rows: list[dict]) -> str:
     """The rows as a Markdown table."""
-    lines = ["| variant | max deviation (mm) | max distance to path (mm) | paper (mm) | max abs torque (N mm) "
-             "| assembly max von Mises (MPa) | build (s) | run (s) |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "| variant | max deviation (mm) | max distance to path (mm) | paper (mm) | max abs torque (N mm) "
+        "| assembly max von Mises (MPa) | build (s) | run (s) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
         paper = f"< {r['paper_max_deviation_mm']}" if r["variant"] == "rigid" else f"{r['paper_max_deviation_mm']}"
-        lines.append(f"| {r['variant']} | {r['max_coupler_deviation_mm']:.4g} | {r['max_distance_to_path_mm']:.4g} "
-                     f"| {paper} | {r['max_abs_driving_torque_Nmm']:.4g} | {r['assembly_max_von_mises_MPa']:.3g} "
-                     f"| {r['wall_time_s']['build']:.1f} | {r['wall_time_s']['run']:.1f} |")
+        lines.append(
+            f"| {r['variant']} | {r['max_coupler_deviation_mm']:.4g} | {r['max_distance_to_path_mm']:.4g} "
+            f"| {paper} | {r['max_abs_driving_torque_Nmm']:.4g} | {r['assembly_max_von_mises_MPa']:.3g} "
+            f"| {r['wall_time_s']['build']:.1f} | {r['wall_time_s']['run']:.1f} |"
+        )
     return "\n".join(lines)
 
 
@@ -87,19 +94,27 @@ def main(argv=None) -> dict:
     for variant in args.variants.split(","):
         rows.append(run_variant(variant, args.h, args.order, args.modes, args.outputs, args.out))
         r = rows[-1]
-        print(f"{variant}: {r['max_coupler_deviation_mm']:.4f} mm (paper {r['paper_max_deviation_mm']}), "
-              f"{r['max_abs_driving_torque_Nmm']:.3f} N mm, {r['assembly_max_von_mises_MPa']:.3f} MPa, "
-              f"{r['n_coordinates']} coordinates, nodes per link {r['nodes_per_link']}, "
-              f"build {r['wall_time_s']['build']:.1f} s, run {r['wall_time_s']['run']:.1f} s", flush=True)
+        print(
+            f"{variant}: {r['max_coupler_deviation_mm']:.4f} mm (paper {r['paper_max_deviation_mm']}), "
+            f"{r['max_abs_driving_torque_Nmm']:.3f} N mm, {r['assembly_max_von_mises_MPa']:.3f} MPa, "
+            f"{r['n_coordinates']} coordinates, nodes per link {r['nodes_per_link']}, "
+            f"build {r['wall_time_s']['build']:.1f} s, run {r['wall_time_s']['run']:.1f} s",
+            flush=True,
+        )
     if args.out is not None:
-        from ffrf.bennett_figures import plot_coupler_deviation, plot_driving_torque
+        from ffrf.output.bennett_figures import plot_coupler_deviation, plot_driving_torque
 
         runs = {r["variant"]: r["result"] for r in rows}
         plot_coupler_deviation(runs, args.out / "coupler_deviation.png")
         plot_driving_torque(runs, args.out / "driving_torque.png")
-    report = {"h": args.h, "order": args.order, "modes": args.modes, "outputs": args.outputs,
-              "total_wall_time_s": time.perf_counter() - started,
-              "rows": [{k: v for k, v in r.items() if k != "result"} for r in rows]}
+    report = {
+        "h": args.h,
+        "order": args.order,
+        "modes": args.modes,
+        "outputs": args.outputs,
+        "total_wall_time_s": time.perf_counter() - started,
+        "rows": [{k: v for k, v in r.items() if k != "result"} for r in rows],
+    }
     print(f"\nP{args.order}, h = {1e3 * args.h:g} mm, {args.modes} modes, {args.outputs} quasi-static outputs:\n")
     print(table(rows))
     print(f"\ntotal wall time {report['total_wall_time_s']:.1f} s")

@@ -36,7 +36,7 @@ if str(ROOT) not in sys.path:
 
 def momenta(body, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """Linear and angular momentum about the origin (6,), node by node with the full mass matrix."""
-    from ffrf.euler_parameters import g_bar, rotation_matrix
+    from ffrf.body.euler_parameters import g_bar, rotation_matrix
 
     a, omega = rotation_matrix(q[3:7]), g_bar(q[3:7]) @ qd[3:7]
     u = body.nodes + (body.basis @ q[7:]).reshape(-1, 3)
@@ -76,16 +76,23 @@ def run_exudyn_points(h: float, steps: int) -> list[dict]:
             complete, note = True, ""
         except RuntimeError as failure:
             complete, note = False, str(failure)
-        point = {"integrator": f"Exudyn generalized-alpha rho_inf={rho_inf:g}", "step_s": h, "steps": steps,
-                 "wall_s": time.perf_counter() - started, "complete": complete, "note": note}
+        point = {
+            "integrator": f"Exudyn generalized-alpha rho_inf={rho_inf:g}",
+            "step_s": h,
+            "steps": steps,
+            "wall_s": time.perf_counter() - started,
+            "complete": complete,
+            "note": note,
+        }
         print(point, flush=True)
         out.append(point)
     return out
 
 
 def run(sizes: list[float], steps: int) -> list[dict]:
-    from ffrf.generalized_alpha import NewtonDivergence, generalized_alpha
-    from ffrf.variational_midpoint import variational_midpoint
+    from ffrf.errors import NewtonDivergence
+    from ffrf.solvers.generalized_alpha import generalized_alpha
+    from ffrf.solvers.variational_midpoint import variational_midpoint
     from validation.exudyn_ffrf import bar_body, ffrf_system, free_body_scene
 
     body = bar_body()
@@ -95,10 +102,12 @@ def run(sizes: list[float], steps: int) -> list[dict]:
         system, q0, qd0 = ffrf_system(scene)
         every = max(1, steps // 500)
         runs = {
-            "generalized-alpha rho_inf=1": lambda: generalized_alpha(system, q0, qd0, scene.t_end, h, rho_inf=1.0,
-                                                                     output_every=every),
-            "generalized-alpha rho_inf=0.8": lambda: generalized_alpha(system, q0, qd0, scene.t_end, h, rho_inf=0.8,
-                                                                       output_every=every),
+            "generalized-alpha rho_inf=1": lambda: generalized_alpha(
+                system, q0, qd0, scene.t_end, h, rho_inf=1.0, output_every=every
+            ),
+            "generalized-alpha rho_inf=0.8": lambda: generalized_alpha(
+                system, q0, qd0, scene.t_end, h, rho_inf=0.8, output_every=every
+            ),
             "variational midpoint": lambda: variational_midpoint(system, q0, qd0, scene.t_end, h, output_every=every),
         }
         for name, call in runs.items():
@@ -108,10 +117,17 @@ def run(sizes: list[float], steps: int) -> list[dict]:
             except NewtonDivergence as failure:
                 result = failure.partial
                 print(f"  {name} h={h:g}: {failure}")
-            point = {"integrator": name, "step_s": h, "steps": steps, **measure(system, scene.body, result,
-                                                                                time.perf_counter() - started)}
-            print(f"h={h:g} {name}: " + ", ".join(f"{k}={v:.3g}" for k, v in point.items()
-                                                     if isinstance(v, float) and k != "step_s"), flush=True)
+            point = {
+                "integrator": name,
+                "step_s": h,
+                "steps": steps,
+                **measure(system, scene.body, result, time.perf_counter() - started),
+            }
+            print(
+                f"h={h:g} {name}: "
+                + ", ".join(f"{k}={v:.3g}" for k, v in point.items() if isinstance(v, float) and k != "step_s"),
+                flush=True,
+            )
             out.append(point)
     return out
 
@@ -119,16 +135,23 @@ def run(sizes: list[float], steps: int) -> list[dict]:
 def write(points: list[dict], directory: Path) -> None:
     directory.mkdir(parents=True, exist_ok=True)
     (directory / "conservation.json").write_text(json.dumps(points, indent=2))
-    lines = ["| integrator | h (s) | steps | linear momentum | angular momentum | energy error | energy drift | "
-             "Newton/step | time (s) | completed |", "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "| integrator | h (s) | steps | linear momentum | angular momentum | energy error | energy drift | "
+        "Newton/step | time (s) | completed |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for p in points:
         if "linear_momentum_rel" not in p:  # Exudyn: completion only
-            lines.append(f"| {p['integrator']} | {p['step_s']:g} | {p['steps']} | | | | | | {p['wall_s']:.1f} | "
-                         f"{'yes' if p['complete'] else 'no: ' + p['note']} |")
+            lines.append(
+                f"| {p['integrator']} | {p['step_s']:g} | {p['steps']} | | | | | | {p['wall_s']:.1f} | "
+                f"{'yes' if p['complete'] else 'no: ' + p['note']} |"
+            )
             continue
-        lines.append(f"| {p['integrator']} | {p['step_s']:g} | {p['steps']} | {p['linear_momentum_rel']:.1e} | "
-                     f"{p['angular_momentum_rel']:.1e} | {p['energy_error_rel']:.1e} | {p['energy_drift_rel']:.1e} | "
-                     f"{p['newton_per_step']:.1f} | {p['wall_s']:.1f} | {'yes' if p['complete'] else 'no'} |")
+        lines.append(
+            f"| {p['integrator']} | {p['step_s']:g} | {p['steps']} | {p['linear_momentum_rel']:.1e} | "
+            f"{p['angular_momentum_rel']:.1e} | {p['energy_error_rel']:.1e} | {p['energy_drift_rel']:.1e} | "
+            f"{p['newton_per_step']:.1f} | {p['wall_s']:.1f} | {'yes' if p['complete'] else 'no'} |"
+        )
     (directory / "conservation.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

@@ -1,7 +1,7 @@
 """Benchmark: our Hurty/Craig-Bampton reduction against Exudyn's on the same matrices.
 
-One Bennett link (ffrf.link_geometry, paper axes) is meshed at several edge
-lengths; ``ffrf.craig_bampton`` and Exudyn's
+One Bennett link (ffrf.geometry.link_geometry, paper axes) is meshed at several edge
+lengths; ``ffrf.reduction.craig_bampton`` and Exudyn's
 ``FEMinterface.ComputeHurtyCraigBamptonModes(RBE2, excludeRigidBodyMotion=True)``
 reduce the same nodes, M, K, bores and weights in the same process. Reported:
 wall times, the ratio ours/Exudyn and the largest relative difference of the
@@ -37,7 +37,7 @@ def build_link(h_mm: float, link: int):
 
 
 def time_ours(model, interfaces, n_modes: int, verify: bool):
-    from ffrf.craig_bampton import craig_bampton
+    from ffrf.reduction.craig_bampton import craig_bampton
 
     start = time.perf_counter()
     result = craig_bampton(model, interfaces, n_modes, verify_mode_count=verify)
@@ -51,18 +51,23 @@ def time_exudyn(model, interfaces, n_modes: int):
     fem.nodes = {"Position": np.asarray(model.nodes)}
     fem.massMatrix, fem.stiffnessMatrix = model.mass, model.stiffness
     start = time.perf_counter()
-    fem.ComputeHurtyCraigBamptonModes(boundaryNodesList=[list(map(int, i.nodes)) for i in interfaces],
-                                      nEigenModes=n_modes, useSparseSolver=True,
-                                      computationMode=HCBstaticModeSelection.RBE2,
-                                      boundaryNodesWeights=[np.asarray(i.weights) for i in interfaces],
-                                      excludeRigidBodyMotion=True, verboseMode=False, timerTreshold=10**12)
+    fem.ComputeHurtyCraigBamptonModes(
+        boundaryNodesList=[list(map(int, i.nodes)) for i in interfaces],
+        nEigenModes=n_modes,
+        useSparseSolver=True,
+        computationMode=HCBstaticModeSelection.RBE2,
+        boundaryNodesWeights=[np.asarray(i.weights) for i in interfaces],
+        excludeRigidBodyMotion=True,
+        verboseMode=False,
+        timerTreshold=10**12,
+    )
     return time.perf_counter() - start, fem
 
 
 def time_invariants(model, reduction, fem):
     from exudyn.FEM import ObjectFFRFreducedOrderInterface
 
-    from ffrf.invariants import inertia_invariants
+    from ffrf.reduction.invariants import inertia_invariants
 
     start = time.perf_counter()
     ours = inertia_invariants(model, reduction)
@@ -85,12 +90,16 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=2, help="best of this many runs per code")
     args = parser.parse_args()
 
-    header = (f"{'h/mm':>5} {'nodes':>8} {'DOFs':>8} {'ours/s':>8} {'ours,no Sturm/s':>16} {'Exudyn/s':>9} "
-              f"{'ratio':>6} {'max rel df':>11}")
+    header = (
+        f"{'h/mm':>5} {'nodes':>8} {'DOFs':>8} {'ours/s':>8} {'ours,no Sturm/s':>16} {'Exudyn/s':>9} "
+        f"{'ratio':>6} {'max rel df':>11}"
+    )
     import os
 
-    print(f"link {args.link}, n_m = {args.modes}, RBE2 bores, frame on the first bore, best of {args.repeat}, "
-          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
+    print(
+        f"link {args.link}, n_m = {args.modes}, RBE2 bores, frame on the first bore, best of {args.repeat}, "
+        f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}"
+    )
     print(header)
     for h in args.h:
         start = time.perf_counter()
@@ -107,12 +116,18 @@ def main() -> None:
             elapsed, fem = time_exudyn(model, interfaces, args.modes)
             t_exu = min(t_exu, elapsed)
         df = np.abs(ours.fixed_interface_frequencies_hz / np.sort(fem.GetEigenFrequenciesHz()) - 1).max()
-        print(f"{h:5.1f} {len(model.nodes):8d} {3 * len(model.nodes):8d} {t_ours:8.2f} {t_fast:16.2f} {t_exu:9.2f} "
-              f"{t_ours / t_exu:6.2f} {df:11.1e}   (meshing + assembly {t_mesh:.1f} s)", flush=True)
+        print(
+            f"{h:5.1f} {len(model.nodes):8d} {3 * len(model.nodes):8d} {t_ours:8.2f} {t_fast:16.2f} {t_exu:9.2f} "
+            f"{t_ours / t_exu:6.2f} {df:11.1e}   (meshing + assembly {t_mesh:.1f} s)",
+            flush=True,
+        )
         if args.invariants:
             t_inv, t_inv_exu, error = time_invariants(model, ours, fem)
-            print(f"      invariants: ours {t_inv:.2f} s, Exudyn {t_inv_exu:.2f} s, ratio {t_inv / t_inv_exu:.3f}, "
-                  f"max rel diff M_PsiTildePsiTilde {error:.1e}", flush=True)
+            print(
+                f"      invariants: ours {t_inv:.2f} s, Exudyn {t_inv_exu:.2f} s, ratio {t_inv / t_inv_exu:.3f}, "
+                f"max rel diff M_PsiTildePsiTilde {error:.1e}",
+                flush=True,
+            )
         del model, interfaces, ours, fem
         gc.collect()
 

@@ -38,11 +38,21 @@ def main(argv=None) -> int:
             fe = beam.fe_first_frequencies(h, order, bc)
             ref = beam.theory(bc)
             errors = {k: 100.0 * (fe[k] / ref[k] - 1.0) if k in fe else float("nan") for k in ref}
-            row = dict(order=order, h_m=h, bc=bc, errors_percent=errors, fe_hz=fe, theory_hz=ref,
-                       seconds=time.perf_counter() - t0)
+            row = dict(
+                order=order,
+                h_m=h,
+                bc=bc,
+                errors_percent=errors,
+                fe_hz=fe,
+                theory_hz=ref,
+                seconds=time.perf_counter() - t0,
+            )
             rows.append(row)
-            print(f"{order:2d} {h * 1e3:5.1f} {bc:>13} {errors['bend_z']:9.3f} "
-                  f"{errors['bend_y']:9.3f} {errors['torsion']:10.3f} {row['seconds']:6.1f}", flush=True)
+            print(
+                f"{order:2d} {h * 1e3:5.1f} {bc:>13} {errors['bend_z']:9.3f} "
+                f"{errors['bend_y']:9.3f} {errors['torsion']:10.3f} {row['seconds']:6.1f}",
+                flush=True,
+            )
     if args.json:
         args.json.write_text(json.dumps(rows, indent=2, default=float))
     return 0

@@ -38,16 +38,28 @@ def run_case(link: int, h: float, order: int, n_modes: int) -> dict:
     a, b, names = paper_link_axes(link)
     t0 = time.perf_counter()
     mesh, _ = mesh_link(a, b, h=h, names=names, mount=link == 0)
-    result.update(mesh_s=time.perf_counter() - t0, peak_after_mesh_MiB=_peak_mib(),
-                  n_tets=len(mesh.tets), min_quality=quality_summary(mesh).min_quality)
+    result.update(
+        mesh_s=time.perf_counter() - t0,
+        peak_after_mesh_MiB=_peak_mib(),
+        n_tets=len(mesh.tets),
+        min_quality=quality_summary(mesh).min_quality,
+    )
     t0 = time.perf_counter()
     model = FEModel.from_tet_mesh(mesh, PLA, order)
-    result.update(assembly_s=time.perf_counter() - t0, peak_after_assembly_MiB=_peak_mib(), n_dofs=model.n_dofs,
-                  nnz_stiffness=int(model.stiffness.nnz))
+    result.update(
+        assembly_s=time.perf_counter() - t0,
+        peak_after_assembly_MiB=_peak_mib(),
+        n_dofs=model.n_dofs,
+        nnz_stiffness=int(model.stiffness.nnz),
+    )
     t0 = time.perf_counter()
     modes = free_free_modes(model, n_modes)
-    result.update(modal_s=time.perf_counter() - t0, peak_after_modal_MiB=_peak_mib(),
-                  n_rigid=int(modes.rigid_shapes.shape[1]), first_frequencies_hz=modes.frequencies[:4].tolist())
+    result.update(
+        modal_s=time.perf_counter() - t0,
+        peak_after_modal_MiB=_peak_mib(),
+        n_rigid=int(modes.rigid_shapes.shape[1]),
+        first_frequencies_hz=modes.frequencies[:4].tolist(),
+    )
     return result
 
 
@@ -64,21 +76,40 @@ def main(argv=None) -> int:
         print(json.dumps(run_case(args.link, float(args.case), args.order, args.modes)))
         return 0
     results = []
-    header = (f"{'h [mm]':>7} {'P':>2} {'tets':>8} {'DOFs':>9} {'mesh s':>8} {'asm s':>8} {'modal s':>8} "
-              f"{'peak MiB':>9} {'f1 Hz':>8}")
+    header = (
+        f"{'h [mm]':>7} {'P':>2} {'tets':>8} {'DOFs':>9} {'mesh s':>8} {'asm s':>8} {'modal s':>8} "
+        f"{'peak MiB':>9} {'f1 Hz':>8}"
+    )
     print(header)
     for h in args.h:
-        out = subprocess.run([sys.executable, __file__, "--link", str(args.link), "--order", str(args.order),
-                              "--modes", str(args.modes), "--case", repr(h)],
-                             capture_output=True, text=True, cwd=ROOT)
+        out = subprocess.run(
+            [
+                sys.executable,
+                __file__,
+                "--link",
+                str(args.link),
+                "--order",
+                str(args.order),
+                "--modes",
+                str(args.modes),
+                "--case",
+                repr(h),
+            ],
+            capture_output=True,
+            text=True,
+            cwd=ROOT,
+        )
         if out.returncode != 0:
             print(f"h={h}: failed\n{out.stderr[-2000:]}")
             continue
         r = json.loads(out.stdout.strip().splitlines()[-1])
         results.append(r)
-        print(f"{h * 1e3:7.1f} {r['order']:2d} {r['n_tets']:8d} {r['n_dofs']:9d} {r['mesh_s']:8.2f} "
-              f"{r['assembly_s']:8.2f} {r['modal_s']:8.2f} {r['peak_after_modal_MiB']:9.0f} "
-              f"{r['first_frequencies_hz'][0]:8.1f}", flush=True)
+        print(
+            f"{h * 1e3:7.1f} {r['order']:2d} {r['n_tets']:8d} {r['n_dofs']:9d} {r['mesh_s']:8.2f} "
+            f"{r['assembly_s']:8.2f} {r['modal_s']:8.2f} {r['peak_after_modal_MiB']:9.0f} "
+            f"{r['first_frequencies_hz'][0]:8.1f}",
+            flush=True,
+        )
     if args.json:
         args.json.write_text(json.dumps(results, indent=2))
     return 0

@@ -11,13 +11,12 @@ Run: .venv/bin/python bench/bench_ffrf_step_cost.py [--fine] [--steps 300]
 """
 
 import argparse
-import time
 
 import numpy as np
 import scipy.sparse as sp
 
 from ffrf import FEModel, craig_bampton, interface_from_group, mesh_link, paper_link_axes
-from ffrf.materials import PLA
+from ffrf.fe.materials import PLA
 from validation.exudyn_ffrf import ReducedBody, pendulum_scene, run_exudyn, run_ffrf
 
 
@@ -27,8 +26,17 @@ def link_body(h: float, n_modes: int = 8) -> ReducedBody:
     model = FEModel.from_tet_mesh(mesh, PLA, 1)
     bores = [interface_from_group(model, name) for name in names]
     basis = craig_bampton(model, bores, n_modes).basis
-    return ReducedBody(model.nodes, sp.csr_matrix(model.mass), sp.csr_matrix(model.stiffness), basis,
-                       bores[0].nodes, bores[0].weights, bores[1].nodes, bores[1].weights, 0.11)
+    return ReducedBody(
+        model.nodes,
+        sp.csr_matrix(model.mass),
+        sp.csr_matrix(model.stiffness),
+        basis,
+        bores[0].nodes,
+        bores[0].weights,
+        bores[1].nodes,
+        bores[1].weights,
+        0.11,
+    )
 
 
 def main() -> None:
@@ -37,8 +45,10 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=300)
     args = parser.parse_args()
     sizes = (4e-3, 2e-3, 1e-3) if args.fine else (4e-3, 2e-3)
-    print(f"{'h [mm]':>7} {'nodes':>7} {'bore nodes':>10} {'m':>3} | {'ours ms/step':>12} {'it':>5} | "
-          f"{'Exudyn ms/step':>14} {'it':>5} | {'Exudyn mod. ms':>14} | ratio ours/Exudyn")
+    print(
+        f"{'h [mm]':>7} {'nodes':>7} {'bore nodes':>10} {'m':>3} | {'ours ms/step':>12} {'it':>5} | "
+        f"{'Exudyn ms/step':>14} {'it':>5} | {'Exudyn mod. ms':>14} | ratio ours/Exudyn"
+    )
     for h in sizes:
         body = link_body(h)
         scene = pendulum_scene(body, step=1e-3, t_end=args.steps * 1e-3, axis=(0.0, 1.0, 0.0))  # swings under gravity
@@ -48,11 +58,13 @@ def main() -> None:
         modified = run_exudyn(scene, modified_newton=True)
         n = args.steps
         diff = np.abs(ours.tracked - full.tracked).max()
-        print(f"{1e3 * h:7.1f} {len(body.nodes):7d} {len(body.frame_nodes):10d} {body.n_modes:3d} | "
-              f"{1e3 * ours.integration_time / n:12.3f} {ours.newton_iterations / n:5.2f} | "
-              f"{1e3 * full.integration_time / n:14.3f} {full.newton_iterations / n:5.2f} | "
-              f"{1e3 * modified.integration_time / n:14.3f} | {ours.integration_time / full.integration_time:6.2f}"
-              f"   (max tracked-node difference {diff:.1e} m)")
+        print(
+            f"{1e3 * h:7.1f} {len(body.nodes):7d} {len(body.frame_nodes):10d} {body.n_modes:3d} | "
+            f"{1e3 * ours.integration_time / n:12.3f} {ours.newton_iterations / n:5.2f} | "
+            f"{1e3 * full.integration_time / n:14.3f} {full.newton_iterations / n:5.2f} | "
+            f"{1e3 * modified.integration_time / n:14.3f} | {ours.integration_time / full.integration_time:6.2f}"
+            f"   (max tracked-node difference {diff:.1e} m)"
+        )
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@ PLA-like bar 0.2 x 0.02 x 0.01 m hinged at one end, released from horizontal, rh
 beta = 1e-3 s, HCB with 6 + ``--modes`` modes, area weights. Two mesh sizes with the same m;
 the bore node count grows with the mesh, which is what Exudyn's marker cost depends on.
 
-For ours (default Newton of ``ffrf.generalized_alpha``, and full Newton), "cold" is the first run in a fresh interpreter (numba loads its on-disk cache or
+For ours (default Newton of ``ffrf.solvers.generalized_alpha``, and full Newton), "cold" is the first run in a fresh interpreter (numba loads its on-disk cache or
 compiles, first calls of scipy/LAPACK), "warm" the best of ``--repeat`` runs afterwards.
 Exudyn is always warm (best of ``--repeat``). Both use full Newton; Exudyn is also timed with
 its default modified Newton. Also printed: the largest tip difference between the solvers
@@ -45,11 +45,13 @@ def scene_for(mesh: str, modes: int, step: float, t_end: float):
 
 def cold_run(mesh: str, modes: int, step: float, t_end: float) -> dict:
     """Our solver's first run in a fresh interpreter (prints JSON on stdout)."""
-    code = (f"import time; t = time.perf_counter(); import json, sys; sys.path.insert(0, {str(ROOT)!r});"
-            f"from bench.bench_ffrf_vs_exudyn import scene_for;"
-            f"from validation.exudyn_ffrf import run_ffrf;"
-            f"s = scene_for({mesh!r}, {modes}, {step}, {t_end}); r = run_ffrf(s);"
-            f"print(json.dumps({{'per_step': r.time_per_step, 'total': time.perf_counter() - t}}))")
+    code = (
+        f"import time; t = time.perf_counter(); import json, sys; sys.path.insert(0, {str(ROOT)!r});"
+        f"from bench.bench_ffrf_vs_exudyn import scene_for;"
+        f"from validation.exudyn_ffrf import run_ffrf;"
+        f"s = scene_for({mesh!r}, {modes}, {step}, {t_end}); r = run_ffrf(s);"
+        f"print(json.dumps({{'per_step': r.time_per_step, 'total': time.perf_counter() - t}}))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -67,11 +69,15 @@ def bench_mesh(mesh: str, modes: int, step: float, t_end: float, repeat: int) ->
     ours = best_of(lambda: run_ffrf(scene), repeat)
     ours_full = best_of(lambda: run_ffrf(scene, modified_newton=False), repeat)
     full = best_of(lambda: run_exudyn(scene), repeat)
-    modified = best_of(lambda: run_exudyn(scene, modified_newton=True, relative_tolerance=1e-10,
-                                          absolute_tolerance=1e-12), repeat)
+    modified = best_of(
+        lambda: run_exudyn(scene, modified_newton=True, relative_tolerance=1e-10, absolute_tolerance=1e-12), repeat
+    )
     return {
-        "mesh": mesh, "nodes": len(scene.body.nodes), "bore nodes": len(scene.body.frame_nodes),
-        "m": scene.body.n_modes, "steps": scene.n_steps,
+        "mesh": mesh,
+        "nodes": len(scene.body.nodes),
+        "bore nodes": len(scene.body.frame_nodes),
+        "m": scene.body.n_modes,
+        "steps": scene.n_steps,
         "ours cold ms/step": 1e3 * cold["per_step"],
         "ours cold total s (import, JIT/cache, setup, run)": cold["total"],
         "ours warm ms/step": 1e3 * ours.time_per_step,
@@ -79,7 +85,8 @@ def bench_mesh(mesh: str, modes: int, step: float, t_end: float, repeat: int) ->
         "ours it/step": ours.newton_iterations / scene.n_steps,
         "ours full Newton ms/step": 1e3 * ours_full.time_per_step,
         "ours full Newton it/step": ours_full.newton_iterations / scene.n_steps,
-        "exudyn full ms/step": 1e3 * full.time_per_step, "exudyn full it/step": full.newton_iterations / scene.n_steps,
+        "exudyn full ms/step": 1e3 * full.time_per_step,
+        "exudyn full it/step": full.newton_iterations / scene.n_steps,
         "exudyn modified ms/step": 1e3 * modified.time_per_step,
         "ratio ours warm / exudyn full": ours.time_per_step / full.time_per_step,
         "ratio ours warm / exudyn modified": ours.time_per_step / modified.time_per_step,
@@ -95,7 +102,7 @@ def convergence(modes: int, step: float, t_end: float) -> None:
 
     runs = []
     for k in range(3):
-        scene = scene_for("coarse", modes, step / 2 ** k, t_end)
+        scene = scene_for("coarse", modes, step / 2**k, t_end)
         runs.append((scene.step, run_ffrf(scene), run_exudyn(scene)))
     print(f"\n{'h (s)':>10} {'|ours-exudyn| (m)':>18} {'|ours(h)-ours(h/2)|':>20} {'|ex(h)-ex(h/2)|':>16}")
     for k, (h, ours, theirs) in enumerate(runs):

@@ -51,10 +51,14 @@ def main(argv=None) -> dict:
     parser.add_argument("--json", type=Path)
     args = parser.parse_args(argv)
 
-    from ffrf.bennett_scene import assemble, build_bennett
+    from ffrf.scenes.bennett_scene import assemble, build_bennett
     from validation.bennett_validation import dynamic_solve, from_exudyn, run_ours
-    from validation.exudyn_bennett import (assemble_exudyn_bennett, bennett_bodies, exudyn_convention_system,
-                                           run_exudyn_bennett)
+    from validation.exudyn_bennett import (
+        assemble_exudyn_bennett,
+        bennett_bodies,
+        exudyn_convention_system,
+        run_exudyn_bennett,
+    )
     from validation.exudyn_twin import twin_bases
 
     scene = build_bennett(args.variant, h=args.h, order=1, n_modes=args.modes).with_exact_gravity(False)
@@ -68,21 +72,31 @@ def main(argv=None) -> dict:
     for h in steps:
         times = h * np.arange(int(round(args.t_end / h)) + 1)
         ours[h] = run_ours("equivalent", scene, system, times, q_ours, 0.0, dynamic_solve(h, args.rho_inf))
-        theirs[h] = from_exudyn("exudyn", scene, run_exudyn_bennett(scene, start[4], args.t_end, h, args.rho_inf,
-                                                                         bases=bases), 0.0)
+        theirs[h] = from_exudyn(
+            "exudyn", scene, run_exudyn_bennett(scene, start[4], args.t_end, h, args.rho_inf, bases=bases), 0.0
+        )
     rows = []
-    print(f"{args.variant}, h = {args.h} m, {args.modes} modes, {args.t_end} s, exudyn_jacobian = "
-          f"{args.exudyn_jacobian}")
-    print(f"{'step':>8} {'ours: h vs h/2':>15} {'Exudyn: h vs h/2':>17} {'ours vs Exudyn':>15} {'ours s':>7} {'Exudyn s':>9}")
+    print(
+        f"{args.variant}, h = {args.h} m, {args.modes} modes, {args.t_end} s, exudyn_jacobian = {args.exudyn_jacobian}"
+    )
+    print(
+        f"{'step':>8} {'ours: h vs h/2':>15} {'Exudyn: h vs h/2':>17} {'ours vs Exudyn':>15} {'ours s':>7} {'Exudyn s':>9}"
+    )
     for h in steps:
-        row = {"step": h, "ours_vs_exudyn_m": float(np.linalg.norm(_points(ours[h]) - _points(theirs[h]), axis=2).max()),
-               "ours_s": ours[h].solve_s, "exudyn_s": theirs[h].solve_s}
+        row = {
+            "step": h,
+            "ours_vs_exudyn_m": float(np.linalg.norm(_points(ours[h]) - _points(theirs[h]), axis=2).max()),
+            "ours_s": ours[h].solve_s,
+            "exudyn_s": theirs[h].solve_s,
+        }
         if h / 2 in ours:
             row["ours_self_m"] = _diff_at_common_times(ours[h / 2], ours[h])
             row["exudyn_self_m"] = _diff_at_common_times(theirs[h / 2], theirs[h])
         rows.append(row)
-        print(f"{h:8.1e} {row.get('ours_self_m', float('nan')):15.3e} {row.get('exudyn_self_m', float('nan')):17.3e} "
-              f"{row['ours_vs_exudyn_m']:15.3e} {row['ours_s']:7.2f} {row['exudyn_s']:9.2f}")
+        print(
+            f"{h:8.1e} {row.get('ours_self_m', float('nan')):15.3e} {row.get('exudyn_self_m', float('nan')):17.3e} "
+            f"{row['ours_vs_exudyn_m']:15.3e} {row['ours_s']:7.2f} {row['exudyn_s']:9.2f}"
+        )
     out = {"settings": vars(args) | {"json": None}, "rows": rows}
     if args.json:
         args.json.write_text(json.dumps(out, indent=2, default=float))

@@ -19,7 +19,6 @@ import argparse
 import json
 import os
 import sys
-import time
 from pathlib import Path
 
 for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -34,7 +33,7 @@ if str(ROOT) not in sys.path:
 
 def _count_factorisations():
     """Wrap the generalized-alpha module's factorisation so that its calls are counted."""
-    module = sys.modules["ffrf.generalized_alpha"]
+    module = sys.modules["ffrf.solvers.generalized_alpha"]
     original = module._factor_iteration_matrix
     counter = {"n": 0}
 
@@ -58,32 +57,51 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--json", type=Path)
     args = parser.parse_args(argv)
 
-    import ffrf.generalized_alpha  # noqa: F401  (the module, for the counter)
+    import ffrf.solvers.generalized_alpha  # noqa: F401  (the module, for the counter)
     from bench.speed_vs_error import run_dynamic
-    from ffrf.bennett_scene import build_bennett
+    from ffrf.scenes.bennett_scene import build_bennett
 
     counter = _count_factorisations()
     t_end = args.t_end if args.t_end is not None else build_bennett("pla", h=6e-3, order=1, n_modes=2).t_end
     print(f"t_end {t_end:.3f} s, {int(round(t_end / args.step))} steps of {args.step} s", flush=True)
     out = run_dynamic(args.order, args.h, args.modes, args.step, args.rho_inf, t_end, not args.no_exudyn)
     steps = len(out["ffrf"]["time"]) - 1
-    report = {"order": args.order, "h": args.h, "modes": args.modes, "step": args.step, "rho_inf": args.rho_inf,
-              "t_end": t_end, "steps": steps, "factorisations": counter["n"]}
+    report = {
+        "order": args.order,
+        "h": args.h,
+        "modes": args.modes,
+        "step": args.step,
+        "rho_inf": args.rho_inf,
+        "t_end": t_end,
+        "steps": steps,
+        "factorisations": counter["n"],
+    }
     for solver, run in out.items():
         solve = run["integration_s"] - run["assembly_s"]
-        report[solver] = {"setup_s": run["setup_s"], "assembly_s": run["assembly_s"], "solve_s": solve,
-                          "ms_per_step": 1e3 * solve / steps,
-                          "max_torque_Nm": float(np.max(np.abs(run["torque"])))}
-        print(f"{solver:7s} set-up {run['setup_s']:7.2f} s  assembly {run['assembly_s']:6.2f} s  "
-              f"integration {solve:8.2f} s  ({1e3 * solve / steps:.2f} ms/step)", flush=True)
+        report[solver] = {
+            "setup_s": run["setup_s"],
+            "assembly_s": run["assembly_s"],
+            "solve_s": solve,
+            "ms_per_step": 1e3 * solve / steps,
+            "max_torque_Nm": float(np.max(np.abs(run["torque"]))),
+        }
+        print(
+            f"{solver:7s} set-up {run['setup_s']:7.2f} s  assembly {run['assembly_s']:6.2f} s  "
+            f"integration {solve:8.2f} s  ({1e3 * solve / steps:.2f} ms/step)",
+            flush=True,
+        )
     if "exudyn" in out:
         ours, theirs = out["ffrf"], out["exudyn"]
         report["coupler_difference_m"] = float(np.max(np.linalg.norm(ours["coupler"] - theirs["coupler"], axis=1)))
-        report["torque_difference_rel"] = float(np.max(np.abs(ours["torque"] - theirs["torque"]))
-                                                / np.max(np.abs(theirs["torque"])))
+        report["torque_difference_rel"] = float(
+            np.max(np.abs(ours["torque"] - theirs["torque"])) / np.max(np.abs(theirs["torque"]))
+        )
         report["ratio_integration"] = report["exudyn"]["solve_s"] / report["ffrf"]["solve_s"]
-        print(f"coupler difference {report['coupler_difference_m']:.2e} m, torque {report['torque_difference_rel']:.1e}"
-              f" relative; Exudyn / ours, integration: {report['ratio_integration']:.1f}x", flush=True)
+        print(
+            f"coupler difference {report['coupler_difference_m']:.2e} m, torque {report['torque_difference_rel']:.1e}"
+            f" relative; Exudyn / ours, integration: {report['ratio_integration']:.1f}x",
+            flush=True,
+        )
     print(f"our factorisations of the iteration matrix: {counter['n']} for {steps} steps", flush=True)
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)

@@ -71,8 +71,10 @@ if str(ROOT) not in sys.path:
 QS_POINTS = [f"1,{h},{m}" for h in (0.006, 0.004, 0.003) for m in (2, 8)] + [f"2,0.006,{m}" for m in (4, 8)]
 _STEPS = (0.004, 0.002, 0.001, 0.0005)
 DYN_POINTS = (  # cheap first, so that an interrupted sweep still covers every axis
-    [f"1,0.006,{m},0.004,0.9" for m in (2, 8)] + [f"1,0.004,{m},0.004,0.9" for m in (2, 16)]  # discretisation
-    + [f"2,0.006,{m},0.004,0.9" for m in (4, 8)] + ["2,0.006,8,0.002,0.9,ours"]
+    [f"1,0.006,{m},0.004,0.9" for m in (2, 8)]
+    + [f"1,0.004,{m},0.004,0.9" for m in (2, 16)]  # discretisation
+    + [f"2,0.006,{m},0.004,0.9" for m in (4, 8)]
+    + ["2,0.006,8,0.002,0.9,ours"]
     + [f"1,0.004,8,{s},{r},ours" for s in _STEPS for r in (0.5, 0.8, 1.0)]  # spectral radius, ours
     + [f"1,0.004,8,0.004,{r}" for r in (0.5, 1.0)]  # spectral radius, Exudyn too at the cheapest step
     + [f"1,0.004,8,{s},0.9" for s in _STEPS]  # the time step, both solvers
@@ -84,6 +86,7 @@ THRESHOLDS_M = (1e-3, 1e-4, 1e-5, 1e-6)
 # --------------------------------------------------------------------------------------------
 # Memory: the process's resident high-water mark, reset per measured part
 # --------------------------------------------------------------------------------------------
+
 
 def _status_mb(field: str) -> float:
     for line in Path("/proc/self/status").read_text().splitlines():
@@ -114,8 +117,9 @@ def _memory_stop(start_mb: float) -> dict:
 # Runs
 # --------------------------------------------------------------------------------------------
 
+
 def _build(order: int, h: float, modes: int):
-    from ffrf.bennett_scene import build_bennett
+    from ffrf.scenes.bennett_scene import build_bennett
 
     started = time.perf_counter()
     scene = build_bennett("pla", h=h, order=order, n_modes=modes)
@@ -156,19 +160,26 @@ def _exudyn_assembled(scene) -> tuple:
     return mem, bases, setup, start, time.perf_counter() - started, started
 
 
-def run_quasi_static(order: int, h: float, modes: int, times: np.ndarray, exudyn: bool,
-                     scene_cache: dict | None = None) -> dict:
+def run_quasi_static(
+    order: int, h: float, modes: int, times: np.ndarray, exudyn: bool, scene_cache: dict | None = None
+) -> dict:
     """Both solvers' quasi-static runs at ``times`` on one discretisation."""
-    from ffrf.bennett_run import run_bennett
+    from ffrf.scenes.bennett_run import run_bennett
 
     out = {}
     mem = _memory_start()
     scene, setup = _scene(order, h, modes, scene_cache)
     result = run_bennett(scene, mode="quasi_static", n_outputs=len(times), t_end=float(times[-1]))
     timings = result.metadata["timings_s"]
-    out["ffrf"] = {"setup_s": setup, "integration_s": timings["assembly"] + timings["solve"],
-                   "assembly_s": timings["assembly"], **_memory_stop(mem), "time": result.time,
-                   "coupler": result.sensors["coupler_point"], "torque": result.sensors["driving_torque"]}
+    out["ffrf"] = {
+        "setup_s": setup,
+        "integration_s": timings["assembly"] + timings["solve"],
+        "assembly_s": timings["assembly"],
+        **_memory_stop(mem),
+        "time": result.time,
+        "coupler": result.sensors["coupler_point"],
+        "torque": result.sensors["driving_torque"],
+    }
     if exudyn:
         from validation.exudyn_bennett import quasi_static_exudyn_bennett
 
@@ -176,16 +187,30 @@ def run_quasi_static(order: int, h: float, modes: int, times: np.ndarray, exudyn
         trajectory = quasi_static_exudyn_bennett(scene, start, times, bases=bases)
         solve = time.perf_counter() - started
         # the twin's build inside the sweep is set-up, as for the dynamic runs
-        out["exudyn"] = {"setup_s": setup + trajectory.setup_time, "integration_s": solve - trajectory.setup_time,
-                         "assembly_s": assembly, **_memory_stop(mem), "time": trajectory.time,
-                         "coupler": trajectory.coupler, "torque": trajectory.torque}
+        out["exudyn"] = {
+            "setup_s": setup + trajectory.setup_time,
+            "integration_s": solve - trajectory.setup_time,
+            "assembly_s": assembly,
+            **_memory_stop(mem),
+            "time": trajectory.time,
+            "coupler": trajectory.coupler,
+            "torque": trajectory.torque,
+        }
     return out
 
 
-def run_dynamic(order: int, h: float, modes: int, step: float, rho: float, t_end: float, exudyn: bool,
-                scene_cache: dict | None = None) -> dict:
+def run_dynamic(
+    order: int,
+    h: float,
+    modes: int,
+    step: float,
+    rho: float,
+    t_end: float,
+    exudyn: bool,
+    scene_cache: dict | None = None,
+) -> dict:
     """Both solvers' generalized-alpha runs from their own static assembly at rest, one row per step."""
-    from ffrf.bennett_scene import assemble
+    from ffrf.scenes.bennett_scene import assemble
     from validation.bennett_validation import dynamic_solve, run_ours
 
     out = {}
@@ -196,16 +221,29 @@ def run_dynamic(order: int, h: float, modes: int, step: float, rho: float, t_end
     q0 = assemble(scene).q
     assembly = time.perf_counter() - started
     run = run_ours("ffrf", scene, scene.system, times, q0, setup, dynamic_solve(step, rho))
-    out["ffrf"] = {"setup_s": setup, "integration_s": assembly + run.solve_s, "assembly_s": assembly,
-                   **_memory_stop(mem), "time": run.time, "coupler": run.coupler, "torque": run.torque}
+    out["ffrf"] = {
+        "setup_s": setup,
+        "integration_s": assembly + run.solve_s,
+        "assembly_s": assembly,
+        **_memory_stop(mem),
+        "time": run.time,
+        "coupler": run.coupler,
+        "torque": run.torque,
+    }
     if exudyn:
         from validation.exudyn_bennett import run_exudyn_bennett
 
         mem, bases, setup, start, assembly, _ = _exudyn_assembled(scene)
         trajectory = run_exudyn_bennett(scene, start[4], t_end, step, rho, bases=bases)
-        out["exudyn"] = {"setup_s": setup + trajectory.setup_time, "integration_s": assembly + trajectory.integration_time,
-                         "assembly_s": assembly, **_memory_stop(mem), "time": trajectory.time,
-                         "coupler": trajectory.coupler, "torque": trajectory.torque}
+        out["exudyn"] = {
+            "setup_s": setup + trajectory.setup_time,
+            "integration_s": assembly + trajectory.integration_time,
+            "assembly_s": assembly,
+            **_memory_stop(mem),
+            "time": trajectory.time,
+            "coupler": trajectory.coupler,
+            "torque": trajectory.torque,
+        }
     return out
 
 
@@ -219,14 +257,16 @@ def _errors(run: dict, reference: dict) -> tuple[float, float]:
         raise ValueError("the run and the reference share no output time")
     rows, ref_rows = np.flatnonzero(common), index[common]
     coupler = float(np.linalg.norm(run["coupler"][rows] - reference["coupler"][ref_rows], axis=1).max())
-    torque = float(np.abs(run["torque"][rows] - reference["torque"][ref_rows]).max()
-                   / np.abs(reference["torque"]).max())
+    torque = float(
+        np.abs(run["torque"][rows] - reference["torque"][ref_rows]).max() / np.abs(reference["torque"]).max()
+    )
     return coupler, torque
 
 
 # --------------------------------------------------------------------------------------------
 # Reports
 # --------------------------------------------------------------------------------------------
+
 
 def _richardson(h_coarse: float, h_fine: float, order: float) -> Callable[[dict, dict], dict]:
     """``(coarse, fine) -> extrapolated`` run (coupler and torque at the same rows)."""
@@ -235,14 +275,20 @@ def _richardson(h_coarse: float, h_fine: float, order: float) -> Callable[[dict,
     def extrapolate(coarse: dict, fine: dict) -> dict:
         if coarse["time"].shape != fine["time"].shape:
             raise ValueError("the two references have different rows")
-        return {"time": coarse["time"], **{k: (wc * fine[k] - wf * coarse[k]) / (wc - wf) for k in ("coupler", "torque")}}
+        return {
+            "time": coarse["time"],
+            **{k: (wc * fine[k] - wf * coarse[k]) / (wc - wf) for k in ("coupler", "torque")},
+        }
+
     return extrapolate
 
 
 def _setting(p: dict) -> str:
     text = f"P{p['order']}, {1e3 * p['h']:g} mm, {p['modes']} modes"
     if p["sweep"] == "dynamic_window":
-        text += ", quasi-static" if p["mode"] == "quasi_static" else f", dt {1e3 * p['step']:g} ms, rho {p['rho_inf']:g}"
+        text += (
+            ", quasi-static" if p["mode"] == "quasi_static" else f", dt {1e3 * p['step']:g} ms, rho {p['rho_inf']:g}"
+        )
     return text
 
 
@@ -252,12 +298,16 @@ def _total(p: dict) -> float:
 
 def cheapest_table(points: list[dict], sweep: str) -> str:
     """Markdown: for each accuracy threshold the cheapest point of each solver (set-up + run) that reaches it."""
-    lines = ["| coupler accuracy | ours: setting, time (s) | Exudyn: setting, time (s) | Exudyn / ours |",
-             "|---|---|---|---|"]
+    lines = [
+        "| coupler accuracy | ours: setting, time (s) | Exudyn: setting, time (s) | Exudyn / ours |",
+        "|---|---|---|---|",
+    ]
     for threshold in THRESHOLDS_M:
         cells, times = [], {}
         for solver in ("ffrf", "exudyn"):
-            ok = [p for p in points if p["sweep"] == sweep and p["solver"] == solver and p["coupler_error_m"] <= threshold]
+            ok = [
+                p for p in points if p["sweep"] == sweep and p["solver"] == solver and p["coupler_error_m"] <= threshold
+            ]
             if not ok:
                 cells.append("not reached")
                 continue
@@ -271,16 +321,24 @@ def cheapest_table(points: list[dict], sweep: str) -> str:
 
 def same_point_table(points: list[dict], sweep: str) -> str:
     """Markdown: every point both solvers ran, side by side (integration only and total)."""
-    lines = ["| setting | coupler error ours / Exudyn (m) | run ours / Exudyn (s) | ratio | total ours / Exudyn (s) | ratio |",
-             "|---|---|---|---|---|---|"]
+    lines = [
+        "| setting | coupler error ours / Exudyn (m) | run ours / Exudyn (s) | ratio | total ours / Exudyn (s) | ratio |",
+        "|---|---|---|---|---|---|",
+    ]
     # a pair is ours and Exudyn's run of one point, back to back in the list (same load)
     for p, e in zip(points[:-1], points[1:]):
-        if p["sweep"] != sweep or p["solver"] != "ffrf" or e["solver"] != "exudyn" or not all(
-                e[k] == p[k] for k in ("sweep", "mode", "order", "h", "modes", "step", "rho_inf")):
+        if (
+            p["sweep"] != sweep
+            or p["solver"] != "ffrf"
+            or e["solver"] != "exudyn"
+            or not all(e[k] == p[k] for k in ("sweep", "mode", "order", "h", "modes", "step", "rho_inf"))
+        ):
             continue
-        row = (f"| {_setting(p)} | {p['coupler_error_m']:.2e} / {e['coupler_error_m']:.2e} | "
-               f"{p['integration_s']:.2f} / {e['integration_s']:.2f} | {e['integration_s'] / p['integration_s']:.1f} | "
-               f"{_total(p):.2f} / {_total(e):.2f} | {_total(e) / _total(p):.1f} |")
+        row = (
+            f"| {_setting(p)} | {p['coupler_error_m']:.2e} / {e['coupler_error_m']:.2e} | "
+            f"{p['integration_s']:.2f} / {e['integration_s']:.2f} | {e['integration_s'] / p['integration_s']:.1f} | "
+            f"{_total(p):.2f} / {_total(e):.2f} | {_total(e) / _total(p):.1f} |"
+        )
         if p["mode"] == "dynamic":
             ours, theirs = _ms_per_step(p), _ms_per_step(e)
             row += f" {ours:.2f} / {theirs:.1f} | {theirs / ours:.1f} |"
@@ -309,9 +367,15 @@ def pareto_figure(points: list[dict], sweep: str, path: Path, xlabel: str) -> No
             chosen = [p for p in points if p["sweep"] == sweep and p["solver"] == solver and p["mode"] == mode]
             if chosen:
                 label = name + (" (quasi-static)" if sweep == "dynamic_window" and mode == "quasi_static" else "")
-                ax.loglog([_total(p) for p in chosen], [max(p["coupler_error_m"], 1e-12) for p in chosen],
-                          ls="none", marker=marker, color=color, mfc="none" if mode == "quasi_static" else color,
-                          label=label)
+                ax.loglog(
+                    [_total(p) for p in chosen],
+                    [max(p["coupler_error_m"], 1e-12) for p in chosen],
+                    ls="none",
+                    marker=marker,
+                    color=color,
+                    mfc="none" if mode == "quasi_static" else color,
+                    label=label,
+                )
     for threshold in THRESHOLDS_M:
         ax.axhline(threshold, color="0.7", lw=0.8, ls=":")
     ax.set_xlabel(xlabel)
@@ -325,24 +389,40 @@ def pareto_figure(points: list[dict], sweep: str, path: Path, xlabel: str) -> No
 
 def _point(solver: str, sweep: str, mode: str, spec: tuple, run: dict, errors: tuple, extra: dict) -> dict:
     order, h, modes = spec[:3]
-    return {"solver": solver, "sweep": sweep, "mode": mode, "order": order, "h": h, "modes": modes,
-            "step": extra.pop("step", None), "rho_inf": extra.pop("rho_inf", None), "t_end": extra.pop("t_end"),
-            "setup_s": run["setup_s"], "integration_s": run["integration_s"], "assembly_s": run["assembly_s"],
-            "peak_mem_mb": run["peak_mem_mb"], "peak_rss_mb": run["peak_rss_mb"],
-            "coupler_error_m": errors[0], "torque_error_rel": errors[1], **extra}
+    return {
+        "solver": solver,
+        "sweep": sweep,
+        "mode": mode,
+        "order": order,
+        "h": h,
+        "modes": modes,
+        "step": extra.pop("step", None),
+        "rho_inf": extra.pop("rho_inf", None),
+        "t_end": extra.pop("t_end"),
+        "setup_s": run["setup_s"],
+        "integration_s": run["integration_s"],
+        "assembly_s": run["assembly_s"],
+        "peak_mem_mb": run["peak_mem_mb"],
+        "peak_rss_mb": run["peak_rss_mb"],
+        "coupler_error_m": errors[0],
+        "torque_error_rel": errors[1],
+        **extra,
+    }
 
 
 def _log(p: dict) -> None:
     extra = f", vs quasi-static ref {p['coupler_error_qs_m']:.2e} m" if "coupler_error_qs_m" in p else ""
-    print(f"{p['solver']:7s} {_setting(p)}: set-up {p['setup_s']:6.2f} s, run {p['integration_s']:7.2f} s, "
-          f"+{p['peak_mem_mb']:6.0f} MiB, coupler {p['coupler_error_m']:.3e} m, torque {p['torque_error_rel']:.2e}{extra}",
-          flush=True)
+    print(
+        f"{p['solver']:7s} {_setting(p)}: set-up {p['setup_s']:6.2f} s, run {p['integration_s']:7.2f} s, "
+        f"+{p['peak_mem_mb']:6.0f} MiB, coupler {p['coupler_error_m']:.3e} m, torque {p['torque_error_rel']:.2e}{extra}",
+        flush=True,
+    )
 
 
 def _warm_up() -> None:
     """Load (or compile) the numba kernels once, so that no point's time includes it."""
-    from ffrf.bennett_run import run_bennett
-    from ffrf.bennett_scene import assemble
+    from ffrf.scenes.bennett_run import run_bennett
+    from ffrf.scenes.bennett_scene import assemble
     from validation.bennett_validation import dynamic_solve
 
     scene, _ = _build(1, 0.008, 2)
@@ -361,14 +441,25 @@ def main(argv: list[str] | None = None) -> list[dict]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--qs-points", nargs="*", default=QS_POINTS, help="order,h,modes")
     parser.add_argument("--dyn-points", nargs="*", default=DYN_POINTS, help="order,h,modes,step,rho[,ours]")
-    parser.add_argument("--dyn-qs-points", nargs="*", default=DYN_QS_POINTS, help="order,h,modes: quasi-static on the window")
+    parser.add_argument(
+        "--dyn-qs-points", nargs="*", default=DYN_QS_POINTS, help="order,h,modes: quasi-static on the window"
+    )
     parser.add_argument("--reference", default="2,0.004,32")
-    parser.add_argument("--fine-reference", default="2,0.003,32",
-                        help="a finer mesh of the reference: the references become the Richardson extrapolation "
-                             "of the two ('' for the reference alone)")
-    parser.add_argument("--richardson-order", type=float, default=1.91,
-                        help="order of the mesh error in h (1.91: observed from P2 at 6, 4 and 3 mm)")
-    parser.add_argument("--ref-step", type=float, default=2.5e-4, help="dynamic reference step (s); checked against twice it")
+    parser.add_argument(
+        "--fine-reference",
+        default="2,0.003,32",
+        help="a finer mesh of the reference: the references become the Richardson extrapolation "
+        "of the two ('' for the reference alone)",
+    )
+    parser.add_argument(
+        "--richardson-order",
+        type=float,
+        default=1.91,
+        help="order of the mesh error in h (1.91: observed from P2 at 6, 4 and 3 mm)",
+    )
+    parser.add_argument(
+        "--ref-step", type=float, default=2.5e-4, help="dynamic reference step (s); checked against twice it"
+    )
     parser.add_argument("--ref-rho", type=float, default=0.9)
     parser.add_argument("--outputs", type=int, default=121, help="quasi-static drive angles over ramp + revolution")
     parser.add_argument("--window", type=float, default=1.5, help="dynamic window (s) from the start of the ramp")
@@ -391,8 +482,12 @@ def main(argv: list[str] | None = None) -> list[dict]:
     exudyn = not args.no_exudyn
     ref_spec = _parse(args.reference)[0]
     points: list[dict] = []
-    checks: dict = {"reference": dict(zip(("order", "h", "modes"), ref_spec)), "ref_step": args.ref_step,
-                    "ref_rho": args.ref_rho, "window_s": args.window}
+    checks: dict = {
+        "reference": dict(zip(("order", "h", "modes"), ref_spec)),
+        "ref_step": args.ref_step,
+        "ref_rho": args.ref_rho,
+        "window_s": args.window,
+    }
 
     def save() -> None:  # partial results survive an interrupted sweep
         (args.out / "results.json").write_text(json.dumps(points, indent=2))
@@ -409,8 +504,10 @@ def main(argv: list[str] | None = None) -> list[dict]:
         reference = run_quasi_static(*ref_spec, qs_times, False, cache)["ffrf"]
         checks["quasi_static_reference_s"] = {"setup": reference["setup_s"], "run": reference["integration_s"]}
     if args.dyn_points or args.dyn_qs_points:
-        print(f"dynamic reference: {args.reference}, step {args.ref_step} s, rho {args.ref_rho}, "
-              f"window {args.window} s", flush=True)
+        print(
+            f"dynamic reference: {args.reference}, step {args.ref_step} s, rho {args.ref_rho}, window {args.window} s",
+            flush=True,
+        )
         dyn_ref = run_dynamic(*ref_spec, args.ref_step, args.ref_rho, args.window, False, cache)["ffrf"]
         half = run_dynamic(*ref_spec, 2 * args.ref_step, args.ref_rho, args.window, False, cache)["ffrf"]
         qs_window = np.arange(0.0, args.window + 1e-9, args.qs_window_every)
@@ -418,37 +515,50 @@ def main(argv: list[str] | None = None) -> list[dict]:
         step_check = _errors(half, dyn_ref)
         dynamic_effect = _errors(qs_ref, dyn_ref)
         checks["dynamic_reference"] = {
-            "setup_s": dyn_ref["setup_s"], "run_s": dyn_ref["integration_s"],
-            "twice_the_step_coupler_m": step_check[0], "twice_the_step_torque_rel": step_check[1],
-            "quasi_static_vs_dynamic_coupler_m": dynamic_effect[0], "quasi_static_vs_dynamic_torque_rel": dynamic_effect[1]}
-        print(f"dynamic reference: step {2 * args.ref_step} vs {args.ref_step} s differ by {step_check[0]:.3e} m "
-              f"(torque {step_check[1]:.2e}); quasi-static vs dynamic reference {dynamic_effect[0]:.3e} m "
-              f"(torque {dynamic_effect[1]:.2e})", flush=True)
+            "setup_s": dyn_ref["setup_s"],
+            "run_s": dyn_ref["integration_s"],
+            "twice_the_step_coupler_m": step_check[0],
+            "twice_the_step_torque_rel": step_check[1],
+            "quasi_static_vs_dynamic_coupler_m": dynamic_effect[0],
+            "quasi_static_vs_dynamic_torque_rel": dynamic_effect[1],
+        }
+        print(
+            f"dynamic reference: step {2 * args.ref_step} vs {args.ref_step} s differ by {step_check[0]:.3e} m "
+            f"(torque {step_check[1]:.2e}); quasi-static vs dynamic reference {dynamic_effect[0]:.3e} m "
+            f"(torque {dynamic_effect[1]:.2e})",
+            flush=True,
+        )
     del reference_scene
     cache.clear()
     if args.fine_reference:
         # Richardson: f(h) = f* + C h^p on the two meshes gives f*; the reference's own error is |f(h) - f*|
         fine_spec = _parse(args.fine_reference)[0]
-        print(f"finer reference {args.fine_reference}: Richardson extrapolation, order {args.richardson_order}",
-              flush=True)
+        print(
+            f"finer reference {args.fine_reference}: Richardson extrapolation, order {args.richardson_order}",
+            flush=True,
+        )
         extrapolate = _richardson(ref_spec[1], fine_spec[1], args.richardson_order)
         checks["fine_reference"] = dict(zip(("order", "h", "modes"), fine_spec))
         checks["richardson_order"] = args.richardson_order
         if args.qs_points:
             fine = run_quasi_static(*fine_spec, qs_times, False, cache)["ffrf"]
             coarse, reference = reference, extrapolate(reference, fine)
-            checks["reference_error_quasi_static"] = dict(zip(("coarse_coupler_m", "coarse_torque_rel"),
-                                                              _errors(coarse, reference)))
+            checks["reference_error_quasi_static"] = dict(
+                zip(("coarse_coupler_m", "coarse_torque_rel"), _errors(coarse, reference))
+            )
         if args.dyn_points or args.dyn_qs_points:
             fine = run_dynamic(*fine_spec, args.ref_step, args.ref_rho, args.window, False, cache)["ffrf"]
             coarse, dyn_ref = dyn_ref, extrapolate(dyn_ref, fine)
-            checks["reference_error_dynamic"] = dict(zip(("coarse_coupler_m", "coarse_torque_rel"),
-                                                         _errors(coarse, dyn_ref)))
+            checks["reference_error_dynamic"] = dict(
+                zip(("coarse_coupler_m", "coarse_torque_rel"), _errors(coarse, dyn_ref))
+            )
             fine = run_quasi_static(*fine_spec, qs_window, False, cache)["ffrf"]
             qs_ref = extrapolate(qs_ref, fine)
         cache.clear()
-        print(f"reference's own error: {json.dumps({k: v for k, v in checks.items() if k.startswith('reference_error')})}",
-              flush=True)
+        print(
+            f"reference's own error: {json.dumps({k: v for k, v in checks.items() if k.startswith('reference_error')})}",
+            flush=True,
+        )
     save()
 
     # Quasi-static sweep ---------------------------------------------------------------------
@@ -465,8 +575,12 @@ def main(argv: list[str] | None = None) -> list[dict]:
         parsed, ours_only = _parse(spec)
         runs = run_dynamic(*parsed, args.window, exudyn and not ours_only)
         for solver, run in runs.items():
-            extra = {"t_end": args.window, "step": parsed[3], "rho_inf": parsed[4],
-                     "coupler_error_qs_m": _errors(run, qs_ref)[0]}
+            extra = {
+                "t_end": args.window,
+                "step": parsed[3],
+                "rho_inf": parsed[4],
+                "coupler_error_qs_m": _errors(run, qs_ref)[0],
+            }
             p = _point(solver, "dynamic_window", "dynamic", parsed, run, _errors(run, dyn_ref), extra)
             points.append(p)
             _log(p)
@@ -474,8 +588,15 @@ def main(argv: list[str] | None = None) -> list[dict]:
     for spec in args.dyn_qs_points:
         parsed, ours_only = _parse(spec)
         for solver, run in run_quasi_static(*parsed[:3], qs_window, exudyn and not ours_only).items():
-            p = _point(solver, "dynamic_window", "quasi_static", parsed, run, _errors(run, dyn_ref),
-                       {"t_end": args.window, "coupler_error_qs_m": _errors(run, qs_ref)[0]})
+            p = _point(
+                solver,
+                "dynamic_window",
+                "quasi_static",
+                parsed,
+                run,
+                _errors(run, dyn_ref),
+                {"t_end": args.window, "coupler_error_qs_m": _errors(run, qs_ref)[0]},
+            )
             points.append(p)
             _log(p)
         save()
@@ -488,13 +609,24 @@ def main(argv: list[str] | None = None) -> list[dict]:
 def write_report(points: list[dict], out: Path, window: float) -> None:
     """``pareto_*.png`` and ``cheapest.md`` (cheapest settings and same-point tables per sweep)."""
     report = []
-    for sweep, title, xlabel in (("quasi_static", "Quasi-static ramp + revolution", "set-up + quasi-static revolution (s)"),
-                                 ("dynamic_window", f"Dynamic window ({window:g} s)", f"set-up + {window:g} s window (s)")):
+    for sweep, title, xlabel in (
+        ("quasi_static", "Quasi-static ramp + revolution", "set-up + quasi-static revolution (s)"),
+        ("dynamic_window", f"Dynamic window ({window:g} s)", f"set-up + {window:g} s window (s)"),
+    ):
         if any(p["sweep"] == sweep for p in points):
             pareto_figure(points, sweep, out / f"pareto_{sweep}.png", "wall time: " + xlabel)
-            report += [f"## {title}", "", "Cheapest setting per accuracy (time: set-up + run):", "",
-                       cheapest_table(points, sweep), "", "Both solvers on the same points:", "",
-                       same_point_table(points, sweep), ""]
+            report += [
+                f"## {title}",
+                "",
+                "Cheapest setting per accuracy (time: set-up + run):",
+                "",
+                cheapest_table(points, sweep),
+                "",
+                "Both solvers on the same points:",
+                "",
+                same_point_table(points, sweep),
+                "",
+            ]
     (out / "cheapest.md").write_text("\n".join(report))
     print("\n".join(report))
 

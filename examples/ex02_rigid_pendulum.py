@@ -10,9 +10,17 @@ modal moments, the hinge as a revolute joint to the ground, and integrate 0.3 s.
 import numpy as np
 import skfem
 
-from ffrf import FEModel, FlexibleBody, GroundFrame, MultibodySystem, frame_marker, generalized_alpha, modal_moments
-from ffrf import revolute_joint
-from ffrf.mesh import orient_positive
+from ffrf import (
+    FEModel,
+    FlexibleBody,
+    GroundFrame,
+    MultibodySystem,
+    frame_marker,
+    generalized_alpha,
+    modal_moments,
+    revolute_joint,
+)
+from ffrf.mesh.tet_mesh import orient_positive
 
 
 def main() -> float:
@@ -29,7 +37,7 @@ def main() -> float:
     lift = -result.multipliers[0, 3]  # constraint force on the body is -C_q^T lambda
     mass = model.total_mass
     print(f"mass {1e3 * mass:.3f} g, hinge force at release {lift:.6e} N = {lift / (mass * 9.81):.4f} m g")
-    from ffrf.euler_parameters import rotation_matrix
+    from ffrf.body.euler_parameters import rotation_matrix
 
     turned = rotation_matrix(result.q[-1, 3:7]) @ np.array([1.0, 0.0, 0.0])
     print(f"after 0.3 s the bar points {np.degrees(np.arctan2(-turned[2], turned[0])):.2f} deg below the horizontal")

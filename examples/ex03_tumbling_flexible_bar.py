@@ -11,10 +11,17 @@ does not. The momentum is summed node by node with the full FE mass matrix, outs
 import numpy as np
 import skfem
 
-from ffrf import FEModel, FlexibleBody, MultibodySystem, craig_bampton, generalized_alpha, modal_moments
-from ffrf import variational_midpoint
-from ffrf.euler_parameters import g_bar, rotation_matrix
-from ffrf.mesh import orient_positive
+from ffrf import (
+    FEModel,
+    FlexibleBody,
+    MultibodySystem,
+    craig_bampton,
+    generalized_alpha,
+    modal_moments,
+    variational_midpoint,
+)
+from ffrf.body.euler_parameters import g_bar, rotation_matrix
+from ffrf.mesh.tet_mesh import orient_positive
 
 
 def angular_momentum(model, basis, q, qd):
@@ -40,8 +47,10 @@ def main(t_end: float = 0.05, step: float = 5e-5) -> float:
     q0[7:] = 1e-5 * np.random.default_rng(0).normal(size=body.n_modes)
 
     changes = {}
-    for name, run in (("variational midpoint", variational_midpoint),
-                      ("generalized-alpha, rho_inf = 0.8", lambda *a: generalized_alpha(*a, rho_inf=0.8))):
+    for name, run in (
+        ("variational midpoint", variational_midpoint),
+        ("generalized-alpha, rho_inf = 0.8", lambda *a: generalized_alpha(*a, rho_inf=0.8)),
+    ):
         result = run(system, q0, qd0, t_end, step)
         momentum = np.array([angular_momentum(model, reduction.basis, q, qd) for q, qd in zip(result.q, result.qd)])
         changes[name] = np.abs(momentum - momentum[0]).max() / np.linalg.norm(momentum[0])

@@ -16,8 +16,8 @@ the converged path.
 
 import numpy as np
 
-from ffrf.bennett_run import run_bennett
-from ffrf.bennett_scene import build_bennett
+from ffrf.scenes.bennett_run import run_bennett
+from ffrf.scenes.bennett_scene import build_bennett
 
 
 def main() -> dict:
@@ -33,12 +33,15 @@ def main() -> dict:
     angle, torque = s["drive_angle"][revolution], s["driving_torque"][revolution]
     work = np.trapezoid(torque, angle)
     scale = np.trapezoid(np.abs(torque), angle)
-    print(f"drive turned {np.degrees(angle[-1] - angle[0]):.2f} deg after the ramp; net work {1e3 * work:.3e} mJ "
-          f"against {1e3 * scale:.3f} mJ of |torque| d(angle)")
-    print(f"max coupler deviation from the ideal path {1e3 * result.summary()['max_coupler_deviation_m']:.4f} mm, "
-          f"max driving torque {1e3 * np.abs(s['driving_torque']).max():.3f} N mm")
-    return {"clamp_over_weight": clamp / weight, "net_work_relative": work / scale,
-            "turned": angle[-1] - angle[0]}
+    print(
+        f"drive turned {np.degrees(angle[-1] - angle[0]):.2f} deg after the ramp; net work {1e3 * work:.3e} mJ "
+        f"against {1e3 * scale:.3f} mJ of |torque| d(angle)"
+    )
+    print(
+        f"max coupler deviation from the ideal path {1e3 * result.summary()['max_coupler_deviation_m']:.4f} mm, "
+        f"max driving torque {1e3 * np.abs(s['driving_torque']).max():.3f} N mm"
+    )
+    return {"clamp_over_weight": clamp / weight, "net_work_relative": work / scale, "turned": angle[-1] - angle[0]}
 
 
 if __name__ == "__main__":

@@ -13,16 +13,18 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from ffrf.fe.fe_model import FEModel
+from ffrf.fe.interfaces import interface_from_group
+from ffrf.fe.materials import PLA
+from ffrf.geometry.link_geometry import LinkDesign, bennett_axes, mesh_link, paper_link_axes
+from ffrf.mesh.tet_mesh import quality_summary, write_vtu
+
 from .errors import FEInputError
-from .fe_model import FEModel
-from .interfaces import interface_from_group
-from .link_geometry import LinkDesign, bennett_axes, mesh_link, paper_link_axes
-from .materials import PLA
-from .mesh import quality_summary, write_vtu
 
 __all__ = ["main", "SUBCOMMANDS", "bennett_axes", "link_summary"]
 
 logger = logging.getLogger(__name__)
+
 
 def link_summary(model: FEModel, geometry, interfaces) -> dict:
     """JSON-ready summary of a meshed link."""
@@ -33,19 +35,29 @@ def link_summary(model: FEModel, geometry, interfaces) -> dict:
         "n_tetrahedra": len(model.mesh.tets),
         "n_dofs": model.n_dofs,
         "quality": quality_summary(model.mesh).as_dict(),
-        "material": {"name": model.material.name, "E": model.material.E, "nu": model.material.nu,
-                     "rho": model.material.rho},
+        "material": {
+            "name": model.material.name,
+            "E": model.material.E,
+            "nu": model.material.nu,
+            "rho": model.material.rho,
+        },
         "volume_m3": model.mesh.volume,
         "mass_kg": model.total_mass,
         "center_of_mass_m": model.center_of_mass.tolist(),
         "inertia_tensor_kgm2": model.inertia_tensor.tolist(),
         "link_length_m": geometry.length,
         "joint_points_m": geometry.joint_points.tolist(),
-        "axes": {name: {"point_m": axis.point.tolist(), "direction": axis.direction.tolist()}
-                 for name, axis in zip(geometry.interface_names, geometry.axes)},
+        "axes": {
+            name: {"point_m": axis.point.tolist(), "direction": axis.direction.tolist()}
+            for name, axis in zip(geometry.interface_names, geometry.axes)
+        },
         "interfaces": {
-            i.name: {"n_nodes": int(len(i.nodes)), "weights_sum": float(i.weights.sum()), "area_m2": i.area,
-                     "axial_offset_m": geometry.interface_offsets.get(i.name)}
+            i.name: {
+                "n_nodes": int(len(i.nodes)),
+                "weights_sum": float(i.weights.sum()),
+                "area_m2": i.area,
+                "axial_offset_m": geometry.interface_offsets.get(i.name),
+            }
             for i in interfaces
         },
     }
@@ -56,8 +68,9 @@ def _output_folder(path: Path) -> Path:
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as error:
-        raise FEInputError(f"cannot write to --out {path} ({error.strerror}); give a folder you can write to") \
-            from error
+        raise FEInputError(
+            f"cannot write to --out {path} ({error.strerror}); give a folder you can write to"
+        ) from error
     return path
 
 
@@ -72,8 +85,9 @@ def _configure_mesh(parser: argparse.ArgumentParser) -> None:
 def _run_mesh(args: argparse.Namespace) -> int:
     first, second, names = paper_link_axes(args.link, bennett_axes(args.alpha3_deg))
     stem = f"link{args.link}"
-    mesh, geometry = mesh_link(first, second, h=args.h, design=LinkDesign(), names=names,
-                               mount=args.link == 0, name=stem)
+    mesh, geometry = mesh_link(
+        first, second, h=args.h, design=LinkDesign(), names=names, mount=args.link == 0, name=stem
+    )
     model = FEModel.from_tet_mesh(mesh, PLA, args.order)
     interfaces = [interface_from_group(model, group) for group in sorted(mesh.groups)]
     _output_folder(args.out)
@@ -81,34 +95,56 @@ def _run_mesh(args: argparse.Namespace) -> int:
     summary = link_summary(model, geometry, interfaces)
     summary.update(link=args.link, alpha3_deg=args.alpha3_deg, h_m=args.h, vtu=vtu.name)
     (args.out / f"{stem}.json").write_text(json.dumps(summary, indent=2))
-    print(f"{stem}: {summary['n_tetrahedra']} tets, {summary['n_nodes']} nodes, mass {summary['mass_kg']:.5f} kg, "
-          f"min quality {summary['quality']['min_quality']:.3f} -> {args.out}")
+    print(
+        f"{stem}: {summary['n_tetrahedra']} tets, {summary['n_nodes']} nodes, mass {summary['mass_kg']:.5f} kg, "
+        f"min quality {summary['quality']['min_quality']:.3f} -> {args.out}"
+    )
     return 0
 
 
 def _configure_bennett(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--variant", choices=("rigid", "pla", "pla1", "pla2"), default="pla",
-                        help="paper's variant: rigid, PLA, PLA with alpha_3 = 91 or 92 deg")
+    parser.add_argument(
+        "--variant",
+        choices=("rigid", "pla", "pla1", "pla2"),
+        default="pla",
+        help="paper's variant: rigid, PLA, PLA with alpha_3 = 91 or 92 deg",
+    )
     # Defaults: the cheapest discretisation with the coupler path within 0.01 mm (docs/speed_vs_error.md).
     parser.add_argument("--h", type=float, default=6e-3, help="maximum element edge in metres (paper: 0.002)")
     parser.add_argument("--order", type=int, choices=(1, 2), default=2, help="tetrahedron order (paper: 1)")
     parser.add_argument("--modes", type=int, default=4, help="fixed-interface modes per link (paper: 32)")
-    parser.add_argument("--joint-offsets", choices=("body", "marker"), default="body",
-                        help="joint point off the bore centre in the body frame (paper, Exudyn) or the bore's frame")
-    parser.add_argument("--dt", type=float, default=4e-3,
-                        help="time step of a dynamic run (s); at 1 rpm 4 ms is as accurate as 0.25 ms")
-    parser.add_argument("--outputs", type=int, default=961,
-                        help="output times over the run (961: every 0.375 deg; the energy balance, a Simpson "
-                             "integral over them, then closes to 2e-7)")
+    parser.add_argument(
+        "--joint-offsets",
+        choices=("body", "marker"),
+        default="body",
+        help="joint point off the bore centre in the body frame (paper, Exudyn) or the bore's frame",
+    )
+    parser.add_argument(
+        "--dt", type=float, default=4e-3, help="time step of a dynamic run (s); at 1 rpm 4 ms is as accurate as 0.25 ms"
+    )
+    parser.add_argument(
+        "--outputs",
+        type=int,
+        default=961,
+        help="output times over the run (961: every 0.375 deg; the energy balance, a Simpson "
+        "integral over them, then closes to 2e-7)",
+    )
     mode = parser.add_mutually_exclusive_group()
     mode.add_argument("--quasi-static", dest="mode", action="store_const", const="quasi_static")
     mode.add_argument("--dynamic", dest="mode", action="store_const", const="dynamic")
     parser.set_defaults(mode="auto")
-    parser.add_argument("--vtk-every", type=int, default=0,
-                        help="also write deformed meshes for ParaView (DIR/bennett.pvd) every N outputs (0: none)")
-    parser.add_argument("--out", type=Path, required=True,
-                        help="output directory (results.npz, metadata.json, assembly.vtu, coupler_deviation.png, "
-                             "driving_torque.png)")
+    parser.add_argument(
+        "--vtk-every",
+        type=int,
+        default=0,
+        help="also write deformed meshes for ParaView (DIR/bennett.pvd) every N outputs (0: none)",
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="output directory (results.npz, metadata.json, assembly.vtu, coupler_deviation.png, driving_torque.png)",
+    )
 
 
 def _progress_printer():
@@ -122,68 +158,89 @@ def _progress_printer():
             print(f"\r  [{bar:<25}] {percent:3d} %  t = {t:7.2f} s", end="", file=sys.stderr, flush=True)
             if percent >= 100:
                 print(file=sys.stderr)
+
     return show
 
 
 def _run_bennett(args: argparse.Namespace) -> int:
     import time
 
-    from .bennett_run import choose_mode, run_bennett, write_results
-    from .bennett_scene import build_bennett
+    from ffrf.scenes.bennett_run import choose_mode, run_bennett, write_results
+    from ffrf.scenes.bennett_scene import build_bennett
 
     started = time.perf_counter()
     _output_folder(args.out)
-    print(f"Building the {args.variant} Bennett scene: 4 links, h = {1e3 * args.h:g} mm, P{args.order}, "
-          f"{args.modes} fixed-interface modes per link ...", file=sys.stderr)
-    scene = build_bennett(args.variant, h=args.h, order=args.order, n_modes=args.modes,
-                          joint_offsets=args.joint_offsets)
+    print(
+        f"Building the {args.variant} Bennett scene: 4 links, h = {1e3 * args.h:g} mm, P{args.order}, "
+        f"{args.modes} fixed-interface modes per link ...",
+        file=sys.stderr,
+    )
+    scene = build_bennett(
+        args.variant, h=args.h, order=args.order, n_modes=args.modes, joint_offsets=args.joint_offsets
+    )
     mode, ratio = choose_mode(scene) if args.mode == "auto" else (args.mode, float("nan"))
-    print(f"Running {mode.replace('_', '-')} over {scene.t_end:.1f} s of drive"
-          + (f" (drive time scale / longest link period = {ratio:.0f})" if args.mode == "auto" else ""),
-          file=sys.stderr)
+    print(
+        f"Running {mode.replace('_', '-')} over {scene.t_end:.1f} s of drive"
+        + (f" (drive time scale / longest link period = {ratio:.0f})" if args.mode == "auto" else ""),
+        file=sys.stderr,
+    )
     result = run_bennett(scene, mode=mode, n_outputs=args.outputs, step=args.dt, progress=_progress_printer())
     write_results(result, args.out)
     if args.vtk_every > 0:
-        from .paraview import write_time_series
+        from ffrf.output.paraview import write_time_series
 
-        pvd = write_time_series(args.out, [(link.fe, link.reduction.basis) for link in scene.links],
-                                [scene.system.block(k) for k in range(4)], result.time, result.q,
-                                every=args.vtk_every, name="bennett")
+        pvd = write_time_series(
+            args.out,
+            [(link.fe, link.reduction.basis) for link in scene.links],
+            [scene.system.block(k) for k in range(4)],
+            result.time,
+            result.q,
+            every=args.vtk_every,
+            name="bennett",
+        )
         print(f"ParaView series: {pvd}", file=sys.stderr)
-    from .assembly_stress import write_assembly_vtu
-    from .bennett_figures import plot_coupler_deviation, plot_driving_torque
+    from ffrf.output.assembly_stress import write_assembly_vtu
+    from ffrf.output.bennett_figures import plot_coupler_deviation, plot_driving_torque
 
     write_assembly_vtu(args.out / "assembly.vtu", scene, result.assembly)
     plot_coupler_deviation({args.variant: result}, args.out / "coupler_deviation.png")
     plot_driving_torque({args.variant: result}, args.out / "driving_torque.png")
     summary = result.summary()
     paper = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}[args.variant]
-    print(f"{args.variant}: max coupler deviation from the ideal path "
-          f"{1e3 * summary['max_coupler_deviation_m']:.4f} mm at the same drive angle, "
-          f"{1e3 * summary['max_coupler_distance_to_path_m']:.4f} mm to the closest point "
-          f"(paper: below {paper} mm); max driving torque {1e3 * summary['max_abs_driving_torque_Nm']:.3f} N mm; "
-          f"largest constraint residual {summary['max_constraint_residual']:.1e}; energy balance closed to "
-          f"{summary['energy_balance_relative']:.1e} of the drive work; wall time "
-          f"{time.perf_counter() - started:.1f} s -> {args.out}")
-    print("assembled state (gravity" + (", misalignment" if scene.settings["alpha3_deg"] != 90.0 else "")
-          + f"; {args.out / 'assembly.vtu'}):")
+    print(
+        f"{args.variant}: max coupler deviation from the ideal path "
+        f"{1e3 * summary['max_coupler_deviation_m']:.4f} mm at the same drive angle, "
+        f"{1e3 * summary['max_coupler_distance_to_path_m']:.4f} mm to the closest point "
+        f"(paper: below {paper} mm); max driving torque {1e3 * summary['max_abs_driving_torque_Nm']:.3f} N mm; "
+        f"largest constraint residual {summary['max_constraint_residual']:.1e}; energy balance closed to "
+        f"{summary['energy_balance_relative']:.1e} of the drive work; wall time "
+        f"{time.perf_counter() - started:.1f} s -> {args.out}"
+    )
+    print(
+        "assembled state (gravity"
+        + (", misalignment" if scene.settings["alpha3_deg"] != 90.0 else "")
+        + f"; {args.out / 'assembly.vtu'}):"
+    )
     for link in result.assembly.links:
         print("  " + link.line())
     return 0
 
 
 def _configure_run(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("scene", type=Path, help="scene file (TOML), see ffrf.scene_file")
+    parser.add_argument("scene", type=Path, help="scene file (TOML), see ffrf.scenes.scene_file")
     parser.add_argument("--out", type=Path, required=True, help="output directory (results.npz, metadata.json)")
 
 
 def _run_scene_file(args: argparse.Namespace) -> int:
-    from .scene_file import load_scene, run_scene
+    from ffrf.scenes.scene_file import load_scene, run_scene
 
     scene = load_scene(args.scene)
     out = _output_folder(args.out)  # after the scene's checks: a refused scene leaves no folder behind
-    print(f"Scene {scene.name!r}: {len(scene.bodies)} bodies, {len(scene.system.constraints)} joints, "
-          f"{scene.system.n_coordinates} coordinates", file=sys.stderr)
+    print(
+        f"Scene {scene.name!r}: {len(scene.bodies)} bodies, {len(scene.system.constraints)} joints, "
+        f"{scene.system.n_coordinates} coordinates",
+        file=sys.stderr,
+    )
     metadata = run_scene(scene, out, progress=_progress_printer())
     print(f"{scene.name}: wall time {metadata['wall_time_s']:.1f} s -> {args.out}")
     return 0
@@ -192,8 +249,11 @@ def _run_scene_file(args: argparse.Namespace) -> int:
 SUBCOMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None], Callable[[argparse.Namespace], int]]] = {
     "mesh": ("mesh one Bennett link and write .vtu + JSON summary", _configure_mesh, _run_mesh),
     "run": ("run a scene file (TOML) built from your own meshes", _configure_run, _run_scene_file),
-    "bennett": ("simulate the paper's flexible Bennett linkage and write its sensors", _configure_bennett,
-                _run_bennett),
+    "bennett": (
+        "simulate the paper's flexible Bennett linkage and write its sensors",
+        _configure_bennett,
+        _run_bennett,
+    ),
 }
 
 

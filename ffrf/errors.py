@@ -1,13 +1,27 @@
-"""Exceptions raised by the finite-element link models.
+"""Every exception class of :mod:`ffrf`, below every layer so that any module can raise them.
 
-All are subclasses of :class:`ValueError`, so callers that only care about
-"bad input" can catch that; the message always names the object, the bad value
-and a remedy.
+Bad input (:class:`FEInputError` and its subclasses) derives from :class:`ValueError`, so callers
+that only care about "bad input" can catch that; solver failures (:class:`StaticDivergence`,
+:class:`NewtonDivergence`) derive from :class:`RuntimeError`. Every message names the object,
+the bad value and a remedy.
 """
 
 from __future__ import annotations
 
-__all__ = ["FEInputError", "MeshError", "InterfaceError", "MaterialError", "GeometryError", "SceneError"]
+from typing import Any
+
+__all__ = [
+    "FEInputError",
+    "MeshError",
+    "InterfaceError",
+    "MaterialError",
+    "GeometryError",
+    "SceneError",
+    "ReductionError",
+    "StaticDivergence",
+    "NewtonDivergence",
+    "SingularIterationMatrix",
+]
 
 
 class FEInputError(ValueError):
@@ -32,3 +46,26 @@ class GeometryError(FEInputError):
 
 class SceneError(FEInputError):
     """A scene file that cannot be built; the message names the entry and the fix."""
+
+
+class ReductionError(FEInputError):
+    """A model, an interface set or a request that the HCB reduction cannot handle."""
+
+
+# Solver failures: not bad input, so not FEInputError.
+
+
+class StaticDivergence(RuntimeError):
+    """Newton found no static equilibrium."""
+
+
+class NewtonDivergence(RuntimeError):
+    """Newton did not converge; ``partial`` holds the results up to the last converged step."""
+
+    def __init__(self, message: str, partial: Any):
+        super().__init__(message)
+        self.partial = partial
+
+
+class SingularIterationMatrix(NewtonDivergence):
+    """The iteration matrix (G3) has zero singular values by the rank rule (R1): no step can be solved."""

@@ -30,22 +30,36 @@ def main(argv: list[str] | None = None) -> int:
     source.add_argument("--vicon", type=Path, nargs="+", help="Vicon segment CSV export(s), one per run")
     source.add_argument("--result", type=Path, nargs="+", help="simulation result folder(s) with results.npz")
     parser.add_argument("--unit", default="mm", choices=["mm", "m"], help="length unit of the Vicon export")
-    parser.add_argument("--window", type=int, default=None,
-                        help="moving-average window in frames (default: 10 for --vicon as in the paper, "
-                             "1 for noise-free --result)")
-    parser.add_argument("--alpha-deg", type=float, nargs=4, default=list(np.degrees(PAPER_ALPHA)),
-                        help="nominal twists, used only to orient the fitted axes")
+    parser.add_argument(
+        "--window",
+        type=int,
+        default=None,
+        help="moving-average window in frames (default: 10 for --vicon as in the paper, 1 for noise-free --result)",
+    )
+    parser.add_argument(
+        "--alpha-deg",
+        type=float,
+        nargs=4,
+        default=list(np.degrees(PAPER_ALPHA)),
+        help="nominal twists, used only to orient the fitted axes",
+    )
     parser.add_argument("--json", action="store_true", help="print JSON instead of the table")
     parser.add_argument("--out", type=Path, help="also write dh_table.md, dh_table.csv and axis_fits.png here")
     args = parser.parse_args(argv)
     if not np.all(np.isfinite(args.alpha_deg)):  # argparse accepts "nan" and "inf" as floats
-        print(f"error: --alpha-deg {args.alpha_deg} must be 4 finite twists in degrees, e.g. the paper's "
-              f"{np.degrees(PAPER_ALPHA).round(3).tolist()}", file=sys.stderr)
+        print(
+            f"error: --alpha-deg {args.alpha_deg} must be 4 finite twists in degrees, e.g. the paper's "
+            f"{np.degrees(PAPER_ALPHA).round(3).tolist()}",
+            file=sys.stderr,
+        )
         return 2
 
     try:
-        records = [read_vicon_csv(p, unit=args.unit) for p in args.vicon] if args.vicon else \
-            [read_simulation_result(p) for p in args.result]
+        records = (
+            [read_vicon_csv(p, unit=args.unit) for p in args.vicon]
+            if args.vicon
+            else [read_simulation_result(p) for p in args.result]
+        )
         window = args.window if args.window is not None else (10 if args.vicon else 1)
         results = [identify_record(r, window, np.radians(args.alpha_deg)) for r in records]
     except (IdentificationError, OSError) as error:

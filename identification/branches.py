@@ -137,4 +137,3 @@ def identify_branch(link_points: list[NDArray], names: list[str]) -> list[LinkAx
         fits.append(fit)
         remaining = [project_into_previous_frame(fit, p) if k > i else p for k, p in enumerate(remaining)]
     return fits
-

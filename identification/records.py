@@ -42,8 +42,9 @@ class LinkRecord:
         n = self.time.shape[0]
         for link, p in self.points.items():
             if p.ndim != 3 or p.shape[0] != n or p.shape[2] != 3:
-                raise IdentificationError(f"{self.source}: link {link} positions have shape {p.shape}, "
-                                          f"expected ({n}, k, 3)")
+                raise IdentificationError(
+                    f"{self.source}: link {link} positions have shape {p.shape}, expected ({n}, k, 3)"
+                )
         if not self.segments:
             object.__setattr__(self, "segments", ((0, n),))
 
@@ -65,8 +66,9 @@ def _numbers(cells: list[str], path: Path, line: int) -> list[float]:
     try:
         return [float(c) if c.strip() else np.nan for c in cells]
     except ValueError as error:
-        raise IdentificationError(f"{path}, line {line}: {error}; data rows hold numbers or empty cells only") \
-            from error
+        raise IdentificationError(
+            f"{path}, line {line}: {error}; data rows hold numbers or empty cells only"
+        ) from error
 
 
 def read_vicon_csv(path: str | Path, segments: dict[str, int] | None = None, unit: str = "mm") -> LinkRecord:
@@ -84,25 +86,31 @@ def read_vicon_csv(path: str | Path, segments: dict[str, int] | None = None, uni
         with path.open(newline="") as handle:
             rows = list(csv.reader(handle))
     except UnicodeDecodeError as error:  # a binary file (a .c3d or .x2d) given for the CSV export
-        raise IdentificationError(f"{path}: not a text file ({error.reason} at byte {error.start}); give the Vicon "
-                                  "segment export as CSV") from error
+        raise IdentificationError(
+            f"{path}: not a text file ({error.reason} at byte {error.start}); give the Vicon segment export as CSV"
+        ) from error
     header_row = next((i for i, r in enumerate(rows) if r and r[0].strip().lower() == "frame"), None)
     if header_row is None or header_row < 1:
-        raise IdentificationError(f"{path}: no 'Frame, Sub Frame, ...' header row found; is this a Vicon segment "
-                                  "export?")
+        raise IdentificationError(
+            f"{path}: no 'Frame, Sub Frame, ...' header row found; is this a Vicon segment export?"
+        )
     names, header = rows[header_row - 1], [h.strip().upper() for h in rows[header_row]]
     rate = None
-    for r in rows[:header_row - 1]:
+    for r in rows[: header_row - 1]:
         if r and r[0].strip():
             try:
                 rate = float(r[0])
             except ValueError:
                 continue
-    data_rows = [r for r in rows[header_row + 2:] if r and r[0].strip()]
+    data_rows = [r for r in rows[header_row + 2 :] if r and r[0].strip()]
     if not data_rows:
         raise IdentificationError(f"{path}: no data rows below the header and unit rows; export the trajectories")
-    table = np.array([_numbers(r[: len(header)], path, header_row + 3 + k) + [np.nan] * (len(header) - len(r))
-                      for k, r in enumerate(data_rows)])
+    table = np.array(
+        [
+            _numbers(r[: len(header)], path, header_row + 3 + k) + [np.nan] * (len(header) - len(r))
+            for k, r in enumerate(data_rows)
+        ]
+    )
     points: dict[int, NDArray] = {}
     for column, name in enumerate(names):
         if not name.strip():
@@ -113,7 +121,7 @@ def read_vicon_csv(path: str | Path, segments: dict[str, int] | None = None, uni
         tx = next((c for c in range(column, min(column + 6, len(header))) if header[c] == "TX"), None)
         if tx is None:
             raise IdentificationError(f"{path}: segment {name!r} has no TX, TY, TZ columns")
-        points[link] = scale * table[:, tx:tx + 3][:, None, :]
+        points[link] = scale * table[:, tx : tx + 3][:, None, :]
     frame = table[:, 0]  # the sub-frame index only counts analog samples within a frame
     time = frame / rate if rate else frame
     log.info("read %s: %d frames, links %s", path, len(time), sorted(points))
@@ -146,8 +154,10 @@ def _npz_arrays(path: Path) -> dict[str, NDArray]:
         with archive:
             return {name: archive[name] for name in archive.files}
     except (OSError, ValueError, zipfile.BadZipFile) as error:  # damaged, pickled objects, or not numpy at all
-        raise IdentificationError(f"{path} cannot be read as a results archive ({type(error).__name__}: "
-                                  f"{error}); write it again with python -m ffrf bennett --out DIR") from error
+        raise IdentificationError(
+            f"{path} cannot be read as a results archive ({type(error).__name__}: "
+            f"{error}); write it again with python -m ffrf bennett --out DIR"
+        ) from error
 
 
 def clean_record(record: LinkRecord, gap_factor: float = 1.5) -> LinkRecord:
@@ -191,19 +201,23 @@ def moving_average(record: LinkRecord, window: int = 10) -> LinkRecord:
     the plane, so the fitted axes are unchanged.
     """
     if window < 1:
-        raise IdentificationError(f"moving-average window must be >= 1 frame, got {window}; give --window 1 (no "
-                                  "filter) or more")
+        raise IdentificationError(
+            f"moving-average window must be >= 1 frame, got {window}; give --window 1 (no filter) or more"
+        )
     if window == 1:
         return record
     left, right = window // 2, window - 1 - window // 2
     keep, segments, smoothed = [], [], {link: [] for link in record.points}
     for start, stop in record.segments:
         if stop - start < window:
-            warnings.warn(f"{record.source}: dropped a segment of {stop - start} frames, shorter than the "
-                          f"{window}-frame filter window", stacklevel=2)
+            warnings.warn(
+                f"{record.source}: dropped a segment of {stop - start} frames, shorter than the "
+                f"{window}-frame filter window",
+                stacklevel=2,
+            )
             continue
         for link, p in record.points.items():
-            smoothed[link].append(uniform_filter1d(p[start:stop], size=window, axis=0)[left:stop - start - right])
+            smoothed[link].append(uniform_filter1d(p[start:stop], size=window, axis=0)[left : stop - start - right])
         first = sum(b - a for a, b in segments)
         segments.append((first, first + stop - start - left - right))
         keep.append(np.arange(start + left, stop - right))

@@ -64,7 +64,9 @@ def plot_axis_fits(points: dict[int, np.ndarray], fits: dict[str, LinkAxisFit]):
         fit = fits[name]
         for circle in fit.fits:
             phi = np.linspace(0, 2 * np.pi, 200)
-            ring = circle.centre + circle.radius * (np.outer(np.cos(phi), circle.e_x) + np.outer(np.sin(phi), circle.e_y))
+            ring = circle.centre + circle.radius * (
+                np.outer(np.cos(phi), circle.e_x) + np.outer(np.sin(phi), circle.e_y)
+            )
             ax.plot(*(1e3 * ring.T), color="gray", lw=0.8, ls="--")
         ends = fit.axis.point_at(np.array([-0.1, 0.1])) + (fit.centre - fit.axis.point)
         ax.plot(*(1e3 * ends.T), color="tab:purple", lw=2)

@@ -99,13 +99,16 @@ def main(argv: list[str] | None = None) -> int:
         report = rigid_mobility(a, alpha, n_angles=args.points // 4)
         print(report.summary())
         return 0
-    print("Bennett conditions hold: a0 = a2, a1 = a3, alpha0 = alpha2, alpha1 = alpha3, "
-          "a0/sin(alpha0) = a1/sin(alpha1)")
+    print(
+        "Bennett conditions hold: a0 = a2, a1 = a3, alpha0 = alpha2, alpha1 = alpha3, a0/sin(alpha0) = a1/sin(alpha1)"
+    )
     try:
         _print_bennett(linkage, args.out, args.points)
     except OSError as error:  # --out names a file, or a folder we may not write to
-        print(f"error: cannot write to --out {args.out} ({error.strerror}); give a folder you can write to",
-              file=sys.stderr)
+        print(
+            f"error: cannot write to --out {args.out} ({error.strerror}); give a folder you can write to",
+            file=sys.stderr,
+        )
         return 2
     return 0
 

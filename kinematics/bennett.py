@@ -184,7 +184,9 @@ class BennettLinkage:
         def factor(parameter, axis: Line, sign: float) -> DualQuaternion:
             """``parameter + sign * h``, or the identity where ``parameter`` is infinite."""
             finite = np.isfinite(parameter)
-            linear = np.where(finite, parameter, 0.0)[..., None] * np.eye(8)[0] + sign * axis.to_dual_quaternion().coeffs
+            linear = (
+                np.where(finite, parameter, 0.0)[..., None] * np.eye(8)[0] + sign * axis.to_dual_quaternion().coeffs
+            )
             return DualQuaternion(np.where(finite[..., None], linear, np.eye(8)[0]))
 
         link1 = factor(ts[..., 0], self.axes[0], -1.0)
@@ -229,8 +231,7 @@ def _check_bennett_conditions(a: NDArray, alpha: NDArray, rtol: float) -> None:
         raise BennettConditionError("twists of 0 or pi make a planar or degenerate loop, not a Bennett linkage")
     if abs(a[0] * s1 - a[1] * s0) > rtol * scale:
         raise BennettConditionError(
-            f"Bennett condition a0/sin(alpha0) = a1/sin(alpha1) violated: "
-            f"{a[0] / s0:.9g} m vs {a[1] / s1:.9g} m"
+            f"Bennett condition a0/sin(alpha0) = a1/sin(alpha1) violated: {a[0] / s0:.9g} m vs {a[1] / s1:.9g} m"
         )
     if abs(np.sin(0.5 * (alpha[1] - alpha[0]))) < rtol:
         raise BennettConditionError("alpha0 = alpha1 with a0 = a1 is the degenerate (folding) Bennett case")

@@ -262,11 +262,7 @@ def dh_from_axes(lines: list[Line], tol: float = 1e-12) -> DHParameters:
         units[i] = normal.unit
     a = np.array([np.linalg.norm(feet_on_next[i] - feet_on_self[i]) for i in range(n)])
     z = [line.direction for line in lines]
-    alpha = np.array(
-        [np.arctan2(np.cross(z[i], z[(i + 1) % n]) @ units[i], z[i] @ z[(i + 1) % n]) for i in range(n)]
-    )
+    alpha = np.array([np.arctan2(np.cross(z[i], z[(i + 1) % n]) @ units[i], z[i] @ z[(i + 1) % n]) for i in range(n)])
     d = np.array([(feet_on_self[i] - feet_on_next[i - 1]) @ z[i] for i in range(n)])
-    theta = np.array(
-        [np.arctan2(np.cross(units[i - 1], units[i]) @ z[i], units[i - 1] @ units[i]) for i in range(n)]
-    )
+    theta = np.array([np.arctan2(np.cross(units[i - 1], units[i]) @ z[i], units[i - 1] @ units[i]) for i in range(n)])
     return DHParameters(a=a, alpha=alpha, d=d, theta=theta)

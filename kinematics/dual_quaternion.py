@@ -50,9 +50,7 @@ class DualQuaternion:
     def __init__(self, coeffs: ArrayLike = (1, 0, 0, 0, 0, 0, 0, 0)):
         array = np.array(coeffs, dtype=float)
         if array.shape[-1:] != (8,):
-            raise ValueError(
-                f"a dual quaternion needs 8 coefficients [p0..p3, d0..d3], got shape {array.shape}"
-            )
+            raise ValueError(f"a dual quaternion needs 8 coefficients [p0..p3, d0..d3], got shape {array.shape}")
         array.flags.writeable = False
         object.__setattr__(self, "coeffs", array)
 

@@ -4,8 +4,8 @@ import numpy as np
 import skfem
 
 from ffrf import FEModel
-from ffrf.euler_parameters import g_bar, rotation_matrix, skew
-from ffrf.mesh import orient_positive
+from ffrf.body.euler_parameters import g_bar, rotation_matrix, skew
+from ffrf.mesh.tet_mesh import orient_positive
 
 
 def bar_model(order: int = 1, E: float = 2.1e11, rho: float = 7850.0):
@@ -73,22 +73,26 @@ def five_point_slope(values, step: float) -> float:
 def free_bar(name: str = "bar"):
     """The soft bar (E = 1e8 Pa, 450 kg/m^3) with Craig-Bampton modes of both end faces (2 fixed-
     interface modes), undamped: ``(model, basis, end node sets, body)``."""
-    from ffrf.craig_bampton import craig_bampton
-    from ffrf.flexible_body import FlexibleBody
-    from ffrf.modal_moments import modal_moments
+    from ffrf.body.flexible_body import FlexibleBody
+    from ffrf.body.modal_moments import modal_moments
+    from ffrf.reduction.craig_bampton import craig_bampton
 
     model = bar_model(E=1e8, rho=450.0)
     ends = [np.flatnonzero(model.nodes[:, 0] < 1e-9), np.flatnonzero(model.nodes[:, 0] > 0.2 - 1e-9)]
     basis = craig_bampton(model, ends, 2)
-    body = FlexibleBody(name, modal_moments(model.nodes, model.mass, basis.basis), basis.reduced_stiffness,
-                        0.0 * basis.reduced_stiffness)
+    body = FlexibleBody(
+        name,
+        modal_moments(model.nodes, model.mass, basis.basis),
+        basis.reduced_stiffness,
+        0.0 * basis.reduced_stiffness,
+    )
     return model, basis.basis, ends, body
 
 
 def tumbling_start(body):
     """A one-body system of ``body`` thrown at 0.1 m/s, spun at (0.5, 1, 5) rad/s (body frame),
     its modes excited at random (1e-5): ``(system, q0, qd0)``."""
-    from ffrf.system import MultibodySystem
+    from ffrf.system.multibody import MultibodySystem
 
     system = MultibodySystem((body,))
     q0 = system.initial_state()
@@ -105,29 +109,52 @@ def two_bar_chain():
     joint locking a subset (tx, tz, rx, rz) with a prescribed angle, between rigid interface
     markers with offsets: every branch of Eqs. (J1)-(J3). Bar 1 keeps two free motions (its
     unlocked translation and rotation), so the static tangent is exactly singular."""
-    from ffrf.craig_bampton import craig_bampton
-    from ffrf.flexible_body import FlexibleBody
-    from ffrf.joints import GroundFrame, MarkerJoint, driven_revolute_joint, revolute_joint
-    from ffrf.markers import frame_marker, rigid_interface_marker
-    from ffrf.modal_moments import modal_moments
-    from ffrf.system import MultibodySystem
+    from ffrf.body.flexible_body import FlexibleBody
+    from ffrf.body.modal_moments import modal_moments
+    from ffrf.reduction.craig_bampton import craig_bampton
+    from ffrf.system.joints import GroundFrame, MarkerJoint, driven_revolute_joint, revolute_joint
+    from ffrf.system.markers import frame_marker, rigid_interface_marker
+    from ffrf.system.multibody import MultibodySystem
 
     model = bar_model(E=1e8, rho=450.0)
     ends = [np.flatnonzero(model.nodes[:, 0] < 1e-9), np.flatnonzero(model.nodes[:, 0] > 0.2 - 1e-9)]
     basis = craig_bampton(model, ends, 3)
-    bodies = [FlexibleBody(name, modal_moments(model.nodes, model.mass, basis.basis), basis.reduced_stiffness,
-                           0.01 * basis.reduced_stiffness) for name in ("bar0", "bar1")]
+    bodies = [
+        FlexibleBody(
+            name,
+            modal_moments(model.nodes, model.mass, basis.basis),
+            basis.reduced_stiffness,
+            0.01 * basis.reduced_stiffness,
+        )
+        for name in ("bar0", "bar1")
+    ]
     psi = basis.basis
     rng = np.random.default_rng(7)
     turn = np.linalg.qr(rng.normal(size=(3, 3)))[0]
     turn *= np.sign(np.linalg.det(turn))
     ground = GroundFrame(np.array([0.0, 0.01, 0.005]), turn)
-    drive = driven_revolute_joint(ground, frame_marker(0, bodies[0].n_modes, (0.0, 0.01, 0.005)),
-                                  lambda t: 0.3 * np.sin(2 * t), rotation1=turn, offset0=np.array([0.0, 0.0, 0.002]),
-                                  offset1=np.array([0.0, 0.0, 0.002]), name="drive")
+    drive = driven_revolute_joint(
+        ground,
+        frame_marker(0, bodies[0].n_modes, (0.0, 0.01, 0.005)),
+        lambda t: 0.3 * np.sin(2 * t),
+        rotation1=turn,
+        offset0=np.array([0.0, 0.0, 0.002]),
+        offset1=np.array([0.0, 0.0, 0.002]),
+        name="drive",
+    )
     far0 = rigid_interface_marker(0, model.nodes, psi, ends[1], name="bar0:far")
     near1 = rigid_interface_marker(1, model.nodes, psi, ends[0], name="bar1:near")
     hinge = revolute_joint(far0, near1, offset0=np.array([0.001, 0.0, 0.003]), offset1=np.array([-0.2, 0.0, 0.002]))
-    subset = MarkerJoint(hinge.bodies, "subset", hinge.marker0, hinge.marker1, turn, turn.T, hinge.offset0,
-                         hinge.offset1, (True, False, True, True, False, True), lambda t: 0.1 * t)
+    subset = MarkerJoint(
+        hinge.bodies,
+        "subset",
+        hinge.marker0,
+        hinge.marker1,
+        turn,
+        turn.T,
+        hinge.offset0,
+        hinge.offset1,
+        (True, False, True, True, False, True),
+        lambda t: 0.1 * t,
+    )
     return MultibodySystem(tuple(bodies), (drive, subset), gravity=np.array([0.0, 0.0, -9.81]))

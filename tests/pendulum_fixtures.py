@@ -3,11 +3,11 @@
 import numpy as np
 from body_fixtures import bar_model
 
-from ffrf.constraints import GroundPerpendicular, GroundPoint
-from ffrf.craig_bampton import craig_bampton
-from ffrf.flexible_body import FlexibleBody
-from ffrf.modal_moments import modal_moments
-from ffrf.system import MultibodySystem
+from ffrf.body.flexible_body import FlexibleBody
+from ffrf.body.modal_moments import modal_moments
+from ffrf.reduction.craig_bampton import craig_bampton
+from ffrf.system.constraints import GroundPerpendicular, GroundPoint
+from ffrf.system.multibody import MultibodySystem
 
 
 def pendulum(n_modes: int = 3, E: float = 1e8, rho: float = 450.0, beta: float = 0.0):
@@ -28,7 +28,9 @@ def pendulum(n_modes: int = 3, E: float = 1e8, rho: float = 450.0, beta: float =
     body = FlexibleBody("bar", modal_moments(nodes, model.mass, psi), k_red, beta * k_red)
     joint = (
         GroundPoint((0,), "hinge", local=hinge, target=hinge),
-        GroundPerpendicular((0,), "hinge axis", vector=np.array([0.0, 1.0, 0.0]), normals=np.array([[1.0, 0, 0], [0, 0, 1.0]])),
+        GroundPerpendicular(
+            (0,), "hinge axis", vector=np.array([0.0, 1.0, 0.0]), normals=np.array([[1.0, 0, 0], [0, 0, 1.0]])
+        ),
     )
     system = MultibodySystem((body,), joint, gravity=np.array([0.0, 0.0, -9.81]))
     return system, model, psi, hinge
@@ -36,8 +38,8 @@ def pendulum(n_modes: int = 3, E: float = 1e8, rho: float = 450.0, beta: float =
 
 def tip_position(q, model, psi):
     """World position of the node at the far end (x = 0.2, y = 0, z = 0)."""
-    from ffrf.euler_parameters import rotation_matrix
+    from ffrf.body.euler_parameters import rotation_matrix
 
     i = int(np.argmin(np.linalg.norm(model.nodes - [0.2, 0.0, 0.0], axis=1)))
-    u = model.nodes[i] + psi[3 * i:3 * i + 3] @ q[7:]
+    u = model.nodes[i] + psi[3 * i : 3 * i + 3] @ q[7:]
     return q[:3] + rotation_matrix(q[3:7]) @ u

@@ -28,19 +28,35 @@ def _settings_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--order", type=int, choices=(1, 2), default=defaults.order, help="element order")
     parser.add_argument("--modes", type=int, default=defaults.n_modes, help="fixed-interface modes per link (paper 32)")
     parser.add_argument("--outputs", type=int, default=defaults.outputs, help="quasi-static rows over the revolution")
-    parser.add_argument("--dynamic-window", type=float, default=defaults.dynamic_t_end,
-                        help="seconds of dynamic simulation compared from t = 0 (0: skip)")
+    parser.add_argument(
+        "--dynamic-window",
+        type=float,
+        default=defaults.dynamic_t_end,
+        help="seconds of dynamic simulation compared from t = 0 (0: skip)",
+    )
     parser.add_argument("--step", type=float, default=defaults.step, help="time step of the dynamic window (s)")
     parser.add_argument("--rho-inf", type=float, default=defaults.rho_inf, help="generalized-alpha spectral radius")
-    parser.add_argument("--basis", choices=("exudyn", "ffrf"), default=defaults.basis,
-                        help="mode basis of Exudyn's bodies: its own Craig-Bampton (default) or ours")
+    parser.add_argument(
+        "--basis",
+        choices=("exudyn", "ffrf"),
+        default=defaults.basis,
+        help="mode basis of Exudyn's bodies: its own Craig-Bampton (default) or ours",
+    )
     parser.add_argument("--out", type=Path, required=True, help="output folder")
 
 
 def _settings(args, variant: str) -> ValidationSettings:
-    return ValidationSettings(variant=variant, h=args.h, order=args.order, n_modes=args.modes, outputs=args.outputs,
-                              dynamic_t_end=args.dynamic_window, step=args.step, rho_inf=args.rho_inf,
-                              basis=args.basis)
+    return ValidationSettings(
+        variant=variant,
+        h=args.h,
+        order=args.order,
+        n_modes=args.modes,
+        outputs=args.outputs,
+        dynamic_t_end=args.dynamic_window,
+        step=args.step,
+        rho_inf=args.rho_inf,
+        basis=args.basis,
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -49,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
     report = commands.add_parser("report", help="one variant: report.md, metrics.json, figures")
     which = report.add_mutually_exclusive_group()
     which.add_argument("--variant", choices=VARIANTS, default="pla")
-    which.add_argument("--scene", type=Path, help="a TOML scene file (see ffrf/scene_file.py)")
+    which.add_argument("--scene", type=Path, help="a TOML scene file (see ffrf/scenes/scene_file.py)")
     _settings_arguments(report)
     summary = commands.add_parser("summary", help="several variants and a summary in the paper's layout")
     summary.add_argument("--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS))
@@ -67,9 +83,12 @@ def main(argv: list[str] | None = None) -> int:
             path = write_report(validation, folder)
             validations.append(validation)
             m = validation.metrics
-            print(f"[{variant}] {'all targets met' if m['passed'] else 'targets missed (explained in the report)'}; "
-                  f"coupler diff {m['trajectories']['coupler_point']['max_abs_diff_m']:.3e} m, torque diff "
-                  f"{m['torque']['max_rel_diff']:.2e}; report: {path}", flush=True)
+            print(
+                f"[{variant}] {'all targets met' if m['passed'] else 'targets missed (explained in the report)'}; "
+                f"coupler diff {m['trajectories']['coupler_point']['max_abs_diff_m']:.3e} m, torque diff "
+                f"{m['torque']['max_rel_diff']:.2e}; report: {path}",
+                flush=True,
+            )
     except Exception as error:  # every failure ends with the reason, and the reports written so far stay
         print(f"validation failed: {type(error).__name__}: {error}", file=sys.stderr)
         if len(validations) > 1 and args.command == "summary":
@@ -89,8 +108,9 @@ def _scene_report(scene: Path, basis: str, out: Path) -> int:
         print(f"validation failed: {type(error).__name__}: {error}", file=sys.stderr)
         return 2
     path = write_scene_report(validation, out)
-    print(f"[{validation.name}] {'all targets met' if validation.metrics['passed'] else 'targets missed'}; "
-          f"report: {path}")
+    print(
+        f"[{validation.name}] {'all targets met' if validation.metrics['passed'] else 'targets missed'}; report: {path}"
+    )
     return 0 if validation.metrics["passed"] else 1
 
 

@@ -6,7 +6,7 @@ weights, joints, drive, gravity, damping, solver settings):
 1. **Modes** per link: our fixed-interface frequencies and mode shapes against Exudyn's own
    Craig-Bampton reduction (:mod:`validation.modes`). The twin's bodies use Exudyn's basis.
 2. **Quasi-static revolution** (the paper's 1 rpm drive is quasi-static, see
-   :func:`ffrf.bennett_run.choose_mode`): our static equilibria along the drive against one
+   :func:`ffrf.scenes.bennett_run.choose_mode`): our static equilibria along the drive against one
    Exudyn ``SolveStatic`` whose load steps turn the drive; each solver assembles itself
    (misalignment continuation in both).
 3. **Dynamic window**: generalized-alpha in both (same step and spectral radius) from each
@@ -36,8 +36,17 @@ from typing import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ValidationSettings", "SolverRun", "BennettValidation", "TARGETS", "validate_bennett", "run_ours",
-           "quasi_static_solve", "dynamic_solve", "from_exudyn"]
+__all__ = [
+    "ValidationSettings",
+    "SolverRun",
+    "BennettValidation",
+    "TARGETS",
+    "validate_bennett",
+    "run_ours",
+    "quasi_static_solve",
+    "dynamic_solve",
+    "from_exudyn",
+]
 
 #: Issue 7's targets: frequencies (relative), MAC diagonal (1 - value), torque (relative to its
 #: maximum), trajectories (relative to the coupler's elastic deviation from the ideal path).
@@ -108,8 +117,11 @@ def _trajectory_metrics(a: SolverRun, b: SolverRun, scale_m: float) -> dict:
     series_b = [b.coupler] + [b.tracked[:, i] for i in range(9)]
     for name, xa, xb in zip(names, series_a, series_b):
         distance = np.linalg.norm(xa - xb, axis=1)
-        out[name] = {"max_abs_diff_m": float(distance.max()), "rms_diff_m": float(np.sqrt(np.mean(distance**2))),
-                     "relative_to_elastic_deviation": float(distance.max() / scale_m)}
+        out[name] = {
+            "max_abs_diff_m": float(distance.max()),
+            "rms_diff_m": float(np.sqrt(np.mean(distance**2))),
+            "relative_to_elastic_deviation": float(distance.max() / scale_m),
+        }
     torque_scale = float(np.abs(b.torque).max())
     torque = {"max_abs_diff_Nm": float(np.abs(a.torque - b.torque).max()), "max_abs_Nm": torque_scale}
     torque["max_rel_diff"] = torque["max_abs_diff_Nm"] / max(torque_scale, 1e-300)
@@ -118,16 +130,18 @@ def _trajectory_metrics(a: SolverRun, b: SolverRun, scale_m: float) -> dict:
 
 def _energy_balance(scene, system, run: SolverRun, qd: NDArray | None = None) -> float:
     """Drive work minus the change of stored energy, relative to the work (Simpson over the rows)."""
-    from ffrf.bennett_run import energy_balance
+    from ffrf.scenes.bennett_run import energy_balance
 
-    energies = [system.energies(q, np.zeros_like(q) if qd is None else v)
-                for q, v in zip(run.q, run.q if qd is None else qd)]
+    energies = [
+        system.energies(q, np.zeros_like(q) if qd is None else v) for q, v in zip(run.q, run.q if qd is None else qd)
+    ]
     sensors = {"driving_torque": run.torque, "drive_angle": run.drive_angle}
     for kind in ("kinetic", "potential", "strain"):
         sensors[f"energy_{kind}"] = np.array([e[kind] for e in energies])
     balance = energy_balance(scene, run.time, sensors, qd)
-    return float(np.abs(balance["energy_balance_residual"]).max()
-                 / max(np.abs(balance["energy_drive_work"]).max(), 1e-300))
+    return float(
+        np.abs(balance["energy_balance_residual"]).max() / max(np.abs(balance["energy_drive_work"]).max(), 1e-300)
+    )
 
 
 def _constraint_residual(system, run: SolverRun) -> float:
@@ -147,8 +161,8 @@ def run_ours(label, scene, system, times, q0, setup_s, solve) -> SolverRun:
 
 
 def quasi_static_solve(system, q0, times):
-    """Static equilibria at ``times`` (:func:`ffrf.static_solver.quasi_static`)."""
-    from ffrf.static_solver import quasi_static
+    """Static equilibria at ``times`` (:func:`ffrf.solvers.static_solver.quasi_static`)."""
+    from ffrf.solvers.static_solver import quasi_static
 
     solution = quasi_static(system, q0, times)
     return solution.q, solution.multipliers[:, -1], {"newton_iterations": int(sum(solution.iterations))}
@@ -156,34 +170,57 @@ def quasi_static_solve(system, q0, times):
 
 def dynamic_solve(step, rho_inf):
     """A ``solve`` for :func:`run_ours`: generalized-alpha from rest with ``step``, one row per step."""
+
     def solve(system, q0, times):
-        from ffrf.generalized_alpha import generalized_alpha
+        from ffrf.solvers.generalized_alpha import generalized_alpha
 
         result = generalized_alpha(system, q0, np.zeros_like(q0), float(times[-1]), step, rho_inf=rho_inf)
-        return result.q, result.multipliers[:, -1], {"newton_iterations": int(result.newton_iterations.sum()),
-                                                     "qd": result.qd}
+        return (
+            result.q,
+            result.multipliers[:, -1],
+            {"newton_iterations": int(result.newton_iterations.sum()), "qd": result.qd},
+        )
+
     return solve
 
 
 def from_exudyn(label, scene, trajectory, setup_s) -> SolverRun:
     """A :class:`SolverRun` from an Exudyn :class:`validation.exudyn_bennett.BennettTrajectory`."""
     angles = np.array([scene.drive_angle(float(t)) for t in trajectory.time])
-    return SolverRun(label, trajectory.time, angles, trajectory.q, trajectory.coupler, trajectory.tracked,
-                     trajectory.torque, setup_s, trajectory.integration_time,
-                     {"solver": trajectory.solver, "notes": trajectory.extra.get("notes", []),
-                      "newton_iterations": trajectory.newton_iterations})
+    return SolverRun(
+        label,
+        trajectory.time,
+        angles,
+        trajectory.q,
+        trajectory.coupler,
+        trajectory.tracked,
+        trajectory.torque,
+        setup_s,
+        trajectory.integration_time,
+        {
+            "solver": trajectory.solver,
+            "notes": trajectory.extra.get("notes", []),
+            "newton_iterations": trajectory.newton_iterations,
+        },
+    )
 
 
-def validate_bennett(settings: ValidationSettings = ValidationSettings(),
-                     progress: Callable[[str], None] = _progress_default) -> BennettValidation:
+def validate_bennett(
+    settings: ValidationSettings = ValidationSettings(), progress: Callable[[str], None] = _progress_default
+) -> BennettValidation:
     """Build the variant, run every comparison of the module docstring, compute the metrics."""
     import exudyn
 
-    from ffrf.bennett_run import ideal_coupler_points
-    from ffrf.bennett_scene import assemble, build_bennett
+    from ffrf.scenes.bennett_run import ideal_coupler_points
+    from ffrf.scenes.bennett_scene import assemble, build_bennett
 
-    from .exudyn_bennett import (assemble_exudyn_bennett, bennett_bodies, exudyn_convention_system,
-                                 quasi_static_exudyn_bennett, run_exudyn_bennett)
+    from .exudyn_bennett import (
+        assemble_exudyn_bennett,
+        bennett_bodies,
+        exudyn_convention_system,
+        quasi_static_exudyn_bennett,
+        run_exudyn_bennett,
+    )
     from .exudyn_twin import twin_bases
     from .modes import compare_modes
 
@@ -191,9 +228,11 @@ def validate_bennett(settings: ValidationSettings = ValidationSettings(),
     production = build_bennett(settings.variant, h=settings.h, order=settings.order, n_modes=settings.n_modes)
     setup_ours = time.perf_counter() - started
     equivalent = production.with_exact_gravity(False)
-    progress(f"[{settings.variant}] scene built in {setup_ours:.1f} s "
-             f"({sum(l.fe.nodes.shape[0] for l in production.links)} nodes, "
-             f"{[l.reduction.n_modes for l in production.links]} modes)")
+    progress(
+        f"[{settings.variant}] scene built in {setup_ours:.1f} s "
+        f"({sum(l.fe.nodes.shape[0] for l in production.links)} nodes, "
+        f"{[l.reduction.n_modes for l in production.links]} modes)"
+    )
 
     started = time.perf_counter()
     bases = twin_bases(bennett_bodies(production), settings.basis)
@@ -201,15 +240,19 @@ def validate_bennett(settings: ValidationSettings = ValidationSettings(),
     modes = {}
     for link, basis in zip(production.links, bases):
         if basis.source == "exudyn":
-            modes[f"link{link.index}"] = compare_modes(link.fe, link.reduction, basis.matrix,
-                                                       basis.fixed_interface_frequencies_hz, basis.setup_s)
+            modes[f"link{link.index}"] = compare_modes(
+                link.fe, link.reduction, basis.matrix, basis.fixed_interface_frequencies_hz, basis.setup_s
+            )
     progress(f"[{settings.variant}] Exudyn's HCB on the same matrices in {setup_bases:.1f} s")
 
     # Quasi-static revolution ------------------------------------------------------------------
     times = np.linspace(0.0, production.t_end, settings.outputs)
     qs: dict[str, SolverRun] = {}
-    for label, scene, convert in (("production", production, None), ("equivalent", equivalent, None),
-                                  ("exudyn_jacobian", equivalent, lambda s: exudyn_convention_system(s, True))):
+    for label, scene, convert in (
+        ("production", production, None),
+        ("equivalent", equivalent, None),
+        ("exudyn_jacobian", equivalent, lambda s: exudyn_convention_system(s, True)),
+    ):
         system = scene.system if convert is None else convert(scene.system)
         t0 = time.perf_counter()
         q0 = assemble(scene, convert=convert).q
@@ -230,11 +273,19 @@ def validate_bennett(settings: ValidationSettings = ValidationSettings(),
     if settings.dynamic_t_end > 0:
         n_steps = int(round(settings.dynamic_t_end / settings.step))
         dyn_times = settings.step * np.arange(n_steps + 1)
-        dyn["equivalent"] = run_ours("equivalent", equivalent, equivalent.system, dyn_times, qs["equivalent"].q[0],
-                                     setup_ours, dynamic_solve(settings.step, settings.rho_inf))
+        dyn["equivalent"] = run_ours(
+            "equivalent",
+            equivalent,
+            equivalent.system,
+            dyn_times,
+            qs["equivalent"].q[0],
+            setup_ours,
+            dynamic_solve(settings.step, settings.rho_inf),
+        )
         progress(f"[{settings.variant}] ours: {n_steps} dynamic steps in {dyn['equivalent'].solve_s:.1f} s")
-        trajectory = run_exudyn_bennett(production, start[4], settings.dynamic_t_end, settings.step, settings.rho_inf,
-                                        bases=bases)
+        trajectory = run_exudyn_bennett(
+            production, start[4], settings.dynamic_t_end, settings.step, settings.rho_inf, bases=bases
+        )
         dyn["exudyn"] = from_exudyn("exudyn", production, trajectory, setup_bases + trajectory.setup_time)
         progress(f"[{settings.variant}] Exudyn: {n_steps} dynamic steps in {dyn['exudyn'].solve_s:.1f} s")
 
@@ -244,7 +295,6 @@ def validate_bennett(settings: ValidationSettings = ValidationSettings(),
 
 
 def _metrics(settings, production, equivalent, modes, qs, dyn, ideal, exudyn_version) -> dict:
-    from .exudyn_bennett import exudyn_convention_system
 
     deviation = {label: float(np.linalg.norm(run.coupler - ideal, axis=1).max()) for label, run in qs.items()}
     scale = max(deviation["exudyn"], SCALE_FLOOR_M)  # the coupler's elastic deviation from the ideal path
@@ -254,8 +304,11 @@ def _metrics(settings, production, equivalent, modes, qs, dyn, ideal, exudyn_ver
         "modes": {name: c.metrics() for name, c in modes.items()},
         "trajectories": headline["trajectories"],
         "torque": headline["torque"],
-        "coupler_deviation_from_ideal_m": {"inhouse": deviation["production"], "inhouse_equivalent":
-                                           deviation["equivalent"], "exudyn": deviation["exudyn"]},
+        "coupler_deviation_from_ideal_m": {
+            "inhouse": deviation["production"],
+            "inhouse_equivalent": deviation["equivalent"],
+            "exudyn": deviation["exudyn"],
+        },
         "modelling_differences": {
             "exact_vs_exudyn_gravity": _trajectory_summary(qs["production"], qs["equivalent"], scale),
             "exact_vs_exudyn_marker_jacobian": _trajectory_summary(qs["equivalent"], qs["exudyn_jacobian"], scale),
@@ -266,21 +319,28 @@ def _metrics(settings, production, equivalent, modes, qs, dyn, ideal, exudyn_ver
             "inhouse_exudyn_jacobian": _energy_balance(equivalent, equivalent.system, qs["exudyn_jacobian"]),
             "exudyn": _energy_balance(equivalent, equivalent.system, qs["exudyn"]),
         },
-        "constraint_residual": {"inhouse": _constraint_residual(equivalent.system, qs["equivalent"]),
-                                "exudyn": _constraint_residual(equivalent.system, qs["exudyn"])},
+        "constraint_residual": {
+            "inhouse": _constraint_residual(equivalent.system, qs["equivalent"]),
+            "exudyn": _constraint_residual(equivalent.system, qs["exudyn"]),
+        },
         "max_abs_driving_torque_Nm": {label: float(np.abs(run.torque).max()) for label, run in qs.items()},
         "timing_s": {
             "inhouse": _timing(qs["equivalent"], dyn.get("equivalent")),
             "exudyn": _timing(qs["exudyn"], dyn.get("exudyn")),
         },
         "versions": _versions(exudyn_version),
-        "settings": dict(settings.as_dict(), **{k: v for k, v in production.settings.items()
-                                                if k not in ("gravity",)}, gravity=production.settings["gravity"]),
+        "settings": dict(
+            settings.as_dict(),
+            **{k: v for k, v in production.settings.items() if k not in ("gravity",)},
+            gravity=production.settings["gravity"],
+        ),
     }
     if dyn:
         dynamic = _trajectory_metrics(dyn["equivalent"], dyn["exudyn"], scale)
-        dynamic["constraint_residual"] = {"inhouse": _constraint_residual(equivalent.system, dyn["equivalent"]),
-                                          "exudyn": _constraint_residual(equivalent.system, dyn["exudyn"])}
+        dynamic["constraint_residual"] = {
+            "inhouse": _constraint_residual(equivalent.system, dyn["equivalent"]),
+            "exudyn": _constraint_residual(equivalent.system, dyn["exudyn"]),
+        }
         dynamic["t_end"] = settings.dynamic_t_end
         m["dynamic"] = dynamic
     m["checks"] = _checks(m)
@@ -291,13 +351,20 @@ def _metrics(settings, production, equivalent, modes, qs, dyn, ideal, exudyn_ver
 def _trajectory_summary(a: SolverRun, b: SolverRun, scale: float) -> dict:
     full = _trajectory_metrics(a, b, scale)
     worst = max(v["max_abs_diff_m"] for v in full["trajectories"].values())
-    return {"max_abs_diff_m": worst, "coupler_max_abs_diff_m": full["trajectories"]["coupler_point"]["max_abs_diff_m"],
-            "relative_to_elastic_deviation": worst / scale, "torque_max_rel_diff": full["torque"]["max_rel_diff"]}
+    return {
+        "max_abs_diff_m": worst,
+        "coupler_max_abs_diff_m": full["trajectories"]["coupler_point"]["max_abs_diff_m"],
+        "relative_to_elastic_deviation": worst / scale,
+        "torque_max_rel_diff": full["torque"]["max_rel_diff"],
+    }
 
 
 def _timing(quasi_static: SolverRun, dynamic: SolverRun | None) -> dict:
-    out = {"setup": quasi_static.setup_s, "integration": quasi_static.solve_s,
-           "total": quasi_static.setup_s + quasi_static.solve_s}
+    out = {
+        "setup": quasi_static.setup_s,
+        "integration": quasi_static.solve_s,
+        "total": quasi_static.setup_s + quasi_static.solve_s,
+    }
     if dynamic is not None:
         out["dynamic_window"] = dynamic.solve_s
         out["total"] += dynamic.solve_s
@@ -309,9 +376,15 @@ def _versions(exudyn_version: str) -> dict:
     import scipy
     import skfem
 
-    return {"exudyn": exudyn_version, "python": platform.python_version(), "numpy": np.__version__,
-            "scipy": scipy.__version__, "numba": numba.__version__, "scikit-fem": skfem.__version__,
-            "platform": platform.platform()}
+    return {
+        "exudyn": exudyn_version,
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "numba": numba.__version__,
+        "scikit-fem": skfem.__version__,
+        "platform": platform.platform(),
+    }
 
 
 def _checks(m: dict) -> list[dict]:
@@ -329,6 +402,9 @@ def _checks(m: dict) -> list[dict]:
             continue
         add(f"{kind}: driving torque, max difference / max torque", block["torque"]["max_rel_diff"], TARGETS["torque"])
         worst = max(v["relative_to_elastic_deviation"] for v in block["trajectories"].values())
-        add(f"{kind}: coupler and tracked nodes, max difference / coupler's elastic deviation", worst,
-            TARGETS["trajectory"])
+        add(
+            f"{kind}: coupler and tracked nodes, max difference / coupler's elastic deviation",
+            worst,
+            TARGETS["trajectory"],
+        )
     return checks

@@ -1,6 +1,6 @@
 r"""The Exudyn twin of the flexible Bennett scene, its runner, and the comparison with our solver.
 
-The twin is built from a :class:`ffrf.bennett_scene.BennettScene` only (identical input in both
+The twin is built from a :class:`ffrf.scenes.bennett_scene.BennettScene` only (identical input in both
 solvers):
 
 * four ``ObjectFFRFreducedOrder`` bodies (``FEMinterface`` with our nodes, consistent M, K and
@@ -19,7 +19,7 @@ solvers):
 **Offset convention (measured, see ``probe_marker_offset``).** Exudyn applies the translation
 of a ``MarkerSuperElementRigid``'s ``localHT`` in the *body* frame:
 ``p = R + A (o + sum w_i (x_i + u_i))``. Our scenes do the same by default
-(``joint_offsets="body"``, :func:`ffrf.markers.attach_joint_point`), so the twin's marker
+(``joint_offsets="body"``, :func:`ffrf.system.markers.attach_joint_point`), so the twin's marker
 translation is our marker point minus the interface's weighted centre and the models are
 equivalent. With ``joint_offsets="marker"`` our joint point is ``r_M + A exp(theta_M) o``,
 which Exudyn cannot express; the twin then applies ``o`` in the body frame and records a note
@@ -32,7 +32,7 @@ velocity ``A (omega_bar + T(theta) theta_dot)``; the exact derivative of its own
 ``C_q^T lambda`` is not the gradient of its constraint equations when a non-frame interface
 rotates elastically (O(|theta|) relative in the modal columns of the rotation rows; |theta| up
 to 3e-4 here). ``exudyn_convention_system(..., exudyn_jacobian=True)`` reproduces it in our
-solver (a :class:`ffrf.joints.MarkerJoint` subclass, same equations); then both solvers agree
+solver (a :class:`ffrf.system.joints.MarkerJoint` subclass, same equations); then both solvers agree
 to round-off.
 
 Measured on the coarse PLA scene (h = 6 mm, 2 modes, from ``q_start``, h = 1e-3, 0.2 s):
@@ -53,8 +53,16 @@ from types import SimpleNamespace
 import numpy as np
 from numpy.typing import NDArray
 
-from .exudyn_twin import (ExudynTwin, TwinBasis, exudyn_settings, q_from_twin, solve_static, static_settings,
-                          sweep_settings, to_twin_layout)
+from .exudyn_twin import (
+    ExudynTwin,
+    TwinBasis,
+    exudyn_settings,
+    q_from_twin,
+    solve_static,
+    static_settings,
+    sweep_settings,
+    to_twin_layout,
+)
 
 __all__ = [
     "BennettTrajectory",
@@ -77,6 +85,7 @@ __all__ = [
 # --------------------------------------------------------------------------------------------
 # Results
 # --------------------------------------------------------------------------------------------
+
 
 @dataclass
 class BennettTrajectory:
@@ -105,11 +114,12 @@ class BennettTrajectory:
 # Our system with Exudyn's offset convention
 # --------------------------------------------------------------------------------------------
 
+
 def _exudyn_joint_class():
-    """:class:`ffrf.joints.MarkerJoint` with Exudyn's marker rotation Jacobian (see :func:`exudyn_convention_system`)."""
-    from ffrf.euler_parameters import rotation_matrix
-    from ffrf.joints import MarkerJoint, exp_so3_tangent, joint_side
-    from ffrf.markers import _skew, exp_so3
+    """:class:`ffrf.system.joints.MarkerJoint` with Exudyn's marker rotation Jacobian (see :func:`exudyn_convention_system`)."""
+    from ffrf.body.euler_parameters import rotation_matrix
+    from ffrf.system.joints import MarkerJoint, exp_so3_tangent, joint_side
+    from ffrf.system.markers import _skew, exp_so3
 
     def axis_correction(marker, q, rotation):
         """Exudyn's minus the exact d(axis_k)/d zeta, k = 0..2: -A[(E w)~ - E w~] T Theta (3, 3, m)."""
@@ -136,11 +146,16 @@ def _exudyn_joint_class():
             _, axes0, _, _ = joint_side(self.marker0, q0, self.rotation0, self.offset0)
             _, axes1, _, _ = joint_side(self.marker1, q1, self.rotation1, self.offset1)
             c1 = axis_correction(self.marker1, q1, self.rotation1) if self.marker1.rotation_modes.shape[1] else None
-            c0 = (axis_correction(self.marker0, q0, self.rotation0)
-                  if not ground and self.marker0.rotation_modes.shape[1] else None)
+            c0 = (
+                axis_correction(self.marker0, q0, self.rotation0)
+                if not ground and self.marker0.rotation_modes.shape[1]
+                else None
+            )
             rows0, rows1 = (None, rows[0]) if ground else (rows[0], rows[1])
             row = 3
-            pairs = [(2, 1, False)] * self.locked[3] + [(2, 0, False)] * self.locked[4] + [(0, 1, True)] * self.locked[5]
+            pairs = (
+                [(2, 1, False)] * self.locked[3] + [(2, 0, False)] * self.locked[4] + [(0, 1, True)] * self.locked[5]
+            )
             for k0, k1, turned in pairs:
                 if turned and self.angle is not None:
                     phi = self.angle(t)
@@ -166,8 +181,8 @@ def exudyn_convention_system(system, exudyn_jacobian: bool = True):
     Jacobian (angular velocity A(omega_bar + T theta_dot), without the factor exp(theta~) in front
     of T that the exact derivative of its orientation A exp(theta~) has) in the joints' C_q.
     The constraint equations are ours either way."""
-    from ffrf.joints import GroundFrame, MarkerJoint
-    from ffrf.system import MultibodySystem
+    from ffrf.system.joints import GroundFrame, MarkerJoint
+    from ffrf.system.multibody import MultibodySystem
 
     joint_class = _exudyn_joint_class() if exudyn_jacobian else None
     constraints = []
@@ -177,7 +192,9 @@ def exudyn_convention_system(system, exudyn_jacobian: bool = True):
             for side in (0, 1):
                 marker, offset = getattr(c, f"marker{side}"), getattr(c, f"offset{side}")
                 if isinstance(marker, GroundFrame):
-                    changes[f"marker{side}"] = dataclasses.replace(marker, point=marker.point + marker.rotation @ offset)
+                    changes[f"marker{side}"] = dataclasses.replace(
+                        marker, point=marker.point + marker.rotation @ offset
+                    )
                 else:
                     changes[f"marker{side}"] = dataclasses.replace(marker, point=marker.point + offset)
                 changes[f"offset{side}"] = np.zeros(3)
@@ -189,16 +206,16 @@ def exudyn_convention_system(system, exudyn_jacobian: bool = True):
 
 
 def _joints(system):
-    from ffrf.joints import MarkerJoint
+    from ffrf.system.joints import MarkerJoint
 
     return {c.name: c for c in system.constraints if isinstance(c, MarkerJoint)}
 
 
 def system_points(scene, system, q: NDArray) -> tuple[NDArray, NDArray]:
-    """Coupler point (mean of link 2's joint points, as :func:`ffrf.bennett_run.evaluate_sensors`)
+    """Coupler point (mean of link 2's joint points, as :func:`ffrf.scenes.bennett_run.evaluate_sensors`)
     and the tracked nodes of links 1..3 for coordinate rows ``q``, using ``system``'s joints."""
-    from ffrf.euler_parameters import rotation_matrix
-    from ffrf.joints import joint_pose
+    from ffrf.body.flexible_body import node_positions
+    from ffrf.system.joints import joint_pose
 
     joints = _joints(system)
     j1, j2 = joints["joint1"], joints["joint2"]
@@ -210,11 +227,10 @@ def system_points(scene, system, q: NDArray) -> tuple[NDArray, NDArray]:
         p_near, _ = joint_pose(j2.marker0, qq[system.block(j2.bodies[0])], j2.rotation0, j2.offset0)
         coupler[row] = 0.5 * (p_far + p_near)
         for a, link in enumerate(scene.links[1:]):
-            block = qq[system.block(link.index)]
-            rot = rotation_matrix(np.ascontiguousarray(block[3:7]))
-            psi = link.reduction.basis
-            for j, node in enumerate(link.tracked_nodes):
-                tracked[row, 3 * a + j] = block[:3] + rot @ (link.fe.nodes[node] + psi[3 * node:3 * node + 3] @ block[7:])
+            nodes = scene.tracked_nodes[link.index]
+            tracked[row, 3 * a : 3 * a + len(nodes)] = node_positions(
+                qq[system.block(link.index)], link.fe.nodes, link.reduction.basis, nodes
+            )
     return coupler, tracked
 
 
@@ -226,26 +242,35 @@ def _zeta(system, q) -> list:
 # Exudyn twin
 # --------------------------------------------------------------------------------------------
 
+
 def bennett_bodies(scene) -> list:
     """The scene's links as :class:`validation.exudyn_twin.TwinBody` s."""
     from .exudyn_twin import TwinBody
 
-    return [TwinBody(f"link{link.index}", link.fe, link.interfaces, link.markers, link.reduction)
-            for link in scene.links]
+    return [
+        TwinBody(f"link{link.index}", link.fe, link.interfaces, link.markers, link.reduction) for link in scene.links
+    ]
 
 
-def build_exudyn_twin(scene, q0: NDArray, symbolic: bool = True, frozen_drive_time: float | None = None,
-                      system=None, bases: list[TwinBasis] | None = None) -> ExudynTwin:
+def build_exudyn_twin(
+    scene,
+    q0: NDArray,
+    symbolic: bool = True,
+    frozen_drive_time: float | None = None,
+    system=None,
+    bases: list[TwinBasis] | None = None,
+) -> ExudynTwin:
     """The Exudyn twin (:func:`validation.exudyn_twin.build_twin`) of ``system`` (default
     ``scene.system``) starting at ``q0``, with the Bennett sensors: the nine tracked nodes
     (``node0..8``), link 2's two joint points (``coupler_a/b``) and the drive's ``TorqueLocal``."""
     from .exudyn_twin import add_marker_sensor, add_node_sensor, build_twin
 
     system = scene.system if system is None else system
-    twin = build_twin(bennett_bodies(scene), system, q0, float(scene.settings["beta"]), symbolic, frozen_drive_time,
-                      bases)
+    twin = build_twin(
+        bennett_bodies(scene), system, q0, float(scene.settings["beta"]), symbolic, frozen_drive_time, bases
+    )
     for a, link in enumerate(scene.links[1:]):
-        for j, node in enumerate(link.tracked_nodes):
+        for j, node in enumerate(scene.tracked_nodes[link.index]):
             add_node_sensor(twin, f"node{3 * a + j}", link.index, node)
     # link 2 is marker 1 of joint1 and marker 0 of joint2
     add_marker_sensor(twin, "coupler_a", twin.markers["joint1"][1])
@@ -260,9 +285,14 @@ def _read_twin(twin: ExudynTwin, scene, q0: NDArray) -> dict:
     from .exudyn_twin import read_twin
 
     data = read_twin(twin, scene.system, q0)
-    return {"time": data["time"], "q": data["q"], "twin_q": data["twin_q"],
-            "tracked": np.stack([data[f"node{i}"] for i in range(9)], axis=1),
-            "coupler": 0.5 * (data["coupler_a"] + data["coupler_b"]), "torque": data["torque"][:, 2]}
+    return {
+        "time": data["time"],
+        "q": data["q"],
+        "twin_q": data["twin_q"],
+        "tracked": np.stack([data[f"node{i}"] for i in range(9)], axis=1),
+        "coupler": 0.5 * (data["coupler_a"] + data["coupler_b"]),
+        "torque": data["torque"][:, 2],
+    }
 
 
 def _check_times(times: NDArray, expected: NDArray, what: str) -> None:
@@ -276,9 +306,16 @@ def _label(twin: ExudynTwin) -> str:
     return f"exudyn {exu.__version__}" + (" (symbolic drive)" if twin.symbolic else " (Python drive)")
 
 
-def run_exudyn_bennett(scene, q0: NDArray, t_end: float, step: float = 1e-3, rho_inf: float = 0.9,
-                       tolerance: float = 1e-10, symbolic: bool = True,
-                       bases: list[TwinBasis] | None = None) -> BennettTrajectory:
+def run_exudyn_bennett(
+    scene,
+    q0: NDArray,
+    t_end: float,
+    step: float = 1e-3,
+    rho_inf: float = 0.9,
+    tolerance: float = 1e-10,
+    symbolic: bool = True,
+    bases: list[TwinBasis] | None = None,
+) -> BennettTrajectory:
     """Build the twin at ``q0`` (at rest; modal part in ``bases``), integrate to ``t_end`` with
     generalized-alpha and read every step back (``q`` in our basis)."""
     import exudyn as exu
@@ -296,30 +333,66 @@ def run_exudyn_bennett(scene, q0: NDArray, t_end: float, step: float = 1e-3, rho
     out = _read_twin(twin, scene, q0)
     _check_times(out["time"], step * np.arange(int(round(t_end / step)) + 1), "dynamic")
     iterations = int(solver.it.newtonStepsCount) if hasattr(solver, "it") else -1
-    return BennettTrajectory(out["time"], out["q"], out["coupler"], out["tracked"], out["torque"],
-                             _zeta(scene.system, out["q"]), setup, integration, iterations, _label(twin),
-                             {"symbolic": twin.symbolic, "twin_q": out["twin_q"],
-                              "notes": twin.notes})
+    return BennettTrajectory(
+        out["time"],
+        out["q"],
+        out["coupler"],
+        out["tracked"],
+        out["torque"],
+        _zeta(scene.system, out["q"]),
+        setup,
+        integration,
+        iterations,
+        _label(twin),
+        {"symbolic": twin.symbolic, "twin_q": out["twin_q"], "notes": twin.notes},
+    )
 
 
-def run_ffrf_bennett(scene, system, q0: NDArray, t_end: float, step: float = 1e-3, rho_inf: float = 0.9,
-                     tolerance: float = 1e-12, label: str = "ffrf") -> BennettTrajectory:
+def run_ffrf_bennett(
+    scene,
+    system,
+    q0: NDArray,
+    t_end: float,
+    step: float = 1e-3,
+    rho_inf: float = 0.9,
+    tolerance: float = 1e-12,
+    label: str = "ffrf",
+) -> BennettTrajectory:
     """Our generalized-alpha on ``system`` (``scene.system`` or :func:`exudyn_convention_system`) from ``q0`` at rest."""
-    from ffrf.generalized_alpha import generalized_alpha
+    from ffrf.solvers.generalized_alpha import generalized_alpha
 
-    result = generalized_alpha(system, np.asarray(q0, float), np.zeros_like(q0), t_end, step, rho_inf=rho_inf,
-                               tolerance=tolerance)
+    result = generalized_alpha(
+        system, np.asarray(q0, float), np.zeros_like(q0), t_end, step, rho_inf=rho_inf, tolerance=tolerance
+    )
     coupler, tracked = system_points(scene, system, result.q)
-    return BennettTrajectory(result.time, result.q, coupler, tracked, result.multipliers[:, -1],
-                             _zeta(system, result.q), 0.0, result.wall_time, int(result.newton_iterations.sum()), label)
+    return BennettTrajectory(
+        result.time,
+        result.q,
+        coupler,
+        tracked,
+        result.multipliers[:, -1],
+        _zeta(system, result.q),
+        0.0,
+        result.wall_time,
+        int(result.newton_iterations.sum()),
+        label,
+    )
 
 
 # --------------------------------------------------------------------------------------------
 # Statics
 # --------------------------------------------------------------------------------------------
 
-def static_exudyn_bennett(scene, q0: NDArray, t: float = 0.0, load_steps: int = 2, tolerance: float = 1e-10,
-                          system=None, bases: list[TwinBasis] | None = None):
+
+def static_exudyn_bennett(
+    scene,
+    q0: NDArray,
+    t: float = 0.0,
+    load_steps: int = 2,
+    tolerance: float = 1e-10,
+    system=None,
+    bases: list[TwinBasis] | None = None,
+):
     """Exudyn ``SolveStatic`` of the twin of ``system`` from ``q0`` with the drive frozen at ``t``
     (gravity in ``load_steps``). Returns (q (our basis), drive multiplier with *our* sign (Exudyn's
     static lambda is flipped), coupler, tracked, q in the twin's basis)."""
@@ -341,25 +414,36 @@ def static_exudyn_bennett(scene, q0: NDArray, t: float = 0.0, load_steps: int = 
     return q, torque, 0.5 * (ca + cb), tracked, twin_q
 
 
-def assemble_exudyn_bennett(scene, bases: list[TwinBasis] | None = None, steps: int | None = None,
-                            tolerance: float = 1e-10):
-    """Exudyn's own static assembly at t = 0, as :func:`ffrf.bennett_scene.assemble`: gravity from
+def assemble_exudyn_bennett(
+    scene, bases: list[TwinBasis] | None = None, steps: int | None = None, tolerance: float = 1e-10
+):
+    """Exudyn's own static assembly at t = 0, as :func:`ffrf.scenes.bennett_scene.assemble`: gravity from
     ``scene.q_start``, then the misalignment in ``steps`` increments, each a new twin of
     ``scene.with_misalignment(k / steps)`` started from the previous equilibrium. Returns the
     static result of :func:`static_exudyn_bennett` at full misalignment."""
     misalignment = abs(scene.settings["alpha3_deg"] - 90.0)
     if steps is None:
         steps = max(1, int(np.ceil(4 * misalignment))) if misalignment > 1e-12 else 1
-    result = static_exudyn_bennett(scene, to_twin_layout(scene.system, scene.q_start, bases), 0.0, 2, tolerance,
-                                   scene.with_misalignment(0.0) if misalignment > 1e-12 else scene.system, bases)
+    result = static_exudyn_bennett(
+        scene,
+        to_twin_layout(scene.system, scene.q_start, bases),
+        0.0,
+        2,
+        tolerance,
+        scene.with_misalignment(0.0) if misalignment > 1e-12 else scene.system,
+        bases,
+    )
     if misalignment > 1e-12:
         for k in range(1, steps + 1):
-            result = static_exudyn_bennett(scene, result[4], 0.0, 1, tolerance, scene.with_misalignment(k / steps), bases)
+            result = static_exudyn_bennett(
+                scene, result[4], 0.0, 1, tolerance, scene.with_misalignment(k / steps), bases
+            )
     return result
 
 
-def quasi_static_exudyn_bennett(scene, start: tuple, times: NDArray, tolerance: float = 1e-10,
-                                bases: list[TwinBasis] | None = None) -> BennettTrajectory:
+def quasi_static_exudyn_bennett(
+    scene, start: tuple, times: NDArray, tolerance: float = 1e-10, bases: list[TwinBasis] | None = None
+) -> BennettTrajectory:
     """Static equilibria at equally spaced ``times`` (from 0) with one ``SolveStatic``: the load
     steps' quasi-time turns the drive (``useLoadFactor=False``: gravity is always on).
     ``start``: the equilibrium at t = 0 (:func:`assemble_exudyn_bennett`), the first row."""
@@ -380,14 +464,24 @@ def quasi_static_exudyn_bennett(scene, start: tuple, times: NDArray, tolerance: 
     # first row is the start state, whose multipliers the sweep never computed.
     torque = -out["torque"]
     torque[0] = start[1]
-    return BennettTrajectory(out["time"], out["q"], out["coupler"], out["tracked"], torque,
-                             _zeta(scene.system, out["q"]), setup, integration, -1, _label(twin) + ", SolveStatic",
-                             {"symbolic": twin.symbolic, "twin_q": out["twin_q"], "notes": twin.notes})
+    return BennettTrajectory(
+        out["time"],
+        out["q"],
+        out["coupler"],
+        out["tracked"],
+        torque,
+        _zeta(scene.system, out["q"]),
+        setup,
+        integration,
+        -1,
+        _label(twin) + ", SolveStatic",
+        {"symbolic": twin.symbolic, "twin_q": out["twin_q"], "notes": twin.notes},
+    )
 
 
 def static_ffrf_bennett(scene, system, q0: NDArray, t: float = 0.0, load_steps: int = 2, tolerance: float = 1e-12):
     """Our static equilibrium of ``system`` from ``q0``: (q, drive multiplier, coupler, tracked)."""
-    from ffrf.static_solver import static_equilibrium
+    from ffrf.solvers.static_solver import static_equilibrium
 
     solution = static_equilibrium(system, np.asarray(q0, float), t=t, load_steps=load_steps, tolerance=tolerance)
     coupler, tracked = system_points(scene, system, solution.q)
@@ -397,6 +491,7 @@ def static_ffrf_bennett(scene, system, q0: NDArray, t: float = 0.0, load_steps: 
 # --------------------------------------------------------------------------------------------
 # Comparison
 # --------------------------------------------------------------------------------------------
+
 
 def compare(a: BennettTrajectory, b: BennettTrajectory, elastic: BennettTrajectory | None = None) -> dict[str, float]:
     """Max differences between two runs (same output times). ``elastic``: a run whose coupler
@@ -419,8 +514,9 @@ def compare(a: BennettTrajectory, b: BennettTrajectory, elastic: BennettTrajecto
     return out
 
 
-def probe_marker_offset(scene, link_index: int = 1, interface: str | None = None, zeta_scale: float = 0.03,
-                        offset=(0.01, -0.02, 0.005)) -> dict[str, float]:
+def probe_marker_offset(
+    scene, link_index: int = 1, interface: str | None = None, zeta_scale: float = 0.03, offset=(0.01, -0.02, 0.005)
+) -> dict[str, float]:
     """Where Exudyn puts a ``MarkerSuperElementRigid``'s ``localHT`` translation on a deformed body:
     distances of its marker position from R + A(x_bar + P zeta + o) (body frame) and from
     r_M + A exp(theta) o (marker frame, ours), and its orientation error against A exp(theta) R."""
@@ -428,8 +524,8 @@ def probe_marker_offset(scene, link_index: int = 1, interface: str | None = None
     import exudyn.itemInterface as eii
     from exudyn.FEM import ObjectFFRFreducedOrderInterface
 
-    from ffrf.euler_parameters import rotation_matrix
-    from ffrf.markers import exp_so3
+    from ffrf.body.euler_parameters import rotation_matrix
+    from ffrf.system.markers import exp_so3
 
     from .exudyn_ffrf import _exudyn_fem
 
@@ -439,20 +535,30 @@ def probe_marker_offset(scene, link_index: int = 1, interface: str | None = None
     a = rotation_matrix(block[3:7])
     m = link.reduction.basis.shape[1]
     zeta = zeta_scale * np.array([(-1.0) ** k * (k + 1) for k in range(m)]) / m
-    body = SimpleNamespace(nodes=np.asarray(link.fe.nodes), mass=link.fe.mass, stiffness=link.fe.stiffness,
-                           basis=np.asarray(link.reduction.basis))
+    body = SimpleNamespace(
+        nodes=np.asarray(link.fe.nodes),
+        mass=link.fe.mass,
+        stiffness=link.fe.stiffness,
+        basis=np.asarray(link.reduction.basis),
+    )
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
     info = ObjectFFRFreducedOrderInterface(_exudyn_fem(body)).AddObjectFFRFreducedOrder(
-        mbs, positionRef=list(block[:3]), rotationMatrixRef=a)
+        mbs, positionRef=list(block[:3]), rotationMatrixRef=a
+    )
     mbs.SetNodeParameter(info["nGenericODE2"], "initialCoordinates", [float(z) for z in zeta])
     itf = link.interfaces[name]
     turn = rotation_matrix(np.array([np.cos(0.3), np.sin(0.3), 0.0, 0.0]))
     o = np.asarray(offset, float)
-    marker = mbs.AddMarker(eii.MarkerSuperElementRigid(
-        bodyNumber=info["oFFRFreducedOrder"], meshNodeNumbers=[int(i) for i in itf.nodes],
-        weightingFactors=[float(w) for w in itf.weights], useAlternativeApproach=True,
-        localHT=exu.HT(rotation=turn, translation=o)))
+    marker = mbs.AddMarker(
+        eii.MarkerSuperElementRigid(
+            bodyNumber=info["oFFRFreducedOrder"],
+            meshNodeNumbers=[int(i) for i in itf.nodes],
+            weightingFactors=[float(w) for w in itf.weights],
+            useAlternativeApproach=True,
+            localHT=exu.HT(rotation=turn, translation=o),
+        )
+    )
     mbs.Assemble()
     out = exu.OutputVariableType
     position = np.asarray(mbs.GetMarkerOutput(marker, out.Position))

@@ -12,7 +12,7 @@ state and an optional revolute joint to ground at the frame interface. Both solv
   ``MarkerSuperElementRigid`` on the frame-interface nodes with our weights and a ground
   ``MarkerBodyRigid``, joined by ``GenericJoint(constrainedAxes=[1,1,1,1,1,0])``; the joint
   frames are rotated by the markers' ``localHT`` so that their z-axis is the hinge axis.
-* Ours: :class:`ffrf.flexible_body.FlexibleBody` with ``exact_gravity=False`` (Exudyn's
+* Ours: :class:`ffrf.body.flexible_body.FlexibleBody` with ``exact_gravity=False`` (Exudyn's
   ``LoadMassProportional`` on ``ObjectFFRFreducedOrder`` uses the undeformed centre of mass in
   the rotational row), ``GroundPoint`` at the weighted frame-interface centre and
   ``GroundPerpendicular`` for the axis.
@@ -62,6 +62,7 @@ __all__ = [
 # --------------------------------------------------------------------------------------------
 # Scene description (solver neutral)
 # --------------------------------------------------------------------------------------------
+
 
 @dataclass(frozen=True, eq=False)
 class ReducedBody:
@@ -155,7 +156,7 @@ class Scene:
 
     def rotation0(self) -> NDArray[np.float64]:
         """Initial rotation matrix A(euler0) (body to world)."""
-        from ffrf.euler_parameters import rotation_matrix
+        from ffrf.body.euler_parameters import rotation_matrix
 
         return rotation_matrix(np.asarray(self.euler0, dtype=float))
 
@@ -230,9 +231,16 @@ def hinge_frame(axis: ArrayLike) -> NDArray[np.float64]:
 # The test bar
 # --------------------------------------------------------------------------------------------
 
-def bar_body(divisions: tuple[int, int, int] = (8, 2, 2), size: tuple[float, float, float] = (0.2, 0.02, 0.01),
-             E: float = 1.2e9, nu: float = 0.33, rho: float = 450.0, n_modes: int = 4,
-             weights: str = "uniform") -> ReducedBody:
+
+def bar_body(
+    divisions: tuple[int, int, int] = (8, 2, 2),
+    size: tuple[float, float, float] = (0.2, 0.02, 0.01),
+    E: float = 1.2e9,
+    nu: float = 0.33,
+    rho: float = 450.0,
+    n_modes: int = 4,
+    weights: str = "uniform",
+) -> ReducedBody:
     """Prismatic bar along x, centred in y and z, bore 0 = face x = 0 (frame interface).
 
     Parameters
@@ -246,15 +254,16 @@ def bar_body(divisions: tuple[int, int, int] = (8, 2, 2), size: tuple[float, flo
     import skfem
 
     from ffrf import FEModel
-    from ffrf.craig_bampton import craig_bampton
-    from ffrf.mesh import orient_positive
+    from ffrf.mesh.tet_mesh import orient_positive
+    from ffrf.reduction.craig_bampton import craig_bampton
 
     nx, ny, nz = divisions
     if ny < 2 or nz < 2:
         raise ValueError(f"use at least 2 elements across the section, got {divisions}")
     lx, ly, lz = size
-    mesh = skfem.MeshTet.init_tensor(np.linspace(0.0, lx, nx + 1), np.linspace(-ly / 2, ly / 2, ny + 1),
-                                     np.linspace(-lz / 2, lz / 2, nz + 1))
+    mesh = skfem.MeshTet.init_tensor(
+        np.linspace(0.0, lx, nx + 1), np.linspace(-ly / 2, ly / 2, ny + 1), np.linspace(-lz / 2, lz / 2, nz + 1)
+    )
     points = mesh.p.T
     tets = orient_positive(points, mesh.t.T)
     model = FEModel.from_mesh(points, tets, E=E, nu=nu, rho=rho, order=1)
@@ -268,8 +277,17 @@ def bar_body(divisions: tuple[int, int, int] = (8, 2, 2), size: tuple[float, flo
     else:
         raise ValueError(f"weights={weights!r}: use 'uniform' or 'area'")
     cb = craig_bampton(model, bores, n_modes, w)
-    return ReducedBody(nodes, sp.csr_matrix(model.mass), sp.csr_matrix(model.stiffness), np.asarray(cb.basis),
-                       bores[0], w[0], bores[1], w[1], float(lx))
+    return ReducedBody(
+        nodes,
+        sp.csr_matrix(model.mass),
+        sp.csr_matrix(model.stiffness),
+        np.asarray(cb.basis),
+        bores[0],
+        w[0],
+        bores[1],
+        w[1],
+        float(lx),
+    )
 
 
 def _face_area_weights(yz: NDArray[np.float64], ny: int, nz: int) -> NDArray[np.float64]:
@@ -291,12 +309,26 @@ def tip_node(body: ReducedBody) -> int:
     return int(body.tip_nodes[np.argmin(np.linalg.norm(body.nodes[body.tip_nodes] - centre, axis=1))])
 
 
-def pendulum_scene(body: ReducedBody, step: float = 1e-3, t_end: float = 1.0, beta: float = 0.0,
-                   rho_inf: float = 0.8, axis: tuple[float, float, float] = (0.0, 1.0, 0.0)) -> Scene:
+def pendulum_scene(
+    body: ReducedBody,
+    step: float = 1e-3,
+    t_end: float = 1.0,
+    beta: float = 0.0,
+    rho_inf: float = 0.8,
+    axis: tuple[float, float, float] = (0.0, 1.0, 0.0),
+) -> Scene:
     """Scene 1: hinged at bore 0 about ``axis``, released from horizontal at rest, g = -9.81 e_z."""
     corner = int(np.argmax(body.nodes @ np.array([1.0, 1e-3, 1e-6])))  # an outer tip corner
-    return Scene(body, (tip_node(body), corner), gravity=(0.0, 0.0, -9.81), beta=beta, hinge=Hinge(axis),
-                 t_end=t_end, step=step, rho_inf=rho_inf)
+    return Scene(
+        body,
+        (tip_node(body), corner),
+        gravity=(0.0, 0.0, -9.81),
+        beta=beta,
+        hinge=Hinge(axis),
+        t_end=t_end,
+        step=step,
+        rho_inf=rho_inf,
+    )
 
 
 def static_deflection(body: ReducedBody, tip_force: ArrayLike) -> NDArray[np.float64]:
@@ -304,12 +336,18 @@ def static_deflection(body: ReducedBody, tip_force: ArrayLike) -> NDArray[np.flo
     the tip interface with its weights, with the frame interface clamped: K_red zeta = Psi^T f."""
     f = np.zeros(3 * len(body.nodes))
     for i, w in zip(body.tip_nodes, body.tip_weights):
-        f[3 * i:3 * i + 3] = w * np.asarray(tip_force, dtype=float)
+        f[3 * i : 3 * i + 3] = w * np.asarray(tip_force, dtype=float)
     return np.linalg.solve(body.reduced_stiffness, body.basis.T @ f)
 
 
-def free_body_scene(body: ReducedBody, step: float = 1e-3, t_end: float = 0.2, rho_inf: float = 0.8,
-                    tip_force: tuple[float, float, float] = (0.0, 1e-2, 1e-2), tilted: bool = False) -> Scene:
+def free_body_scene(
+    body: ReducedBody,
+    step: float = 1e-3,
+    t_end: float = 0.2,
+    rho_inf: float = 0.8,
+    tip_force: tuple[float, float, float] = (0.0, 1e-2, 1e-2),
+    tilted: bool = False,
+) -> Scene:
     """Scene 2: no gravity, no constraints, omega_bar = (1, 2, 30) rad/s, v = (0.1, 0, 0) m/s.
 
     The elastic excitation zeta0 is the static deflection under a small ``tip_force`` (10 mN:
@@ -326,13 +364,23 @@ def free_body_scene(body: ReducedBody, step: float = 1e-3, t_end: float = 0.2, r
         half, axis = np.radians(40.0) / 2.0, np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
         euler0 = tuple(float(v) for v in np.r_[np.cos(half), np.sin(half) * axis])
     corner = int(np.argmax(body.nodes @ np.array([1.0, 1e-3, 1e-6])))
-    return Scene(body, (tip_node(body), corner), velocity=(0.1, 0.0, 0.0), omega_bar=(1.0, 2.0, 30.0),
-                 zeta0=static_deflection(body, tip_force), euler0=euler0, t_end=t_end, step=step, rho_inf=rho_inf)
+    return Scene(
+        body,
+        (tip_node(body), corner),
+        velocity=(0.1, 0.0, 0.0),
+        omega_bar=(1.0, 2.0, 30.0),
+        zeta0=static_deflection(body, tip_force),
+        euler0=euler0,
+        t_end=t_end,
+        step=step,
+        rho_inf=rho_inf,
+    )
 
 
 # --------------------------------------------------------------------------------------------
 # Exudyn twin
 # --------------------------------------------------------------------------------------------
+
 
 def _exudyn_fem(body: ReducedBody):
     """FEMinterface with our nodes, M, K and basis (no surface: only needed for weights/graphics)."""
@@ -355,9 +403,14 @@ def _add_exudyn_body(mbs, scene: Scene):
     rotation_ref = scene.rotation0()
     omega_global = rotation_ref @ np.asarray(scene.omega_bar, dtype=float)  # Exudyn expects the global omega
     info = cms.AddObjectFFRFreducedOrder(
-        mbs, positionRef=list(scene.position), initialVelocity=list(scene.velocity), rotationMatrixRef=rotation_ref,
-        initialAngularVelocity=list(omega_global), gravity=list(scene.gravity),
-        stiffnessProportionalDamping=scene.beta)
+        mbs,
+        positionRef=list(scene.position),
+        initialVelocity=list(scene.velocity),
+        rotationMatrixRef=rotation_ref,
+        initialAngularVelocity=list(omega_global),
+        gravity=list(scene.gravity),
+        stiffnessProportionalDamping=scene.beta,
+    )
     mbs.SetNodeParameter(info["nGenericODE2"], "initialCoordinates", [float(z) for z in scene.initial_zeta()])
     return info["oFFRFreducedOrder"], info["nRigidBody"], info["nGenericODE2"]
 
@@ -371,12 +424,18 @@ def _add_exudyn_hinge(mbs, scene: Scene, body_object) -> None:
     frame = hinge_frame(scene.hinge.axis)  # world = body axes at t = 0 (identity reference rotation)
     centre_world = np.asarray(scene.position, dtype=float) + body.frame_center
     ground = mbs.AddObject(eii.ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
-    m_ground = mbs.AddMarker(eii.MarkerBodyRigid(bodyNumber=ground,
-                                                 localHT=exu.HT(rotation=frame, translation=centre_world)))
-    m_body = mbs.AddMarker(eii.MarkerSuperElementRigid(
-        bodyNumber=body_object, meshNodeNumbers=[int(i) for i in body.frame_nodes],
-        weightingFactors=[float(w) for w in body.frame_weights], useAlternativeApproach=True,
-        localHT=exu.HT(rotation=frame, translation=[0.0, 0.0, 0.0])))
+    m_ground = mbs.AddMarker(
+        eii.MarkerBodyRigid(bodyNumber=ground, localHT=exu.HT(rotation=frame, translation=centre_world))
+    )
+    m_body = mbs.AddMarker(
+        eii.MarkerSuperElementRigid(
+            bodyNumber=body_object,
+            meshNodeNumbers=[int(i) for i in body.frame_nodes],
+            weightingFactors=[float(w) for w in body.frame_weights],
+            useAlternativeApproach=True,
+            localHT=exu.HT(rotation=frame, translation=[0.0, 0.0, 0.0]),
+        )
+    )
     mbs.AddObject(eii.GenericJoint(markerNumbers=[m_ground, m_body], constrainedAxes=[1, 1, 1, 1, 1, 0]))
 
 
@@ -386,20 +445,33 @@ def _add_exudyn_sensors(mbs, scene: Scene, body_object, rigid_node, modal_node) 
 
     out = exu.OutputVariableType
     sensors = {
-        "rigid": mbs.AddSensor(eii.SensorNode(nodeNumber=rigid_node, outputVariableType=out.Coordinates,
-                                              storeInternal=True, writeToFile=False)),
-        "modal": mbs.AddSensor(eii.SensorNode(nodeNumber=modal_node, outputVariableType=out.Coordinates,
-                                              storeInternal=True, writeToFile=False)),
+        "rigid": mbs.AddSensor(
+            eii.SensorNode(
+                nodeNumber=rigid_node, outputVariableType=out.Coordinates, storeInternal=True, writeToFile=False
+            )
+        ),
+        "modal": mbs.AddSensor(
+            eii.SensorNode(
+                nodeNumber=modal_node, outputVariableType=out.Coordinates, storeInternal=True, writeToFile=False
+            )
+        ),
     }
     for k, node in enumerate(scene.tracked_nodes):
-        sensors[f"node{k}"] = mbs.AddSensor(eii.SensorSuperElement(
-            bodyNumber=body_object, meshNodeNumber=int(node), outputVariableType=out.Position,
-            storeInternal=True, writeToFile=False))
+        sensors[f"node{k}"] = mbs.AddSensor(
+            eii.SensorSuperElement(
+                bodyNumber=body_object,
+                meshNodeNumber=int(node),
+                outputVariableType=out.Position,
+                storeInternal=True,
+                writeToFile=False,
+            )
+        )
     return sensors
 
 
-def exudyn_settings(scene: Scene, modified_newton: bool = False, relative_tolerance: float = 1e-12,
-                    absolute_tolerance: float = 1e-12):
+def exudyn_settings(
+    scene: Scene, modified_newton: bool = False, relative_tolerance: float = 1e-12, absolute_tolerance: float = 1e-12
+):
     """Generalized-alpha (index 3, no Newmark), fixed step, full Newton, tight tolerances."""
     import exudyn as exu
 
@@ -427,8 +499,9 @@ def exudyn_settings(scene: Scene, modified_newton: bool = False, relative_tolera
     return s
 
 
-def run_exudyn(scene: Scene, modified_newton: bool = False, relative_tolerance: float = 1e-12,
-               absolute_tolerance: float = 1e-12) -> TrajectoryResult:
+def run_exudyn(
+    scene: Scene, modified_newton: bool = False, relative_tolerance: float = 1e-12, absolute_tolerance: float = 1e-12
+) -> TrajectoryResult:
     """Build the Exudyn twin of ``scene``, integrate it and return plain arrays.
 
     ``relative_tolerance``/``absolute_tolerance`` are Exudyn's Newton criteria (residual norm
@@ -458,51 +531,73 @@ def run_exudyn(scene: Scene, modified_newton: bool = False, relative_tolerance: 
     rigid = np.asarray(mbs.GetSensorStoredData(sensors["rigid"]))
     modal = np.asarray(mbs.GetSensorStoredData(sensors["modal"]))
     reference = np.asarray(mbs.GetNodeParameter(rigid_node, "referenceCoordinates"), dtype=float)
-    tracked = np.stack([np.asarray(mbs.GetSensorStoredData(sensors[f"node{k}"]))[:, 1:]
-                        for k in range(len(scene.tracked_nodes))], axis=1)
+    tracked = np.stack(
+        [np.asarray(mbs.GetSensorStoredData(sensors[f"node{k}"]))[:, 1:] for k in range(len(scene.tracked_nodes))],
+        axis=1,
+    )
     t = rigid[:, 0]
     _check_output_times(t, scene)
     q_rigid = rigid[:, 1:] + reference  # Exudyn stores displacements from the reference
-    return TrajectoryResult(t, q_rigid[:, :3], q_rigid[:, 3:7], modal[:, 1:], tracked, setup, integration,
-                            iterations, f"exudyn {exu.__version__}", exu.__version__)
+    return TrajectoryResult(
+        t,
+        q_rigid[:, :3],
+        q_rigid[:, 3:7],
+        modal[:, 1:],
+        tracked,
+        setup,
+        integration,
+        iterations,
+        f"exudyn {exu.__version__}",
+        exu.__version__,
+    )
 
 
 def _check_output_times(t: NDArray[np.float64], scene: Scene) -> None:
     expected = scene.step * np.arange(scene.n_steps + 1)
     if t.shape != expected.shape or np.abs(t - expected).max() > 1e-9 * scene.t_end:
-        raise RuntimeError(f"Exudyn sensor output has {len(t)} rows at unexpected times; expected one per step "
-                           f"({len(expected)} rows); check solution.sensors.writePeriod")
+        raise RuntimeError(
+            f"Exudyn sensor output has {len(t)} rows at unexpected times; expected one per step "
+            f"({len(expected)} rows); check solution.sensors.writePeriod"
+        )
 
 
 # --------------------------------------------------------------------------------------------
 # Our solver on the same scene
 # --------------------------------------------------------------------------------------------
 
+
 def ffrf_system(scene: Scene, exact_gravity: bool = False):
-    """Our :class:`ffrf.system.MultibodySystem` of ``scene`` and its initial state (q0, qd0).
+    """Our :class:`ffrf.system.multibody.MultibodySystem` of ``scene`` and its initial state (q0, qd0).
 
     ``exact_gravity=False`` (default) is Exudyn's simplified gravity moment; True keeps the
     deformation-dependent term (only for sensitivity studies).
     """
-    from ffrf.constraints import GroundPerpendicular, GroundPoint
-    from ffrf.euler_parameters import g_bar
-    from ffrf.flexible_body import FlexibleBody
-    from ffrf.modal_moments import modal_moments
-    from ffrf.system import MultibodySystem
+    from ffrf.body.euler_parameters import g_bar
+    from ffrf.body.flexible_body import FlexibleBody
+    from ffrf.body.modal_moments import modal_moments
+    from ffrf.system.constraints import GroundPerpendicular, GroundPoint
+    from ffrf.system.multibody import MultibodySystem
 
     body = scene.body
     moments = modal_moments(body.nodes, body.mass, body.basis)
-    flexible = FlexibleBody("bar", moments, stiffness=body.reduced_stiffness,
-                            damping=scene.beta * body.reduced_stiffness, exact_gravity=exact_gravity)
+    flexible = FlexibleBody(
+        "bar",
+        moments,
+        stiffness=body.reduced_stiffness,
+        damping=scene.beta * body.reduced_stiffness,
+        exact_gravity=exact_gravity,
+    )
     constraints = ()
     if scene.hinge is not None:
         frame = hinge_frame(scene.hinge.axis)
         centre = body.frame_center
         constraints = (
-            GroundPoint(bodies=(0,), name="hinge", local=centre,
-                        target=np.asarray(scene.position, dtype=float) + centre),
-            GroundPerpendicular(bodies=(0,), name="hinge axis", vector=frame[:, 2].copy(),
-                                normals=np.ascontiguousarray(frame[:, :2].T)),
+            GroundPoint(
+                bodies=(0,), name="hinge", local=centre, target=np.asarray(scene.position, dtype=float) + centre
+            ),
+            GroundPerpendicular(
+                bodies=(0,), name="hinge axis", vector=frame[:, 2].copy(), normals=np.ascontiguousarray(frame[:, :2].T)
+            ),
         )
     system = MultibodySystem(bodies=(flexible,), constraints=constraints, gravity=np.asarray(scene.gravity, float))
     q0 = system.initial_state(positions=[scene.position], rotations=[scene.euler0])
@@ -515,11 +610,11 @@ def ffrf_system(scene: Scene, exact_gravity: bool = False):
 
 def node_positions(body: ReducedBody, nodes: tuple[int, ...], q: NDArray[np.float64]) -> NDArray[np.float64]:
     """World positions (n_times, k, 3) of mesh ``nodes``: R + A(p)(x_i + Psi_i zeta)."""
-    from ffrf.euler_parameters import rotation_matrix
+    from ffrf.body.euler_parameters import rotation_matrix
 
     q = np.atleast_2d(q)
     out = np.empty((q.shape[0], len(nodes), 3))
-    rows = [body.basis[3 * i:3 * i + 3] for i in nodes]
+    rows = [body.basis[3 * i : 3 * i + 3] for i in nodes]
     for k, qk in enumerate(q):
         a = rotation_matrix(np.ascontiguousarray(qk[3:7]))
         for j, i in enumerate(nodes):
@@ -527,20 +622,30 @@ def node_positions(body: ReducedBody, nodes: tuple[int, ...], q: NDArray[np.floa
     return out
 
 
-def run_ffrf(scene: Scene, tolerance: float = 1e-12, exact_gravity: bool = False,
-             modified_newton: bool | None = None) -> TrajectoryResult:
+def run_ffrf(
+    scene: Scene, tolerance: float = 1e-12, exact_gravity: bool = False, modified_newton: bool | None = None
+) -> TrajectoryResult:
     """Integrate ``scene`` with our generalized-alpha solver (Newton ``tolerance``, see
-    :func:`ffrf.generalized_alpha.generalized_alpha`); ``modified_newton=None`` keeps the
+    :func:`ffrf.solvers.generalized_alpha.generalized_alpha`); ``modified_newton=None`` keeps the
     solver's default."""
-    from ffrf.generalized_alpha import generalized_alpha
+    from ffrf.solvers.generalized_alpha import generalized_alpha
 
     started = time.perf_counter()
     system, q0, qd0 = ffrf_system(scene, exact_gravity)
     setup = time.perf_counter() - started
     options = {} if modified_newton is None else {"modified_newton": modified_newton}
-    result = generalized_alpha(system, q0, qd0, scene.t_end, scene.step, rho_inf=scene.rho_inf, tolerance=tolerance,
-                               **options)
+    result = generalized_alpha(
+        system, q0, qd0, scene.t_end, scene.step, rho_inf=scene.rho_inf, tolerance=tolerance, **options
+    )
     q = result.q
-    return TrajectoryResult(result.time, q[:, :3], q[:, 3:7], q[:, 7:], node_positions(scene.body, scene.tracked_nodes, q),
-                            setup, result.wall_time, int(result.newton_iterations.sum()),
-                            "ffrf" if modified_newton is None else f"ffrf (modified_newton={modified_newton})")
+    return TrajectoryResult(
+        result.time,
+        q[:, :3],
+        q[:, 3:7],
+        q[:, 7:],
+        node_positions(scene.body, scene.tracked_nodes, q),
+        setup,
+        result.wall_time,
+        int(result.newton_iterations.sum()),
+        "ffrf" if modified_newton is None else f"ffrf (modified_newton={modified_newton})",
+    )

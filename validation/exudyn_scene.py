@@ -25,8 +25,14 @@ from numpy.typing import NDArray
 
 from .modes import compare_modes
 
-__all__ = ["SCENE_TARGETS", "SceneValidation", "scene_bodies", "run_exudyn_scene", "validate_scene",
-           "write_scene_report"]
+__all__ = [
+    "SCENE_TARGETS",
+    "SceneValidation",
+    "scene_bodies",
+    "run_exudyn_scene",
+    "validate_scene",
+    "write_scene_report",
+]
 
 #: Targets for a scene: frequencies and MAC as for the Bennett scene; sensors relative to their
 #: travel; driving torques relative to their maximum.
@@ -47,21 +53,24 @@ class SceneValidation:
 
 def scene_bodies(scene) -> list:
     """The scene's bodies as :class:`validation.exudyn_twin.TwinBody` s (markers on every interface)."""
-    from ffrf.markers import rigid_interface_marker
+    from ffrf.system.markers import rigid_interface_marker
 
     from .exudyn_twin import TwinBody
 
     out = []
     for k, body in enumerate(scene.bodies):
-        markers = {name: rigid_interface_marker(k, body.fe.nodes, body.reduction.basis, itf.nodes, itf.weights,
-                                                name=f"{body.name}:{name}")
-                   for name, itf in body.interfaces.items()}
+        markers = {
+            name: rigid_interface_marker(
+                k, body.fe.nodes, body.reduction.basis, itf.nodes, itf.weights, name=f"{body.name}:{name}"
+            )
+            for name, itf in body.interfaces.items()
+        }
         out.append(TwinBody(body.name, body.fe, body.interfaces, markers, body.reduction))
     return out
 
 
 def _with_gravity_model(scene, exact: bool):
-    from ffrf.system import MultibodySystem
+    from ffrf.system.multibody import MultibodySystem
 
     bodies = tuple(replace(b, exact_gravity=exact) for b in scene.system.bodies)
     system = MultibodySystem(bodies, scene.system.constraints, gravity=scene.system.gravity)
@@ -79,8 +88,16 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
     (positions, ``<joint>_torque`` with our sign), set-up and solution wall times."""
     import exudyn as exu
 
-    from .exudyn_twin import (add_node_sensor, build_twin, exudyn_settings, read_twin, solve_static, static_settings,
-                              sweep_settings, to_twin_layout)
+    from .exudyn_twin import (
+        add_node_sensor,
+        build_twin,
+        exudyn_settings,
+        read_twin,
+        solve_static,
+        static_settings,
+        sweep_settings,
+        to_twin_layout,
+    )
 
     s = scene.settings
     mode = s.get("mode", "dynamic")
@@ -130,7 +147,7 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
     """Load the scene, run ours (Exudyn's gravity model, and the exact one) and Exudyn's, compare."""
     import exudyn
 
-    from ffrf.scene_file import load_scene, sensor_arrays, simulate_scene
+    from ffrf.scenes.scene_file import load_scene, sensor_arrays, simulate_scene
 
     from .exudyn_twin import twin_bases
 
@@ -139,8 +156,11 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
     setup_ours = time.perf_counter() - started
     equivalent, exact = _with_gravity_model(scene, False), _with_gravity_model(scene, True)
     bases = twin_bases(scene_bodies(scene), basis)
-    modes = {b.name: compare_modes(b.fe, b.reduction, tb.matrix, tb.fixed_interface_frequencies_hz, tb.setup_s)
-             for b, tb in zip(scene.bodies, bases) if tb.source == "exudyn"}
+    modes = {
+        b.name: compare_modes(b.fe, b.reduction, tb.matrix, tb.fixed_interface_frequencies_hz, tb.setup_s)
+        for b, tb in zip(scene.bodies, bases)
+        if tb.source == "exudyn"
+    }
     started = time.perf_counter()
     times, q, lam = simulate_scene(equivalent)
     solve_ours = time.perf_counter() - started
@@ -149,24 +169,39 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
     exact_arrays = sensor_arrays(exact, q_exact, lam_exact)
     theirs, setup_exudyn, solve_exudyn = run_exudyn_scene(scene, bases, times)
 
-    metrics: dict = {"scene": scene.name, "mode": scene.settings.get("mode", "dynamic"),
-                     "modes": {n: c.metrics() for n, c in modes.items()}, "sensors": {}, "torques": {},
-                     "exact_gravity_effect": {}}
+    metrics: dict = {
+        "scene": scene.name,
+        "mode": scene.settings.get("mode", "dynamic"),
+        "modes": {n: c.metrics() for n, c in modes.items()},
+        "sensors": {},
+        "torques": {},
+        "exact_gravity_effect": {},
+    }
     for name in scene.sensors:
         distance = np.linalg.norm(ours[name] - theirs[name], axis=1)
         travel = max(float(np.linalg.norm(theirs[name] - theirs[name][0], axis=1).max()), 1e-300)
-        metrics["sensors"][name] = {"max_abs_diff_m": float(distance.max()), "travel_m": travel,
-                                    "relative_to_travel": float(distance.max()) / travel}
+        metrics["sensors"][name] = {
+            "max_abs_diff_m": float(distance.max()),
+            "travel_m": travel,
+            "relative_to_travel": float(distance.max()) / travel,
+        }
         metrics["exact_gravity_effect"][name] = float(np.linalg.norm(exact_arrays[name] - ours[name], axis=1).max())
     for name in scene.driven:
         key = f"{name}_torque"
         scale = max(float(np.abs(theirs[key]).max()), 1e-300)
-        metrics["torques"][name] = {"max_abs_diff_Nm": float(np.abs(ours[key] - theirs[key]).max()),
-                                    "max_abs_Nm": scale,
-                                    "max_rel_diff": float(np.abs(ours[key] - theirs[key]).max()) / scale}
-    metrics["timing_s"] = {"inhouse": {"setup": setup_ours, "integration": solve_ours, "total": setup_ours + solve_ours},
-                           "exudyn": {"setup": setup_exudyn + sum(b.setup_s for b in bases), "integration": solve_exudyn,
-                                      "total": setup_exudyn + sum(b.setup_s for b in bases) + solve_exudyn}}
+        metrics["torques"][name] = {
+            "max_abs_diff_Nm": float(np.abs(ours[key] - theirs[key]).max()),
+            "max_abs_Nm": scale,
+            "max_rel_diff": float(np.abs(ours[key] - theirs[key]).max()) / scale,
+        }
+    metrics["timing_s"] = {
+        "inhouse": {"setup": setup_ours, "integration": solve_ours, "total": setup_ours + solve_ours},
+        "exudyn": {
+            "setup": setup_exudyn + sum(b.setup_s for b in bases),
+            "integration": solve_exudyn,
+            "total": setup_exudyn + sum(b.setup_s for b in bases) + solve_exudyn,
+        },
+    }
     metrics["versions"] = {"exudyn": exudyn.__version__, "numpy": np.__version__}
     metrics["settings"] = {k: v for k, v in scene.settings.items()}
     checks = []
@@ -191,39 +226,88 @@ def write_scene_report(v: SceneValidation, directory: str | Path) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     m = v.metrics
     (out / "metrics.json").write_text(json.dumps(m, indent=2, default=float))
-    figures.series_difference_figure(v.time, {n: (v.ours[n], v.exudyn[n]) for n in m["sensors"]},
-                                     out / "difference.png", f"{v.name}: ours minus Exudyn")
+    figures.series_difference_figure(
+        v.time,
+        {n: (v.ours[n], v.exudyn[n]) for n in m["sensors"]},
+        out / "difference.png",
+        f"{v.name}: ours minus Exudyn",
+    )
     if v.modes:
         figures.mac_figure(v.modes, out / "mac.png")
     failed = [c for c in m["checks"] if not c["passed"]]
     state = "all targets met" if not failed else f"{len(failed)} of {len(m['checks'])} targets missed"
     ti, te = m["timing_s"]["inhouse"], m["timing_s"]["exudyn"]
-    lines = [f"# Cross-validation against Exudyn: scene `{v.name}` ({m['mode']})", "",
-             f"**Verdict: {state}.** Same meshes, M, K, interfaces, joints, drives, gravity model and solver "
-             f"settings; Exudyn {m['versions']['exudyn']} reduces the bodies itself. Time: ours "
-             f"{ti['integration']:.2f} s, Exudyn {te['integration']:.2f} s.", "",
-             markdown_table(["check", "measured", "target", ""],
-                    [[c["name"], format_sci(c["value"]), f"{c['target']:g}", "met" if c["passed"] else "**missed**"]
-                     for c in m["checks"]]), "",
-             "## Sensors", "",
-             markdown_table(["sensor", "max abs diff", "travel", "relative", "exact gravity moves it by"],
-                    [[n, format_length(s["max_abs_diff_m"]), format_length(s["travel_m"]), format_sci(s["relative_to_travel"]),
-                      format_length(m["exact_gravity_effect"][n])] for n, s in m["sensors"].items()]), "",
-             "![difference](difference.png)"]
+    lines = [
+        f"# Cross-validation against Exudyn: scene `{v.name}` ({m['mode']})",
+        "",
+        f"**Verdict: {state}.** Same meshes, M, K, interfaces, joints, drives, gravity model and solver "
+        f"settings; Exudyn {m['versions']['exudyn']} reduces the bodies itself. Time: ours "
+        f"{ti['integration']:.2f} s, Exudyn {te['integration']:.2f} s.",
+        "",
+        markdown_table(
+            ["check", "measured", "target", ""],
+            [
+                [c["name"], format_sci(c["value"]), f"{c['target']:g}", "met" if c["passed"] else "**missed**"]
+                for c in m["checks"]
+            ],
+        ),
+        "",
+        "## Sensors",
+        "",
+        markdown_table(
+            ["sensor", "max abs diff", "travel", "relative", "exact gravity moves it by"],
+            [
+                [
+                    n,
+                    format_length(s["max_abs_diff_m"]),
+                    format_length(s["travel_m"]),
+                    format_sci(s["relative_to_travel"]),
+                    format_length(m["exact_gravity_effect"][n]),
+                ]
+                for n, s in m["sensors"].items()
+            ],
+        ),
+        "",
+        "![difference](difference.png)",
+    ]
     if m["torques"]:
-        lines += ["", "## Driving torques", "",
-                  markdown_table(["joint", "max abs diff (N m)", "max torque (N m)", "relative"],
-                         [[n, format_sci(t["max_abs_diff_Nm"]), format_sci(t["max_abs_Nm"]), format_sci(t["max_rel_diff"])]
-                          for n, t in m["torques"].items()])]
+        lines += [
+            "",
+            "## Driving torques",
+            "",
+            markdown_table(
+                ["joint", "max abs diff (N m)", "max torque (N m)", "relative"],
+                [
+                    [n, format_sci(t["max_abs_diff_Nm"]), format_sci(t["max_abs_Nm"]), format_sci(t["max_rel_diff"])]
+                    for n, t in m["torques"].items()
+                ],
+            ),
+        ]
     if v.modes:
-        lines += ["", "## Modes", "",
-                  markdown_table(["body", "max rel. frequency diff", "min diagonal MAC"],
-                         [[n, format_sci(c.max_rel_freq_diff), f"{c.min_mac_diag:.12f}"] for n, c in v.modes.items()]),
-                  "", "![MAC](mac.png)"]
-    lines += ["", "## Wall time (s)", "",
-              markdown_table(["", "set-up", "run", "total"],
-                     [["ours", f"{ti['setup']:.2f}", f"{ti['integration']:.2f}", f"{ti['total']:.2f}"],
-                      ["Exudyn", f"{te['setup']:.2f}", f"{te['integration']:.2f}", f"{te['total']:.2f}"]]), ""]
+        lines += [
+            "",
+            "## Modes",
+            "",
+            markdown_table(
+                ["body", "max rel. frequency diff", "min diagonal MAC"],
+                [[n, format_sci(c.max_rel_freq_diff), f"{c.min_mac_diag:.12f}"] for n, c in v.modes.items()],
+            ),
+            "",
+            "![MAC](mac.png)",
+        ]
+    lines += [
+        "",
+        "## Wall time (s)",
+        "",
+        markdown_table(
+            ["", "set-up", "run", "total"],
+            [
+                ["ours", f"{ti['setup']:.2f}", f"{ti['integration']:.2f}", f"{ti['total']:.2f}"],
+                ["Exudyn", f"{te['setup']:.2f}", f"{te['integration']:.2f}", f"{te['total']:.2f}"],
+            ],
+        ),
+        "",
+    ]
     path = out / "report.md"
     path.write_text("\n".join(lines))
     return path

@@ -1,7 +1,7 @@
 r"""The Exudyn twin of any of our multibody systems of reduced flexible bodies.
 
 Given our bodies (nodes, consistent M and K, interface node sets and weights, reduction) and
-a :class:`ffrf.system.MultibodySystem` of :class:`ffrf.joints.MarkerJoint` s, the twin has
+a :class:`ffrf.system.multibody.MultibodySystem` of :class:`ffrf.system.joints.MarkerJoint` s, the twin has
 
 * per body an ``ObjectFFRFreducedOrder`` (``FEMinterface`` with our nodes, M and K and either
   Exudyn's own Craig-Bampton modes on the same interfaces, :func:`twin_bases`, or ours), with
@@ -11,11 +11,11 @@ a :class:`ffrf.system.MultibodySystem` of :class:`ffrf.joints.MarkerJoint` s, th
 * per joint side a ``MarkerSuperElementRigid`` on the interface's nodes with our weights
   (``useAlternativeApproach=True``, exponential map); its ``localHT`` carries our joint
   rotation and the joint point's offset from the interface centre, which Exudyn applies in
-  the body frame as our default (``joint_offsets="body"``, :func:`ffrf.markers.attach_joint_point`);
+  the body frame as our default (``joint_offsets="body"``, :func:`ffrf.system.markers.attach_joint_point`);
   a ground ``MarkerBodyRigid`` for ground frames;
 * per joint a ``GenericJoint`` with our locked axes; a prescribed rotation as its
   ``offsetUserFunction``: *symbolic* (C++ speed) for the paper's cosine ramp
-  (:class:`ffrf.drives.RampedAngle`), our Python function of time otherwise.
+  (:class:`ffrf.system.drives.RampedAngle`), our Python function of time otherwise.
 
 Sensors: the rigid and modal nodes of every body, the ``TorqueLocal`` of every driven joint
 (``torque:<joint>``); callers add their own (:func:`add_node_sensor`, :func:`add_marker_sensor`).
@@ -31,18 +31,32 @@ from types import SimpleNamespace
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.drives import RampedAngle
+from ffrf.system.drives import RampedAngle
 
-__all__ = ["TwinBody", "TwinBasis", "ExudynTwin", "twin_bases", "to_twin_layout", "build_twin",
-           "add_node_sensor", "add_marker_sensor", "read_twin", "static_settings", "sweep_settings", "solve_static", "joint_key",
-           "exudyn_settings", "q_from_twin"]
+__all__ = [
+    "TwinBody",
+    "TwinBasis",
+    "ExudynTwin",
+    "twin_bases",
+    "to_twin_layout",
+    "build_twin",
+    "add_node_sensor",
+    "add_marker_sensor",
+    "read_twin",
+    "static_settings",
+    "sweep_settings",
+    "solve_static",
+    "joint_key",
+    "exudyn_settings",
+    "q_from_twin",
+]
 
 
 @dataclass(frozen=True, eq=False)
 class TwinBody:
     """What the twin needs of one of our bodies. ``markers``: our interface markers by interface
     name (their points are the interfaces' weighted centres); ``reduction``: our
-    :class:`ffrf.craig_bampton.CraigBamptonBasis`, interfaces in its order."""
+    :class:`ffrf.reduction.craig_bampton.CraigBamptonBasis`, interfaces in its order."""
 
     name: str
     fe: object  # .nodes (N, 3), .mass, .stiffness
@@ -111,11 +125,20 @@ def twin_bases(bodies: list[TwinBody], source: str = "exudyn") -> list[TwinBasis
             continue
         started = time.perf_counter()
         itfs = list(body.interfaces.values())
-        basis, frequencies = exudyn_hcb(body.fe, [i.nodes for i in itfs], [i.weights for i in itfs],
-                                        frequencies_ours.size)
+        basis, frequencies = exudyn_hcb(
+            body.fe, [i.nodes for i in itfs], [i.weights for i in itfs], frequencies_ours.size
+        )
         elapsed = time.perf_counter() - started
-        out.append(TwinBasis(basis, np.sort(frequencies), "exudyn", elapsed,
-                             _modal_map(body.fe.mass, basis, ours), _modal_map(body.fe.mass, ours, basis)))
+        out.append(
+            TwinBasis(
+                basis,
+                np.sort(frequencies),
+                "exudyn",
+                elapsed,
+                _modal_map(body.fe.mass, basis, ours),
+                _modal_map(body.fe.mass, ours, basis),
+            )
+        )
     return out
 
 
@@ -126,13 +149,13 @@ def to_twin_layout(system, q: NDArray, bases: list[TwinBasis] | None) -> NDArray
         return q
     for k, basis in enumerate(bases):
         block = system.block(k)
-        q[..., block.start + 7:block.stop] = q[..., block.start + 7:block.stop] @ basis.from_ours.T
+        q[..., block.start + 7 : block.stop] = q[..., block.start + 7 : block.stop] @ basis.from_ours.T
     return q
 
 
 def _drive_function(angle, frozen_time: float | None, symbolic: bool):
     """offsetUserFunction [0, 0, 0, 0, 0, angle(t)]: symbolic (``exudyn.symbolic``) for a
-    :class:`ffrf.drives.RampedAngle`, else plain Python calling ``angle``."""
+    :class:`ffrf.system.drives.RampedAngle`, else plain Python calling ``angle``."""
     import exudyn as exu
 
     if frozen_time is not None or not symbolic or not isinstance(angle, RampedAngle):
@@ -140,6 +163,7 @@ def _drive_function(angle, frozen_time: float | None, symbolic: bool):
 
         def offset(mbs, t, itemNumber, args):
             return [0.0, 0.0, 0.0, 0.0, 0.0, float(angle(t)) if fixed is None else fixed + 0.0 * t]
+
         return offset
     esym = exu.symbolic
     start, w, tr = float(angle.start), float(angle.ramp.omega), float(angle.ramp.ramp_time)
@@ -148,6 +172,7 @@ def _drive_function(angle, frozen_time: float | None, symbolic: bool):
         during = 0.5 * w * (t - tr / np.pi * esym.sin(np.pi / tr * t))
         after = 0.5 * w * tr + w * (t - tr)
         return [0.0, 0.0, 0.0, 0.0, 0.0, start + esym.IfThenElse(t < tr, during, after)]
+
     return offset
 
 
@@ -156,12 +181,21 @@ def _interface_name(body: TwinBody, marker) -> str:
     for name, candidate in body.markers.items():
         if candidate.name == marker.name:
             return name
-    raise ValueError(f"marker {marker.name!r} is not one of body {body.name!r}'s interface markers "
-                     f"({sorted(body.markers)}); the twin supports rigid interface markers only")
+    raise ValueError(
+        f"marker {marker.name!r} is not one of body {body.name!r}'s interface markers "
+        f"({sorted(body.markers)}); the twin supports rigid interface markers only"
+    )
 
 
-def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, symbolic: bool = True,
-               frozen_drive_time: float | None = None, bases: list[TwinBasis] | None = None) -> ExudynTwin:
+def build_twin(
+    bodies: list[TwinBody],
+    system,
+    q0: NDArray,
+    beta: float,
+    symbolic: bool = True,
+    frozen_drive_time: float | None = None,
+    bases: list[TwinBasis] | None = None,
+) -> ExudynTwin:
     """The twin of ``system`` at ``q0`` (our layout, absolute, at rest; modal part in ``bases``,
     default our basis). ``frozen_drive_time``: drives held at their angle at this time (static solves, whose quasi-time
     would otherwise turn them). Call ``twin.mbs.Assemble()`` after adding sensors."""
@@ -169,8 +203,8 @@ def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, symboli
     import exudyn.itemInterface as eii
     from exudyn.FEM import ObjectFFRFreducedOrderInterface
 
-    from ffrf.euler_parameters import rotation_matrix
-    from ffrf.joints import GroundFrame, MarkerJoint
+    from ffrf.body.euler_parameters import rotation_matrix
+    from ffrf.system.joints import GroundFrame, MarkerJoint
 
     from .exudyn_ffrf import _exudyn_fem
 
@@ -180,11 +214,19 @@ def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, symboli
     for k, body in enumerate(bodies):
         block = np.asarray(q0[system.block(k)], dtype=float)
         basis = np.asarray(body.reduction.basis) if bases is None else bases[k].matrix
-        fem = _exudyn_fem(SimpleNamespace(nodes=np.asarray(body.fe.nodes), mass=body.fe.mass,
-                                          stiffness=body.fe.stiffness, basis=basis))
+        fem = _exudyn_fem(
+            SimpleNamespace(
+                nodes=np.asarray(body.fe.nodes), mass=body.fe.mass, stiffness=body.fe.stiffness, basis=basis
+            )
+        )
         info = ObjectFFRFreducedOrderInterface(fem).AddObjectFFRFreducedOrder(
-            mbs, positionRef=[float(v) for v in block[:3]], rotationMatrixRef=rotation_matrix(block[3:7]),
-            gravity=[float(v) for v in system.gravity], stiffnessProportionalDamping=float(beta), name=body.name)
+            mbs,
+            positionRef=[float(v) for v in block[:3]],
+            rotationMatrixRef=rotation_matrix(block[3:7]),
+            gravity=[float(v) for v in system.gravity],
+            stiffnessProportionalDamping=float(beta),
+            name=body.name,
+        )
         mbs.SetNodeParameter(info["nGenericODE2"], "initialCoordinates", [float(z) for z in block[7:]])
         objects.append(info["oFFRFreducedOrder"])
         rigid_nodes.append(info["nRigidBody"])
@@ -203,14 +245,22 @@ def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, symboli
         itf = body.interfaces[name]
         if np.any(offset != 0.0) and np.any(marker.rotation_modes != 0.0):
             # Our marker-frame offset A exp(theta) o has no Exudyn equivalent; Exudyn applies it as A o.
-            notes.append(f"{label}: marker-frame offset {np.linalg.norm(offset) * 1e3:.3g} mm applied in the body frame")
+            notes.append(
+                f"{label}: marker-frame offset {np.linalg.norm(offset) * 1e3:.3g} mm applied in the body frame"
+            )
         # Exudyn's marker point is the interface's weighted centre plus localHT's translation, in the body frame.
         translation = marker.point - body.markers[name].point + offset
-        return mbs.AddMarker(eii.MarkerSuperElementRigid(
-            bodyNumber=objects[marker.body], meshNodeNumbers=[int(i) for i in itf.nodes],
-            weightingFactors=[float(w) for w in itf.weights], useAlternativeApproach=True, rotationsExponentialMap=2,
-            localHT=exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(translation, float)),
-            name=label))
+        return mbs.AddMarker(
+            eii.MarkerSuperElementRigid(
+                bodyNumber=objects[marker.body],
+                meshNodeNumbers=[int(i) for i in itf.nodes],
+                weightingFactors=[float(w) for w in itf.weights],
+                useAlternativeApproach=True,
+                rotationsExponentialMap=2,
+                localHT=exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(translation, float)),
+                name=label,
+            )
+        )
 
     used_symbolic = False
     out = exu.OutputVariableType
@@ -222,8 +272,9 @@ def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, symboli
         m0 = add_marker(c.marker0, c.rotation0, c.offset0, f"{key}:m0")
         m1 = add_marker(c.marker1, c.rotation1, c.offset1, f"{key}:m1")
         markers[key] = (m0, m1)
-        joint = mbs.AddObject(eii.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=[int(v) for v in c.locked],
-                                               name=key))
+        joint = mbs.AddObject(
+            eii.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=[int(v) for v in c.locked], name=key)
+        )
         joints[key] = joint
         if c.angle is None:
             continue
@@ -232,8 +283,9 @@ def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, symboli
             from exudyn.utilities import CreateSymbolicUserFunction
 
             try:
-                function = CreateSymbolicUserFunction(mbs, _drive_function(c.angle, None, True),
-                                                      "offsetUserFunction", joint)
+                function = CreateSymbolicUserFunction(
+                    mbs, _drive_function(c.angle, None, True), "offsetUserFunction", joint
+                )
                 used_symbolic = True
             except Exception as error:  # pragma: no cover - reported to the caller
                 notes.append(f"{key}: symbolic user function failed ({error!r}); Python function used")
@@ -241,15 +293,37 @@ def build_twin(bodies: list[TwinBody], system, q0: NDArray, beta: float, symboli
             function = _drive_function(c.angle, frozen_drive_time, False)
         mbs.SetObjectParameter(joint, "offsetUserFunction", function)
         keep.append(function)
-        sensors[f"torque:{key}"] = mbs.AddSensor(eii.SensorObject(
-            objectNumber=joint, outputVariableType=out.TorqueLocal, storeInternal=True, writeToFile=False))
+        sensors[f"torque:{key}"] = mbs.AddSensor(
+            eii.SensorObject(
+                objectNumber=joint, outputVariableType=out.TorqueLocal, storeInternal=True, writeToFile=False
+            )
+        )
     for k in range(len(bodies)):
-        sensors[f"rigid{k}"] = mbs.AddSensor(eii.SensorNode(nodeNumber=rigid_nodes[k], outputVariableType=out.Coordinates,
-                                                            storeInternal=True, writeToFile=False))
-        sensors[f"modal{k}"] = mbs.AddSensor(eii.SensorNode(nodeNumber=modal_nodes[k], outputVariableType=out.Coordinates,
-                                                            storeInternal=True, writeToFile=False))
-    return ExudynTwin(sc, mbs, objects, rigid_nodes, modal_nodes, reference, markers, joints, sensors, used_symbolic,
-                      keep, notes, bases)
+        sensors[f"rigid{k}"] = mbs.AddSensor(
+            eii.SensorNode(
+                nodeNumber=rigid_nodes[k], outputVariableType=out.Coordinates, storeInternal=True, writeToFile=False
+            )
+        )
+        sensors[f"modal{k}"] = mbs.AddSensor(
+            eii.SensorNode(
+                nodeNumber=modal_nodes[k], outputVariableType=out.Coordinates, storeInternal=True, writeToFile=False
+            )
+        )
+    return ExudynTwin(
+        sc,
+        mbs,
+        objects,
+        rigid_nodes,
+        modal_nodes,
+        reference,
+        markers,
+        joints,
+        sensors,
+        used_symbolic,
+        keep,
+        notes,
+        bases,
+    )
 
 
 def add_node_sensor(twin: ExudynTwin, name: str, body: int, node: int) -> None:
@@ -257,9 +331,15 @@ def add_node_sensor(twin: ExudynTwin, name: str, body: int, node: int) -> None:
     import exudyn as exu
     import exudyn.itemInterface as eii
 
-    twin.sensors[name] = twin.mbs.AddSensor(eii.SensorSuperElement(
-        bodyNumber=twin.objects[body], meshNodeNumber=int(node), outputVariableType=exu.OutputVariableType.Position,
-        storeInternal=True, writeToFile=False))
+    twin.sensors[name] = twin.mbs.AddSensor(
+        eii.SensorSuperElement(
+            bodyNumber=twin.objects[body],
+            meshNodeNumber=int(node),
+            outputVariableType=exu.OutputVariableType.Position,
+            storeInternal=True,
+            writeToFile=False,
+        )
+    )
 
 
 def add_marker_sensor(twin: ExudynTwin, name: str, marker: int) -> None:
@@ -267,8 +347,14 @@ def add_marker_sensor(twin: ExudynTwin, name: str, marker: int) -> None:
     import exudyn as exu
     import exudyn.itemInterface as eii
 
-    twin.sensors[name] = twin.mbs.AddSensor(eii.SensorMarker(
-        markerNumber=marker, outputVariableType=exu.OutputVariableType.Position, storeInternal=True, writeToFile=False))
+    twin.sensors[name] = twin.mbs.AddSensor(
+        eii.SensorMarker(
+            markerNumber=marker,
+            outputVariableType=exu.OutputVariableType.Position,
+            storeInternal=True,
+            writeToFile=False,
+        )
+    )
 
 
 def q_from_twin(twin: ExudynTwin, system, q0: NDArray, rigid: list, modal: list, our_basis: bool = True) -> NDArray:
@@ -281,9 +367,9 @@ def q_from_twin(twin: ExudynTwin, system, q0: NDArray, rigid: list, modal: list,
         absolute = rigid[k] + twin.reference[k]
         sign = 1.0 if np.dot(twin.reference[k][3:7], q0[block][3:7]) >= 0 else -1.0
         absolute[:, 3:7] *= sign
-        q[:, block.start:block.start + 7] = absolute
+        q[:, block.start : block.start + 7] = absolute
         to_ours = twin.bases[k].to_ours if (our_basis and twin.bases is not None) else None
-        q[:, block.start + 7:block.stop] = modal[k] if to_ours is None else modal[k] @ to_ours.T
+        q[:, block.start + 7 : block.stop] = modal[k] if to_ours is None else modal[k] @ to_ours.T
     return q
 
 

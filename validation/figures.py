@@ -11,8 +11,14 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["coupler_deviation_figure", "difference_figure", "torque_figure", "mac_figure", "coupler_path_figure",
-           "series_difference_figure"]
+__all__ = [
+    "coupler_deviation_figure",
+    "difference_figure",
+    "torque_figure",
+    "mac_figure",
+    "coupler_path_figure",
+    "series_difference_figure",
+]
 
 #: One colour and line style per run label, the same in every figure.
 STYLE = {
@@ -66,11 +72,16 @@ def difference_figure(a, b, path: Path, title: str = "") -> Path:
     fig, ax = plt.subplots(figsize=(7, 3.6))
     x = _turn_deg(a)
     floor = 1e-16
-    ax.semilogy(x, np.maximum(np.linalg.norm(a.coupler - b.coupler, axis=1), floor), color="k", lw=2,
-                label="coupler point")
+    ax.semilogy(
+        x, np.maximum(np.linalg.norm(a.coupler - b.coupler, axis=1), floor), color="k", lw=2, label="coupler point"
+    )
     for i in range(9):
-        ax.semilogy(x, np.maximum(np.linalg.norm(a.tracked[:, i] - b.tracked[:, i], axis=1), floor), lw=0.8,
-                    label=f"link{1 + i // 3}_node{i % 3}")
+        ax.semilogy(
+            x,
+            np.maximum(np.linalg.norm(a.tracked[:, i] - b.tracked[:, i], axis=1), floor),
+            lw=0.8,
+            label=f"link{1 + i // 3}_node{i % 3}",
+        )
     ax.set_xlabel("drive angle turned (deg)" if x[-1] > 1 else "drive angle turned (deg), dynamic window")
     ax.set_ylabel("|ours - Exudyn| (m)")
     ax.set_title(title or f"{STYLE[a.label]['label']} minus {STYLE[b.label]['label']}")
@@ -88,8 +99,9 @@ def torque_figure(runs: dict, path: Path, title: str = "") -> Path:
         top.plot(_turn_deg(run), 1e3 * run.torque, **STYLE[label])
         if reference is not None and label != "exudyn":
             scale = np.abs(reference.torque).max()
-            bottom.semilogy(_turn_deg(run), np.maximum(np.abs(run.torque - reference.torque) / scale, 1e-16),
-                            **STYLE[label])
+            bottom.semilogy(
+                _turn_deg(run), np.maximum(np.abs(run.torque - reference.torque) / scale, 1e-16), **STYLE[label]
+            )
     top.set_ylabel("driving torque (N mm)")
     top.set_title(title or "Driving torque")
     top.grid(alpha=0.3)
@@ -139,8 +151,9 @@ def coupler_path_figure(runs: dict, ideal: NDArray, path: Path, magnify: float =
     return _save(fig, path)
 
 
-def series_difference_figure(time: NDArray, pairs: dict[str, tuple[NDArray, NDArray]], path: Path,
-                             title: str = "") -> Path:
+def series_difference_figure(
+    time: NDArray, pairs: dict[str, tuple[NDArray, NDArray]], path: Path, title: str = ""
+) -> Path:
     """|a - b| (m, log scale) over time for named pairs of (n, 3) position series."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 3.6))

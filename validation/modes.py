@@ -2,7 +2,7 @@ r"""Mode-by-mode comparison of our Craig-Bampton reduction with Exudyn's.
 
 Exudyn's ``FEMinterface.ComputeHurtyCraigBamptonModes`` (RBE2 interfaces,
 ``excludeRigidBodyMotion=True``) gets the same nodes, consistent M and K, boundary node sets
-and area weights as :func:`ffrf.craig_bampton.craig_bampton`. We compare
+and area weights as :func:`ffrf.reduction.craig_bampton.craig_bampton`. We compare
 
 * the fixed-interface frequencies, relative difference per mode;
 * the fixed-interface mode shapes by the mass-weighted modal assurance criterion
@@ -15,7 +15,7 @@ and area weights as :func:`ffrf.craig_bampton.craig_bampton`. We compare
   columns have the opposite sign, so columns are not compared one by one).
 
 ``exudyn`` is imported lazily; the functions take duck-typed models (``.nodes``, ``.mass``,
-``.stiffness``) like :mod:`ffrf.craig_bampton`.
+``.stiffness``) like :mod:`ffrf.reduction.craig_bampton`.
 """
 
 from __future__ import annotations
@@ -50,10 +50,13 @@ class ModeComparison:
         return float(np.min(self.diagonal_mac))
 
     def metrics(self) -> dict:
-        return {"max_rel_freq_diff": self.max_rel_freq_diff, "min_mac_diag": self.min_mac_diag,
-                "static_space_angle_rad": self.static_space_angle_rad,
-                "frequencies_hz": self.frequencies_hz.tolist(),
-                "exudyn_frequencies_hz": self.exudyn_frequencies_hz.tolist()}
+        return {
+            "max_rel_freq_diff": self.max_rel_freq_diff,
+            "min_mac_diag": self.min_mac_diag,
+            "static_space_angle_rad": self.static_space_angle_rad,
+            "frequencies_hz": self.frequencies_hz.tolist(),
+            "exudyn_frequencies_hz": self.exudyn_frequencies_hz.tolist(),
+        }
 
 
 def exudyn_hcb(model, interfaces, weights, n_modes: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -64,11 +67,14 @@ def exudyn_hcb(model, interfaces, weights, n_modes: int) -> tuple[NDArray[np.flo
     fem.nodes = {"Position": np.asarray(model.nodes, dtype=float)}
     fem.massMatrix = sp.csr_matrix(model.mass)
     fem.stiffnessMatrix = sp.csr_matrix(model.stiffness)
-    fem.ComputeHurtyCraigBamptonModes(boundaryNodesList=[[int(i) for i in nodes] for nodes in interfaces],
-                                      nEigenModes=n_modes, useSparseSolver=True,
-                                      computationMode=HCBstaticModeSelection.RBE2,
-                                      boundaryNodesWeights=[np.asarray(w, dtype=float) for w in weights],
-                                      excludeRigidBodyMotion=True)
+    fem.ComputeHurtyCraigBamptonModes(
+        boundaryNodesList=[[int(i) for i in nodes] for nodes in interfaces],
+        nEigenModes=n_modes,
+        useSparseSolver=True,
+        computationMode=HCBstaticModeSelection.RBE2,
+        boundaryNodesWeights=[np.asarray(w, dtype=float) for w in weights],
+        excludeRigidBodyMotion=True,
+    )
     return np.asarray(fem.modeBasis["matrix"]), np.asarray(fem.GetEigenFrequenciesHz())
 
 
@@ -85,9 +91,10 @@ def frequency_clusters(frequencies: NDArray, rel_gap: float = 1e-6) -> list[NDAr
     return np.split(np.arange(len(frequencies)), breaks)
 
 
-def compare_modes(model, reduction, exudyn_basis: NDArray, exudyn_frequencies_hz: NDArray,
-                  setup_s: float = float("nan")) -> ModeComparison:
-    """Compare ``reduction`` (:class:`ffrf.craig_bampton.CraigBamptonBasis` of ``model``) with Exudyn's basis."""
+def compare_modes(
+    model, reduction, exudyn_basis: NDArray, exudyn_frequencies_hz: NDArray, setup_s: float = float("nan")
+) -> ModeComparison:
+    """Compare ``reduction`` (:class:`ffrf.reduction.craig_bampton.CraigBamptonBasis` of ``model``) with Exudyn's basis."""
     s = reduction.n_static_modes
     ours = reduction.fixed_interface_frequencies_hz
     order = np.argsort(exudyn_frequencies_hz)

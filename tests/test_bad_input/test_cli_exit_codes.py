@@ -23,12 +23,17 @@ def test_ffrf_run_refuses_a_bad_scene_with_exit_2(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("content, words", [
-    ("Segments\n100\n,,Bennett:Link1\nFrame,Sub Frame,RX,RY,RZ,TX,TY,TZ\n,,deg,deg,deg,mm,mm,mm\n1,0,0,0,0,a,2,3\n",
-     "line 6: could not convert string to float: 'a'"),
-    ("Segments\n100\n,,Bennett:Link1\nFrame,Sub Frame,RX,RY,RZ,TX,TY,TZ\n,,deg,deg,deg,mm,mm,mm\n", "no data rows"),
-    ("just,some,numbers\n1,2,3\n", "no 'Frame, Sub Frame, ...' header row"),
-])
+@pytest.mark.parametrize(
+    "content, words",
+    [
+        (
+            "Segments\n100\n,,Bennett:Link1\nFrame,Sub Frame,RX,RY,RZ,TX,TY,TZ\n,,deg,deg,deg,mm,mm,mm\n1,0,0,0,0,a,2,3\n",
+            "line 6: could not convert string to float: 'a'",
+        ),
+        ("Segments\n100\n,,Bennett:Link1\nFrame,Sub Frame,RX,RY,RZ,TX,TY,TZ\n,,deg,deg,deg,mm,mm,mm\n", "no data rows"),
+        ("just,some,numbers\n1,2,3\n", "no 'Frame, Sub Frame, ...' header row"),
+    ],
+)
 def test_identification_refuses_a_broken_vicon_file_with_exit_2(tmp_path, capsys, content, words):
     from identification.__main__ import main
 
@@ -48,8 +53,13 @@ def test_identification_names_a_missing_result_with_exit_2(tmp_path, capsys):
 def test_validation_exit_status_says_whether_every_target_was_met(tmp_path, monkeypatch, passed, status):
     import validation.__main__ as cli
 
-    fake = SimpleNamespace(metrics={"passed": passed, "trajectories": {"coupler_point": {"max_abs_diff_m": 0.0}},
-                                    "torque": {"max_rel_diff": 0.0}})
+    fake = SimpleNamespace(
+        metrics={
+            "passed": passed,
+            "trajectories": {"coupler_point": {"max_abs_diff_m": 0.0}},
+            "torque": {"max_rel_diff": 0.0},
+        }
+    )
     monkeypatch.setattr(cli, "validate_bennett", lambda settings: fake)
     monkeypatch.setattr(cli, "write_report", lambda validation, folder: folder / "report.md")
     monkeypatch.setattr(cli, "write_summary", lambda validations, folder: folder / "summary.md")

@@ -18,8 +18,13 @@ def one_line_error(capsys) -> str:
 
 def tiny_vicon_csv(frames: int = 8) -> str:
     """A Vicon segment export of links 1-3 with ``frames`` frames of made-up (finite) positions."""
-    rows = ["Segments", "100", SEGMENT_NAMES.strip(), "Frame,Sub Frame" + ",RX,RY,RZ,TX,TY,TZ" * 3,
-            ",," + ",".join(["deg,deg,deg,mm,mm,mm"] * 3)]
+    rows = [
+        "Segments",
+        "100",
+        SEGMENT_NAMES.strip(),
+        "Frame,Sub Frame" + ",RX,RY,RZ,TX,TY,TZ" * 3,
+        ",," + ",".join(["deg,deg,deg,mm,mm,mm"] * 3),
+    ]
     rng = np.random.default_rng(1)
     for frame in range(1, frames + 1):
         rows.append(f"{frame},0," + ",".join(f"{v:.3f}" for v in rng.normal(size=18)))
@@ -35,10 +40,13 @@ def test_tiny_vicon_file_is_read(tmp_path):
     assert sorted(record.points) == [1, 2, 3] and record.n_frames == 8
 
 
-@pytest.mark.parametrize("arguments, words", [
-    (["--window", "0"], "moving-average window must be >= 1 frame, got 0; give --window 1"),
-    (["--alpha-deg", "nan", "90", "150", "90"], "--alpha-deg [nan, 90.0, 150.0, 90.0] must be 4 finite twists"),
-])
+@pytest.mark.parametrize(
+    "arguments, words",
+    [
+        (["--window", "0"], "moving-average window must be >= 1 frame, got 0; give --window 1"),
+        (["--alpha-deg", "nan", "90", "150", "90"], "--alpha-deg [nan, 90.0, 150.0, 90.0] must be 4 finite twists"),
+    ],
+)
 def test_identification_refuses_bad_numbers_with_exit_2(tmp_path, capsys, arguments, words):
     from identification.__main__ import main
 
@@ -65,14 +73,17 @@ def _npy_bytes() -> bytes:
 def _zip_cut_in_half(path):
     np.savez(path.with_name("whole.npz"), time=np.arange(100.0), link1_node0=np.zeros((100, 3)))
     whole = path.with_name("whole.npz").read_bytes()
-    path.write_bytes(whole[:len(whole) // 2])
+    path.write_bytes(whole[: len(whole) // 2])
 
 
-@pytest.mark.parametrize("damage, words", [
-    (lambda path: path.write_text("time,x\n0,1\n"), "ValueError"),
-    (_zip_cut_in_half, "BadZipFile"),
-    (lambda path: path.write_bytes(_npy_bytes()), "one array"),
-])
+@pytest.mark.parametrize(
+    "damage, words",
+    [
+        (lambda path: path.write_text("time,x\n0,1\n"), "ValueError"),
+        (_zip_cut_in_half, "BadZipFile"),
+        (lambda path: path.write_bytes(_npy_bytes()), "one array"),
+    ],
+)
 def test_identification_refuses_a_damaged_result_with_exit_2(tmp_path, capsys, damage, words):
     from identification.__main__ import main
 
@@ -83,10 +94,13 @@ def test_identification_refuses_a_damaged_result_with_exit_2(tmp_path, capsys, d
     assert "write it again with python -m ffrf bennett" in message
 
 
-@pytest.mark.parametrize("arguments, words", [
-    (["--alpha3-deg", "nan"], "--alpha3-deg nan is not a finite angle"),
-    (["--points", "0"], "--points 0: sample the coupler path at 4 points or more"),
-])
+@pytest.mark.parametrize(
+    "arguments, words",
+    [
+        (["--alpha3-deg", "nan"], "--alpha3-deg nan is not a finite angle"),
+        (["--points", "0"], "--points 0: sample the coupler path at 4 points or more"),
+    ],
+)
 def test_kinematics_refuses_bad_numbers_with_exit_2(tmp_path, capsys, arguments, words):
     from kinematics.__main__ import main
 
@@ -113,15 +127,15 @@ def test_ffrf_refuses_a_non_finite_twist_with_exit_2(tmp_path, capsys):
 @pytest.mark.parametrize("command", [["bennett"], ["run", "scene.toml"]])
 def test_ffrf_checks_the_output_folder_before_the_run(tmp_path, capsys, monkeypatch, command):
     """An unwritable ``--out`` is refused before any simulation, so no run is lost to it."""
-    import ffrf.bennett_run
-    import ffrf.scene_file
+    import ffrf.scenes.bennett_run
+    import ffrf.scenes.scene_file
     from ffrf.cli import main
 
     def must_not_run(*args, **kwargs):
         raise AssertionError("the run started before --out was checked")
 
-    monkeypatch.setattr(ffrf.bennett_run, "run_bennett", must_not_run)
-    monkeypatch.setattr(ffrf.scene_file, "run_scene", must_not_run)
+    monkeypatch.setattr(ffrf.scenes.bennett_run, "run_bennett", must_not_run)
+    monkeypatch.setattr(ffrf.scenes.scene_file, "run_scene", must_not_run)
     write_bar(tmp_path)
     (tmp_path / "scene.toml").write_text(PENDULUM)
     (tmp_path / "out").write_text("a file, not a folder")

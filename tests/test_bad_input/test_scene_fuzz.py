@@ -13,15 +13,31 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from scene_fixtures import PENDULUM, write_bar
 
-from ffrf.errors import FEInputError
-from ffrf.generalized_alpha import NewtonDivergence
-from ffrf.scene_file import load_scene, run_scene
-from ffrf.static_solver import StaticDivergence
+from ffrf.errors import FEInputError, NewtonDivergence, StaticDivergence
+from ffrf.scenes.scene_file import load_scene, run_scene
 
 PROJECT_ERRORS = (FEInputError, NewtonDivergence, StaticDivergence)
 VALID = tomllib.loads(PENDULUM)
-REPLACEMENTS = ["x", "", True, 0, -1, 2, 0.5, -1e-300, 1e300, math.nan, math.inf, -math.inf, [], [1.0],
-                [0.0, 0.0, 0.0], [1.0, "a", 2.0], {}, {"name": "a"}]
+REPLACEMENTS = [
+    "x",
+    "",
+    True,
+    0,
+    -1,
+    2,
+    0.5,
+    -1e-300,
+    1e300,
+    math.nan,
+    math.inf,
+    -math.inf,
+    [],
+    [1.0],
+    [0.0, 0.0, 0.0],
+    [1.0, "a", 2.0],
+    {},
+    {"name": "a"},
+]
 #: A built scene is run only when this small (the property is about errors, not long runs).
 MAX_STEPS_TO_RUN = 400
 
@@ -83,14 +99,15 @@ def mutate(document: dict, data) -> dict:
             del container[key]
         elif action == "misspell":
             position = data.draw(st.integers(0, len(key)))
-            container[key[:position] + "x" + key[position + 1:]] = container.pop(key)
+            container[key[:position] + "x" + key[position + 1 :]] = container.pop(key)
         else:
             container[key] = data.draw(st.sampled_from(REPLACEMENTS))
     return document
 
 
-@settings(max_examples=150, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=150, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(data=st.data())
 def test_mutated_scene_gives_a_scene_or_a_project_error(tmp_path, data):
     write_bar(tmp_path)

@@ -7,20 +7,26 @@ import pytest
 from scene_fixtures import PENDULUM, write_bar
 
 from ffrf.errors import FEInputError, MaterialError, MeshError, SceneError
-from ffrf.scene_file import load_scene
+from ffrf.scenes.scene_file import load_scene
 
 CASES = {
     # class: (replace this, by this, expected words in the message)
     "unknown table": ("[[sensors]]", "[[sensor]]", ["unknown key 'sensor'", "did you mean 'sensors'"]),
     "misspelt setting": ("gravity =", "gravty =", ["scene.toml, scene", "'gravty'", "did you mean 'gravity'"]),
-    "misspelt drive key": ('type = "revolute"', 'type = "driven_revolute"\ndrive = {rpmm = 1.0}',
-                           ["joints[0] 'hinge', drive", "'rpmm'", "did you mean 'rpm'"]),
+    "misspelt drive key": (
+        'type = "revolute"',
+        'type = "driven_revolute"\ndrive = {rpmm = 1.0}',
+        ["joints[0] 'hinge', drive", "'rpmm'", "did you mean 'rpm'"],
+    ),
     "string for a number": ("t_end = 0.1", 't_end = "0.1"', ["'t_end' must be a number", "'0.1'"]),
     "boolean for a number": ("step = 1e-3", "step = true", ["'step' must be a number"]),
     "nan": ("step = 1e-3", "step = nan", ["'step' must be finite"]),
     "infinite gravity": ("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, 0.0, -inf]", ["'gravity' must be finite"]),
-    "vector of wrong length": ("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, -9.81]",
-                               ["'gravity' must be a list of 3 numbers"]),
+    "vector of wrong length": (
+        "gravity = [0.0, 0.0, -9.81]",
+        "gravity = [0.0, -9.81]",
+        ["'gravity' must be a list of 3 numbers"],
+    ),
     "zero step": ("step = 1e-3", "step = 0.0", ["'step' must be > 0"]),
     "negative end time": ("t_end = 0.1", "t_end = -1.0", ["'t_end' must be > 0"]),
     "too few outputs": ("outputs = 101", "outputs = 1", ["'outputs' must lie in [2, 1e+06]"]),
@@ -30,30 +36,43 @@ CASES = {
     "negative Young's modulus": ("E = 1e8", "E = -1e8", ["bodies[0] 'bar', material", "'E' must be > 0"]),
     "zero density": ("rho = 450.0", "rho = 0.0", ["'rho' must be > 0"]),
     "Poisson ratio 0.5": ("nu = 0.3", "nu = 0.5", ["'nu' must lie in (-1, 0.5)"]),
-    "missing material": ("material = {E = 1e8, nu = 0.3, rho = 450.0}\n", "",
-                         ["missing required key 'material'"]),
+    "missing material": ("material = {E = 1e8, nu = 0.3, rho = 450.0}\n", "", ["missing required key 'material'"]),
     "unknown unit": ('unit = "mm"', 'unit = "inch"', ["'unit' must be one of ['m', 'mm']"]),
     "element order 3": ("order = 1", "order = 3", ["'order' must be one of [1, 2]"]),
     "negative mode count": ("modes = 3", "modes = -1", ["'modes' must be >= 0"]),
-    "no interface": ('interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]', "interfaces = []",
-                     ["list at least one interface"]),
-    "two selectors": ('nodes_file = "hinge.txt"}', 'nodes_file = "hinge.txt", group = "end"}',
-                      ["exactly one of group, cylinder or nodes_file"]),
+    "no interface": (
+        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]',
+        "interfaces = []",
+        ["list at least one interface"],
+    ),
+    "two selectors": (
+        'nodes_file = "hinge.txt"}',
+        'nodes_file = "hinge.txt", group = "end"}',
+        ["exactly one of group, cylinder or nodes_file"],
+    ),
     "zero joint axis": ("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 0.0]", ["'axis' has zero length"]),
     "unknown joint type": ('type = "revolute"', 'type = "prismatic"', ["'type' must be one of", "driven_revolute"]),
-    "drive on a plain revolute": ('type = "revolute"', 'type = "revolute"\ndrive = {rpm = 1.0}',
-                                  ["a revolute joint has no drive"]),
+    "drive on a plain revolute": (
+        'type = "revolute"',
+        'type = "revolute"\ndrive = {rpm = 1.0}',
+        ["a revolute joint has no drive"],
+    ),
     "driven joint without drive": ('type = "revolute"', 'type = "driven_revolute"', ["needs drive = {rpm"]),
     "zero drive speed": ('type = "revolute"', 'type = "driven_revolute"\ndrive = {rpm = 0.0}', ["'rpm' must not be 0"]),
     "unknown body in a joint": ('body1 = "bar"', 'body1 = "rod"', ["unknown body 'rod'", "bodies are ['bar']"]),
     "unknown interface": ('interface1 = "hinge"', 'interface1 = "bore"', ["no interface 'bore'", "['hinge']"]),
-    "duplicate body names": ("[[joints]]", '[[bodies]]\nname = "bar"\nmesh = "bar.vtu"\nmaterial = {E = 1e8, '
-                             'nu = 0.3, rho = 450.0}\ninterfaces = [{name = "a", group = "g"}]\n[[joints]]',
-                             ["two bodies are named 'bar'"]),
-    "sensor on an unknown body": ('body = "bar"\npoint', 'body = "beam"\npoint', ["sensors[0] 'tip'",
-                                                                                 "unknown body 'beam'"]),
-    "sensor point and node": ("point = [0.2, 0.0, 0.0]", "point = [0.2, 0.0, 0.0]\nnode = 3",
-                              ["exactly one of point"]),
+    "duplicate body names": (
+        "[[joints]]",
+        '[[bodies]]\nname = "bar"\nmesh = "bar.vtu"\nmaterial = {E = 1e8, '
+        'nu = 0.3, rho = 450.0}\ninterfaces = [{name = "a", group = "g"}]\n[[joints]]',
+        ["two bodies are named 'bar'"],
+    ),
+    "sensor on an unknown body": (
+        'body = "bar"\npoint',
+        'body = "beam"\npoint',
+        ["sensors[0] 'tip'", "unknown body 'beam'"],
+    ),
+    "sensor point and node": ("point = [0.2, 0.0, 0.0]", "point = [0.2, 0.0, 0.0]\nnode = 3", ["exactly one of point"]),
     "missing mesh file": ('mesh = "bar.vtu"', 'mesh = "missing.vtu"', ["missing.vtu not found"]),
     "not TOML": ("[scene]", "[scene", ["cannot read the scene"]),
 }
@@ -81,10 +100,14 @@ def test_sensor_point_off_the_body_is_refused(tmp_path):
 
 
 def test_material_is_checked_outside_scene_files_too():
-    from ffrf.materials import Material
+    from ffrf.fe.materials import Material
 
-    for arguments, words in [((-1.0, 0.3, 1.0), "E"), ((1e9, 0.5, 1.0), "nu"), ((1e9, 0.3, 0.0), "rho"),
-                             ((float("nan"), 0.3, 1.0), "E")]:
+    for arguments, words in [
+        ((-1.0, 0.3, 1.0), "E"),
+        ((1e9, 0.5, 1.0), "nu"),
+        ((1e9, 0.3, 0.0), "rho"),
+        ((float("nan"), 0.3, 1.0), "E"),
+    ]:
         with pytest.raises(MaterialError, match=words):
             Material(*arguments, name="test")
     assert issubclass(SceneError, FEInputError) and issubclass(MaterialError, FEInputError)

@@ -1,4 +1,4 @@
-"""Stress state of the assembled Bennett linkage (ffrf.assembly_stress) against independent truth:
+"""Stress state of the assembled Bennett linkage (ffrf.output.assembly_stress) against independent truth:
 a full scikit-fem static solve of each link with the bores moved as the reduced solution's bore
 markers say (Dirichlet conditions), the weight of the linkage carried by the clamp, and the
 strain energy of the reduced stiffness. Coarse scenes (6 mm tetrahedra, 2 modes)."""
@@ -11,7 +11,8 @@ import pytest
 import skfem
 from scipy.spatial.transform import Rotation
 
-from ffrf.assembly_stress import (
+from ffrf.body.euler_parameters import rotation_matrix
+from ffrf.output.assembly_stress import (
     element_von_mises,
     joint_reactions,
     nearest_feature,
@@ -19,9 +20,8 @@ from ffrf.assembly_stress import (
     scene_assembly_stress,
     write_assembly_vtu,
 )
-from ffrf.bennett_run import run_bennett
-from ffrf.bennett_scene import assemble, build_bennett
-from ffrf.euler_parameters import rotation_matrix
+from ffrf.scenes.bennett_run import run_bennett
+from ffrf.scenes.bennett_scene import assemble, build_bennett
 
 COARSE = dict(h=6e-3, order=1, n_modes=2)
 
@@ -111,7 +111,7 @@ def test_assembly_vtu(assembled_pla1, tmp_path):
     point_vm = mesh.point_data["von_mises"]
     assert 0.0 < point_vm.max() <= cell_vm.max()  # averages never exceed the largest element value
     # Reference + displacement = current positions of the links (Warp By Vector).
-    reference = np.vstack([link.fe.nodes[:len(link.fe.mesh.points)] for link in scene.links])
+    reference = np.vstack([link.fe.nodes[: len(link.fe.mesh.points)] for link in scene.links])
     assert np.allclose(reference + mesh.point_data["displacement"], mesh.points, atol=1e-15)
 
 
@@ -122,8 +122,10 @@ def test_pure_helpers():
     name, distance = nearest_feature([0.0, 0.0, 1.0], {"a": [[0.0, 0.0, 0.0]], "b": [[0.0, 0.0, 3.0], [0, 2.0, 1.0]]})
     assert (name, distance) == ("a", 1.0)
     reactions = joint_reactions(["fixed", "drive"], [6, 6], [False, True], [3, 4, 0, 0, 0, 1, 0, 0, 0, 3, 4, -7])
-    assert reactions == {"fixed": {"force_n": 5.0, "moment_nm": 1.0},
-                         "drive": {"force_n": 0.0, "moment_nm": 5.0, "torque_nm": -7.0}}
+    assert reactions == {
+        "fixed": {"force_n": 5.0, "moment_nm": 1.0},
+        "drive": {"force_n": 0.0, "moment_nm": 5.0, "torque_nm": -7.0},
+    }
 
 
 def test_run_bennett_reports_the_assembly():

@@ -1,19 +1,27 @@
-"""Paper-style figures (ffrf.bennett_figures): files are written and the plotted data are the inputs
+"""Paper-style figures (ffrf.output.bennett_figures): files are written and the plotted data are the inputs
 (angles from the start in degrees, deviations in mm, torques in N mm), including extra series."""
 
 import numpy as np
 import pytest
 
 from ffrf import cli
-from ffrf.bennett_figures import (coupler_deviation_series, driving_torque_series, plot_coupler_deviation,
-                                  plot_driving_torque, plot_over_drive_angle)
-from ffrf.bennett_run import BennettResult
+from ffrf.output.bennett_figures import (
+    coupler_deviation_series,
+    driving_torque_series,
+    plot_coupler_deviation,
+    plot_driving_torque,
+    plot_over_drive_angle,
+)
+from ffrf.scenes.bennett_run import BennettResult
 
 
 def synthetic_result(scale: float, rng) -> BennettResult:
     angle = np.radians(90.0) + np.linspace(0.0, 2 * np.pi + 0.05, 50)
-    sensors = {"drive_angle": angle, "coupler_deviation": scale * rng.normal(size=(50, 3)),
-               "driving_torque": scale * np.sin(angle)}
+    sensors = {
+        "drive_angle": angle,
+        "coupler_deviation": scale * rng.normal(size=(50, 3)),
+        "driving_torque": scale * np.sin(angle),
+    }
     return BennettResult(np.linspace(0.0, 61.0, 50), sensors, np.zeros((50, 1)))
 
 
@@ -58,12 +66,28 @@ def test_generic_plot_and_series(rng):
 
 def test_bennett_command_writes_figures_and_assembly(tmp_path, monkeypatch, capsys):
     """The bennett subcommand on a short run (t_end shortened to 2 s; its other options unchanged)."""
-    import ffrf.bennett_run as bennett_run
+    import ffrf.scenes.bennett_run as bennett_run
 
     full_run = bennett_run.run_bennett
     monkeypatch.setattr(bennett_run, "run_bennett", lambda scene, **kw: full_run(scene, **kw, t_end=2.0))
-    code = cli.main(["bennett", "--variant", "pla1", "--h", "6e-3", "--order", "1", "--modes", "2", "--outputs", "5",
-                     "--quasi-static", "--out", str(tmp_path)])
+    code = cli.main(
+        [
+            "bennett",
+            "--variant",
+            "pla1",
+            "--h",
+            "6e-3",
+            "--order",
+            "1",
+            "--modes",
+            "2",
+            "--outputs",
+            "5",
+            "--quasi-static",
+            "--out",
+            str(tmp_path),
+        ]
+    )
     assert code == 0
     for name in ("results.npz", "metadata.json", "assembly.vtu", "coupler_deviation.png", "driving_torque.png"):
         assert (tmp_path / name).exists(), name

@@ -7,16 +7,18 @@ import json
 import numpy as np
 import pytest
 
-from ffrf.bennett_run import run_bennett, write_results
-from ffrf.bennett_scene import build_bennett
+from ffrf.scenes.bennett_run import run_bennett, write_results
+from ffrf.scenes.bennett_scene import build_bennett
 
 COARSE = dict(h=6e-3, order=1, n_modes=2)
 
 
 @pytest.fixture(scope="module")
 def runs():
-    return {variant: run_bennett(build_bennett(variant, **COARSE), mode="quasi_static", n_outputs=13)
-            for variant in ("rigid", "pla", "pla2")}
+    return {
+        variant: run_bennett(build_bennett(variant, **COARSE), mode="quasi_static", n_outputs=13)
+        for variant in ("rigid", "pla", "pla2")
+    }
 
 
 def test_start_state_is_the_ideal_linkage():
@@ -67,12 +69,19 @@ def test_energy_balance_closes_quasi_statically():
 
 
 def test_paraview_series(runs, tmp_path):
-    from ffrf.paraview import write_time_series
+    from ffrf.output.paraview import write_time_series
 
     scene = build_bennett("pla", **COARSE)
     result = runs["pla"]
-    pvd = write_time_series(tmp_path, [(l.fe, l.reduction.basis) for l in scene.links],
-                            [scene.system.block(k) for k in range(4)], result.time, result.q, every=4, name="b")
+    pvd = write_time_series(
+        tmp_path,
+        [(l.fe, l.reduction.basis) for l in scene.links],
+        [scene.system.block(k) for k in range(4)],
+        result.time,
+        result.q,
+        every=4,
+        name="b",
+    )
     text = pvd.read_text()
     assert text.count("<DataSet") == 4 and f'timestep="{result.time[4]:.9g}"' in text
     import meshio

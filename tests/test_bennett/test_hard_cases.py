@@ -20,10 +20,10 @@ if str(BENCH) not in sys.path:
 
 import hard_cases  # noqa: E402  (bench/ is not a package)
 
-from ffrf.bennett_run import choose_mode  # noqa: E402
-from ffrf.drives import rpm  # noqa: E402
-from ffrf.materials import PLA, RIGID, Material  # noqa: E402
-from ffrf.static_solver import StaticDivergence  # noqa: E402
+from ffrf.fe.materials import PLA, RIGID, Material  # noqa: E402
+from ffrf.scenes.bennett_run import choose_mode  # noqa: E402
+from ffrf.solvers.static_solver import StaticDivergence  # noqa: E402
+from ffrf.system.drives import rpm  # noqa: E402
 
 COARSE = dict(h=8e-3, order=1, n_modes=2)
 
@@ -47,8 +47,9 @@ def test_near_rigid_links_converge_at_large_and_tiny_steps(ctx, rigid_scene, ste
     """E = 1e15 Pa: the index-3 iteration at 1e-2 s and 1e-5 s steps converges, keeps the
     constraints, and the coupler follows the ideal rigid linkage (motion polynomial)."""
     n_steps = int(round(t_end / step))
-    out = hard_cases.simulate(ctx, rigid_scene, f"step {step}", "dynamic", t_end, step=step,
-                              n_outputs=min(n_steps, 20) + 1)
+    out = hard_cases.simulate(
+        ctx, rigid_scene, f"step {step}", "dynamic", t_end, step=step, n_outputs=min(n_steps, 20) + 1
+    )
     assert out.row.converged, out.row.error
     assert out.row.steps == n_steps
     assert _all_finite(out)
@@ -69,23 +70,23 @@ def test_near_rigid_energy_balance_closes_with_small_steps(ctx, rigid_scene):
 
 
 def test_assembly_failure_names_scene_step_and_remedy(monkeypatch):
-    """A failed static assembly says which scene (alpha_3), which continuation step, the solver's
-    own diagnosis, and what to do."""
-    from ffrf import bennett_scene
+    """A failed static assembly says which scene (and its misfit: alpha_3 - 90 deg), which
+    continuation step, the solver's own diagnosis, and what to do."""
+    from ffrf.scenes import builder
 
     scene = hard_cases.make_scene(PLA, 92.0, **COARSE)
 
     def fail(*args, **kwargs):
         raise StaticDivergence("static Newton did not converge in 25 iterations: last increment 1e-3")
 
-    monkeypatch.setattr(bennett_scene, "static_equilibrium", fail)
+    monkeypatch.setattr(builder, "static_equilibrium", fail)
     with pytest.raises(StaticDivergence) as info:
-        bennett_scene.assemble(scene)
+        builder.assemble(scene)
     message = str(info.value)
-    assert "alpha_3 = 92 deg" in message
+    assert f"scene {scene.name!r} (2 deg of axis misfit)" in message
     assert "continuation step 0/8" in message
     assert "last increment 1e-3" in message
-    assert "check alpha_3" in message and "more iterations" in message
+    assert "check the joints' axes" in message and "more steps" in message
 
 
 def test_misaligned_assembly_at_95_deg_holds_the_constraints(ctx):
@@ -183,8 +184,8 @@ def test_only_the_base_is_misaligned_and_continuation_starts_closed():
 def test_long_quasi_static_steps_reach_the_same_equilibria_as_short_ones():
     """Seven equilibria over a whole revolution (60 deg of drive apart) must be the ones a fine
     sequence passes through: a predictor or tangent update must not jump to another equilibrium."""
-    from ffrf.bennett_scene import assemble, build_bennett
-    from ffrf.static_solver import quasi_static
+    from ffrf.scenes.bennett_scene import assemble, build_bennett
+    from ffrf.solvers.static_solver import quasi_static
 
     scene = build_bennett("pla", h=0.006, order=1, n_modes=2)  # where Broyden updates once jumped (secant=True)
     start = assemble(scene).q

@@ -1,4 +1,4 @@
-"""Joint reactions (``ffrf.reactions``) against Newton-Euler statics: in a static equilibrium
+"""Joint reactions (``ffrf.system.reactions``) against Newton-Euler statics: in a static equilibrium
 the joint wrenches and gravity on every link sum to zero, force and moment (the elastic
 forces are internal). Independent of how the reactions were computed, so it checks the
 signs, the lever arms and the torque directions of every joint, misaligned assembly included.
@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from body_fixtures import five_point_slope, potential_energy
 
-from ffrf.bennett_scene import assemble, build_bennett
-from ffrf.euler_parameters import rotation_matrix
-from ffrf.reactions import joint_reactions
-from ffrf.static_solver import quasi_static
+from ffrf.body.euler_parameters import rotation_matrix
+from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.solvers.static_solver import quasi_static
+from ffrf.system.reactions import joint_reactions
 
 
 @lru_cache(maxsize=None)
@@ -95,7 +95,7 @@ def test_reactions_are_not_trivially_zero():
 def test_run_bennett_writes_reactions_in_joint_frames():
     """The ``joint_reactions`` sensor: the drive's torque about its axis is the driving torque,
     and the clamp carries the linkage's weight (vertical in the clamp's frame, the world's)."""
-    from ffrf.bennett_run import run_bennett
+    from ffrf.scenes.bennett_run import run_bennett
 
     scene = build_bennett("pla", h=6e-3, order=1, n_modes=2)
     result = run_bennett(scene, mode="quasi_static", n_outputs=5)
@@ -109,14 +109,17 @@ def test_run_bennett_writes_reactions_in_joint_frames():
 
 def test_reactions_from_supplied_poses_equal_the_computed_ones():
     """evaluate_sensors hands its joint poses to joint_reactions; the wrenches must not change."""
-    from ffrf.joints import MarkerJoint
-    from ffrf.reactions import joint_poses
+    from ffrf.system.joints import MarkerJoint
+    from ffrf.system.reactions import joint_poses
 
     scene, times, solution = equilibria("pla")
     system = scene.system
     q, lam, t = solution.q[1], solution.multipliers[1], times[1]
-    poses = {c.name: joint_poses(c, [q[system.block(i)] for i in c.bodies])
-             for c in system.constraints if isinstance(c, MarkerJoint) and c.name != "clamp"}
+    poses = {
+        c.name: joint_poses(c, [q[system.block(i)] for i in c.bodies])
+        for c in system.constraints
+        if isinstance(c, MarkerJoint) and c.name != "clamp"
+    }
     plain, reused = joint_reactions(system, q, lam, t), joint_reactions(system, q, lam, t, poses)
     assert plain.keys() == reused.keys() and len(poses) == 4
     for name in plain:

@@ -1,11 +1,11 @@
 """Same input, same output, bit for bit: a scene built and run twice in one process gives equal
-arrays (ARPACK starts from a fixed vector, mode signs follow one rule: ffrf/eigen.py)."""
+arrays (ARPACK starts from a fixed vector, mode signs follow one rule: ffrf/numerics/eigen.py)."""
 
 import numpy as np
 
-from ffrf.bennett_scene import assemble, build_bennett
-from ffrf.eigen import fix_signs, lanczos_start
-from ffrf.static_solver import quasi_static
+from ffrf.numerics.eigen import fix_signs, lanczos_start
+from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.solvers.static_solver import quasi_static
 
 
 def _run():

@@ -12,10 +12,15 @@ import functools
 
 import numpy as np
 import pytest
+from ffrf_reference import (
+    classify_mode,
+    prism_mesh,
+    rectangle_torsion_constant,
+    timoshenko_bending_frequencies,
+    torsion_frequencies,
+)
 
 from ffrf import PLA, FEModel, clamped_modes, free_free_modes
-from ffrf_reference import (classify_mode, prism_mesh, rectangle_torsion_constant,
-                            timoshenko_bending_frequencies, torsion_frequencies)
 
 LENGTH, WIDTH, THICK = 0.2, 0.012, 0.008  # x, y, z
 E, NU, RHO = PLA.E, PLA.nu, PLA.rho
@@ -54,6 +59,7 @@ def fe_first_frequencies(h, order, bc, n_modes=8):
 
 # --- the reference formulas themselves, against tabulated values -------------------------
 
+
 def test_reference_reduces_to_euler_bernoulli_tables():
     """Thomson, Theory of Vibration, App. D: beta L = 1.8751, 4.6941 (clamped-free), 4.7300, 7.8532 (free-free)."""
     for bc, beta_l in (("clamped-free", (1.8751, 4.6941)), ("free-free", (4.7300, 7.8532))):
@@ -71,11 +77,14 @@ def test_reference_torsion_constants_match_roark():
 def test_timoshenko_correction_is_below_euler_bernoulli():
     for bc in ("clamped-free", "free-free"):
         t = timoshenko_bending_frequencies(E, NU, RHO, AREA, I_Y_BENDING, LENGTH, bc, n=1)[0]
-        eb = timoshenko_bending_frequencies(E, NU, RHO, AREA, I_Y_BENDING, LENGTH, bc, n=1, shear=False, rotary=False)[0]
+        eb = timoshenko_bending_frequencies(E, NU, RHO, AREA, I_Y_BENDING, LENGTH, bc, n=1, shear=False, rotary=False)[
+            0
+        ]
         assert 0.98 * eb < t < eb
 
 
 # --- FE against theory ---------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("bc", ["clamped-free", "free-free"])
 def test_p2_matches_beam_theory(bc):
@@ -95,7 +104,7 @@ def test_p1_is_stiff_in_bending_and_converges():
     err_fine = {k: fine[k] / ref[k] - 1 for k in ref}
     print(f"P1 clamped-free relative errors: h=4mm {err_coarse}, h=2mm {err_fine}")
     for kind in ("bend_z", "bend_y"):
-        assert err_coarse[kind] > 0.2          # locking: P1 tets are much too stiff in bending
+        assert err_coarse[kind] > 0.2  # locking: P1 tets are much too stiff in bending
         assert 0.0 < err_fine[kind] < err_coarse[kind] / 2  # and converge from above
     assert 0.0 < err_fine["torsion"] < err_coarse["torsion"]
 

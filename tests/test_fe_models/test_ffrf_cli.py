@@ -34,8 +34,25 @@ def test_mesh_command_writes_vtu_and_summary(tmp_path):
 
 
 def test_misaligned_base_link_via_module_entry_point(tmp_path):
-    result = subprocess.run([sys.executable, "-m", "ffrf", "mesh", "--link", "0", "--alpha3-deg", "91",
-                             "--h", "0.008", "--out", str(tmp_path)], cwd=ROOT, capture_output=True, text=True)
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ffrf",
+            "mesh",
+            "--link",
+            "0",
+            "--alpha3-deg",
+            "91",
+            "--h",
+            "0.008",
+            "--out",
+            str(tmp_path),
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
     assert result.returncode == 0, result.stderr
     summary = json.loads((tmp_path / "link0.json").read_text())
     h3_foot, h0_foot = np.array(summary["joint_points_m"])
@@ -53,7 +70,7 @@ def test_bad_arguments_give_a_clear_error(tmp_path, capsys):
 
 def test_paper_axes_agree_with_kinematics_dh():
     """The hard-coded home-configuration axes against the kinematics package's DH chain."""
-    from ffrf.link_geometry import PAPER_AXES, bennett_axes
+    from ffrf.geometry.link_geometry import PAPER_AXES, bennett_axes
 
     for ours, theirs in zip(PAPER_AXES, bennett_axes(90.0)):
         np.testing.assert_allclose(theirs.point, ours.point, atol=1e-12)

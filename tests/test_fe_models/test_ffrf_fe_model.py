@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from ffrf_reference import prism_mesh
 
 from ffrf import PLA, FEModel, Material, rigid_body_modes
-from ffrf.mesh import signed_volumes
-from ffrf.meshing import configure_meshing, gmsh_session, mesh_current_model
-from ffrf_reference import prism_mesh
+from ffrf.geometry.meshing import configure_meshing, gmsh_session, mesh_current_model
+from ffrf.mesh.tet_mesh import signed_volumes
 
 R, L = 0.02, 0.1  # solid cylinder along z, base at the origin
 
@@ -122,6 +122,6 @@ def test_cylinder_inertia_converges_to_analytic():
     errors = [_cylinder_errors(h) for h in (0.01, 0.005)]
     print("cylinder mass/inertia relative errors (h = 10, 5 mm):", errors)
     (m10, j10, c10), (m5, j5, c5) = errors
-    assert m10 < 0.03 and j10 < 0.05       # polygonal boundary: O(h^2) error
+    assert m10 < 0.03 and j10 < 0.05  # polygonal boundary: O(h^2) error
     assert m5 < m10 / 2.5 and j5 < j10 / 2.5  # and it converges at about second order
     assert max(c10, c5) < 1e-3

@@ -4,11 +4,21 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from ffrf import (PLA, RIGID, FEInputError, FEModel, InterfaceError, Material, MaterialError, MeshError,
-                  interface_from_nodes, orient_positive)
-from ffrf.mesh import TetMesh, check_mesh, mesh_quality
 from ffrf_reference import prism_mesh
+
+from ffrf import (
+    PLA,
+    RIGID,
+    FEInputError,
+    FEModel,
+    InterfaceError,
+    Material,
+    MaterialError,
+    MeshError,
+    interface_from_nodes,
+    orient_positive,
+)
+from ffrf.mesh.tet_mesh import TetMesh, check_mesh, mesh_quality
 
 UNIT_TET = (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * 0.01, np.array([[0, 1, 2, 3]]))
 
@@ -19,14 +29,17 @@ def test_paper_materials():
     assert PLA.shear_modulus == pytest.approx(1.2e9 / 2.66)
 
 
-@pytest.mark.parametrize("kwargs, words", [
-    (dict(E=0.0, nu=0.3, rho=1000.0), ["E=0.0", "> 0"]),
-    (dict(E=-1e9, nu=0.3, rho=1000.0), ["E=-1000000000.0"]),
-    (dict(E=1e9, nu=0.3, rho=0.0), ["rho=0.0", "> 0"]),
-    (dict(E=1e9, nu=0.5, rho=1000.0), ["nu=0.5", "(-1, 0.5)"]),
-    (dict(E=1e9, nu=-1.0, rho=1000.0), ["nu=-1.0"]),
-    (dict(E=float("nan"), nu=0.3, rho=1000.0), ["not a finite number"]),
-])
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [
+        (dict(E=0.0, nu=0.3, rho=1000.0), ["E=0.0", "> 0"]),
+        (dict(E=-1e9, nu=0.3, rho=1000.0), ["E=-1000000000.0"]),
+        (dict(E=1e9, nu=0.3, rho=0.0), ["rho=0.0", "> 0"]),
+        (dict(E=1e9, nu=0.5, rho=1000.0), ["nu=0.5", "(-1, 0.5)"]),
+        (dict(E=1e9, nu=-1.0, rho=1000.0), ["nu=-1.0"]),
+        (dict(E=float("nan"), nu=0.3, rho=1000.0), ["not a finite number"]),
+    ],
+)
 def test_bad_material_data(kwargs, words):
     with pytest.raises(MaterialError) as info:
         Material(name="test PLA", **kwargs)

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from ffrf_reference import prism_mesh
 
 from ffrf import FEModel, InterfaceError, TetMesh, boundary_triangles, interface_from_group, interface_from_triangles
-from ffrf.interfaces import interface_in_cylinder
-from ffrf_reference import prism_mesh
+from ffrf.fe.interfaces import interface_in_cylinder
 
 A, B, C = 0.03, 0.02, 0.01  # box [0, A] x [0, B] x [0, C]
 
@@ -56,7 +56,7 @@ def test_p2_weights_integrate_quadratic_fields_exactly(box):
     assert np.all(face.weights[corners] == 0.0)
     assert np.all(face.weights[~corners] > 0.0)
     # every midside node of the face is in the set, so the whole surface moves with the joint
-    midside_on_face = np.flatnonzero((np.abs(model.nodes[:, 2]) < 1e-12)[model.n_vertices:]) + model.n_vertices
+    midside_on_face = np.flatnonzero((np.abs(model.nodes[:, 2]) < 1e-12)[model.n_vertices :]) + model.n_vertices
     np.testing.assert_array_equal(face.nodes[~corners], midside_on_face)
 
 

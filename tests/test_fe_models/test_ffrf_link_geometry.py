@@ -5,9 +5,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ffrf import (PLA, Axis, FEModel, GeometryError, LinkDesign, check_mesh, interface_from_group,
-                  interface_in_cylinder, mesh_link, paper_link_axes, quality_summary)
-from ffrf.link_geometry import common_normal_feet
+from ffrf import (
+    PLA,
+    Axis,
+    FEModel,
+    GeometryError,
+    LinkDesign,
+    check_mesh,
+    interface_from_group,
+    interface_in_cylinder,
+    mesh_link,
+    paper_link_axes,
+    quality_summary,
+)
+from ffrf.geometry.link_geometry import common_normal_feet
 
 H = 0.006  # coarse on purpose: tests check geometry, not accuracy
 DESIGN = LinkDesign()
@@ -114,8 +125,9 @@ def test_interfaces_by_group_and_by_cylinder_agree(links):
             by_group = interface_from_group(model, name)
             center = geometry.housing_centers[k]
             half = DESIGN.housing_length / 2
-            by_cylinder = interface_in_cylinder(model, name, center, geometry.axes[k].direction,
-                                                DESIGN.bore_radius, (-half, half), tol=1e-6)
+            by_cylinder = interface_in_cylinder(
+                model, name, center, geometry.axes[k].direction, DESIGN.bore_radius, (-half, half), tol=1e-6
+            )
             np.testing.assert_array_equal(by_group.nodes, by_cylinder.nodes)
             np.testing.assert_allclose(by_group.weights, by_cylinder.weights, rtol=1e-12)
             assert by_group.weights.sum() == pytest.approx(1.0)

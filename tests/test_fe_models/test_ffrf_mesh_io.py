@@ -5,9 +5,9 @@ from __future__ import annotations
 import meshio
 import numpy as np
 import pytest
+from ffrf_reference import prism_mesh
 
 from ffrf import MeshError, TetMesh, mesh_link, mesh_stl, paper_link_axes, read_mesh, write_vtu
-from ffrf_reference import prism_mesh
 
 
 @pytest.fixture(scope="module")
@@ -66,8 +66,22 @@ def _write_box_stl(path, size_mm):
     """Closed triangulated box surface (12 triangles, outward normals) in millimetres."""
     a, b, c = size_mm
     corners = np.array([[x, y, z] for z in (0, c) for y in (0, b) for x in (0, a)], float)
-    faces = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
-                      [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]])
+    faces = np.array(
+        [
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ]
+    )
     meshio.write(path, meshio.Mesh(corners, [("triangle", faces)]), file_format="stl")
 
 

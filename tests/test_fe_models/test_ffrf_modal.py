@@ -5,7 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ffrf import PLA, FEInputError, FEModel, clamped_modes, free_free_modes, mesh_link, paper_link_axes, rigid_body_modes
+from ffrf import (
+    PLA,
+    FEInputError,
+    FEModel,
+    clamped_modes,
+    free_free_modes,
+    mesh_link,
+    paper_link_axes,
+    rigid_body_modes,
+)
 
 
 @pytest.fixture(scope="module")

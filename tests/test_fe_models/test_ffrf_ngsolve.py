@@ -13,7 +13,7 @@ import pytest
 import scipy.sparse as sp
 
 from ffrf import PLA, FEModel, mesh_link, paper_link_axes
-from ffrf.meshing import configure_meshing, gmsh_session, mesh_current_model
+from ffrf.geometry.meshing import configure_meshing, gmsh_session, mesh_current_model
 
 #: Largest relative entry difference, about 100x the largest measured over the four cases on 2026-11-24
 #: (AMD EPYC; the same under OPENBLAS_CORETYPE=Sandybridge and Prescott).
@@ -65,6 +65,7 @@ def _ngsolve_matrices(mesh, order, material):
     m += rho * u * v * ng.dx(bonus_intorder=2)
     k.Assemble()
     m.Assemble()
+
     def to_scipy(form):
         rows, cols, values = form.mat.COO()
         return sp.csr_matrix((np.asarray(values), (np.asarray(rows), np.asarray(cols))), shape=(fes.ndof, fes.ndof))
@@ -100,8 +101,9 @@ def _hierarchical_to_lagrange(mesh, model, scalar_dofs):
     gf.vec.FV().NumPy()[scalar_dofs[nv:]] = 1.0
     beta = gf(points)[nv:, 0]
     rows = list(range(nv)) + [nv + e for e in range(len(model.edges)) for _ in range(3)]
-    cols = list(scalar_dofs[:nv]) + [d for e, (i, j) in enumerate(model.edges)
-                                      for d in (scalar_dofs[i], scalar_dofs[j], scalar_dofs[nv + e])]
+    cols = list(scalar_dofs[:nv]) + [
+        d for e, (i, j) in enumerate(model.edges) for d in (scalar_dofs[i], scalar_dofs[j], scalar_dofs[nv + e])
+    ]
     vals = [1.0] * nv + [v for e in range(len(model.edges)) for v in (0.5, 0.5, beta[e])]
     t = sp.csr_matrix((vals, (rows, cols)), shape=(n_nodes, scalar.ndof))
     coefficients = np.random.default_rng(0).standard_normal(scalar.ndof)

@@ -10,16 +10,17 @@ import skfem
 
 from ffrf import FEModel
 from ffrf.errors import InterfaceError
-from ffrf.interfaces import boundary_triangles, interface_from_nodes, interface_from_nodes_file
-from ffrf.mesh import orient_positive
+from ffrf.fe.interfaces import boundary_triangles, interface_from_nodes, interface_from_nodes_file
+from ffrf.mesh.tet_mesh import orient_positive
 
 WIDTH, HEIGHT = 0.02, 0.01  # the x = 0 end face, metres
 
 
 def graded_bar(order: int) -> FEModel:
     """A 0.1 m bar whose end faces are meshed unevenly, so equal node weights miss the face centre."""
-    mesh = skfem.MeshTet.init_tensor(np.linspace(0, 0.1, 4), np.array([0.0, 0.003, 0.005, WIDTH]),
-                                     np.array([0.0, 0.001, HEIGHT]))
+    mesh = skfem.MeshTet.init_tensor(
+        np.linspace(0, 0.1, 4), np.array([0.0, 0.003, 0.005, WIDTH]), np.array([0.0, 0.001, HEIGHT])
+    )
     return FEModel.from_mesh(mesh.p.T, orient_positive(mesh.p.T, mesh.t.T), E=1e8, nu=0.3, rho=450.0, order=order)
 
 
@@ -69,20 +70,23 @@ def test_listed_node_off_the_surface_keeps_weight_zero(caplog):
     model = graded_bar(1)
     interior = [i for i in range(model.n_vertices) if i not in np.unique(boundary_triangles(model.mesh))]
     nodes = np.append(end_face_vertices(model), interior[:1])
-    with caplog.at_level(logging.WARNING, logger="ffrf.interfaces"):
+    with caplog.at_level(logging.WARNING, logger="ffrf.fe.interfaces"):
         interface = interface_from_nodes(model, "face", nodes)
     assert "1 listed nodes lie on no spanned boundary triangle" in caplog.text
     assert interface.weights[np.searchsorted(interface.nodes, interior[0])] == 0.0
     np.testing.assert_allclose(interface.weighted_center(model.nodes), [0.0, WIDTH / 2, HEIGHT / 2], atol=1e-15)
 
 
-@pytest.mark.parametrize("content, message", [
-    (None, "not found"),
-    ("0 1 2\n3 4 5\n", "3 columns"),
-    ("0\n1.5\n", "non-integer"),
-    ("0\nabc\n", "not a table of numbers"),
-    ("\n", "is empty"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (None, "not found"),
+        ("0 1 2\n3 4 5\n", "3 columns"),
+        ("0\n1.5\n", "non-integer"),
+        ("0\nabc\n", "not a table of numbers"),
+        ("\n", "is empty"),
+    ],
+)
 def test_bad_nodes_file_is_refused(tmp_path, content, message):
     model = graded_bar(1)
     path = tmp_path / "nodes.txt"

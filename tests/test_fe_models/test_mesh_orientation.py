@@ -6,8 +6,8 @@ import skfem
 
 from ffrf import FEModel
 from ffrf.errors import MeshError
-from ffrf.materials import Material
-from ffrf.mesh import TetMesh, orient_positive, signed_volumes
+from ffrf.fe.materials import Material
+from ffrf.mesh.tet_mesh import TetMesh, orient_positive, signed_volumes
 
 STEEL = Material(2.1e11, 0.3, 7850.0, name="steel")
 
@@ -36,6 +36,8 @@ def test_mixed_orientation_is_refused():
     tets = good.tets.copy()
     tets[[4, 9]] = tets[[4, 9]][:, [0, 1, 3, 2]]
     centroid = good.points[tets[4]].mean(axis=0)
-    with pytest.raises(MeshError, match=r"2 of 36 tetrahedra are inverted.*first \[4, 9\] at \[\[" +
-                       f"{centroid[0]:g}".replace(".", r"\.")):
+    with pytest.raises(
+        MeshError,
+        match=r"2 of 36 tetrahedra are inverted.*first \[4, 9\] at \[\[" + f"{centroid[0]:g}".replace(".", r"\."),
+    ):
         FEModel.from_tet_mesh(TetMesh(good.points, tets, name="bar"), STEEL, 1)

@@ -1,4 +1,4 @@
-"""Stress recovery (``ffrf.component_modes_post``, ``ffrf.assembly_stress``) against hand formulas:
+"""Stress recovery (``ffrf.reduction.component_modes_post``, ``ffrf.output.assembly_stress``) against hand formulas:
 von Mises from the principal-free formula on closed-form stress states, and a bar in uniform tension
 solved by the FE model, whose stress is E times the strain in every element."""
 
@@ -7,9 +7,9 @@ import pytest
 import skfem
 
 from ffrf import FEModel
-from ffrf.assembly_stress import element_von_mises
-from ffrf.component_modes_post import von_mises_stress
-from ffrf.mesh import orient_positive
+from ffrf.mesh.tet_mesh import orient_positive
+from ffrf.output.assembly_stress import element_von_mises
+from ffrf.reduction.component_modes_post import von_mises_stress
 
 E, NU = 3.5e9, 0.36
 
@@ -26,13 +26,16 @@ def hand_von_mises(s: np.ndarray) -> float:
     return float(np.sqrt(0.5 * normal + 3.0 * shear))
 
 
-@pytest.mark.parametrize("stress, expected", [
-    (np.diag([2e6, 0.0, 0.0]), 2e6),                                        # uniaxial: |sigma|
-    (np.diag([-3e6, 0.0, 0.0]), 3e6),                                       # compression: |sigma|
-    (np.array([[0, 1e6, 0], [1e6, 0, 0], [0, 0, 0]]), np.sqrt(3) * 1e6),    # pure shear: sqrt(3) tau
-    (np.diag([5e6, 5e6, 5e6]), 0.0),                                        # hydrostatic: none
-    (np.diag([1e6, -1e6, 0.0]), np.sqrt(3) * 1e6),                          # shear in principal axes
-])
+@pytest.mark.parametrize(
+    "stress, expected",
+    [
+        (np.diag([2e6, 0.0, 0.0]), 2e6),  # uniaxial: |sigma|
+        (np.diag([-3e6, 0.0, 0.0]), 3e6),  # compression: |sigma|
+        (np.array([[0, 1e6, 0], [1e6, 0, 0], [0, 0, 0]]), np.sqrt(3) * 1e6),  # pure shear: sqrt(3) tau
+        (np.diag([5e6, 5e6, 5e6]), 0.0),  # hydrostatic: none
+        (np.diag([1e6, -1e6, 0.0]), np.sqrt(3) * 1e6),  # shear in principal axes
+    ],
+)
 def test_von_mises_of_closed_form_states(stress, expected):
     # Pa, about 100x the largest error measured on 2026-11-24: 4.7e-10 Pa (2.3e-16 of 2 MPa); 0 for hydrostatic.
     assert von_mises_stress(strain_of(stress), E, NU) == pytest.approx(expected, rel=0, abs=5e-8)
@@ -53,8 +56,14 @@ def test_bar_in_uniform_tension_has_e_times_strain_in_every_element():
     mesh = skfem.MeshTet.init_tensor(np.linspace(0, length, 6), np.linspace(0, 0.02, 3), np.linspace(0, 0.01, 3))
     model = FEModel.from_mesh(mesh.p.T, orient_positive(mesh.p.T, mesh.t.T), E=E, nu=NU, rho=1000.0)
     x = model.nodes
-    fixed = np.concatenate([3 * np.flatnonzero(x[:, 0] < 1e-12), 3 * np.flatnonzero(x[:, 0] > length - 1e-12),
-                            3 * np.flatnonzero(x[:, 1] < 1e-12) + 1, 3 * np.flatnonzero(x[:, 2] < 1e-12) + 2])
+    fixed = np.concatenate(
+        [
+            3 * np.flatnonzero(x[:, 0] < 1e-12),
+            3 * np.flatnonzero(x[:, 0] > length - 1e-12),
+            3 * np.flatnonzero(x[:, 1] < 1e-12) + 1,
+            3 * np.flatnonzero(x[:, 2] < 1e-12) + 2,
+        ]
+    )
     prescribed = np.zeros(model.n_dofs)
     prescribed[3 * np.flatnonzero(x[:, 0] > length - 1e-12)] = strain * length
     u = skfem.solve(*skfem.condense(model.stiffness, np.zeros(model.n_dofs), x=prescribed, D=fixed))

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from body_fixtures import bar_model, nodal_jacobian, nodal_velocities, random_state
 
-from ffrf.body_kernels import gravity_force, mass_matrix, quadratic_velocity
-from ffrf.euler_parameters import g_bar, rotation_derivative, rotation_matrix, skew
-from ffrf.modal_moments import modal_moments
+from ffrf.body.body_kernels import gravity_force, mass_matrix, quadratic_velocity
+from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix, skew
+from ffrf.body.modal_moments import modal_moments
 
 
 @pytest.fixture(scope="module")
@@ -83,13 +83,14 @@ def test_gravity_equals_consistent_nodal_load(body, rng, exact):
     else:  # Exudyn's simplification drops G^T (S1 zeta)~ A^T g from the rotational row only
         missing = g_bar(p).T @ (skew(mm.s1 @ zeta) @ (rotation_matrix(p).T @ g))
         np.testing.assert_allclose(ours[3:7] + missing, reference[3:7], atol=1e-12 * scale)
-        np.testing.assert_allclose(ours[[0, 1, 2, *range(7, ours.size)]],
-                                   reference[[0, 1, 2, *range(7, ours.size)]], atol=1e-12 * scale)
+        np.testing.assert_allclose(
+            ours[[0, 1, 2, *range(7, ours.size)]], reference[[0, 1, 2, *range(7, ours.size)]], atol=1e-12 * scale
+        )
         assert np.abs(missing).max() > 1e-6 * scale
 
 
 def test_complex_step_jacobians_against_finite_differences(body, rng):
-    from ffrf.flexible_body import FlexibleBody
+    from ffrf.body.flexible_body import FlexibleBody
 
     model, basis, mm = body
     kred = basis.T @ (model.stiffness @ basis)
@@ -100,10 +101,18 @@ def test_complex_step_jacobians_against_finite_differences(body, rng):
     g = np.array([0.0, 0.0, -9.81])
     jac_q, jac_qd = flex.jacobians(q, qd, qdd, g)
     h = 1e-6
-    fd_q = np.array([(flex.residual(q + h * e, qd, qdd, g) - flex.residual(q - h * e, qd, qdd, g)) / (2 * h)
-                     for e in np.eye(q.size)]).T
-    fd_qd = np.array([(flex.residual(q, qd + h * e, qdd, g) - flex.residual(q, qd - h * e, qdd, g)) / (2 * h)
-                      for e in np.eye(q.size)]).T
+    fd_q = np.array(
+        [
+            (flex.residual(q + h * e, qd, qdd, g) - flex.residual(q - h * e, qd, qdd, g)) / (2 * h)
+            for e in np.eye(q.size)
+        ]
+    ).T
+    fd_qd = np.array(
+        [
+            (flex.residual(q, qd + h * e, qdd, g) - flex.residual(q, qd - h * e, qdd, g)) / (2 * h)
+            for e in np.eye(q.size)
+        ]
+    ).T
     np.testing.assert_allclose(jac_q, fd_q, atol=1e-6 * np.abs(fd_q).max())
     np.testing.assert_allclose(jac_qd, fd_qd, atol=1e-6 * np.abs(fd_qd).max())
 
@@ -111,7 +120,7 @@ def test_complex_step_jacobians_against_finite_differences(body, rng):
 def test_modal_moments_agree_with_exudyn_style_invariants(body):
     """The component moments and the invariants of Zwoelfer and Gerstmayr (2021), which Exudyn uses
     and which tests/test_reduction checks against Exudyn, describe the same inertia."""
-    from ffrf.invariants import inertia_invariants
+    from ffrf.reduction.invariants import inertia_invariants
 
     model, basis, mm = body
     inv = inertia_invariants(model, basis)

@@ -22,8 +22,8 @@ import pytest
 from body_fixtures import five_point_slope, potential_energy
 from scene_fixtures import driven_link_scene
 
-from ffrf.scene_file import load_scene, sensor_arrays, start_state
-from ffrf.static_solver import quasi_static
+from ffrf.scenes.scene_file import load_scene, sensor_arrays, start_state
+from ffrf.solvers.static_solver import quasi_static
 
 RPM_STEP = 0.2  # s of drive at 1 rpm: 1.2 deg
 

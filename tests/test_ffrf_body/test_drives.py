@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from ffrf.drives import CosineRamp, rpm
+from ffrf.system.drives import CosineRamp, rpm
 
 
 def test_cosine_ramp_is_smooth_and_consistent():

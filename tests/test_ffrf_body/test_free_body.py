@@ -9,8 +9,8 @@ fall as h^2. Conservation to round-off is the variational midpoint integrator's
 import numpy as np
 from body_fixtures import free_bar, nodal_velocities, tumbling_start
 
-from ffrf.euler_parameters import rotation_matrix
-from ffrf.generalized_alpha import generalized_alpha
+from ffrf.body.euler_parameters import rotation_matrix
+from ffrf.solvers.generalized_alpha import generalized_alpha
 
 
 def _momenta(model, psi, q, qd):
@@ -29,11 +29,13 @@ def test_momentum_and_energy_drift_are_second_order():
         result = generalized_alpha(system, q0, qd0, 0.01, step, rho_inf=1.0)
         linear, angular = zip(*(_momenta(model, psi, q, qd) for q, qd in zip(result.q, result.qd)))
         energy = np.array([sum(system.energies(q, qd).values()) for q, qd in zip(result.q, result.qd)])
-        drifts.append([
-            np.abs(np.array(linear) - linear[0]).max() / np.linalg.norm(linear[0]),
-            np.abs(np.array(angular) - angular[0]).max() / np.linalg.norm(angular[0]),
-            np.abs(energy - energy[0]).max() / energy[0],
-        ])
+        drifts.append(
+            [
+                np.abs(np.array(linear) - linear[0]).max() / np.linalg.norm(linear[0]),
+                np.abs(np.array(angular) - angular[0]).max() / np.linalg.norm(angular[0]),
+                np.abs(energy - energy[0]).max() / energy[0],
+            ]
+        )
     coarse, fine = np.array(drifts)
     np.testing.assert_allclose(np.log2(coarse / fine), 2.0, atol=0.3)
     assert np.all(fine < 3e-4)

@@ -6,8 +6,8 @@ import pytest
 from pendulum_fixtures import pendulum, tip_position
 from scipy.integrate import solve_ivp
 
-from ffrf.euler_parameters import rotation_matrix
-from ffrf.generalized_alpha import AlphaParameters, generalized_alpha
+from ffrf.body.euler_parameters import rotation_matrix
+from ffrf.solvers.generalized_alpha import AlphaParameters, generalized_alpha
 
 
 def test_parameters_from_spectral_radius():
@@ -33,8 +33,14 @@ def test_rigid_pendulum_matches_the_pendulum_equation():
     system, _, _, _ = pendulum(n_modes=0)
     length, thickness, mass = 0.2, 0.01, 450.0 * 0.2 * 0.02 * 0.01
     inertia = mass * (length**2 / 3 + thickness**2 / 12)
-    exact = solve_ivp(lambda t, y: [y[1], mass * 9.81 * length / 2 * np.cos(y[0]) / inertia], [0, 0.5], [0, 0],
-                      rtol=1e-12, atol=1e-14, dense_output=True)
+    exact = solve_ivp(
+        lambda t, y: [y[1], mass * 9.81 * length / 2 * np.cos(y[0]) / inertia],
+        [0, 0.5],
+        [0, 0],
+        rtol=1e-12,
+        atol=1e-14,
+        dense_output=True,
+    )
     q0 = system.initial_state()
     errors = []
     for step in (2e-3, 1e-3):
@@ -74,7 +80,7 @@ def test_newton_start_extrapolates_linear_histories_exactly():
     """Eq. (G6): unknowns that are linear in time are predicted exactly, also across unequal steps."""
     import sys
 
-    module = sys.modules["ffrf.generalized_alpha"]
+    module = sys.modules["ffrf.solvers.generalized_alpha"]
     a, b = np.array([1.0, -2.0, 0.5]), np.array([3.0, 0.25, -1.0])
     t_before, t_now, h = 0.3, 0.35, 0.02
     state = module._State(None, None, a + b * t_now, None, 2 * a - b * t_now)

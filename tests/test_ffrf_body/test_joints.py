@@ -6,13 +6,13 @@ import pytest
 from body_fixtures import bar_model, random_state
 from pendulum_fixtures import pendulum, tip_position
 
-from ffrf.euler_parameters import rotation_matrix
-from ffrf.flexible_body import FlexibleBody
-from ffrf.generalized_alpha import generalized_alpha
-from ffrf.joints import GroundFrame, MarkerJoint, driven_revolute_joint, exp_so3_tangent, revolute_joint
-from ffrf.markers import exp_so3, frame_marker, rigid_interface_marker
-from ffrf.modal_moments import modal_moments
-from ffrf.system import MultibodySystem
+from ffrf.body.euler_parameters import rotation_matrix
+from ffrf.body.flexible_body import FlexibleBody
+from ffrf.body.modal_moments import modal_moments
+from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.system.joints import GroundFrame, MarkerJoint, driven_revolute_joint, exp_so3_tangent, revolute_joint
+from ffrf.system.markers import exp_so3, frame_marker, rigid_interface_marker
+from ffrf.system.multibody import MultibodySystem
 
 
 def test_exponential_map_tangent(rng):
@@ -33,8 +33,18 @@ def test_joint_jacobian_against_finite_differences(rng, locked):
     m0 = rigid_interface_marker(0, model.nodes, basis, ends[1], name="a")
     m1 = rigid_interface_marker(1, model.nodes, basis, ends[0], name="b")
     rot0 = exp_so3(rng.normal(size=3))
-    joint = MarkerJoint((0, 1), "j", m0, m1, rot0, exp_so3(rng.normal(size=3)), rng.normal(size=3) * 0.01,
-                        rng.normal(size=3) * 0.01, locked, (lambda t: 0.3 * t) if locked[5] else None)
+    joint = MarkerJoint(
+        (0, 1),
+        "j",
+        m0,
+        m1,
+        rot0,
+        exp_so3(rng.normal(size=3)),
+        rng.normal(size=3) * 0.01,
+        rng.normal(size=3) * 0.01,
+        locked,
+        (lambda t: 0.3 * t) if locked[5] else None,
+    )
     blocks = [np.r_[random_state(rng, 3)[:3]] for _ in range(2)]
     exact = joint.jacobian(blocks, 0.7)
     h = 1e-6
@@ -70,11 +80,13 @@ def test_driven_bar_needs_the_analytic_torque():
     model = bar_model(E=1e8, rho=450.0)
     nodes = model.nodes
     hinge = nodes[np.flatnonzero(nodes[:, 0] < 1e-9)].mean(axis=0)
-    body = FlexibleBody("bar", modal_moments(nodes, model.mass, np.zeros((3 * nodes.shape[0], 0))), np.zeros((0, 0)),
-                        np.zeros((0, 0)))
+    body = FlexibleBody(
+        "bar", modal_moments(nodes, model.mass, np.zeros((3 * nodes.shape[0], 0))), np.zeros((0, 0)), np.zeros((0, 0))
+    )
     axes = np.array([[0.0, 0, 1], [1, 0, 0], [0, 1, 0]]).T  # joint z = world y
-    drive = driven_revolute_joint(GroundFrame(hinge, np.eye(3)), frame_marker(0, 0, hinge), lambda t: 0.5 * t**3,
-                                  rotation0=axes, rotation1=axes)
+    drive = driven_revolute_joint(
+        GroundFrame(hinge, np.eye(3)), frame_marker(0, 0, hinge), lambda t: 0.5 * t**3, rotation0=axes, rotation1=axes
+    )
     system = MultibodySystem((body,), (drive,), gravity=np.array([0.0, 0.0, -9.81]))
     q0 = system.initial_state()
     result = generalized_alpha(system, q0, np.zeros_like(q0), 1.0, 1e-3, rho_inf=0.8)

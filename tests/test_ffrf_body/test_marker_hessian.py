@@ -6,7 +6,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from ffrf.marker_kernels import _exp_so3_coefficients, exp_so3_hessian, marker_frame, marker_frame_hessian
+from ffrf.system.marker_kernels import _exp_so3_coefficients, exp_so3_hessian, marker_frame, marker_frame_hessian
 
 mpmath.mp.dps = 40
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from body_fixtures import bar_model, random_state
 
-from ffrf.euler_parameters import rotation_matrix
-from ffrf.markers import exp_so3, frame_marker, node_marker, rigid_interface_marker
+from ffrf.body.euler_parameters import rotation_matrix
+from ffrf.system.markers import exp_so3, frame_marker, node_marker, rigid_interface_marker
 
 
 @pytest.fixture(scope="module")
@@ -49,8 +49,9 @@ def test_exponential_map_and_frame_markers(rng):
     np.testing.assert_allclose(rotation @ rotation.T, np.eye(3), atol=1e-14)
     np.testing.assert_allclose(rotation @ theta, theta, atol=1e-14)  # the axis is fixed
     assert np.arccos((np.trace(rotation) - 1) / 2) == pytest.approx(np.linalg.norm(theta) % (2 * np.pi))
-    np.testing.assert_allclose(exp_so3(np.array([1e-9, 0, 0])), np.eye(3) + 1e-9 * np.array(
-        [[0, 0, 0], [0, 0, -1], [0, 1, 0]]), atol=1e-20)
+    np.testing.assert_allclose(
+        exp_so3(np.array([1e-9, 0, 0])), np.eye(3) + 1e-9 * np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]]), atol=1e-20
+    )
     marker = frame_marker(0, 2, point=[1.0, 0, 0])
     q = np.r_[[0.0, 0, 1], [np.cos(0.5), 0, 0, np.sin(0.5)], [3.0, 4.0]]
     np.testing.assert_allclose(marker.position(q), [np.cos(1.0), np.sin(1.0), 1.0], atol=1e-15)
@@ -63,7 +64,9 @@ def test_position_jacobian_against_finite_differences(bar, rng):
         r, p, zeta, _, _, _ = random_state(rng, 4)
         q = np.r_[r, p, zeta]
         h = 1e-6
-        numeric = np.array([(marker.position(q + h * e) - marker.position(q - h * e)) / (2 * h) for e in np.eye(q.size)]).T
+        numeric = np.array(
+            [(marker.position(q + h * e) - marker.position(q - h * e)) / (2 * h) for e in np.eye(q.size)]
+        ).T
         np.testing.assert_allclose(marker.position_jacobian(q), numeric, atol=1e-8)
 
 
@@ -83,7 +86,7 @@ def test_marker_history_and_body_frame_offsets(bar, rng):
     """``marker_history`` over rows equals the single-state evaluations; ``attach_joint_point``
     puts the joint point at the given body point in the body frame ("body": the marker moves,
     no joint offset) or keeps the marker and returns the offset ("marker")."""
-    from ffrf.markers import attach_joint_point, marker_history
+    from ffrf.system.markers import attach_joint_point, marker_history
 
     model, end = bar
     basis = rng.normal(size=(3 * model.nodes.shape[0], 4))
@@ -97,8 +100,9 @@ def test_marker_history_and_body_frame_offsets(bar, rng):
     moved, offset = attach_joint_point(marker, point, "body")
     assert np.all(offset == 0) and np.allclose(moved.point, point) and moved.name == marker.name
     q = rows[0]
-    np.testing.assert_allclose(moved.position(q) - marker.position(q),
-                               rotation_matrix(q[3:7]) @ (point - marker.point), atol=1e-15)
+    np.testing.assert_allclose(
+        moved.position(q) - marker.position(q), rotation_matrix(q[3:7]) @ (point - marker.point), atol=1e-15
+    )
     same, offset = attach_joint_point(marker, point, "marker")
     assert same is marker and np.allclose(offset, point - marker.point)
     with pytest.raises(ValueError, match="joint_offsets"):

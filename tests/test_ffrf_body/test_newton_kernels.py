@@ -1,14 +1,15 @@
-"""The jitted generalized-alpha Newton iterations (ffrf/newton_kernels.py) against LAPACK and
-against the Python loop of ffrf.generalized_alpha._step evaluating the same packed kernels."""
+"""The jitted generalized-alpha Newton iterations (ffrf/solvers/newton_kernels.py) against LAPACK and
+against the Python loop of ffrf.solvers.generalized_alpha._step evaluating the same packed kernels."""
 
 import numpy as np
 import pytest
 import scipy.linalg
 
-from ffrf.bennett_scene import assemble, build_bennett
-from ffrf.generalized_alpha import AlphaParameters, _Newton, _State, _step, consistent_accelerations
-from ffrf.newton_kernels import lu_solve
-from ffrf.packed_system import pack_system
+from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.solvers.common import consistent_accelerations
+from ffrf.solvers.generalized_alpha import AlphaParameters, _Newton, _State, _step
+from ffrf.solvers.newton_kernels import lu_solve
+from ffrf.system.packed_system import pack_system
 
 
 def test_lu_solve_equals_lapack_with_pivoting():

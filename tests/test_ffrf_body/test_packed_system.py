@@ -1,4 +1,4 @@
-"""The fast path (ffrf/packed_system.py, whole-system numba kernels) against the reference Python
+"""The fast path (ffrf/system/packed_system.py, whole-system numba kernels) against the reference Python
 path of MultibodySystem: every Newton piece on random states, whole trajectories, and the
 fallback for constraints it does not know (docs/formulation.md, Eqs. (FP4)-(FP6))."""
 
@@ -10,12 +10,12 @@ import pytest
 from body_fixtures import two_bar_chain
 from pendulum_fixtures import pendulum
 
-from ffrf.bennett_scene import assemble, build_bennett
-from ffrf.generalized_alpha import generalized_alpha
-from ffrf.joints import MarkerJoint
-from ffrf.packed_system import newton_model, pack_system
-from ffrf.static_solver import quasi_static, static_equilibrium
-from ffrf.system import MultibodySystem
+from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.solvers.static_solver import quasi_static, static_equilibrium
+from ffrf.system.joints import MarkerJoint
+from ffrf.system.multibody import MultibodySystem
+from ffrf.system.packed_system import newton_model, pack_system
 
 
 @pytest.fixture(scope="module")
@@ -52,8 +52,10 @@ def _compare(system, q, qd, qdd, lam, t, hessian_rtol=1e-12):
         assert _relative(ours, ref) < 1e-12
     assert _relative(fast.constraint_hessian(q, lam, t), system.constraint_hessian(q, lam, t)) < hessian_rtol
     for factors in ((1.0, 1e-6, 2e-3), (0.0, 1.0, 0.0)):
-        ours, ref = fast.iteration_matrix(q, qd, qdd, lam, t, *factors), system.iteration_matrix(q, qd, qdd, lam, t,
-                                                                                                  *factors)
+        ours, ref = (
+            fast.iteration_matrix(q, qd, qdd, lam, t, *factors),
+            system.iteration_matrix(q, qd, qdd, lam, t, *factors),
+        )
         assert _relative(ours, ref) < 1e-12
 
 
@@ -88,8 +90,10 @@ def test_pendulum_and_free_body_bodies(rng):
 
 def test_dynamic_trajectories_agree(bennett, chain):
     scene, q_assembled = bennett
-    for system, q0, t_end in ((scene.system, q_assembled, 0.05),
-                              (chain, chain.initial_state(positions=[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]]), 0.05)):
+    for system, q0, t_end in (
+        (scene.system, q_assembled, 0.05),
+        (chain, chain.initial_state(positions=[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]]), 0.05),
+    ):
         if system is chain:  # start on the constraints
             q0 = static_equilibrium(replace(chain, gravity=np.zeros(3)), q0, fast_path=False).q
         runs = [generalized_alpha(system, q0, np.zeros_like(q0), t_end, 1e-3, fast_path=fast) for fast in (False, True)]
@@ -129,14 +133,27 @@ class _OverridingJoint(MarkerJoint):
 
 def test_unsupported_constraints_fall_back(caplog, chain):
     joint = chain.constraints[1]
-    custom = _OverridingJoint(joint.bodies, joint.name, joint.marker0, joint.marker1, joint.rotation0,
-                              joint.rotation1, joint.offset0, joint.offset1, joint.locked, joint.angle)
+    custom = _OverridingJoint(
+        joint.bodies,
+        joint.name,
+        joint.marker0,
+        joint.marker1,
+        joint.rotation0,
+        joint.rotation1,
+        joint.offset0,
+        joint.offset1,
+        joint.locked,
+        joint.angle,
+    )
     system = MultibodySystem(chain.bodies, (chain.constraints[0], custom), gravity=chain.gravity)
-    with caplog.at_level(logging.DEBUG, logger="ffrf.packed_system"):
+    with caplog.at_level(logging.DEBUG, logger="ffrf.system.packed_system"):
         assert newton_model(system) is system
     assert "_OverridingJoint" in caplog.text
-    q0 = static_equilibrium(replace(system, gravity=np.zeros(3)),
-                            system.initial_state(positions=[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]]), fast_path=False).q
+    q0 = static_equilibrium(
+        replace(system, gravity=np.zeros(3)),
+        system.initial_state(positions=[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]]),
+        fast_path=False,
+    ).q
     runs = [generalized_alpha(system, q0, np.zeros_like(q0), 0.01, 1e-3, fast_path=fast) for fast in (False, True)]
     np.testing.assert_array_equal(runs[1].q, runs[0].q)
     pendulum_system = pendulum(n_modes=2)[0]

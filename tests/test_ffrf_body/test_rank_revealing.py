@@ -1,4 +1,4 @@
-"""The rank rule of ffrf/rank_revealing.py (docs/formulation.md, Eq. (R1)): the verdict "singular,
+"""The rank rule of ffrf/numerics/rank_revealing.py (docs/formulation.md, Eq. (R1)): the verdict "singular,
 with so many free motions" and the solutions do not change under round-off, on synthetic matrices
 with a known null space and on the static tangents of the test fixtures."""
 
@@ -13,9 +13,10 @@ import pytest
 from body_fixtures import two_bar_chain
 from pendulum_fixtures import pendulum
 
-from ffrf.bennett_scene import assemble, build_bennett
-from ffrf.rank_revealing import equilibration, factor, rank_tolerance, singular_values
-from ffrf.static_solver import StaticDivergence, static_equilibrium
+from ffrf.errors import StaticDivergence
+from ffrf.numerics.rank_revealing import equilibration, factor, rank_tolerance, singular_values
+from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.solvers.static_solver import static_equilibrium
 
 ROUND_OFF = 1e-15  # relative perturbation of every entry: what another BLAS kernel's rounding can change
 
@@ -29,9 +30,9 @@ def _singular_matrix(rng, n=40, deficiency=3):
     u = np.linalg.qr(rng.normal(size=(n, n)))[0]
     v = np.linalg.qr(rng.normal(size=(n, n)))[0]
     sigma = np.logspace(0, -6, n)
-    sigma[n - deficiency:] = 0.0
+    sigma[n - deficiency :] = 0.0
     scales = 10.0 ** rng.uniform(-8, 8, size=n)  # rows of stiffness and of constraints
-    return scales[:, None] * ((u * sigma) @ v.T), v[:, n - deficiency:], scales[:, None] * u[:, :n - deficiency]
+    return scales[:, None] * ((u * sigma) @ v.T), v[:, n - deficiency :], scales[:, None] * u[:, : n - deficiency]
 
 
 def test_synthetic_rank_is_the_same_under_round_off(rng):
@@ -104,14 +105,17 @@ def test_chain_equilibrium_is_the_same_under_round_off(chain, monkeypatch):
     old threshold (1e-15), their inverse entered the Newton step, and Newton ran out of iterations.
     Now the same equilibrium (to the Newton tolerance) comes out under ten different roundings, and
     with gravity the mechanism is reported as one (no equilibrium exists: bar 1 swings freely)."""
-    from ffrf import static_solver
+    from ffrf.solvers import static_solver
 
     weightless = replace(chain, gravity=np.zeros(3))
     q0 = chain.initial_state(positions=[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]])
     reference = static_equilibrium(weightless, q0, fast_path=False).q
     for seed in range(10):
-        monkeypatch.setattr(static_solver, "newton_model",
-                            lambda system, fast, seed=seed: _RoundedModel(system, np.random.default_rng(seed)))
+        monkeypatch.setattr(
+            static_solver,
+            "newton_model",
+            lambda system, fast, seed=seed: _RoundedModel(system, np.random.default_rng(seed)),
+        )
         q = static_equilibrium(weightless, q0).q
         assert np.abs(q - reference).max() <= 1e-10 * np.abs(reference).max()
         assert np.abs(weightless.constraint_values(q, 0.0)).max() <= 1e-10
@@ -125,7 +129,7 @@ def test_near_rigid_bennett_keeps_its_small_physical_singular_values(monkeypatch
     values (measured 1.9e-10 of the largest at the assembly, down to 6.0e-13 along a revolution)
     are physics, not round-off: they must stay above the threshold n eps (2.3e-14 at n = 105), so
     that no tangent of the revolution is taken as singular."""
-    from ffrf import static_solver
+    from ffrf.solvers import static_solver
 
     scene = build_bennett("rigid", h=6e-3, order=1, n_modes=4)
     assembly = assemble(scene)
@@ -150,7 +154,7 @@ def test_redundant_hinge_gives_unique_accelerations_and_shared_reactions():
     """A rigid pendulum held by the same hinge twice: the constraint matrix of Eq. (G4) is
     singular (5 redundant rows), the accelerations are still those of the single hinge, and the
     minimum-norm multipliers split the single hinge's reaction equally between the two copies."""
-    from ffrf.generalized_alpha import consistent_accelerations
+    from ffrf.solvers.common import consistent_accelerations
 
     system = pendulum(n_modes=0)[0]
     twice = replace(system, constraints=system.constraints + system.constraints)
@@ -163,12 +167,13 @@ def test_redundant_hinge_gives_unique_accelerations_and_shared_reactions():
     hinge = lam_single[1:]
     assert lam_twice.size == 1 + 2 * hinge.size
     np.testing.assert_allclose(lam_twice[0], lam_single[0], rtol=1e-12)
-    for copy in (lam_twice[1:1 + hinge.size], lam_twice[1 + hinge.size:]):
+    for copy in (lam_twice[1 : 1 + hinge.size], lam_twice[1 + hinge.size :]):
         np.testing.assert_allclose(copy, 0.5 * hinge, rtol=0, atol=1e-12 * np.abs(hinge).max())
 
 
 def test_singular_iteration_matrix_stops_the_run_with_partial_results():
-    from ffrf.generalized_alpha import SingularIterationMatrix, generalized_alpha
+    from ffrf.errors import SingularIterationMatrix
+    from ffrf.solvers.generalized_alpha import generalized_alpha
 
     system = pendulum(n_modes=0)[0]
     twice = replace(system, constraints=system.constraints + system.constraints)
@@ -185,8 +190,8 @@ sys.path[:0] = [{tests!r}]
 from dataclasses import replace
 import numpy as np
 from body_fixtures import two_bar_chain
-from ffrf.generalized_alpha import generalized_alpha
-from ffrf.static_solver import static_equilibrium
+from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.solvers.static_solver import static_equilibrium
 chain = two_bar_chain()
 q0 = chain.initial_state(positions=[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0]])
 q0 = static_equilibrium(replace(chain, gravity=np.zeros(3)), q0).q
@@ -219,8 +224,12 @@ def test_chain_results_agree_across_blas_kernels(kernel, tmp_path, detected_kern
     equilibrium and the dynamic trajectory from it agree to the Newton tolerance (measured: at
     most 1e-12 m apart)."""
     env = dict(os.environ, OPENBLAS_CORETYPE=kernel)
-    probe = subprocess.run([sys.executable, "-c", "import numpy as np; np.linalg.solve(np.eye(3) + 1, np.ones(3))"],
-                           env=env, capture_output=True, timeout=120)
+    probe = subprocess.run(
+        [sys.executable, "-c", "import numpy as np; np.linalg.solve(np.eye(3) + 1, np.ones(3))"],
+        env=env,
+        capture_output=True,
+        timeout=120,
+    )
     if probe.returncode != 0:
         pytest.skip(f"this CPU cannot execute OpenBLAS's {kernel} kernel")  # not a failure of our code
     result = _run_in_process(tmp_path / "run.npz", kernel)

@@ -1,10 +1,10 @@
-"""The loop products of ffrf/small_linalg.py against numpy, on the layouts the kernels pass
+"""The loop products of ffrf/numerics/small_linalg.py against numpy, on the layouts the kernels pass
 (contiguous, transposed, strided columns), real and complex, including empty dimensions."""
 
 import numpy as np
 import pytest
 
-from ffrf.small_linalg import cross3, dot, mat_mat, mat_vec, vec_mat
+from ffrf.numerics.small_linalg import cross3, dot, mat_mat, mat_vec, vec_mat
 
 
 @pytest.mark.parametrize("dtype", [np.float64, np.complex128])

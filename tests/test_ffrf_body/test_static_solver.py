@@ -6,13 +6,14 @@ import scipy.sparse.linalg as spla
 from body_fixtures import bar_model
 from pendulum_fixtures import pendulum
 
-from ffrf.constraints import GroundPerpendicular, GroundPoint
-from ffrf.craig_bampton import craig_bampton
-from ffrf.euler_parameters import rotation_matrix
-from ffrf.flexible_body import FlexibleBody
-from ffrf.modal_moments import modal_moments
-from ffrf.static_solver import StaticDivergence, static_equilibrium
-from ffrf.system import MultibodySystem
+from ffrf.body.euler_parameters import rotation_matrix
+from ffrf.body.flexible_body import FlexibleBody
+from ffrf.body.modal_moments import modal_moments
+from ffrf.errors import StaticDivergence
+from ffrf.reduction.craig_bampton import craig_bampton
+from ffrf.solvers.static_solver import static_equilibrium
+from ffrf.system.constraints import GroundPerpendicular, GroundPoint
+from ffrf.system.multibody import MultibodySystem
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
 
@@ -21,11 +22,18 @@ def _cantilever(n_modes):
     model = bar_model(E=1e8, rho=450.0)
     clamp = np.flatnonzero(model.nodes[:, 0] < 1e-9)
     basis = craig_bampton(model, [clamp], n_modes)
-    body = FlexibleBody("bar", modal_moments(model.nodes, model.mass, basis.basis), basis.reduced_stiffness,
-                        0.0 * basis.reduced_stiffness)
+    body = FlexibleBody(
+        "bar",
+        modal_moments(model.nodes, model.mass, basis.basis),
+        basis.reduced_stiffness,
+        0.0 * basis.reduced_stiffness,
+    )
     e = np.eye(3)
-    fixed = (GroundPoint((0,), "clamp"), GroundPerpendicular((0,), "clamp y", vector=e[1], normals=e[[0, 2]]),
-             GroundPerpendicular((0,), "clamp x", vector=e[0], normals=e[[2]]))
+    fixed = (
+        GroundPoint((0,), "clamp"),
+        GroundPerpendicular((0,), "clamp y", vector=e[1], normals=e[[0, 2]]),
+        GroundPerpendicular((0,), "clamp x", vector=e[0], normals=e[[2]]),
+    )
     return model, clamp, basis.basis, MultibodySystem((body,), fixed, gravity=GRAVITY)
 
 
@@ -93,15 +101,16 @@ def test_free_body_is_refused_with_a_clear_message():
 def test_quasi_static_drive_follows_the_prescribed_angle():
     """A rigid bar held by a driven hinge: without inertia the drive only balances gravity,
     tau = -m g (L/2) cos(phi) (about +y, see test_joints), at every prescribed angle."""
-    from ffrf.joints import GroundFrame, driven_revolute_joint
-    from ffrf.markers import frame_marker
-    from ffrf.static_solver import quasi_static
+    from ffrf.solvers.static_solver import quasi_static
+    from ffrf.system.joints import GroundFrame, driven_revolute_joint
+    from ffrf.system.markers import frame_marker
 
     _, _, _, hinge = pendulum(n_modes=0)
     system, _, _, _ = pendulum(n_modes=0)
     axes = np.array([[0.0, 0, 1], [1, 0, 0], [0, 1, 0]]).T
-    drive = driven_revolute_joint(GroundFrame(hinge, np.eye(3)), frame_marker(0, 0, hinge), lambda t: t,
-                                  rotation0=axes, rotation1=axes)
+    drive = driven_revolute_joint(
+        GroundFrame(hinge, np.eye(3)), frame_marker(0, 0, hinge), lambda t: t, rotation0=axes, rotation1=axes
+    )
     driven = MultibodySystem(system.bodies, (drive,), gravity=GRAVITY)
     times = np.linspace(0.0, 3.0, 7)
     solution = quasi_static(driven, driven.initial_state(), times)
@@ -111,25 +120,25 @@ def test_quasi_static_drive_follows_the_prescribed_angle():
 
 def test_extrapolation_weights_reproduce_a_quadratic():
     """Eq. (S2): three Lagrange weights extrapolate any quadratic exactly (unequal spacing too)."""
-    from ffrf.static_solver import extrapolation_weights
+    from ffrf.solvers.common import extrapolation_weights
 
     times = np.array([0.3, 0.7, 1.6])
-    values = np.array([[2.0 - 3.0 * t + 0.5 * t ** 2, np.sin(1.0) * t ** 2] for t in times])
+    values = np.array([[2.0 - 3.0 * t + 0.5 * t**2, np.sin(1.0) * t**2] for t in times])
     weights = extrapolation_weights(times, 2.1)
-    np.testing.assert_allclose(weights @ values, [2.0 - 6.3 + 0.5 * 2.1 ** 2, np.sin(1.0) * 2.1 ** 2], rtol=1e-13)
+    np.testing.assert_allclose(weights @ values, [2.0 - 6.3 + 0.5 * 2.1**2, np.sin(1.0) * 2.1**2], rtol=1e-13)
     np.testing.assert_allclose(extrapolation_weights(times[1:], 1.0), [2.0 / 3.0, 1.0 / 3.0], rtol=1e-14)
 
 
 def test_secant_steps_equal_broyden_with_the_dense_updated_matrix():
     """Eq. (S3): the product form gives the steps of good Broyden with the explicit weighted update
     B += (y - B s) s^T W / (s^T W s), on a small nonlinear system started with a poor tangent."""
-    from ffrf.static_solver import _Secant
+    from ffrf.solvers.static_solver import _Secant
 
     rng = np.random.default_rng(3)
     a = np.eye(4) * 3.0 + 0.3 * rng.standard_normal((4, 4))
 
     def f(x):
-        return a @ x + 0.1 * x ** 3 - 1.0
+        return a @ x + 0.1 * x**3 - 1.0
 
     b0 = a + 0.2 * rng.standard_normal((4, 4))
     weights = np.array([1.0, 4.0, 0.25, 2.0])

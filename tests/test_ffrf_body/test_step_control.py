@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from pendulum_fixtures import pendulum, tip_position
 
-from ffrf.generalized_alpha import NewtonDivergence, StepControl, generalized_alpha
+from ffrf.errors import NewtonDivergence
+from ffrf.solvers.generalized_alpha import StepControl, generalized_alpha
 
 T_END, RHO = 0.2, 0.8
 
@@ -23,8 +24,16 @@ def setup():
 
 def adaptive(tol: float, **kw):
     system, model, psi, q0, _ = setup()
-    return generalized_alpha(system, q0, np.zeros_like(q0), T_END, 1e-2, rho_inf=RHO, output_every=1,
-                             step_control=StepControl(tol, tol, **kw))
+    return generalized_alpha(
+        system,
+        q0,
+        np.zeros_like(q0),
+        T_END,
+        1e-2,
+        rho_inf=RHO,
+        output_every=1,
+        step_control=StepControl(tol, tol, **kw),
+    )
 
 
 def tip_error(result) -> float:

@@ -9,13 +9,14 @@ import pytest
 from body_fixtures import free_bar, nodal_velocities, random_state, tumbling_start
 from pendulum_fixtures import pendulum, tip_position
 
-from ffrf.euler_parameters import g_bar, rotation_matrix
-from ffrf.flexible_body import kinetic_energy_of
-from ffrf.generalized_alpha import NewtonDivergence, generalized_alpha
-from ffrf.joints import revolute_joint
-from ffrf.markers import rigid_interface_marker
-from ffrf.system import MultibodySystem
-from ffrf.variational_midpoint import variational_midpoint
+from ffrf.body.euler_parameters import g_bar, rotation_matrix
+from ffrf.body.flexible_body import kinetic_energy_of
+from ffrf.errors import NewtonDivergence
+from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.solvers.variational_midpoint import variational_midpoint
+from ffrf.system.joints import revolute_joint
+from ffrf.system.markers import rigid_interface_marker
+from ffrf.system.multibody import MultibodySystem
 
 
 def _momenta(model, psi, q, qd):
@@ -37,8 +38,10 @@ def _system_momenta(system, model, psi, result):
 def _relative_drift(rows):
     """Largest change of linear (columns 0-2) and angular (3-5) momentum relative to its size."""
     linear, angular = rows[:, :3], rows[:, 3:]
-    return (np.abs(linear - linear[0]).max() / np.linalg.norm(linear[0]),
-            np.abs(angular - angular[0]).max() / np.linalg.norm(angular[0]))
+    return (
+        np.abs(linear - linear[0]).max() / np.linalg.norm(linear[0]),
+        np.abs(angular - angular[0]).max() / np.linalg.norm(angular[0]),
+    )
 
 
 def _energy(system, result):
@@ -52,11 +55,21 @@ def test_kinetic_energy_and_its_gradient_match_the_mass_matrix_and_complex_step(
     for scale in (1.0, 1.3):  # unit Euler parameters and the midpoint's non-unit ones
         r, p, zeta, rd, pd, zetad = random_state(rng, body.n_modes)
         q, qd = np.concatenate([r, scale * p, zeta]), np.concatenate([rd, pd, zetad])
-        assert np.isclose(kinetic_energy_of(q, qd, body.moments.mass, *packed), 0.5 * qd @ body.mass_matrix(q) @ qd,
-                          rtol=1e-14)
-        reference = np.array([kinetic_energy_of(q + 1e-30j * np.eye(q.size)[k], qd.astype(complex), body.moments.mass,
-                                                *packed_complex).imag / 1e-30 for k in range(q.size)])
-        np.testing.assert_allclose(body.kinetic_energy_gradient(q, qd), reference, rtol=0, atol=1e-14 * np.abs(reference).max())
+        assert np.isclose(
+            kinetic_energy_of(q, qd, body.moments.mass, *packed), 0.5 * qd @ body.mass_matrix(q) @ qd, rtol=1e-14
+        )
+        reference = np.array(
+            [
+                kinetic_energy_of(
+                    q + 1e-30j * np.eye(q.size)[k], qd.astype(complex), body.moments.mass, *packed_complex
+                ).imag
+                / 1e-30
+                for k in range(q.size)
+            ]
+        )
+        np.testing.assert_allclose(
+            body.kinetic_energy_gradient(q, qd), reference, rtol=0, atol=1e-14 * np.abs(reference).max()
+        )
         step = 1e-6
         rate = (body.mass_matrix(q + step * qd) - body.mass_matrix(q - step * qd)) / (2 * step)
         np.testing.assert_allclose(body.mass_matrix_rate(q, qd), rate, rtol=0, atol=1e-8 * np.abs(rate).max())
@@ -94,7 +107,9 @@ def test_two_joined_bodies_in_free_flight_keep_the_total_momentum():
     for i, extra in ((0, 0.0), (1, hinge_rate)):
         s = system.block(i)
         omega = spin + extra * np.array([0.0, 0.0, 1.0])  # world = body frame at the identity
-        qd0[s][:3] = np.array([0.05, 0.0, 0.01]) + np.cross(spin, q0[s][:3]) + extra * np.cross([0, 0, 1.0], q0[s][:3] - hinge)
+        qd0[s][:3] = (
+            np.array([0.05, 0.0, 0.01]) + np.cross(spin, q0[s][:3]) + extra * np.cross([0, 0, 1.0], q0[s][:3] - hinge)
+        )
         qd0[s][3:7] = 0.25 * g_bar(q0[s][3:7]).T @ omega
     assert np.abs(system.constraint_jacobian(q0, 0.0) @ qd0).max() < 1e-12  # consistent start
     result = variational_midpoint(system, q0, qd0, 0.02, 1e-5, output_every=20)
@@ -111,8 +126,10 @@ def test_pendulum_is_second_order_and_agrees_with_generalized_alpha():
     system, model, psi, _ = pendulum(n_modes=2, beta=1e-3)
     q0, qd0 = system.initial_state(), np.zeros(system.n_coordinates)
     t_end = 0.2
-    tips = {h: tip_position(variational_midpoint(system, q0, qd0, t_end, h).q[-1], model, psi)
-            for h in (4e-3, 2e-3, 1e-3, 2.5e-4)}
+    tips = {
+        h: tip_position(variational_midpoint(system, q0, qd0, t_end, h).q[-1], model, psi)
+        for h in (4e-3, 2e-3, 1e-3, 2.5e-4)
+    }
     reference = tips[2.5e-4]
     errors = np.array([np.linalg.norm(tips[h] - reference) for h in (4e-3, 2e-3, 1e-3)])
     np.testing.assert_allclose(np.log2(errors[:-1] / errors[1:]), 2.0, atol=0.2)

@@ -53,7 +53,7 @@ def test_noise_bounds_and_standard_deviation_against_monte_carlo(rng):
 
     loops = [run() for _ in range(200)]
     monte_carlo_std = np.array([l.dh.a for l in loops]).std(axis=0, ddof=1)
-    groups = [run_statistics(loops[i:i + 5]) for i in range(0, 200, 5)]
+    groups = [run_statistics(loops[i : i + 5]) for i in range(0, 200, 5)]
     for stats in groups[:3]:
         assert np.all(np.abs(stats.mean["a"] - linkage.a) < 5e-5)
         assert np.all(np.abs(np.degrees(wrap_angle(stats.mean["alpha"] - np.array(linkage.alpha)))) < 0.03)

@@ -8,11 +8,13 @@ from kinematics import PAPER_A, PAPER_ALPHA, BennettConditionError, BennettLinka
 
 SQRT3 = np.sqrt(3.0)
 # The paper's Eq. (motion), typed in from the text, coefficients of t^2, t^1, t^0.
-PAPER_MOTION = np.array([
-    [SQRT3, 0, 0, 0, 0, 0, 0, 0],
-    [0, 0, -0.5, -SQRT3 / 2, 0, 0, -11 * SQRT3 / 200, -11 / 200],
-    [SQRT3 / 2, -0.5, 0, 0, -11 / 200, -11 * SQRT3 / 200, 0, 0],
-])
+PAPER_MOTION = np.array(
+    [
+        [SQRT3, 0, 0, 0, 0, 0, 0, 0],
+        [0, 0, -0.5, -SQRT3 / 2, 0, 0, -11 * SQRT3 / 200, -11 / 200],
+        [SQRT3 / 2, -0.5, 0, 0, -11 / 200, -11 * SQRT3 / 200, 0, 0],
+    ]
+)
 
 
 def _normalised(c):
@@ -101,6 +103,7 @@ def test_factorisation_by_rational_linkages_recovers_all_four_axes():
     """Independent check: Rational Linkages factorises our C(t) two ways; the factors' axes are
     h0, h1 (one branch) and h3, h2 (the other branch) of the paper's linkage."""
     import rational_linkages as rl
+
     bennett = BennettLinkage.paper()
     curve = rl.RationalCurve.from_coeffs(bennett.motion_polynomial().coefficients.T.copy())
     factorisations = curve.factorize()

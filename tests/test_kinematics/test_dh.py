@@ -21,12 +21,14 @@ from kinematics import (
 SQRT3 = np.sqrt(3.0)
 # The paper's Eq. for h_0..h_3 (Sect. "Recovery of Motion Polynomials"), typed in from the text:
 # h = l + eps * (dual vector) with coefficients [0, i, j, k, 0, eps i, eps j, eps k].
-PAPER_AXES = np.array([
-    [0, 0, 0, 1, 0, 0, 0, 0],
-    [0, 0, 0.5, -SQRT3 / 2, 0, 0, 11 * SQRT3 / 200, 11 / 200],
-    [0, 0, SQRT3 / 2, 0.5, 0, 0, 11 / 200, -11 * SQRT3 / 200],
-    [0, 0, -1, 0, 0, 0, 0, 11 / 50],
-])
+PAPER_AXES = np.array(
+    [
+        [0, 0, 0, 1, 0, 0, 0, 0],
+        [0, 0, 0.5, -SQRT3 / 2, 0, 0, 11 * SQRT3 / 200, 11 / 200],
+        [0, 0, SQRT3 / 2, 0.5, 0, 0, 11 / 200, -11 * SQRT3 / 200],
+        [0, 0, -1, 0, 0, 0, 0, 11 / 50],
+    ]
+)
 
 
 def test_dh_transform_matches_lynch_park_matrices(rng):

@@ -72,6 +72,7 @@ def test_bad_input_is_named():
 def test_point_action_agrees_with_rational_linkages(rng):
     """Rational Linkages (the paper's package) acts on points by sigma_eps x sigma~: same as ours."""
     import rational_linkages as rl
+
     for _ in range(5):
         rotation, translation = random_rigid_displacement(rng)
         sigma = DualQuaternion.from_rotation_translation(rotation, translation)

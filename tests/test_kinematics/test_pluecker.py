@@ -22,8 +22,12 @@ def test_skew_common_normal_against_brute_force(rng):
     for _ in range(10):
         l0 = Line.from_point_direction(rng.normal(size=3), rng.normal(size=3))
         l1 = Line.from_point_direction(rng.normal(size=3), rng.normal(size=3))
-        result = minimize(lambda s: np.sum((l0.point_at(s[0]) - l1.point_at(s[1])) ** 2), [0.0, 0.0],
-                          method="BFGS", options={"gtol": 1e-12})
+        result = minimize(
+            lambda s: np.sum((l0.point_at(s[0]) - l1.point_at(s[1])) ** 2),
+            [0.0, 0.0],
+            method="BFGS",
+            options={"gtol": 1e-12},
+        )
         normal = common_normal(l0, l1)
         assert normal.kind == "skew"
         np.testing.assert_allclose(normal.foot0, l0.point_at(result.x[0]), atol=1e-6)

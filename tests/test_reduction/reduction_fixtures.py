@@ -2,8 +2,8 @@
 
 Meshes are built here (scikit-fem tensor meshes, gmsh for a plate with two
 bores) and assembled with scikit-fem directly, so these tests do not depend on
-the state of :mod:`ffrf.fe_model`. The models are duck-typed like
-``ffrf.fe_model.FEModel``: ``.nodes`` (N, 3), ``.mass``, ``.stiffness``
+the state of :mod:`ffrf.fe.fe_model`. The models are duck-typed like
+``ffrf.fe.fe_model.FEModel``: ``.nodes`` (N, 3), ``.mass``, ``.stiffness``
 (3N, 3N CSR, DOF layout [x0, y0, z0, x1, ...]).
 """
 
@@ -28,8 +28,9 @@ class SmallFEModel:
     tets: np.ndarray
 
 
-def assemble(points: np.ndarray, tets: np.ndarray, E: float = E_PLA, nu: float = NU_PLA,
-             rho: float = RHO_PLA) -> SmallFEModel:
+def assemble(
+    points: np.ndarray, tets: np.ndarray, E: float = E_PLA, nu: float = NU_PLA, rho: float = RHO_PLA
+) -> SmallFEModel:
     """Consistent mass and linear elastic stiffness of P1 tetrahedra, node-interleaved DOFs."""
     from skfem import Basis, BilinearForm, ElementTetP1, ElementVector, MeshTet, asm
     from skfem.helpers import dot
@@ -49,13 +50,17 @@ def assemble(points: np.ndarray, tets: np.ndarray, E: float = E_PLA, nu: float =
 
 
 @lru_cache(maxsize=None)
-def bar_model(length: float = 0.16, width: float = 0.02, height: float = 0.012,
-              divisions: tuple[int, int, int] = (16, 3, 2)) -> SmallFEModel:
+def bar_model(
+    length: float = 0.16, width: float = 0.02, height: float = 0.012, divisions: tuple[int, int, int] = (16, 3, 2)
+) -> SmallFEModel:
     """Prismatic bar along x on a structured tetrahedral grid."""
     from skfem import MeshTet
 
-    mesh = MeshTet.init_tensor(np.linspace(0.0, length, divisions[0] + 1), np.linspace(0.0, width, divisions[1] + 1),
-                               np.linspace(0.0, height, divisions[2] + 1))
+    mesh = MeshTet.init_tensor(
+        np.linspace(0.0, length, divisions[0] + 1),
+        np.linspace(0.0, width, divisions[1] + 1),
+        np.linspace(0.0, height, divisions[2] + 1),
+    )
     return assemble(mesh.p.T, mesh.t.T)
 
 
@@ -116,8 +121,10 @@ def plate_with_bores(h: float = 4e-3) -> tuple[SmallFEModel, tuple[np.ndarray, .
     compact = np.full(len(points), -1)
     compact[used] = np.arange(len(used))
     model = assemble(points[used], compact[tets])
-    bores = tuple(np.flatnonzero(np.abs(np.hypot(model.nodes[:, 0] - cx, model.nodes[:, 1] - cy) - radius) < 1e-6)
-                  for cx, cy in centers)
+    bores = tuple(
+        np.flatnonzero(np.abs(np.hypot(model.nodes[:, 0] - cx, model.nodes[:, 1] - cy) - radius) < 1e-6)
+        for cx, cy in centers
+    )
     return model, bores
 
 
@@ -132,11 +139,14 @@ def exudyn_hcb(model: SmallFEModel, interfaces, weights, n_modes: int):
     fem.nodes = {"Position": np.asarray(model.nodes)}
     fem.massMatrix = sp.csr_matrix(model.mass)
     fem.stiffnessMatrix = sp.csr_matrix(model.stiffness)
-    fem.ComputeHurtyCraigBamptonModes(boundaryNodesList=[list(map(int, i)) for i in interfaces],
-                                      nEigenModes=n_modes, useSparseSolver=True,
-                                      computationMode=HCBstaticModeSelection.RBE2,
-                                      boundaryNodesWeights=[np.asarray(w, float) for w in weights],
-                                      excludeRigidBodyMotion=True)
+    fem.ComputeHurtyCraigBamptonModes(
+        boundaryNodesList=[list(map(int, i)) for i in interfaces],
+        nEigenModes=n_modes,
+        useSparseSolver=True,
+        computationMode=HCBstaticModeSelection.RBE2,
+        boundaryNodesWeights=[np.asarray(w, float) for w in weights],
+        excludeRigidBodyMotion=True,
+    )
     return np.asarray(fem.modeBasis["matrix"]), np.asarray(fem.GetEigenFrequenciesHz())
 
 
@@ -175,7 +185,7 @@ def reduced_elastic_frequencies_hz(model: SmallFEModel, basis: np.ndarray, n: in
     s, v = eigh(m_span)
     q = span @ (v[:, s > 1e-12 * s.max()] / np.sqrt(s[s > 1e-12 * s.max()]))
     values = eigh(q.T @ (model.stiffness @ q), q.T @ (model.mass @ q), eigvals_only=True)
-    return np.sqrt(np.clip(values[6:6 + n], 0.0, None)) / (2 * np.pi)
+    return np.sqrt(np.clip(values[6 : 6 + n], 0.0, None)) / (2 * np.pi)
 
 
 def full_free_free_frequencies_hz(model: SmallFEModel, n: int) -> np.ndarray:
@@ -183,8 +193,14 @@ def full_free_free_frequencies_hz(model: SmallFEModel, n: int) -> np.ndarray:
     from scipy.sparse.linalg import eigsh
 
     scale = model.stiffness.diagonal().mean() / model.mass.diagonal().mean()
-    values = eigsh(model.stiffness.tocsc(), k=n + 6, M=model.mass.tocsc(), sigma=-1e-6 * scale,
-                   which="LM", return_eigenvectors=False)
+    values = eigsh(
+        model.stiffness.tocsc(),
+        k=n + 6,
+        M=model.mass.tocsc(),
+        sigma=-1e-6 * scale,
+        which="LM",
+        return_eigenvectors=False,
+    )
     return np.sqrt(np.clip(np.sort(values)[6:], 0.0, None)) / (2 * np.pi)
 
 

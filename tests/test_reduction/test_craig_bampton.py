@@ -26,10 +26,10 @@ from reduction_fixtures import (
 from scipy.linalg import eigh
 from scipy.sparse.linalg import splu, spsolve
 
-from ffrf.component_modes_post import free_free_frequencies_hz
-from ffrf.craig_bampton import ReductionError, count_eigenvalues_below, craig_bampton, lowest_eigenpairs
-from ffrf.errors import FEInputError, InterfaceError
-from ffrf.invariants import inertia_invariants
+from ffrf.errors import FEInputError, InterfaceError, ReductionError
+from ffrf.reduction.component_modes_post import free_free_frequencies_hz
+from ffrf.reduction.craig_bampton import count_eigenvalues_below, craig_bampton, lowest_eigenpairs
+from ffrf.reduction.invariants import inertia_invariants
 
 
 def dofs(nodes):
@@ -194,7 +194,7 @@ def test_repeated_eigenvalues_are_not_lost(multiplicity):
 
 def test_cutting_a_cluster_is_reported(caplog):
     k, m, values = diagonal_problem(3)
-    with caplog.at_level(logging.WARNING, logger="ffrf.craig_bampton"):
+    with caplog.at_level(logging.WARNING, logger="ffrf.reduction.craig_bampton"):
         found, _ = lowest_eigenpairs(k, m, 4, splu(k).solve)
     assert np.allclose(found, values[:4])
     assert "same frequency" in caplog.text
@@ -214,18 +214,21 @@ def with_floating_tet(model):
     return assemble(points, tets)
 
 
-@pytest.mark.parametrize("case, error, match", [
-    ("empty", InterfaceError, "empty node set"),
-    ("overlap", InterfaceError, "overlaps"),
-    ("out_of_range", InterfaceError, "out of range"),
-    ("collinear", ReductionError, "interfaces do not restrain the body"),
-    ("floating_part", ReductionError, "interfaces do not restrain the body"),
-    ("too_many_modes", ReductionError, "too many modes"),
-    ("nan_mass", ReductionError, "NaN"),
-    ("weights_length", InterfaceError, "weights for"),
-    ("reference", ReductionError, "reference"),
-    ("no_interfaces", InterfaceError, "no interfaces"),
-])
+@pytest.mark.parametrize(
+    "case, error, match",
+    [
+        ("empty", InterfaceError, "empty node set"),
+        ("overlap", InterfaceError, "overlaps"),
+        ("out_of_range", InterfaceError, "out of range"),
+        ("collinear", ReductionError, "interfaces do not restrain the body"),
+        ("floating_part", ReductionError, "interfaces do not restrain the body"),
+        ("too_many_modes", ReductionError, "too many modes"),
+        ("nan_mass", ReductionError, "NaN"),
+        ("weights_length", InterfaceError, "weights for"),
+        ("reference", ReductionError, "reference"),
+        ("no_interfaces", InterfaceError, "no interfaces"),
+    ],
+)
 def test_clear_errors(case, error, match):
     model = bar_model()
     faces = end_faces(model)
@@ -258,15 +261,15 @@ def test_clear_errors(case, error, match):
 
 
 def test_accepts_the_team_fe_model_and_interface_objects():
-    """ffrf.fe_model.FEModel and ffrf.interfaces-style objects (``.nodes``, ``.weights``) work unchanged."""
-    from ffrf.fe_model import FEModel
-    from ffrf.mesh import orient_positive
+    """ffrf.fe.fe_model.FEModel and ffrf.fe.interfaces-style objects (``.nodes``, ``.weights``) work unchanged."""
+    from ffrf.fe.fe_model import FEModel
+    from ffrf.mesh.tet_mesh import orient_positive
 
     reference = bar_model()
     tets = orient_positive(reference.nodes, reference.tets)
     team = FEModel.from_mesh(reference.nodes, tets, 3.5e9, 0.36, 1250.0)
 
-    class Interface:  # duck-typed like ffrf.interfaces.InterfaceNodes
+    class Interface:  # duck-typed like ffrf.fe.interfaces.InterfaceNodes
         def __init__(self, nodes):
             self.nodes, self.weights = nodes, np.full(len(nodes), 1.0 / len(nodes))
 

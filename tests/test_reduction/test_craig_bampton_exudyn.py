@@ -22,7 +22,7 @@ from reduction_fixtures import (
     symmetric_bar_model,
 )
 
-from ffrf.craig_bampton import craig_bampton
+from ffrf.reduction.craig_bampton import craig_bampton
 
 
 def case_data(name):
@@ -38,8 +38,9 @@ def case_data(name):
     return model, list(bores), [surface_area_weights(model, b) for b in bores], 16
 
 
-@pytest.fixture(scope="module", params=["bar, uniform weights", "square bar, repeated modes",
-                                        "plate with bores, area weights"])
+@pytest.fixture(
+    scope="module", params=["bar, uniform weights", "square bar, repeated modes", "plate with bores, area weights"]
+)
 def both(request):
     model, interfaces, weights, n_modes = case_data(request.param)
     ours = craig_bampton(model, interfaces, n_modes, weights)
@@ -93,5 +94,9 @@ def test_static_mode_spaces_identical(both):
 def test_free_free_frequencies_of_both_reduced_models_equal(both):
     model, ours, exudyn_basis, _ = both
     n = 8
-    assert np.allclose(reduced_elastic_frequencies_hz(model, ours.basis, n),
-                       reduced_elastic_frequencies_hz(model, exudyn_basis, n), rtol=5e-12, atol=0)  # measured 5.4e-14
+    assert np.allclose(
+        reduced_elastic_frequencies_hz(model, ours.basis, n),
+        reduced_elastic_frequencies_hz(model, exudyn_basis, n),
+        rtol=5e-12,
+        atol=0,
+    )  # measured 5.4e-14

@@ -19,11 +19,19 @@ from reduction_fixtures import (
     surface_area_weights,
 )
 
-from ffrf.craig_bampton import craig_bampton
-from ffrf.invariants import inertia_invariants, is_isotropic_mass, nodal_tilde
+from ffrf.reduction.craig_bampton import craig_bampton
+from ffrf.reduction.invariants import inertia_invariants, is_isotropic_mass, nodal_tilde
 
-FIELDS = ("theta", "reduced_mass", "m_phit_psi", "m_phit_psi_tilde", "m_x_tilde_psi", "m_x_tilde_psi_tilde",
-          "m_psi_tilde_psi", "m_psi_tilde_psi_tilde")
+FIELDS = (
+    "theta",
+    "reduced_mass",
+    "m_phit_psi",
+    "m_phit_psi_tilde",
+    "m_x_tilde_psi",
+    "m_x_tilde_psi_tilde",
+    "m_psi_tilde_psi",
+    "m_psi_tilde_psi_tilde",
+)
 
 
 def relative_error(a, b):
@@ -77,11 +85,12 @@ def test_plate_with_bores_mass_center_and_inertia_exact():
 
 def obvious_invariants(model, psi):
     """Slow but obvious: explicit 3x3 skew blocks node by node, dense products (as Exudyn's FEM.py)."""
+
     def skew(v):
         return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
 
     def tilde(vector):
-        return np.vstack([skew(vector[3 * i:3 * i + 3]) for i in range(len(vector) // 3)])
+        return np.vstack([skew(vector[3 * i : 3 * i + 3]) for i in range(len(vector) // 3)])
 
     m = model.mass.toarray()
     n = len(model.nodes)
@@ -89,11 +98,18 @@ def obvious_invariants(model, psi):
     x = model.nodes.reshape(-1)
     x_t = tilde(x)
     psi_t = np.hstack([tilde(psi[:, j]) for j in range(psi.shape[1])])
-    return {"theta": x_t.T @ m @ x_t, "reduced_mass": psi.T @ m @ psi, "m_phit_psi": phi_t.T @ m @ psi,
-            "m_phit_psi_tilde": phi_t.T @ m @ psi_t, "m_x_tilde_psi": x_t.T @ m @ psi,
-            "m_x_tilde_psi_tilde": x_t.T @ m @ psi_t, "m_psi_tilde_psi": psi_t.T @ m @ psi,
-            "m_psi_tilde_psi_tilde": psi_t.T @ m @ psi_t, "mass": (phi_t.T @ m @ phi_t)[0, 0],
-            "center_of_mass": phi_t.T @ m @ x / (phi_t.T @ m @ phi_t)[0, 0]}
+    return {
+        "theta": x_t.T @ m @ x_t,
+        "reduced_mass": psi.T @ m @ psi,
+        "m_phit_psi": phi_t.T @ m @ psi,
+        "m_phit_psi_tilde": phi_t.T @ m @ psi_t,
+        "m_x_tilde_psi": x_t.T @ m @ psi,
+        "m_x_tilde_psi_tilde": x_t.T @ m @ psi_t,
+        "m_psi_tilde_psi": psi_t.T @ m @ psi,
+        "m_psi_tilde_psi_tilde": psi_t.T @ m @ psi_t,
+        "mass": (phi_t.T @ m @ phi_t)[0, 0],
+        "center_of_mass": phi_t.T @ m @ x / (phi_t.T @ m @ phi_t)[0, 0],
+    }
 
 
 @pytest.fixture(scope="module")
@@ -142,9 +158,15 @@ def test_invariants_equal_exudyn_object_ffrf_reduced_order_interface(small):
     fem.modeBasis = {"matrix": red.basis, "type": "HCBmodes"}
     exudyn = ObjectFFRFreducedOrderInterface(fem)
     inv = inertia_invariants(model, red)
-    names = {"theta": "inertiaLocal", "m_phit_psi": "mPhitTPsi", "m_phit_psi_tilde": "mPhitTPsiTilde",
-             "m_x_tilde_psi": "mXRefTildePsi", "m_x_tilde_psi_tilde": "mXRefTildePsiTilde",
-             "m_psi_tilde_psi": "mPsiTildePsi", "m_psi_tilde_psi_tilde": "mPsiTildePsiTilde"}
+    names = {
+        "theta": "inertiaLocal",
+        "m_phit_psi": "mPhitTPsi",
+        "m_phit_psi_tilde": "mPhitTPsiTilde",
+        "m_x_tilde_psi": "mXRefTildePsi",
+        "m_x_tilde_psi_tilde": "mXRefTildePsiTilde",
+        "m_psi_tilde_psi": "mPsiTildePsi",
+        "m_psi_tilde_psi_tilde": "mPsiTildePsiTilde",
+    }
     # Thresholds about 100x the largest value measured on 2026-11-24 (AMD EPYC, and under
     # OPENBLAS_CORETYPE=Sandybridge and Prescott).
     for ours, theirs in names.items():

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from reduction_fixtures import SmallFEModel, bar_model, end_faces
 
-import ffrf.reduced_io as reduced_io
-from ffrf.component_modes_post import element_strains, mode_displacements, von_mises_stress
-from ffrf.craig_bampton import craig_bampton
-from ffrf.invariants import inertia_invariants
-from ffrf.reduced_io import (
+import ffrf.reduction.reduced_io as reduced_io
+from ffrf.reduction.component_modes_post import element_strains, mode_displacements, von_mises_stress
+from ffrf.reduction.craig_bampton import craig_bampton
+from ffrf.reduction.invariants import inertia_invariants
+from ffrf.reduction.reduced_io import (
     FORMAT_VERSION,
     ReducedBodyFileError,
     cached_craig_bampton,
@@ -33,8 +33,12 @@ def test_round_trip_is_exact(bar, tmp_path):
     back = saved.reduction
     for name in ("basis", "fixed_interface_frequencies_hz", "reduced_mass", "reduced_stiffness"):
         assert np.array_equal(getattr(back, name), getattr(red, name)), name
-    assert (back.n_static_modes, back.mode_labels, back.reference, back.orthonormalized) == \
-        (red.n_static_modes, red.mode_labels, red.reference, red.orthonormalized)
+    assert (back.n_static_modes, back.mode_labels, back.reference, back.orthonormalized) == (
+        red.n_static_modes,
+        red.mode_labels,
+        red.reference,
+        red.orthonormalized,
+    )
     for a, b in zip(back.interfaces, red.interfaces):
         assert np.array_equal(a.nodes, b.nodes) and np.array_equal(a.weights, b.weights)
         assert np.array_equal(a.center, b.center)
@@ -47,10 +51,14 @@ def test_fingerprint_changes_with_every_input(bar):
     stiffer = SmallFEModel(model.nodes, model.mass, model.stiffness * 1.001, model.tets)
     moved = SmallFEModel(model.nodes + 1e-9, model.mass, model.stiffness, model.tets)
     weights = [np.linspace(1, 2, len(f)) for f in faces]
-    variants = [reduction_fingerprint(stiffer, faces, 5), reduction_fingerprint(moved, faces, 5),
-                reduction_fingerprint(model, faces, 6), reduction_fingerprint(model, faces[::-1], 5),
-                reduction_fingerprint(model, faces, 5, weights),
-                reduction_fingerprint(model, faces, 5, orthonormalize=True)]
+    variants = [
+        reduction_fingerprint(stiffer, faces, 5),
+        reduction_fingerprint(moved, faces, 5),
+        reduction_fingerprint(model, faces, 6),
+        reduction_fingerprint(model, faces[::-1], 5),
+        reduction_fingerprint(model, faces, 5, weights),
+        reduction_fingerprint(model, faces, 5, orthonormalize=True),
+    ]
     assert len({base, *variants}) == 1 + len(variants)
     assert reduction_fingerprint(model, faces, 5) == base  # deterministic
 

@@ -7,8 +7,9 @@ from pendulum_fixtures import pendulum, tip_position
 from scene_fixtures import PENDULUM, driven_link_scene, write_bar
 
 from ffrf.cli import main
-from ffrf.generalized_alpha import generalized_alpha
-from ffrf.scene_file import SceneError, load_scene, run_scene
+from ffrf.scenes.scene_file import SceneError, load_scene, run_scene
+from ffrf.solvers.generalized_alpha import generalized_alpha
+
 
 def test_file_pendulum_equals_the_python_pendulum(tmp_path):
     write_bar(tmp_path)

@@ -26,7 +26,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ffrf.bennett_scene import assemble, build_bennett
+from ffrf.scenes.bennett_scene import assemble, build_bennett
 from validation.exudyn_bennett import (
     compare,
     exudyn_convention_system,
@@ -79,6 +79,7 @@ def exudyn_static():
 # Conventions and set-up
 # ---------------------------------------------------------------------------------------------
 
+
 def test_exudyn_applies_the_marker_offset_in_the_body_frame():
     """Measured on a deformed link: Exudyn's marker point is R + A(x_bar + P zeta + o) to round-off,
     millimetres away from ours r_M + A exp(theta~) o; its orientation is A exp(theta~) R as ours."""
@@ -110,6 +111,7 @@ def test_the_window_exercises_elasticity_and_the_drive():
 # ---------------------------------------------------------------------------------------------
 # Dynamics
 # ---------------------------------------------------------------------------------------------
+
 
 def test_with_exudyn_conventions_the_solvers_agree_to_round_off():
     """Thresholds about 100x the values measured on 2026-11-24 (AMD EPYC; the same to a factor 1.5
@@ -150,6 +152,7 @@ def test_marker_frame_offsets_are_resolved_by_the_comparison():
 # ---------------------------------------------------------------------------------------------
 # Statics
 # ---------------------------------------------------------------------------------------------
+
 
 def test_static_equilibrium_agrees_with_exudyn_solve_static():
     """Exudyn's static multipliers have the opposite sign (residual f + C_q^T lambda):

@@ -35,6 +35,7 @@ from validation.exudyn_ffrf import run_ffrf
 # Set-up checks (guard against a vacuous comparison)
 # ---------------------------------------------------------------------------------------------
 
+
 def test_basis_is_attached_to_the_frame_interface():
     """All modes vanish on bore 0, so the hinge marker sits at the weighted bore-0 centre in both."""
     body = bar()
@@ -56,6 +57,7 @@ def test_exudyn_runner_reports_version_and_every_step():
 # ---------------------------------------------------------------------------------------------
 # Scene 1: flexible pendulum
 # ---------------------------------------------------------------------------------------------
+
 
 def test_pendulum_tip_trajectories_agree():
     scene = pendulum()
@@ -126,6 +128,7 @@ def test_exact_gravity_moment_is_resolved_by_the_comparison():
 # Scene 2: free spinning body
 # ---------------------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("tilted", [False, True], ids=["identity start", "tilted start"])
 def test_free_body_trajectories_agree(tilted):
     scene = free_body(tilted)
@@ -162,5 +165,7 @@ def test_free_body_centre_of_mass_moves_uniformly():
     assert drifts[0] < 2e-3 * body.length
     assert 3.5 < drifts[0] / drifts[1] < 5.5
     ours = ffrf_run(free_body(False))
-    assert max_difference(centre_of_mass_path(body, ours), centre_of_mass_path(body, exudyn_run(free_body(False)))) \
+    assert (
+        max_difference(centre_of_mass_path(body, ours), centre_of_mass_path(body, exudyn_run(free_body(False))))
         < POSITION_TOLERANCE_M
+    )

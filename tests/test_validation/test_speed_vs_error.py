@@ -9,10 +9,33 @@ import json
 import math
 from pathlib import Path
 
-KEYS = {"solver", "sweep", "mode", "order", "h", "modes", "step", "rho_inf", "t_end", "setup_s", "integration_s",
-        "assembly_s", "peak_mem_mb", "peak_rss_mb", "coupler_error_m", "torque_error_rel"}
-NUMBERS = ("setup_s", "integration_s", "assembly_s", "peak_mem_mb", "peak_rss_mb", "coupler_error_m",
-           "torque_error_rel")
+KEYS = {
+    "solver",
+    "sweep",
+    "mode",
+    "order",
+    "h",
+    "modes",
+    "step",
+    "rho_inf",
+    "t_end",
+    "setup_s",
+    "integration_s",
+    "assembly_s",
+    "peak_mem_mb",
+    "peak_rss_mb",
+    "coupler_error_m",
+    "torque_error_rel",
+}
+NUMBERS = (
+    "setup_s",
+    "integration_s",
+    "assembly_s",
+    "peak_mem_mb",
+    "peak_rss_mb",
+    "coupler_error_m",
+    "torque_error_rel",
+)
 
 
 def _bench():

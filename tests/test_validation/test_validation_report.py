@@ -21,8 +21,17 @@ from validation.__main__ import main
 from validation.modes import frequency_clusters, mass_mac
 
 ARGS = ["--h", "6e-3", "--order", "1", "--modes", "2", "--outputs", "25", "--dynamic-window", "0.1", "--step", "1e-3"]
-REQUIRED_KEYS = ("modes", "trajectories", "torque", "coupler_deviation_from_ideal_m", "timing_s", "versions",
-                 "settings", "checks", "passed")
+REQUIRED_KEYS = (
+    "modes",
+    "trajectories",
+    "torque",
+    "coupler_deviation_from_ideal_m",
+    "timing_s",
+    "versions",
+    "settings",
+    "checks",
+    "passed",
+)
 
 
 @lru_cache(maxsize=None)
@@ -85,8 +94,10 @@ def test_the_comparison_is_not_vacuous():
     assert deviation == pytest.approx(m["coupler_deviation_from_ideal_m"]["inhouse"], rel=0.05)
     differences = m["modelling_differences"]
     assert differences["with_exudyn_jacobian_vs_exudyn"]["max_abs_diff_m"] < 1e-11  # measured 6.5e-14 m
-    assert differences["exact_vs_exudyn_marker_jacobian"]["max_abs_diff_m"] > 1e3 * \
-        differences["with_exudyn_jacobian_vs_exudyn"]["max_abs_diff_m"]
+    assert (
+        differences["exact_vs_exudyn_marker_jacobian"]["max_abs_diff_m"]
+        > 1e3 * differences["with_exudyn_jacobian_vs_exudyn"]["max_abs_diff_m"]
+    )
     assert differences["exact_vs_exudyn_gravity"]["max_abs_diff_m"] > 1e-10
     assert m["constraint_residual"]["inhouse"] < 3e-11  # measured 2.5e-13
     assert m["constraint_residual"]["exudyn"] < 1e-11  # measured 7.9e-14
@@ -101,8 +112,14 @@ def test_report_states_the_verdict_first_and_links_its_figures():
     state = "all targets met" if not missed else f"{missed} of {len(m['checks'])} targets missed"
     assert f"**Verdict: {state}.**" in first_screen  # the report states the metrics' verdict, whatever it is
     assert "Exudyn 1.13" in first_screen
-    for figure in ("coupler_deviation.png", "driving_torque.png", "difference_quasi_static.png", "mac.png",
-                   "difference_dynamic.png", "coupler_path.png"):
+    for figure in (
+        "coupler_deviation.png",
+        "driving_torque.png",
+        "difference_quasi_static.png",
+        "mac.png",
+        "difference_dynamic.png",
+        "coupler_path.png",
+    ):
         assert (folder / figure).stat().st_size > 10_000, figure
         assert f"({figure})" in text
 

@@ -78,8 +78,7 @@ def mass_moments(body: ReducedBody) -> tuple[float, NDArray[np.float64], NDArray
     return float(ones @ scalar @ ones), ones @ weighted, body.nodes.T @ weighted
 
 
-def rigid_pendulum_tip(body: ReducedBody, scene: Scene, times: NDArray[np.float64],
-                       node: int) -> NDArray[np.float64]:
+def rigid_pendulum_tip(body: ReducedBody, scene: Scene, times: NDArray[np.float64], node: int) -> NDArray[np.float64]:
     """Tip path of the same body taken as rigid, hinged about world y at the origin, g along -z.
 
     J phi'' = m g c_x cos(phi) with J = int (x^2 + z^2) dm, c = first moment / m; phi is the
@@ -96,13 +95,14 @@ def rigid_pendulum_tip(body: ReducedBody, scene: Scene, times: NDArray[np.float6
     sol = solve_ivp(rhs, (0.0, times[-1]), [0.0, 0.0], t_eval=times, rtol=1e-11, atol=1e-13, method="DOP853")
     phi = sol.y[0]
     x, y, z = body.nodes[node]
-    return np.column_stack([x * np.cos(phi) + z * np.sin(phi), np.full_like(phi, y),
-                            -x * np.sin(phi) + z * np.cos(phi)])
+    return np.column_stack(
+        [x * np.cos(phi) + z * np.sin(phi), np.full_like(phi, y), -x * np.sin(phi) + z * np.cos(phi)]
+    )
 
 
 def centre_of_mass_path(body: ReducedBody, result: TrajectoryResult) -> NDArray[np.float64]:
     """World centre of mass R + A (s0 + S1 zeta) / m along a run (S1 = first moments of the modes)."""
-    from ffrf.euler_parameters import rotation_matrix
+    from ffrf.body.euler_parameters import rotation_matrix
 
     mass, first, _ = mass_moments(body)
     scalar = body.mass[0::3, 0::3]

@@ -1,0 +1,1 @@
+"""Rotations (Euler parameters), modal moments and the FFRF flexible body with its kernels."""

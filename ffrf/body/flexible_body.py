@@ -1,0 +1,280 @@
+r"""A modally reduced flexible body in the floating frame of reference (FFRF).
+
+Its residual (``docs/formulation.md``, Eqs. (F8)-(F11))
+
+.. math:: f(q, \dot q, \ddot q) = M(q)\ddot q - Q_v(q, \dot q) - Q_g(q) + K_r\zeta + D_r\dot\zeta
+
+and its exact Jacobians :math:`\partial f/\partial q` and :math:`\partial f/\partial\dot q`.
+The Jacobians come from complex-step differentiation (Squire and Trapp 1998): every term
+of ``f`` is a polynomial in ``(p, zeta, pd, zetad)``, so
+:math:`\partial f/\partial q_k = \mathrm{Im}\,f(q + ih e_k)/h` holds to round-off for any
+small ``h`` (no subtractive cancellation). They include the terms Exudyn's solver leaves
+out, such as :math:`\partial(M(q)\ddot q)/\partial q`, so Newton converges quadratically.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+from numpy.typing import ArrayLike, NDArray
+
+from ffrf.body.body_kernels import (
+    _levi_civita,
+    gravity_force,
+    inertia_about_origin,
+    mass_and_quadratic_velocity,
+    mass_matrix,
+    rotation_mode_coupling,
+    second_moment,
+)
+from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix
+from ffrf.body.modal_moments import ModalMoments
+from ffrf.numerics.small_linalg import mat_vec
+
+__all__ = [
+    "FlexibleBody",
+    "node_positions",
+    "body_residual",
+    "body_jacobians",
+    "kinetic_energy_gradient",
+    "mass_matrix_rate",
+]
+
+_COMPLEX_STEP = 1e-30  # any tiny step: complex-step derivatives have no cancellation error
+
+
+@dataclass(frozen=True, eq=False)
+class FlexibleBody:
+    """Constant data of one reduced FFRF body (SI units).
+
+    ``moments`` are the modal moments of the consistent mass matrix, ``stiffness`` and
+    ``damping`` the reduced ``K_r`` and ``D_r`` (m x m). ``exact_gravity=False`` reproduces
+    Exudyn's simplified gravity load (Eq. (F10)).
+    """
+
+    name: str
+    moments: ModalMoments
+    stiffness: NDArray[np.float64]
+    damping: NDArray[np.float64]
+    exact_gravity: bool = True
+    _packed: tuple = field(init=False, repr=False)
+    _packed_complex: tuple = field(init=False, repr=False)
+
+    def __post_init__(self):
+        m = self.moments.n_modes
+        for label, matrix in (("stiffness", self.stiffness), ("damping", self.damping)):
+            if np.shape(matrix) != (m, m):
+                raise ValueError(
+                    f"body {self.name!r}: reduced {label} has shape {np.shape(matrix)}, expected ({m}, {m})"
+                )
+            if not np.all(np.isfinite(matrix)):
+                raise ValueError(f"body {self.name!r}: reduced {label} contains NaN or inf")
+        mm = self.moments
+        arrays = (mm.s0, mm.s1, mm.x2, mm.c, mm.d, mm.reduced_mass, self.stiffness, self.damping)
+        packed = tuple(np.ascontiguousarray(a, dtype=np.float64) for a in arrays)
+        object.__setattr__(self, "_packed", packed)
+        object.__setattr__(self, "_packed_complex", tuple(a.astype(np.complex128) for a in packed))
+
+    @property
+    def n_modes(self) -> int:
+        return self.moments.n_modes
+
+    @property
+    def n_coordinates(self) -> int:
+        """7 + m: position (3), Euler parameters (4), modal coordinates (m)."""
+        return 7 + self.moments.n_modes
+
+    def residual(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, gravity: ArrayLike) -> NDArray[np.float64]:
+        return body_residual(
+            np.asarray(q, float),
+            np.asarray(qd, float),
+            np.asarray(qdd, float),
+            np.asarray(gravity, float),
+            self.moments.mass,
+            *self._packed,
+            self.exact_gravity,
+        )
+
+    def jacobians(self, q, qd, qdd, gravity) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Exact ``(df/dq, df/dqd)``, each ``(7+m, 7+m)``."""
+        return body_jacobians(
+            np.asarray(q, float),
+            np.asarray(qd, float),
+            np.asarray(qdd, float),
+            np.asarray(gravity, float),
+            self.moments.mass,
+            *self._packed_complex,
+            self.exact_gravity,
+        )
+
+    def mass_matrix(self, q: ArrayLike) -> NDArray[np.float64]:
+        q = np.asarray(q, float)
+        s0, s1, x2, c, d, mred, _, _ = self._packed
+        return mass_matrix(q[3:7], q[7:], self.moments.mass, s0, s1, x2, c, d, mred)
+
+    def kinetic_energy(self, q: ArrayLike, qd: ArrayLike) -> float:
+        qd = np.asarray(qd, float)
+        return 0.5 * float(qd @ self.mass_matrix(q) @ qd)
+
+    def kinetic_energy_gradient(self, q: ArrayLike, qd: ArrayLike) -> NDArray[np.float64]:
+        r""":math:`\partial T/\partial q` at fixed velocities (Eq. (V6))."""
+        return kinetic_energy_gradient(
+            np.asarray(q, float), np.asarray(qd, float), self.moments.mass, *self._packed[:6]
+        )
+
+    def mass_matrix_rate(self, q: ArrayLike, qd: ArrayLike) -> NDArray[np.float64]:
+        r""":math:`\dot M = \sum_k (\partial M/\partial q_k)\dot q_k` (Eq. (V5)), exact by complex step."""
+        return mass_matrix_rate(
+            np.asarray(q, float), np.asarray(qd, float), self.moments.mass, *self._packed_complex[:6]
+        )
+
+    def strain_energy(self, q: ArrayLike) -> float:
+        zeta = np.asarray(q, float)[7:]
+        return 0.5 * float(zeta @ self.stiffness @ zeta)
+
+    def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> float:
+        """Gravity potential -g . (m R + A s), Eq. (F10) (exact first moment)."""
+        q = np.asarray(q, float)
+        mm = self.moments
+        s = mm.s0 + mm.s1 @ q[7:]
+        return -float(np.asarray(gravity, float) @ (mm.mass * q[:3] + rotation_matrix(q[3:7]) @ s))
+
+
+def node_positions(q: ArrayLike, nodes: ArrayLike, basis: ArrayLike, indices: ArrayLike) -> NDArray[np.float64]:
+    r"""World positions of the mesh nodes ``indices`` of one body (``docs/formulation.md``, Eq. (F1)):
+
+    .. math:: r_i = R + A(\theta)\,(x_i + \Psi_i \zeta),
+
+    ``q``: the body's coordinate block ``[R, theta (Euler parameters), zeta]``, or rows of blocks;
+    ``nodes``: (N, 3) undeformed positions x; ``basis``: (3N, m) mode basis Psi. Returns
+    (len(indices), 3), or (rows, len(indices), 3) for rows of blocks."""
+    q = np.asarray(q, dtype=float)
+    rows = np.atleast_2d(q)
+    indices = np.asarray(indices, dtype=np.int64)
+    basis = np.asarray(basis, dtype=float)
+    local = np.asarray(nodes, dtype=float)[indices]  # (k, 3)
+    psi = basis.reshape(-1, 3, basis.shape[1])[indices]  # (k, 3, m): the 3 rows of each node
+    out = np.empty((rows.shape[0], indices.size, 3))
+    for r, block in enumerate(rows):
+        deformed = local + psi @ block[7:]
+        out[r] = block[:3] + deformed @ rotation_matrix(block[3:7]).T
+    return out if q.ndim == 2 else out[0]
+
+
+@njit(cache=True)
+def body_residual(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity):
+    """Eqs. (F8)-(F11): ``M(q) qdd - Q_v - Q_g + K_r zeta + D_r zetad`` (one dtype throughout)."""
+    p, zeta = q[3:7], q[7:]
+    pd, zetad = qd[3:7], qd[7:]
+    out = np.zeros(q.shape[0], dtype=q.dtype)
+    if np.any(qd != 0) or np.any(qdd != 0):  # at rest (statics) M qdd and Q_v vanish exactly
+        mass_q, velocity_q = mass_and_quadratic_velocity(p, zeta, pd, zetad, mass, s0, s1, x2, c, d, mred)
+        out += mat_vec(mass_q, qdd)
+        out -= velocity_q
+    out -= gravity_force(p, zeta, gravity.astype(q.dtype), mass, s0, s1, exact_gravity)
+    out[7:] += mat_vec(kred, zeta) + mat_vec(dred, zetad)
+    return out
+
+
+@njit(cache=True)
+def body_jacobians(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity, velocity=True):
+    """Complex-step Jacobians of :func:`body_residual`; the constant arrays must be complex128.
+    ``velocity=False`` leaves ``df/dqd`` zero: statics does not use it, and its columns are the
+    expensive ones (a complex velocity switches on ``M`` and ``Q_v`` in every evaluation)."""
+    n = q.shape[0]
+    jac_q = np.empty((n, n))
+    jac_qd = np.zeros((n, n))
+    qc = q.astype(np.complex128)
+    qdc = qd.astype(np.complex128)
+    qddc = qdd.astype(np.complex128)
+    for k in range(n):
+        qc[k] += 1j * _COMPLEX_STEP
+        jac_q[:, k] = (
+            body_residual(qc, qdc, qddc, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity).imag
+            / _COMPLEX_STEP
+        )
+        qc[k] = q[k]
+        if not velocity:
+            continue
+        qdc[k] += 1j * _COMPLEX_STEP
+        jac_qd[:, k] = (
+            body_residual(qc, qdc, qddc, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity).imag
+            / _COMPLEX_STEP
+        )
+        qdc[k] = qd[k]
+    return jac_q, jac_qd
+
+
+@njit(cache=True)
+def _kinetic_terms(q, qd, s0, s1, x2, c, d):
+    """What Eqs. (V6) and (F8) as a scalar share: ``omega_bar = G(p) pd``, the first moment
+    ``s``, its body-frame rate ``w = omega_bar x s + S1 zetad`` and the inertia ``J`` (Eq. (F6))."""
+    zeta = q[7:]
+    omega = g_bar(q[3:7]) @ qd[3:7]
+    s = s0 + s1 @ zeta
+    return omega, s, np.cross(omega, s) + s1 @ qd[7:], inertia_about_origin(second_moment(zeta, x2, c, d))
+
+
+@njit(cache=True)
+def kinetic_energy_of(q, qd, mass, s0, s1, x2, c, d, mred):
+    r"""Eq. (F8) as a scalar without forming ``M``: with :math:`\bar\omega = \bar G\dot p` and
+    :math:`w = \bar\omega\times s + S_1\dot\zeta` (body-frame rate of the first moment),
+    :math:`T = \tfrac12 m|\dot R|^2 + \dot R\cdot Aw + \tfrac12\bar\omega\cdot J\bar\omega
+    + \bar\omega\cdot M_{\omega\zeta}\dot\zeta + \tfrac12\dot\zeta\cdot\Psi^TM\Psi\dot\zeta`.
+    All arrays share one dtype (complex128 for :func:`kinetic_energy_gradient`)."""
+    p, zeta, rd, zetad = q[3:7], q[7:], qd[0:3], qd[7:]
+    omega, s, w, inertia = _kinetic_terms(q, qd, s0, s1, x2, c, d)
+    return (
+        0.5 * mass * (rd @ rd)
+        + rd @ (rotation_matrix(p) @ w)
+        + 0.5 * (omega @ (inertia @ omega))
+        + omega @ (rotation_mode_coupling(zeta, c, d) @ zetad)
+        + 0.5 * (zetad @ (mred @ zetad))
+    )
+
+
+@njit(cache=True)
+def kinetic_energy_gradient(q, qd, mass, s0, s1, x2, c, d, mred):
+    r""":math:`\partial T/\partial q` of :func:`kinetic_energy_of` at fixed ``qd`` (Eq. (V6)), float64:
+
+    .. math::
+        T_R = 0,\qquad T_p = \Big(\frac{\partial(Aw)}{\partial p}\Big)^T\dot R - \bar G(\dot p)^T\tau,
+        \quad \tau = s\times A^T\dot R + J\bar\omega + M_{\omega\zeta}\dot\zeta,\\
+        T_\zeta = S_1^T(A^T\dot R\times\bar\omega) + \sum_{ab}W_{ab}(C_{ab} + D_{ab}\zeta)
+        + \sum_{abc}\epsilon_{abc}\bar\omega_aD_{bc}\dot\zeta,\quad W = |\bar\omega|^2I - \bar\omega\bar\omega^T
+
+    (:math:`\bar\omega = \bar G(p)\dot p = -\bar G(\dot p)p` is linear in each). Needed apart from
+    :func:`body_residual`, whose quadratic velocity vector (Eq. (F9)) equals
+    :math:`\partial T/\partial q - \dot M\dot q` only up to a multiple of ``p``: the normalisation
+    absorbs that in the DAE, but not in Eq. (V2) at the midpoint, where ``p`` is not a unit vector."""
+    p, zeta = q[3:7], q[7:]
+    rd, pd, zetad = qd[0:3], qd[3:7], qd[7:]
+    omega, s, w, inertia = _kinetic_terms(q, qd, s0, s1, x2, c, d)
+    a_rd = rotation_matrix(p).T @ rd
+    tau = np.cross(s, a_rd) + inertia @ omega + rotation_mode_coupling(zeta, c, d) @ zetad
+    out = np.zeros(q.shape[0])
+    out[3:7] = rotation_derivative(p, w).T @ rd - g_bar(pd).T @ tau
+    t_zeta = s1.T @ np.cross(a_rd, omega)
+    w2 = omega @ omega
+    for i in range(3):
+        for j in range(3):
+            weight = (w2 if i == j else 0.0) - omega[i] * omega[j]
+            t_zeta += weight * (c[i, j] + d[i, j] @ zeta)
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                eps = _levi_civita(i, j, k)
+                if eps != 0.0:
+                    t_zeta += eps * omega[i] * (d[j, k] @ zetad)
+    out[7:] = t_zeta
+    return out
+
+
+@njit(cache=True)
+def mass_matrix_rate(q, qd, mass, s0, s1, x2, c, d, mred):
+    r""":math:`\dot M` of Eq. (F8): one complex-step evaluation of ``M`` along ``qd`` (the arrays
+    after ``mass`` complex128)."""
+    qc = q.astype(np.complex128) + 1j * _COMPLEX_STEP * qd.astype(np.complex128)
+    return mass_matrix(qc[3:7], qc[7:], mass, s0, s1, x2, c, d, mred).imag / _COMPLEX_STEP

@@ -1,0 +1,221 @@
+"""Finite-element model of one link: consistent mass and linear elastic stiffness.
+
+DOF layout (the package convention): ``[x0, y0, z0, x1, y1, z1, ...]`` over
+:attr:`FEModel.nodes`. For quadratic tetrahedra the nodes are the mesh vertices
+first (same order as the mesh points), then one midside node per mesh edge, in
+the order of :attr:`FEModel.edges`.
+
+Assembly is scikit-fem's: ``ElementVector(ElementTetP1/P2)``,
+``skfem.models.elasticity.linear_elasticity`` with ``lame_parameters``, and a
+``rho u.v`` bilinear form for the consistent mass.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import ArrayLike, NDArray
+
+from ffrf.errors import FEInputError
+from ffrf.fe.materials import Material
+from ffrf.mesh.tet_mesh import TetMesh, check_mesh, oriented
+
+__all__ = ["FEModel", "rigid_body_modes"]
+
+logger = logging.getLogger(__name__)
+
+
+def rigid_body_modes(nodes: ArrayLike, center: ArrayLike | None = None) -> NDArray[np.float64]:
+    """The six infinitesimal rigid-body motions as columns of a (3N, 6) array.
+
+    Columns 0-2 translate along x, y, z; columns 3-5 rotate about x, y, z
+    through ``center`` (default: the centroid of the nodes): u = omega x (p - c).
+    """
+    nodes = np.asarray(nodes, dtype=float)
+    r = nodes - (nodes.mean(axis=0) if center is None else np.asarray(center, dtype=float))
+    modes = np.zeros((nodes.shape[0], 3, 6))
+    for axis in range(3):
+        modes[:, axis, axis] = 1.0
+        omega = np.eye(3)[axis]
+        modes[:, :, 3 + axis] = np.cross(omega, r)
+    return modes.reshape(-1, 6)
+
+
+@dataclass(frozen=True, eq=False)
+class FEModel:
+    """Linear elastic tetrahedral FE model of one body (SI units).
+
+    Attributes
+    ----------
+    nodes : (N, 3) coordinates of all FE nodes (vertices, then midside nodes for order 2).
+    mass, stiffness : (3N, 3N) scipy CSR matrices, DOF layout [x0, y0, z0, x1, ...].
+    mesh : the linear :class:`TetMesh` the model was built from (groups included).
+    material : :class:`Material`.
+    order : 1 (linear) or 2 (quadratic) tetrahedra.
+    edges : (n_edges, 2) vertex pairs; node ``mesh.n_points + e`` is the midpoint of edge e.
+        Empty for order 1.
+    """
+
+    nodes: NDArray[np.float64]
+    mass: sp.csr_matrix
+    stiffness: sp.csr_matrix
+    mesh: TetMesh
+    material: Material
+    order: int
+    edges: NDArray[np.int64] = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+
+    @classmethod
+    def from_mesh(
+        cls,
+        points: ArrayLike,
+        tetrahedra: ArrayLike,
+        E: float,
+        nu: float,
+        rho: float,
+        order: int = 1,
+        *,
+        groups: dict[str, ArrayLike] | None = None,
+        name: str = "link",
+    ) -> "FEModel":
+        """Assemble the model from points (n x 3, metres) and linear tetrahedra (k x 4)."""
+        mesh = TetMesh(np.asarray(points, dtype=float), np.asarray(tetrahedra), dict(groups or {}), name)
+        return cls.from_tet_mesh(mesh, Material(float(E), float(nu), float(rho), name=f"{name} material"), order)
+
+    @classmethod
+    def from_tet_mesh(cls, mesh: TetMesh, material: Material, order: int = 1) -> "FEModel":
+        """Assemble the model of a checked :class:`TetMesh` (see :func:`ffrf.mesh.tet_mesh.check_mesh`); a mesh in the
+        opposite node order is reoriented with a warning (:func:`ffrf.mesh.tet_mesh.oriented`)."""
+        if order not in (1, 2):
+            raise FEInputError(f"{mesh.name}: element order {order!r} is not supported; use 1 (P1) or 2 (P2)")
+        mesh = oriented(mesh)
+        check_mesh(mesh)
+        nodes, mass, stiffness, edges = _assemble(mesh, material, order)
+        logger.info("%s: P%d model with %d nodes, %d DOFs", mesh.name, order, len(nodes), 3 * len(nodes))
+        return cls(nodes, mass, stiffness, mesh, material, order, edges)
+
+    @property
+    def n_dofs(self) -> int:
+        return 3 * len(self.nodes)
+
+    @property
+    def n_vertices(self) -> int:
+        return len(self.mesh.points)
+
+    @property
+    def total_mass(self) -> float:
+        """Total mass in kg, 1^T M_xx 1 (exact: constants are in the FE space)."""
+        return float(self._moments()[0])
+
+    @property
+    def center_of_mass(self) -> NDArray[np.float64]:
+        """Centre of mass in metres."""
+        m, first, _ = self._moments()
+        return first / m
+
+    @property
+    def inertia_tensor(self) -> NDArray[np.float64]:
+        """Inertia tensor about the centre of mass (kg m^2), world axes.
+
+        J = tr(S) I - S with S_ij = integral rho (x_i - c_i)(x_j - c_j) dV
+        (Goldstein, Classical Mechanics, 3rd ed., eq. 5.7). The integrals are
+        exact because coordinates are interpolated exactly by P1 and P2 fields
+        and the consistent mass integrates their products exactly.
+        """
+        m, first, second = self._moments()
+        c = first / m
+        s = second - m * np.outer(c, c)
+        return np.trace(s) * np.eye(3) - s
+
+    def _moments(self) -> tuple[float, NDArray, NDArray]:
+        m_xx = self.mass[0::3, 0::3]
+        ones = np.ones(len(self.nodes))
+        weighted = m_xx @ self.nodes  # column j: M_xx x_j
+        return float(ones @ m_xx @ ones), ones @ weighted, self.nodes.T @ weighted
+
+    def vertex_strains(self, displacement: ArrayLike) -> NDArray[np.float64]:
+        """Small-strain tensors eps = (H + H^T)/2 at the four vertices of every tetrahedron, shape
+        (n_tets, 4, 3, 3), for nodal ``displacement`` (N, 3) or (3N,): scikit-fem's gradients of
+        the P1 or P2 field evaluated at the reference element's corners. For P1 the four are equal;
+        for P2 the strain is linear in each straight-sided element, so its extremes are at corners."""
+        from skfem import Basis, MeshTet
+
+        u = np.asarray(displacement, dtype=float).reshape(-1)
+        if u.shape[0] != self.n_dofs:
+            raise FEInputError(
+                f"{self.mesh.name}: displacement of length {u.shape[0]} does not match {self.n_dofs} DOFs"
+            )
+        sk_mesh = MeshTet(np.ascontiguousarray(self.mesh.points.T), np.ascontiguousarray(self.mesh.tets.T))
+        corners = np.array([[0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+        basis = Basis(sk_mesh, _vector_element(self.order), quadrature=(corners, np.full(4, 1.0 / 24.0)))
+        field_dofs = np.empty(basis.N)
+        field_dofs[_node_dof_permutation(basis, len(self.mesh.points), len(self.edges))] = u
+        gradient = np.moveaxis(np.asarray(basis.interpolate(field_dofs).grad), (2, 3), (0, 1))  # H_ij = du_i/dx_j
+        return 0.5 * (gradient + np.swapaxes(gradient, -1, -2))
+
+    def interleaved(self, values: ArrayLike) -> NDArray[np.float64]:
+        """Reshape a DOF vector (3N,) into nodal vectors (N, 3)."""
+        values = np.asarray(values)
+        if values.shape[0] != self.n_dofs:
+            raise FEInputError(
+                f"{self.mesh.name}: vector of length {values.shape[0]} does not match {self.n_dofs} DOFs"
+            )
+        return values.reshape(len(self.nodes), 3, *values.shape[1:])
+
+
+def _node_dof_permutation(basis, n_vertices: int, n_edges: int) -> NDArray[np.int64]:
+    """perm[3 k + c] = scikit-fem DOF of component c at node k (vertices, then edges)."""
+    blocks = [basis.nodal_dofs.T]
+    if n_edges:
+        blocks.append(basis.edge_dofs.T)
+    perm = np.concatenate(blocks).reshape(-1)
+    if len(perm) != basis.N:
+        raise RuntimeError(f"unexpected scikit-fem DOF layout: {len(perm)} node DOFs vs {basis.N} in total")
+    return perm
+
+
+def _vector_element(order: int):
+    from skfem import ElementTetP1, ElementTetP2, ElementVector
+
+    return ElementVector(ElementTetP1() if order == 1 else ElementTetP2())
+
+
+def _assemble(mesh: TetMesh, material: Material, order: int):
+    from skfem import Basis, BilinearForm, MeshTet, asm
+    from skfem.helpers import dot
+    from skfem.models.elasticity import lame_parameters, linear_elasticity
+
+    sk_mesh = MeshTet(np.ascontiguousarray(mesh.points.T), np.ascontiguousarray(mesh.tets.T))
+    element = _vector_element(order)
+    # On straight-sided tets the strain of a P_k field is of degree k-1, so the
+    # stiffness integrand has degree 2(k-1) and the mass integrand degree 2k:
+    # these quadrature orders are exact (and 4x cheaper than one order for both).
+    basis = Basis(sk_mesh, element, intorder=2 * order)
+    stiffness_basis = Basis(sk_mesh, element, intorder=max(2 * (order - 1), 1))
+    rho = material.rho
+
+    @BilinearForm
+    def mass_form(u, v, w):
+        return rho * dot(u, v)
+
+    lam, mu = lame_parameters(material.E, material.nu)
+    stiffness = asm(linear_elasticity(lam, mu), stiffness_basis)
+    mass = asm(mass_form, basis)
+
+    edges = sk_mesh.edges.T.astype(np.int64) if order == 2 else np.zeros((0, 2), dtype=np.int64)
+    if not np.array_equal(sk_mesh.p.T, mesh.points):
+        raise RuntimeError(f"{mesh.name}: scikit-fem reordered the mesh points; cannot keep the node numbering")
+    perm = _node_dof_permutation(basis, len(mesh.points), len(edges))
+    # Exact coordinates (scikit-fem's doflocs carry mapping round-off); checked against them.
+    nodes = np.vstack([mesh.points, mesh.points[edges].mean(axis=1)])
+    if not np.allclose(basis.doflocs[:, perm[0::3]].T, nodes, rtol=0.0, atol=1e-12 * np.ptp(nodes, axis=0).max()):
+        raise RuntimeError(
+            f"{mesh.name}: scikit-fem DOF locations do not match vertices + edge midpoints; "
+            "its DOF layout changed, update ffrf.fe.fe_model._node_dof_permutation"
+        )
+    if not np.array_equal(perm, np.arange(len(perm))):
+        stiffness = stiffness[perm][:, perm]
+        mass = mass[perm][:, perm]
+    return nodes, sp.csr_matrix(mass), sp.csr_matrix(stiffness), edges

@@ -1,0 +1,72 @@
+"""Linear isotropic elastic materials (SI units).
+
+The two constants are those of the paper on flexible Bennett linkages:
+printed PLA (E = 1.2 GPa, nu = 0.33, rho = 450 kg/m^3, 15 % infill) and an
+"ideally rigid" reference material used to switch flexibility off.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ffrf.errors import MaterialError
+
+__all__ = ["Material", "PLA", "RIGID"]
+
+
+@dataclass(frozen=True)
+class Material:
+    """Isotropic linear elastic material.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus in Pa, > 0.
+    nu : float
+        Poisson's ratio, -1 < nu < 0.5 (positive definite elasticity tensor,
+        Timoshenko & Goodier, Theory of Elasticity, sec. 6).
+    rho : float
+        Mass density in kg/m^3, > 0.
+    name : str
+        Label used in error messages and summaries.
+    """
+
+    E: float
+    nu: float
+    rho: float
+    name: str = "material"
+
+    def __post_init__(self) -> None:
+        for label, value in (("E", self.E), ("nu", self.nu), ("rho", self.rho)):
+            if not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise MaterialError(f"Material {self.name!r}: {label}={value!r} is not a finite number")
+        if self.E <= 0.0:
+            raise MaterialError(
+                f"Material {self.name!r}: Young's modulus E={self.E!r} Pa must be > 0 "
+                "(give it in Pa, e.g. 1.2e9 for printed PLA)"
+            )
+        if self.rho <= 0.0:
+            raise MaterialError(
+                f"Material {self.name!r}: density rho={self.rho!r} kg/m^3 must be > 0 "
+                "(give it in kg/m^3, e.g. 450.0 for printed PLA)"
+            )
+        if not -1.0 < self.nu < 0.5:
+            raise MaterialError(
+                f"Material {self.name!r}: Poisson's ratio nu={self.nu!r} must lie in (-1, 0.5); "
+                "nu = 0.5 (incompressible) needs a mixed formulation that ffrf does not provide"
+            )
+
+    @property
+    def shear_modulus(self) -> float:
+        """G = E / (2 (1 + nu)) (Timoshenko & Goodier, eq. 6)."""
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def lame_lambda(self) -> float:
+        """First Lame parameter lambda = E nu / ((1 + nu)(1 - 2 nu))."""
+        return self.E * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu))
+
+
+PLA = Material(1.2e9, 0.33, 450.0, "PLA (printed, 15% infill)")
+RIGID = Material(1e15, 0.33, 1250.0, "ideally rigid")

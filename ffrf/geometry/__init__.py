@@ -1,0 +1,1 @@
+"""Parametric link geometry and its gmsh meshing."""

@@ -1,0 +1,403 @@
+"""Parametric Bennett link built with gmsh's OpenCASCADE kernel from its two joint axes.
+
+A link carries two joint axes (lines in space). Its geometry is
+
+* a cylindrical housing coaxial with each axis, with a through bearing bore
+  (default radius 9.5 mm: the outer radius of two 626 bearings, 6 mm wide each);
+* a solid rectangular arm joining the two housing centres;
+* for the base link, a mounting block on the middle of the arm whose outer
+  planar face is the clamping interface (physical group ``"mount"``).
+
+Housing offset rule: the joint point of an axis is the foot of the common
+normal of the link's two axes. At joint i (axis h_i) the link for which h_i is
+its FIRST axis places its housing at +s along h_i's direction, the link for
+which h_i is its SECOND axis at -s, with s = housing_length/2 + axial_gap/2,
+so the housings of the two links meeting at a joint never overlap. The signed
+offsets are recorded in :attr:`LinkGeometry.interface_offsets`.
+
+The default dimensions are our own choice (the paper's STL geometry is not
+available): housing outer radius 16 mm, housing length 16 mm (two 6 mm
+bearings plus shoulders), arm 16 x 12 mm, 1 mm axial gap between housings.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ffrf.errors import GeometryError
+from ffrf.mesh.tet_mesh import MAX_LINK_EXTENT_M, TetMesh
+
+__all__ = [
+    "Axis",
+    "LinkDesign",
+    "LinkGeometry",
+    "PAPER_AXES",
+    "paper_link_axes",
+    "bennett_axes",
+    "common_normal_feet",
+    "build_link",
+    "mesh_link",
+]
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Axis:
+    """A line in space: a point on it and a unit direction (metres, world frame)."""
+
+    point: NDArray[np.float64]
+    direction: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        p = np.asarray(self.point, dtype=float).reshape(3)
+        d = np.asarray(self.direction, dtype=float).reshape(3)
+        n = np.linalg.norm(d)
+        if not n > 0.0:
+            raise GeometryError(f"Axis through {p.tolist()}: direction {d.tolist()} has zero length")
+        object.__setattr__(self, "point", p)
+        object.__setattr__(self, "direction", d / n)
+
+    @classmethod
+    def of(cls, obj) -> "Axis":
+        """Accept an :class:`Axis`, any object with ``.point`` and ``.direction``, or a (point, direction) pair."""
+        if isinstance(obj, Axis):
+            return obj
+        if hasattr(obj, "point") and hasattr(obj, "direction"):
+            return cls(obj.point, obj.direction)
+        point, direction = obj
+        return cls(point, direction)
+
+
+#: The paper's four joint axes h0..h3 in the folded home configuration (metres).
+PAPER_AXES: tuple[Axis, ...] = (
+    Axis((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+    Axis((-0.11, 0.0, 0.0), (0.0, 0.5, -np.sqrt(3.0) / 2.0)),
+    Axis((0.11, 0.0, 0.0), (0.0, np.sqrt(3.0) / 2.0, 0.5)),
+    Axis((0.22, 0.0, 0.0), (0.0, -1.0, 0.0)),
+)
+
+
+def bennett_axes(alpha3_deg: float = 90.0) -> tuple[Axis, Axis, Axis, Axis]:
+    """Joint axes h0..h3 of the paper's linkage (:data:`kinematics.PAPER_A`, ``PAPER_ALPHA``)
+    with the base-link twist ``alpha3_deg``.
+
+    The base link (link 0) carries (h3, h0). With alpha_3 != 90 deg the loop does not
+    close, so its h3 is where the *base link* puts it: :func:`kinematics.open_loop_axes`
+    chains h0..h3 through links 0..2 (nominal) and returns that closing axis, which
+    replaces h3 here (the base's bore axis; link 3 keeps the nominal h3).
+    """
+    from kinematics import PAPER_A, PAPER_ALPHA, open_loop_axes
+
+    if not np.isfinite(alpha3_deg):
+        raise GeometryError(
+            f"base-link twist alpha3_deg={alpha3_deg!r} is not a finite angle; give it in degrees, "
+            "e.g. 90 (paper: 90, 91, 92)"
+        )
+    alpha = np.array(PAPER_ALPHA)
+    alpha[3] = np.radians(alpha3_deg)
+    axes, closing_axis = open_loop_axes(PAPER_A, alpha)
+    return tuple(Axis.of(a) for a in axes[:3]) + (Axis.of(closing_axis),)
+
+
+def paper_link_axes(link: int, axes=PAPER_AXES) -> tuple[Axis, Axis, tuple[str, str]]:
+    """Axes and interface names of link ``link`` (0 = base): it carries (h_{i-1}, h_i)."""
+    if link not in (0, 1, 2, 3):
+        raise GeometryError(f"link index {link!r} must be 0, 1, 2 or 3 (0 = base)")
+    first, second = (link - 1) % 4, link
+    return Axis.of(axes[first]), Axis.of(axes[second]), (f"joint{first}", f"joint{second}")
+
+
+@dataclass(frozen=True)
+class LinkDesign:
+    """Dimensions of the parametric link (metres); see the module docstring for the defaults."""
+
+    bore_radius: float = 9.5e-3
+    housing_outer_radius: float = 16e-3
+    housing_length: float = 16e-3
+    axial_gap: float = 1e-3
+    arm_width: float = 16e-3  # along the first axis' direction (projected)
+    arm_thickness: float = 12e-3
+    mount_length: float = 30e-3  # along the arm
+    mount_width: float = 24e-3
+    mount_height: float = 12e-3  # beyond the arm surface
+
+    def __post_init__(self) -> None:
+        for name, value in vars(self).items():
+            if not value > 0.0:
+                raise GeometryError(f"LinkDesign.{name}={value!r} must be > 0 (metres)")
+            if value > MAX_LINK_EXTENT_M:
+                raise GeometryError(
+                    f"LinkDesign.{name}={value!r} m: suspicious units, did you pass millimetres? "
+                    "give metres, e.g. 9.5e-3"
+                )
+        if self.bore_radius >= self.housing_outer_radius:
+            raise GeometryError(
+                f"LinkDesign: bore radius {self.bore_radius} m must be smaller than the housing "
+                f"outer radius {self.housing_outer_radius} m"
+            )
+
+    @property
+    def housing_offset(self) -> float:
+        """s = housing_length/2 + axial_gap/2: distance of a housing centre from its joint point."""
+        return 0.5 * (self.housing_length + self.axial_gap)
+
+
+@dataclass(frozen=True)
+class LinkGeometry:
+    """What :func:`build_link` made: axes, joint points, housing centres and interface offsets."""
+
+    axes: tuple[Axis, Axis]
+    interface_names: tuple[str, str]
+    joint_points: NDArray[np.float64]  # (2, 3) feet of the common normal
+    housing_centers: NDArray[np.float64]  # (2, 3)
+    interface_offsets: dict[str, float]  # signed offset of each bore centre from its joint point
+    design: LinkDesign
+    has_mount: bool
+    mount_center: NDArray[np.float64] | None = None
+    mount_normal: NDArray[np.float64] | None = None
+    surface_tags: dict[str, list[int]] = field(default_factory=dict)
+
+    @property
+    def length(self) -> float:
+        """Length of the common normal between the two axes (the link's a_i)."""
+        return float(np.linalg.norm(self.joint_points[1] - self.joint_points[0]))
+
+
+def common_normal_feet(axis_a: Axis, axis_b: Axis) -> NDArray[np.float64]:
+    """Feet of the common normal of two skew lines, shape (2, 3).
+
+    Closest points p_a + t_a d_a, p_b + t_b d_b from the stationarity of
+    |(p_a + t_a d_a) - (p_b + t_b d_b)|^2 (e.g. Eberly, 3D Game Engine Design, sec. 14.1).
+    """
+    w0 = axis_a.point - axis_b.point
+    b = float(axis_a.direction @ axis_b.direction)
+    d = float(axis_a.direction @ w0)
+    e = float(axis_b.direction @ w0)
+    denom = 1.0 - b * b
+    if denom < 1e-10:
+        raise GeometryError(
+            f"link axes through {axis_a.point.tolist()} and {axis_b.point.tolist()} are parallel; "
+            "their common normal is not unique, a Bennett link needs skew axes"
+        )
+    t_a = (b * e - d) / denom
+    t_b = (e - b * d) / denom
+    return np.stack([axis_a.point + t_a * axis_a.direction, axis_b.point + t_b * axis_b.direction])
+
+
+def _frame_along(start: NDArray, end: NDArray, hint: NDArray) -> NDArray[np.float64]:
+    """Right-handed frame (columns e1, e2, e3): e1 along start->end, e2 = hint made orthogonal."""
+    e1 = (end - start) / np.linalg.norm(end - start)
+    e2 = hint - (hint @ e1) * e1
+    if np.linalg.norm(e2) < 1e-6:
+        e2 = np.cross(e1, [1.0, 0.0, 0.0] if abs(e1[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e2 /= np.linalg.norm(e2)
+    return np.column_stack([e1, e2, np.cross(e1, e2)])
+
+
+def _placed_box(occ, lower: ArrayLike, size: ArrayLike, frame: NDArray, origin: NDArray) -> int:
+    """Box given in the local frame (x along e1), moved to world coordinates by a rigid motion.
+
+    A rotation + translation keeps the faces exact planes; gmsh's general
+    affineTransform would turn them into approximate B-spline surfaces.
+    """
+    from scipy.spatial.transform import Rotation
+
+    tag = occ.addBox(*lower, *size)
+    rotvec = Rotation.from_matrix(frame).as_rotvec()
+    angle = float(np.linalg.norm(rotvec))
+    if angle > 0.0:
+        occ.rotate([(3, tag)], 0.0, 0.0, 0.0, *(rotvec / angle), angle)
+    occ.translate([(3, tag)], *origin)
+    return tag
+
+
+def _bore_cut_length(design: LinkDesign) -> float:
+    """Bore cutting tool length: 1 mm past each housing end so the cut is clean.
+
+    Surface classification allows the same extent, because OCC's parameter
+    bounds of a trimmed face are only approximate."""
+    return design.housing_length + 2e-3
+
+
+def _surface_samples(gmsh, tag: int, n: int = 5) -> NDArray[np.float64]:
+    lo, hi = gmsh.model.getParametrizationBounds(2, tag)
+    u, v = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n))
+    return np.asarray(gmsh.model.getValue(2, tag, np.column_stack([u.ravel(), v.ravel()]).ravel())).reshape(-1, 3)
+
+
+def _classify_surfaces(gmsh, geometry_axes, centers, design: LinkDesign, mount) -> dict[int | str, list[int]]:
+    """Which gmsh surfaces lie on bore i (0, 1) or on the mount plane ("mount")."""
+    tol = 1e-6 + 1e-4 * design.bore_radius
+    found: dict[int | str, list[int]] = {0: [], 1: [], "mount": []}
+    for _, tag in gmsh.model.getEntities(2):
+        pts = _surface_samples(gmsh, tag)
+        for i, (axis, center) in enumerate(zip(geometry_axes, centers)):
+            rel = pts - center
+            t = rel @ axis.direction
+            r = np.linalg.norm(rel - np.outer(t, axis.direction), axis=1)
+            on_bore = np.all(np.abs(r - design.bore_radius) < tol)
+            if on_bore and np.all(np.abs(t) <= 0.5 * _bore_cut_length(design) + tol):
+                found[i].append(tag)
+        if mount is not None and np.all(np.abs((pts - mount[0]) @ mount[1]) < tol):
+            found["mount"].append(tag)
+    return found
+
+
+def _trim_to_housing_slabs(occ, parts: list[int], axes, centers, design: LinkDesign) -> list[tuple[int, int]]:
+    """Cut away arm material that sticks out of a housing's end faces near the axis.
+
+    A straight box cannot follow two skew axes, so its corners could protrude
+    axially past a housing end (up to half the cross-section diagonal) and
+    clash with the neighbouring link's housing across the axial gap. Removing
+    everything within (housing radius + axial gap) of the axis beyond the end
+    planes keeps the neighbour's housing at least one gap away in both directions.
+    """
+    cap = 2.0 * (design.arm_width + design.arm_thickness + design.mount_height)
+    clearance_radius = design.housing_outer_radius + design.axial_gap
+    tools = []
+    for axis, center in zip(axes, centers):
+        for sign in (-1.0, 1.0):
+            base = center + sign * 0.5 * design.housing_length * axis.direction
+            tools.append((3, occ.addCylinder(*base, *(sign * cap * axis.direction), clearance_radius)))
+    trimmed, _ = occ.cut([(3, p) for p in parts], tools)
+    return trimmed
+
+
+def build_link(
+    gmsh,
+    axis_a,
+    axis_b,
+    design: LinkDesign = LinkDesign(),
+    names: tuple[str, str] = ("joint_a", "joint_b"),
+    mount: bool = False,
+) -> LinkGeometry:
+    """Build the link solid in the open gmsh session (OCC kernel) with physical groups.
+
+    Parameters
+    ----------
+    gmsh : the module, inside :func:`ffrf.geometry.meshing.gmsh_session`.
+    axis_a, axis_b : first and second joint axis (:class:`Axis`, objects with
+        ``.point``/``.direction``, or (point, direction) pairs); misaligned links
+        are built simply by passing the misaligned axes.
+    design : dimensions.
+    names : physical-group names of the two bore surfaces.
+    mount : add the base link's mounting block (physical group ``"mount"``).
+    """
+    axes = (Axis.of(axis_a), Axis.of(axis_b))
+    feet = common_normal_feet(*axes)
+    s = design.housing_offset
+    centers = np.stack([feet[0] + s * axes[0].direction, feet[1] - s * axes[1].direction])
+    span = float(np.linalg.norm(centers[1] - centers[0]))
+    if span > MAX_LINK_EXTENT_M:
+        raise GeometryError(
+            f"link {names}: the housings are {span:.4g} m apart: suspicious units, "
+            "did you pass millimetres? use unit='mm' or give metres"
+        )
+    if span < 2.0 * design.housing_outer_radius:
+        raise GeometryError(
+            f"link {names}: housing centres only {span:.4g} m apart, less than two housing "
+            f"radii ({2 * design.housing_outer_radius} m); reduce housing_outer_radius"
+        )
+    occ = gmsh.model.occ
+    housings = []
+    for axis, center in zip(axes, centers):
+        base = center - 0.5 * design.housing_length * axis.direction
+        housings.append(occ.addCylinder(*base, *(design.housing_length * axis.direction), design.housing_outer_radius))
+    frame = _frame_along(centers[0], centers[1], axes[0].direction)
+    half_w, half_t = 0.5 * design.arm_width, 0.5 * design.arm_thickness
+    parts = [
+        _placed_box(occ, (0.0, -half_w, -half_t), (span, design.arm_width, design.arm_thickness), frame, centers[0])
+    ]
+    mount_plane = None
+    if mount:
+        x0 = 0.5 * (span - design.mount_length)
+        parts.append(
+            _placed_box(
+                occ,
+                (x0, -0.5 * design.mount_width, -half_t - design.mount_height),
+                (design.mount_length, design.mount_width, design.mount_height + half_t),
+                frame,
+                centers[0],
+            )
+        )
+        mount_center = centers[0] + frame @ np.array([0.5 * span, 0.0, -half_t - design.mount_height])
+        mount_plane = (mount_center, -frame[:, 2])
+    parts = _trim_to_housing_slabs(occ, parts, axes, centers, design)
+    solid, _ = occ.fuse([(3, housings[0])], [(3, housings[1])] + parts)
+    bores = []
+    for axis, center in zip(axes, centers):
+        length = _bore_cut_length(design)
+        base = center - 0.5 * length * axis.direction
+        bores.append((3, occ.addCylinder(*base, *(length * axis.direction), design.bore_radius)))
+    solid, _ = occ.cut(solid, bores)
+    occ.synchronize()
+    if len(solid) != 1:
+        raise GeometryError(
+            f"link {names}: the boolean union gave {len(solid)} solids instead of one; "
+            "the arm does not join the housings, check the axes"
+        )
+    tags = _classify_surfaces(gmsh, axes, centers, design, mount_plane)
+    surface_tags = {names[0]: tags[0], names[1]: tags[1]}
+    if mount:
+        surface_tags["mount"] = tags["mount"]
+    for group, group_tags in surface_tags.items():
+        if not group_tags:
+            raise GeometryError(
+                f"link {names}: no surface found for interface {group!r}; "
+                "the arm or mounting block probably covers it, check the design"
+            )
+        gmsh.model.addPhysicalGroup(2, group_tags, name=group)
+    gmsh.model.addPhysicalGroup(3, [solid[0][1]], name="link")
+    logger.info(
+        "link %s: common normal %.4g m, housing offsets +-%.4g m, interfaces %s",
+        names,
+        float(np.linalg.norm(feet[1] - feet[0])),
+        s,
+        sorted(surface_tags),
+    )
+    return LinkGeometry(
+        axes,
+        names,
+        feet,
+        centers,
+        {names[0]: +s, names[1]: -s},
+        design,
+        mount,
+        None if mount_plane is None else mount_plane[0],
+        None if mount_plane is None else mount_plane[1],
+        surface_tags,
+    )
+
+
+def mesh_link(
+    axis_a,
+    axis_b,
+    *,
+    h: float = 2e-3,
+    design: LinkDesign = LinkDesign(),
+    names: tuple[str, str] = ("joint_a", "joint_b"),
+    mount: bool = False,
+    msh_path: str | Path | None = None,
+    name: str = "link",
+) -> tuple[TetMesh, LinkGeometry]:
+    """Build and mesh a link with linear tetrahedra of maximum edge ``h`` (metres).
+
+    Deterministic for given inputs (single-threaded gmsh, fixed seed). Writes
+    the gmsh .msh file too when ``msh_path`` is given.
+    """
+    from ffrf.geometry.meshing import configure_meshing, gmsh_session, mesh_current_model
+
+    with gmsh_session(name) as gmsh:
+        geometry = build_link(gmsh, axis_a, axis_b, design, names, mount)
+        configure_meshing(h)
+        mesh = mesh_current_model(name)
+        if msh_path is not None:
+            Path(msh_path).parent.mkdir(parents=True, exist_ok=True)
+            gmsh.write(str(msh_path))
+    return mesh, geometry

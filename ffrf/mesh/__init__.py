@@ -1,0 +1,1 @@
+"""The tetrahedral mesh type: checks, quality, orientation, reading and writing."""

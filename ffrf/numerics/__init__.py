@@ -1,0 +1,1 @@
+"""Small dense linear algebra, rank decisions and eigensolvers shared by every layer."""

@@ -1,0 +1,1 @@
+"""Result tables, ParaView files, figures and the assembly stress report."""

@@ -1,0 +1,255 @@
+r"""Stress state of an assembled linkage: von Mises stress, strain energy and joint reactions per link.
+
+After the static assembly (:func:`ffrf.scenes.bennett_scene.assemble`: gravity, then the
+misalignment of the variants ``pla1``/``pla2`` closed elastically by continuation) every link
+carries the elastic displacement :math:`u = \Psi\zeta` in its body frame (Eq. (HCB-3),
+``docs/formulation.md``). Per link this module reports
+
+* the von Mises stress of each element, the largest of its four corner values
+  (:meth:`ffrf.fe.fe_model.FEModel.vertex_strains`: constant in a P1 element, linear in a P2 one,
+  so its extremes are at the corners), its largest value, the centroid of that element (body
+  coordinates, which are the mesh's coordinates) and the nearest interface (bore or mounting
+  face) with its distance;
+* the strain energy :math:`\tfrac12 u^T K u = \tfrac12\zeta^T K_{red}\zeta`;
+* the reactions of the joints on its bores from the multipliers: the first three rows of a
+  :class:`~ffrf.system.joints.MarkerJoint` are the world force (N), the further rotation rows the
+  moments about the joint's x and y axes (N m; Eq. (J2)), and a driven joint's last row the
+  driving torque.
+
+The pure functions take plain arrays; :func:`scene_assembly_stress`
+adapts a Bennett scene (duck-typed: ``links[k].fe``, ``.reduction``, ``.interfaces``) and
+:func:`write_assembly_vtu` writes the deformed assembly for ParaView.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Mapping, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ffrf.fe.fe_model import FEModel
+from ffrf.mesh.tet_mesh import signed_volumes
+from ffrf.reduction.component_modes_post import element_strains, von_mises_stress
+
+__all__ = [
+    "LinkStress",
+    "AssemblyStress",
+    "element_von_mises",
+    "nodal_average",
+    "nearest_feature",
+    "link_stress",
+    "joint_reactions",
+    "scene_assembly_stress",
+    "write_assembly_vtu",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class LinkStress:
+    """Stress state of one link (SI units); ``element_von_mises`` (Pa) per tetrahedron."""
+
+    link: int
+    max_von_mises_pa: float
+    max_location_m: NDArray[np.float64]
+    nearest_feature: str
+    feature_distance_m: float
+    strain_energy_j: float
+    element_von_mises: NDArray[np.float64] = field(repr=False)
+    reactions: dict[str, dict[str, float]] = field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        """JSON-ready summary (no per-element arrays)."""
+        out = {
+            "link": self.link,
+            "max_von_mises_pa": self.max_von_mises_pa,
+            "max_location_m": self.max_location_m.tolist(),
+            "nearest_feature": self.nearest_feature,
+            "feature_distance_m": self.feature_distance_m,
+            "strain_energy_j": self.strain_energy_j,
+            "reactions": self.reactions,
+        }
+        if self.reactions:
+            out["max_reaction_force_n"] = max(r["force_n"] for r in self.reactions.values())
+            out["max_reaction_moment_nm"] = max(r["moment_nm"] for r in self.reactions.values())
+        return out
+
+    def line(self) -> str:
+        """One line of text (MPa, mm, mJ), as the ``bennett`` command prints it."""
+        text = (
+            f"link {self.link}: max von Mises {1e-6 * self.max_von_mises_pa:.3f} MPa at "
+            f"({', '.join(f'{1e3 * x:.1f}' for x in self.max_location_m)}) mm, "
+            f"{1e3 * self.feature_distance_m:.1f} mm from {self.nearest_feature}; strain energy "
+            f"{1e3 * self.strain_energy_j:.4g} mJ"
+        )
+        if self.reactions:
+            d = self.as_dict()
+            text += f"; largest joint reaction {d['max_reaction_force_n']:.3g} N, {1e3 * d['max_reaction_moment_nm']:.3g} N mm"
+        return text
+
+
+@dataclass(frozen=True, eq=False)
+class AssemblyStress:
+    """Stress state of every link at the assembled coordinates ``q``."""
+
+    links: tuple[LinkStress, ...]
+    q: NDArray[np.float64] = field(repr=False)
+
+    def as_dict(self) -> dict:
+        return {
+            "links": [link.as_dict() for link in self.links],
+            "max_von_mises_pa": max(link.max_von_mises_pa for link in self.links),
+            "strain_energy_j": sum(link.strain_energy_j for link in self.links),
+        }
+
+
+def element_von_mises(
+    nodes: ArrayLike, tets: ArrayLike, displacement: ArrayLike, E: float, nu: float
+) -> NDArray[np.float64]:
+    """Von Mises stress (Pa) of each P1 tetrahedron for nodal ``displacement`` (N, 3)."""
+    return von_mises_stress(element_strains(nodes, tets, displacement), E, nu)
+
+
+def nodal_average(n_points: int, tets: ArrayLike, element_values: ArrayLike, volumes: ArrayLike) -> NDArray[np.float64]:
+    """Volume-weighted average of element values at the vertices (for ParaView point data)."""
+    tets = np.asarray(tets, dtype=np.int64)
+    weights = np.repeat(np.abs(np.asarray(volumes, dtype=float))[:, None], 4, axis=1)
+    total = np.bincount(tets.ravel(), weights.ravel(), minlength=n_points)
+    summed = np.bincount(
+        tets.ravel(), (weights * np.asarray(element_values, dtype=float)[:, None]).ravel(), minlength=n_points
+    )
+    return summed / np.where(total > 0.0, total, 1.0)
+
+
+def nearest_feature(point: ArrayLike, features: Mapping[str, ArrayLike]) -> tuple[str, float]:
+    """Name of the feature (node cloud, e.g. a bore's interface nodes) nearest to ``point``, and the distance."""
+    point = np.asarray(point, dtype=float)
+    distances = {
+        name: float(np.min(np.linalg.norm(np.asarray(xyz, dtype=float) - point, axis=1)))
+        for name, xyz in features.items()
+    }
+    name = min(distances, key=distances.get)
+    return name, distances[name]
+
+
+def link_stress(index: int, fe: FEModel, displacement: ArrayLike, features: Mapping[str, ArrayLike]) -> LinkStress:
+    """Von Mises field, its maximum and where, and the strain energy of one link.
+
+    ``fe`` the link's FE model, ``displacement`` (N, 3) elastic displacements of all its nodes
+    (midside nodes included for P2) in the mesh axes, ``features``: name -> (k, 3) coordinates of
+    the nodes of each interface (bores, mounting face).
+    """
+    u = np.asarray(displacement, dtype=float).reshape(-1)
+    stress = von_mises_stress(fe.vertex_strains(u), fe.material.E, fe.material.nu).max(axis=1)
+    worst = int(np.argmax(stress))
+    centroid = fe.nodes[fe.mesh.tets[worst]].mean(axis=0)
+    name, distance = nearest_feature(centroid, features)
+    energy = 0.5 * float(u @ (fe.stiffness @ u))
+    return LinkStress(index, float(stress[worst]), centroid, name, distance, energy, stress)
+
+
+def joint_reactions(
+    names: Sequence[str], sizes: Sequence[int], driven: Sequence[bool], multipliers: ArrayLike
+) -> dict[str, dict[str, float]]:
+    """Force (N) and moment (N m) magnitudes of joints whose multipliers follow one another.
+
+    Rows per joint: three world forces, then rotation rows (Eq. (J2)); a driven joint's last row
+    is its driving torque (Eq. (J3)), reported as ``torque_nm`` and left out of ``moment_nm``.
+    """
+    lam = np.asarray(multipliers, dtype=float)
+    out, row = {}, 0
+    for name, size, is_driven in zip(names, sizes, driven):
+        rows = lam[row : row + size]
+        rotation = rows[3:-1] if is_driven else rows[3:]
+        out[name] = {"force_n": float(np.linalg.norm(rows[:3])), "moment_nm": float(np.linalg.norm(rotation))}
+        if is_driven:
+            out[name]["torque_nm"] = float(rows[-1])
+        row += size
+    return out
+
+
+def scene_assembly_stress(scene, q: ArrayLike, multipliers: ArrayLike | None = None) -> AssemblyStress:
+    """:func:`link_stress` of every link of ``scene`` at coordinates ``q``; with ``multipliers``
+    (ordered as ``scene.system.all_constraints``) also the reactions of the joints on each link."""
+    from ffrf.system.joints import MarkerJoint
+
+    q = np.asarray(q, dtype=float)
+    system = scene.system
+    reactions: dict[str, dict[str, float]] = {}
+    bodies_of: dict[str, tuple[int, ...]] = {}
+    if multipliers is not None:
+        lam = np.asarray(multipliers, dtype=float)
+        joints = [(k, c) for k, c in enumerate(system.all_constraints) if isinstance(c, MarkerJoint)]
+        for k, joint in joints:
+            reactions.update(
+                joint_reactions(
+                    [joint.name],
+                    [joint.size],
+                    [joint.angle is not None],
+                    lam[int(system.rows[k]) : int(system.rows[k + 1])],
+                )
+            )
+            bodies_of[joint.name] = tuple(joint.bodies)
+    out = []
+    for link in scene.links:
+        zeta = q[system.block(link.index)][7:]
+        features = {name: link.fe.nodes[itf.nodes] for name, itf in link.interfaces.items()}
+        stress = link_stress(link.index, link.fe, link.reduction.basis @ zeta, features)
+        own = {name: r for name, r in reactions.items() if link.index in bodies_of[name]}
+        out.append(
+            LinkStress(
+                stress.link,
+                stress.max_von_mises_pa,
+                stress.max_location_m,
+                stress.nearest_feature,
+                stress.feature_distance_m,
+                stress.strain_energy_j,
+                stress.element_von_mises,
+                own,
+            )
+        )
+    return AssemblyStress(tuple(out), q.copy())
+
+
+def write_assembly_vtu(path: str | Path, scene, stress: AssemblyStress) -> Path:
+    """The deformed assembly as one ``.vtu``: all links' tetrahedra at their current positions, point data
+    ``displacement`` (current minus reference, for "Warp By Vector"), ``elastic_displacement`` (world axes),
+    ``von_mises`` (Pa, volume-weighted vertex average), ``body``; cell data ``von_mises`` (Pa)."""
+    import meshio
+
+    from ffrf.output.paraview import _frame_points  # one definition of a body's current vertex positions
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    points, elastic, reference, tets, nodal, body, offset = [], [], [], [], [], [], 0
+    for link, link_result in zip(scene.links, stress.links):
+        fe = link.fe
+        n = len(fe.mesh.points)
+        current, world_elastic = _frame_points(fe, link.reduction.basis, stress.q[scene.system.block(link.index)])
+        points.append(current)
+        elastic.append(world_elastic)
+        reference.append(fe.nodes[:n])
+        tets.append(fe.mesh.tets + offset)
+        nodal.append(
+            nodal_average(n, fe.mesh.tets, link_result.element_von_mises, signed_volumes(fe.nodes[:n], fe.mesh.tets))
+        )
+        body.append(np.full(n, float(link.index)))
+        offset += n
+    points_all = np.vstack(points)
+    meshio.write(
+        path,
+        meshio.Mesh(
+            points_all,
+            [("tetra", np.vstack(tets))],
+            point_data={
+                "displacement": points_all - np.vstack(reference),
+                "elastic_displacement": np.vstack(elastic),
+                "von_mises": np.concatenate(nodal),
+                "body": np.concatenate(body),
+            },
+            cell_data={"von_mises": [np.concatenate([s.element_von_mises for s in stress.links])]},
+        ),
+    )
+    return path

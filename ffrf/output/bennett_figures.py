@@ -1,0 +1,150 @@
+"""Figures of Bennett runs in the layout of the paper's Fig. "deviation_errors": (a) the coupler's
+deviation from the ideal path (motion polynomial, Eq. (motion)) and (b) the driving torque at
+joint 3, both over the drive angle, one curve per run (the paper overlays its variants).
+
+The x axis is the drive angle turned since the start of the run (degrees; the ramp's 3 deg plus
+one revolution), so runs and other solvers' curves that start at the same pose line up.
+
+Entry points (all return ``(fig, ax)``, a bare matplotlib ``Figure`` rendered with Agg; with
+``path`` the figure is also saved):
+
+* :func:`plot_over_drive_angle` ``(series: {label: (angle_rad, values)}, ylabel, path=None)``:
+  the generic plot; values are drawn as given (already in display units);
+* :func:`plot_coupler_deviation` ``(runs, path=None, extra=None)``: |coupler_deviation| in mm;
+* :func:`plot_driving_torque` ``(runs, path=None, extra=None, magnitude=True)``: N mm, the
+  magnitude as in the paper ("joint torque magnitude at joint 3") or signed.
+
+``runs`` maps a label to a :class:`~ffrf.scenes.bennett_run.BennettResult`, a ``results.npz`` file or a
+directory holding one; ``extra`` maps labels to further ``(angle_rad, values)`` series in display
+units (e.g. the Exudyn twin's curve: angle from its start in rad, deviation in mm), drawn dashed.
+:func:`coupler_deviation_series` and :func:`driving_torque_series` give the curves as plotted.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Mapping, Union
+
+import numpy as np
+from matplotlib.figure import Figure
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "Series",
+    "Run",
+    "PAPER_COLORS",
+    "plot_over_drive_angle",
+    "run_sensors",
+    "coupler_deviation_series",
+    "driving_torque_series",
+    "plot_coupler_deviation",
+    "plot_driving_torque",
+]
+
+#: One curve: drive angle since the start (rad) and values in display units.
+Series = tuple[ArrayLike, ArrayLike]
+#: A run: a BennettResult, a results.npz file, or a directory holding results.npz.
+Run = Union[object, str, Path]
+
+#: The paper's colours (orange: stiff, blue: PLA) and two more for the misaligned variants.
+PAPER_COLORS = {"rigid": "tab:orange", "pla": "tab:blue", "pla1": "tab:green", "pla2": "tab:red"}
+
+
+def run_sensors(run: Run) -> Mapping[str, NDArray]:
+    """Sensors of a run (``drive_angle``, ``coupler_deviation``, ``driving_torque``, ...), SI units."""
+    if hasattr(run, "sensors"):
+        return run.sensors
+    path = Path(run)
+    if path.is_dir():
+        path = path / "results.npz"
+    with np.load(path) as data:
+        return {name: data[name] for name in data.files}
+
+
+def _angle_from_start(sensors: Mapping[str, NDArray]) -> NDArray[np.float64]:
+    angle = np.asarray(sensors["drive_angle"], dtype=float)
+    return angle - angle[0]
+
+
+def coupler_deviation_series(run: Run) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(drive angle since start in rad, |coupler point - ideal point at the same drive angle| in mm)."""
+    sensors = run_sensors(run)
+    return _angle_from_start(sensors), 1e3 * np.linalg.norm(sensors["coupler_deviation"], axis=1)
+
+
+def driving_torque_series(run: Run, magnitude: bool = True) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(drive angle since start in rad, driving torque at joint 3 in N mm, its magnitude by default)."""
+    sensors = run_sensors(run)
+    torque = 1e3 * np.asarray(sensors["driving_torque"], dtype=float)
+    return _angle_from_start(sensors), np.abs(torque) if magnitude else torque
+
+
+def plot_over_drive_angle(
+    series: Mapping[str, Series],
+    ylabel: str,
+    path: str | Path | None = None,
+    title: str | None = None,
+    dashed: tuple[str, ...] = (),
+):
+    """One line per ``label: (angle_rad, values)``, x in degrees; labels in ``dashed`` drawn dashed.
+    Known variant labels (``rigid``, ``pla``, ...) get :data:`PAPER_COLORS`."""
+    # A bare Figure renders with the Agg canvas: no pyplot state, no display, no global backend switch.
+    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
+    ax = fig.subplots()
+    for label, (angle, values) in series.items():
+        style = "--" if label in dashed else "-"
+        ax.plot(
+            np.degrees(np.asarray(angle, dtype=float)),
+            np.asarray(values, dtype=float),
+            style,
+            color=PAPER_COLORS.get(label),
+            label=label,
+            linewidth=1.4,
+        )
+    ax.set_xlabel("drive angle since start (deg)")
+    ax.set_ylabel(ylabel)
+    ax.set_xlim(left=0.0)
+    ax.grid(True, alpha=0.3)
+    if title:
+        ax.set_title(title)
+    if series:
+        ax.legend()
+    if path is not None:
+        fig.savefig(path, dpi=150)
+    return fig, ax
+
+
+def _overlay(runs: Mapping[str, Run], extract, extra: Mapping[str, Series] | None) -> dict[str, Series]:
+    series = {label: extract(run) for label, run in runs.items()}
+    series.update(extra or {})
+    return series
+
+
+def plot_coupler_deviation(
+    runs: Mapping[str, Run], path: str | Path | None = None, extra: Mapping[str, Series] | None = None
+):
+    """Paper's Fig. "deviation error": coupler deviation from the ideal path (mm) over the drive angle."""
+    return plot_over_drive_angle(
+        _overlay(runs, coupler_deviation_series, extra),
+        "coupler deviation from the ideal path (mm)",
+        path,
+        "Deviation from the ideal trajectory",
+        dashed=tuple(extra or ()),
+    )
+
+
+def plot_driving_torque(
+    runs: Mapping[str, Run],
+    path: str | Path | None = None,
+    extra: Mapping[str, Series] | None = None,
+    magnitude: bool = True,
+):
+    """Paper's Fig. "joint torque magnitude at joint 3" (N mm) over the drive angle."""
+    label = "driving torque magnitude at joint 3 (N mm)" if magnitude else "driving torque at joint 3 (N mm)"
+    return plot_over_drive_angle(
+        _overlay(runs, lambda run: driving_torque_series(run, magnitude), extra),
+        label,
+        path,
+        "Driving torque",
+        dashed=tuple(extra or ()),
+    )

@@ -1,0 +1,1 @@
+"""Craig-Bampton reduction, inertia invariants, reduced-body files and mode post-processing."""

@@ -1,0 +1,421 @@
+"""Hurty/Craig-Bampton (HCB) component modes with rigid (RBE2-type) interfaces.
+
+u = Psi q with static (constraint) modes, i.e. unit rigid motions of one interface with
+the others fixed and the interior statically condensed (Craig and Bampton 1968, eq. 6;
+Hurty 1965; ``docs/formulation.md`` eq. (HCB-3)), and the lowest fixed-interface normal
+modes (Craig and Bampton 1968, eq. 4; eq. (HCB-4)). Each interface moves rigidly about
+its weighted centre: 6 coordinates, translations then rotations (eq. (HCB-2)). The
+default reference condition drops the first interface's static modes, as Exudyn's
+``ComputeHurtyCraigBamptonModes(..., computationMode=RBE2, excludeRigidBodyMotion=True)``:
+every column vanishes there and the frame is attached to it (eq. (HCB-5)). Rotation
+columns follow the right-hand rule u_j = e_i x (x_j - p0); Exudyn's have the opposite sign.
+Input is duck-typed: ``.nodes`` (N, 3), ``.mass``, ``.stiffness`` (3N, 3N), DOFs [x0, y0, z0, x1, ...].
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import eigh
+from scipy.sparse.linalg import LinearOperator, splu
+
+from ffrf.errors import InterfaceError, ReductionError
+from ffrf.numerics.eigen import fix_signs, shift_invert_eigsh
+
+__all__ = [
+    "REFERENCE_CONDITIONS",
+    "RigidInterface",
+    "CraigBamptonBasis",
+    "craig_bampton",
+    "rigid_interface_map",
+    "rigid_interfaces",
+    "rigid_body_basis",
+    "checked_model",
+    "lowest_eigenpairs",
+    "count_eigenvalues_below",
+]
+
+logger = logging.getLogger(__name__)
+
+#: "interface": frame attached to the first interface (Exudyn RBE2, excludeRigidBodyMotion=True);
+#: "mean_axis": linearised Tisserand / Buckens conditions Phi_t^T M Psi = 0, x~^T M Psi = 0;
+#: "none": all 6K static modes kept (the basis contains the rigid-body motions).
+REFERENCE_CONDITIONS = ("interface", "mean_axis", "none")
+
+# Rank test of the rigid motions seen by the interfaces (singular value ratio).
+_RESTRAINT_RANK_TOL = 1e-8
+
+# Below this many interior DOFs the fixed-interface problem is solved densely (exact and cheap).
+_DENSE_LIMIT = 600
+# Relative eigenvalue gap below which two eigenvalues count as one repeated (clustered) value.
+_CLUSTER_REL_GAP = 1e-6
+# Pivot of the LDL^T of K_ii below this fraction of max|diag K_ii|: K_ii is singular.
+_PIVOT_REL_TOL = 1e-13
+
+_NOT_RESTRAINED = "interfaces do not restrain the body; check that interface node sets are non-empty and not collinear"
+
+
+@dataclass(frozen=True, eq=False)
+class RigidInterface:
+    """One rigid (RBE2-type) interface: node indices (order as given), weights (>= 0, sum 1)
+    and weighted centre p0 = sum_j w_j x_j (eq. (HCB-1))."""
+
+    nodes: NDArray[np.int64]
+    weights: NDArray[np.float64]
+    center: NDArray[np.float64]
+
+    @property
+    def dofs(self) -> NDArray[np.int64]:
+        """DOF indices [x, y, z] of every node, node by node."""
+        return (3 * self.nodes[:, None] + np.arange(3)).reshape(-1)
+
+
+@dataclass(frozen=True, eq=False)
+class CraigBamptonBasis:
+    """Result of :func:`craig_bampton`.
+
+    Attributes
+    ----------
+    basis : (3N, m) mode matrix Psi, static modes first, then fixed-interface modes.
+    n_static_modes : number of static (constraint) columns (6 per retained interface).
+    fixed_interface_frequencies_hz : (n_m,) frequencies of the fixed-interface modes, ascending.
+    reduced_mass, reduced_stiffness : (m, m) Psi^T M Psi and Psi^T K Psi (symmetrised).
+    interfaces : the rigid interfaces, first = frame interface.
+    mode_labels : one text label per column, e.g. ``"interface 1 rx"``, ``"fixed-interface 3"``.
+    reference : one of :data:`REFERENCE_CONDITIONS`.
+    orthonormalized : True if the columns were rotated to diagonalise reduced M and K.
+    """
+
+    basis: NDArray[np.float64]
+    n_static_modes: int
+    fixed_interface_frequencies_hz: NDArray[np.float64]
+    reduced_mass: NDArray[np.float64]
+    reduced_stiffness: NDArray[np.float64]
+    interfaces: tuple[RigidInterface, ...]
+    mode_labels: tuple[str, ...]
+    reference: str = "interface"
+    orthonormalized: bool = False
+
+    @property
+    def n_modes(self) -> int:
+        return self.basis.shape[1]
+
+    def reduced_damping(self, beta: float = 0.005) -> NDArray[np.float64]:
+        """Stiffness-proportional damping D = beta K_red (eq. (HCB-8)); the paper uses beta = 0.005 s."""
+        if not (np.isfinite(beta) and beta >= 0.0):
+            raise ReductionError(f"damping factor beta={beta!r} must be finite and >= 0 (seconds)")
+        return beta * self.reduced_stiffness
+
+    def summary(self) -> str:
+        """Mode count and order as text, for logs and reports."""
+        lines = [
+            f"HCB basis: {self.n_modes} modes ({self.n_static_modes} static, "
+            f"{len(self.fixed_interface_frequencies_hz)} fixed-interface), reference={self.reference!r}, "
+            f"orthonormalized={self.orthonormalized}"
+        ]
+        lines += [f"  {i:3d}: {label}" for i, label in enumerate(self.mode_labels)]
+        return "\n".join(lines)
+
+
+def checked_model(fe_model: Any) -> tuple[NDArray[np.float64], sp.csr_matrix, sp.csr_matrix]:
+    """(nodes, mass, stiffness) of a duck-typed FE model, checked for shape and NaN/inf."""
+    nodes = np.asarray(fe_model.nodes, dtype=float)
+    if nodes.ndim != 2 or nodes.shape[1] != 3 or not np.all(np.isfinite(nodes)):
+        raise ReductionError(f"fe_model.nodes must be a finite (N, 3) array, got shape {nodes.shape}")
+    matrices = []
+    for name in ("mass", "stiffness"):
+        matrix = sp.csr_matrix(getattr(fe_model, name), dtype=float)
+        if matrix.shape != (3 * len(nodes),) * 2:
+            raise ReductionError(
+                f"{name} matrix has shape {matrix.shape}, expected {(3 * len(nodes),) * 2} for "
+                f"{len(nodes)} nodes (DOF layout [x0, y0, z0, x1, ...])"
+            )
+        if not np.all(np.isfinite(matrix.data)):
+            raise ReductionError(f"{name} matrix contains NaN or inf entries; check material data and elements")
+        matrices.append(matrix)
+    return nodes, matrices[0], matrices[1]
+
+
+def rigid_interface_map(nodes: ArrayLike, center: ArrayLike) -> NDArray[np.float64]:
+    """(3n, 6) map T from interface motion [t; theta] to nodal displacements (eq. (HCB-2)).
+
+    u_j = t + theta x (x_j - p0): columns 0-2 unit translations, 3-5 unit
+    rotations about x, y, z through ``center`` (right-hand rule). Exudyn uses
+    Skew(x_j - p0) for the rotation block, i.e. the opposite sign.
+    """
+    r = np.asarray(nodes, dtype=float) - np.asarray(center, dtype=float)
+    t = np.zeros((len(r), 3, 6))
+    t[:, :, :3] = np.eye(3)
+    for axis in range(3):
+        t[:, :, 3 + axis] = np.cross(np.eye(3)[axis], r)
+    return t.reshape(-1, 6)
+
+
+def rigid_body_basis(nodes: ArrayLike) -> NDArray[np.float64]:
+    """(3N, 6) rigid-body motions of all nodes about their centroid (translations, rotations)."""
+    nodes = np.asarray(nodes, dtype=float)
+    return rigid_interface_map(nodes, nodes.mean(axis=0))
+
+
+def rigid_interfaces(
+    nodes: NDArray[np.float64], interfaces: Sequence[Any], weights: Sequence[ArrayLike] | None = None
+) -> tuple[RigidInterface, ...]:
+    """Validate interface node sets and weights; compute the weighted centres.
+
+    ``interfaces`` holds node-index arrays or objects with ``.nodes`` and
+    ``.weights`` (e.g. :class:`ffrf.fe.interfaces.InterfaceNodes`). Weights default
+    to the objects' weights, else uniform 1/n_k (as Exudyn); they are normalised to sum 1.
+    """
+    if len(interfaces) == 0:
+        raise InterfaceError(
+            "no interfaces given; pass a list of node-index arrays, the first one being the frame interface"
+        )
+    if weights is not None and len(weights) != len(interfaces):
+        raise InterfaceError(f"{len(weights)} weight arrays for {len(interfaces)} interfaces; give one per interface")
+    result, seen = [], np.zeros(len(nodes), dtype=np.int64)
+    for k, item in enumerate(interfaces):
+        ids = np.asarray(getattr(item, "nodes", item))
+        if ids.size == 0:
+            raise InterfaceError(f"interface {k} has an empty node set; select at least 3 non-collinear nodes")
+        if not np.issubdtype(ids.dtype, np.integer):
+            raise InterfaceError(f"interface {k}: node indices must be integers, got dtype {ids.dtype}")
+        ids = ids.astype(np.int64).reshape(-1)
+        if ids.min() < 0 or ids.max() >= len(nodes):
+            bad = ids[(ids < 0) | (ids >= len(nodes))][:5].tolist()
+            raise InterfaceError(
+                f"interface {k}: node index out of range [0, {len(nodes)}): {bad}; indices are rows of fe_model.nodes"
+            )
+        if len(np.unique(ids)) != len(ids):
+            raise InterfaceError(f"interface {k} lists a node more than once; pass unique node indices")
+        seen[ids] += 1
+        if np.any(seen[ids] > 1):
+            raise InterfaceError(
+                f"interface {k} overlaps an earlier interface (shared nodes "
+                f"{ids[seen[ids] > 1][:5].tolist()}); interfaces must be disjoint node sets"
+            )
+        w = weights[k] if weights is not None else getattr(item, "weights", None)
+        w = np.full(len(ids), 1.0 / len(ids)) if w is None else np.asarray(w, dtype=float).reshape(-1)
+        if len(w) != len(ids):
+            raise InterfaceError(f"interface {k}: {len(w)} weights for {len(ids)} nodes; give one weight per node")
+        if not (np.all(np.isfinite(w)) and np.all(w >= 0.0) and w.sum() > 0.0):
+            raise InterfaceError(f"interface {k}: weights must be finite, >= 0 and not all zero")
+        w = w / w.sum()
+        result.append(RigidInterface(ids, w, w @ nodes[ids]))
+    return tuple(result)
+
+
+def _check_restraint(nodes: NDArray, boundary_dofs: NDArray[np.int64]) -> None:
+    """Raise if a rigid motion leaves every interface node at rest: for a connected body K_ii is
+    regular iff the rigid modes restricted to the boundary DOFs have rank 6."""
+    rigid = rigid_body_basis(nodes)
+    rigid[:, 3:] /= max(np.ptp(nodes, axis=0).max(), np.finfo(float).tiny)  # rotations in length units
+    s = np.linalg.svd(rigid[boundary_dofs], compute_uv=False)
+    if len(s) < 6 or s[-1] <= _RESTRAINT_RANK_TOL * s[0]:
+        raise ReductionError(_NOT_RESTRAINED)
+
+
+def _symmetric_lu(matrix: sp.csc_matrix):
+    """SuperLU in symmetric mode: diagonal pivots only, so U's diagonal is D of A = L D L^T."""
+    return splu(matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+
+
+def factorize_spd(matrix: sp.csc_matrix, singular_message: str) -> Callable[[NDArray], NDArray]:
+    """Factorise a symmetric positive definite sparse matrix once and return its solver; raise
+    :class:`ReductionError` with ``singular_message`` on a non-positive or off-diagonal pivot."""
+    try:
+        lu = _symmetric_lu(matrix)
+    except RuntimeError as exc:
+        raise ReductionError(f"{singular_message} (sparse LU: {exc})") from exc
+    pivots = lu.U.diagonal()
+    if not np.array_equal(lu.perm_r, lu.perm_c) or pivots.min() <= _PIVOT_REL_TOL * abs(matrix.diagonal()).max():
+        raise ReductionError(singular_message)
+    return lu.solve
+
+
+def count_eigenvalues_below(stiffness: sp.spmatrix, mass: sp.spmatrix, sigma: float) -> int | None:
+    """Number of eigenvalues of K x = lambda M x below ``sigma``: the negative pivots of
+    K - sigma M = L D L^T (Sturm sequence property; Bathe, Finite Element Procedures, 2nd ed.,
+    sec. 11.4.3). None if the factorisation pivoted off the diagonal (count unavailable)."""
+    lu = _symmetric_lu(sp.csc_matrix(stiffness - sigma * mass))
+    if not np.array_equal(lu.perm_r, lu.perm_c):
+        return None
+    return int(np.count_nonzero(lu.U.diagonal() < 0.0))
+
+
+def _ritz_cleanup(stiffness, mass, vectors: NDArray):
+    """Rayleigh-Ritz on the computed subspace: exact M-orthonormality, sorted, deterministic signs."""
+    values, q = eigh(vectors.T @ (stiffness @ vectors), vectors.T @ (mass @ vectors))
+    vectors = vectors @ q
+    return values, fix_signs(vectors)
+
+
+def _verified_lanczos(stiffness, mass, n: int, solve, verify_count: bool):
+    """Shift-invert Lanczos about 0 with guard modes; Sturm-checked count, re-run if modes were missed."""
+    size, guard = stiffness.shape[0], max(4, n // 4)
+    request = min(n + guard, size - 1)
+    inverse = LinearOperator(stiffness.shape, matvec=solve, dtype=float)
+    for _ in range(4):
+        values, vectors = shift_invert_eigsh(stiffness, mass, request, 0.0, inverse)
+        gaps = np.flatnonzero(values[n:] > values[n - 1 : -1] * (1.0 + _CLUSTER_REL_GAP)) + n
+        if not verify_count or request == size - 1:
+            return values, vectors
+        if len(gaps) == 0:  # the guard modes are all in one cluster with mode n: look further
+            request = min(2 * request, size - 1)
+            continue
+        j = int(gaps[0])
+        count = count_eigenvalues_below(stiffness, mass, 0.5 * (values[j - 1] + values[j]))
+        if count is None:
+            logger.warning("Sturm count unavailable (off-diagonal pivoting); fixed-interface mode count not verified")
+        if count is None or count == j:
+            return values, vectors
+        logger.warning("shift-invert Lanczos missed %d of the lowest %d eigenvalues; recomputing", count - j, count)
+        request = min(count + guard, size - 1)
+    raise ReductionError(
+        f"could not verify the lowest {n} fixed-interface modes after 4 attempts; "
+        "ask for fewer modes or pass verify_mode_count=False"
+    )
+
+
+def lowest_eigenpairs(
+    stiffness: sp.csc_matrix,
+    mass: sp.csc_matrix,
+    n: int,
+    solve: Callable[[NDArray], NDArray],
+    *,
+    verify_count: bool = True,
+):
+    """The n lowest eigenpairs of K x = lambda M x (K positive definite, ``solve`` applies K^-1), M-orthonormal.
+
+    Shift-invert Lanczos (ARPACK ``eigsh``) with a few guard modes; with
+    ``verify_count`` a Sturm count (:func:`count_eigenvalues_below`) at a shift in
+    the first clear gap above the n-th value detects modes missed in clusters.
+    Small problems are solved densely.
+    """
+    size = stiffness.shape[0]
+    if n == 0:
+        return np.zeros(0), np.zeros((size, 0))
+    if size <= _DENSE_LIMIT:
+        values, vectors = eigh(stiffness.toarray(), mass.toarray(), subset_by_index=[0, min(n, size - 1)])
+    else:
+        values, vectors = _verified_lanczos(stiffness, mass, n, solve, verify_count)
+    if len(values) > n and values[n] <= values[n - 1] * (1.0 + _CLUSTER_REL_GAP):
+        logger.warning(
+            "fixed-interface modes %d and %d have the same frequency: the basis holds an arbitrary part "
+            "of a repeated-mode space; choose n_modes so that repeated modes are kept together",
+            n,
+            n + 1,
+        )
+    return _ritz_cleanup(stiffness, mass, vectors[:, :n])
+
+
+def _mean_axis_projection(basis: NDArray, mass: sp.csr_matrix, nodes: NDArray) -> NDArray[np.float64]:
+    """Remove the M-projection onto the rigid modes: Phi_t^T M Psi = 0 and x~^T M Psi = 0 (eq. (HCB-6))."""
+    rigid = rigid_body_basis(nodes)
+    m_rigid = mass @ rigid
+    return basis - rigid @ np.linalg.solve(rigid.T @ m_rigid, m_rigid.T @ basis)
+
+
+def craig_bampton(
+    fe_model: Any,
+    interfaces: Sequence[Any],
+    n_modes: int,
+    weights: Sequence[ArrayLike] | None = None,
+    *,
+    reference: str = "interface",
+    orthonormalize: bool = False,
+    verify_mode_count: bool = True,
+) -> CraigBamptonBasis:
+    """Hurty/Craig-Bampton basis with rigid interfaces (Craig and Bampton 1968; Hurty 1965).
+
+    The mode count and order are logged (INFO) and available as ``result.summary()``.
+
+    Parameters
+    ----------
+    fe_model : object with ``.nodes`` (N, 3), ``.mass``, ``.stiffness`` (3N, 3N) sparse.
+    interfaces : node-index arrays into ``fe_model.nodes`` (or objects with ``.nodes`` and
+        ``.weights``); the first is the frame interface.
+    n_modes : number n_m of fixed-interface normal modes (>= 0).
+    weights : optional weight arrays, one per interface (default: the objects' weights or uniform).
+    reference : see :data:`REFERENCE_CONDITIONS`; "interface" reproduces Exudyn's
+        ``excludeRigidBodyMotion=True``.
+    orthonormalize : rotate the basis so that reduced M = I and reduced K is diagonal
+        (same span; columns ordered by frequency; eq. (HCB-7)).
+    verify_mode_count : check with a Sturm sequence count that no fixed-interface mode was missed.
+    """
+    if reference not in REFERENCE_CONDITIONS:
+        raise ReductionError(f"reference={reference!r} is unknown; choose one of {REFERENCE_CONDITIONS}")
+    if int(n_modes) != n_modes or n_modes < 0:
+        raise ReductionError(f"n_modes={n_modes!r} must be a non-negative integer")
+    nodes, mass, stiffness = checked_model(fe_model)
+    n_dofs = 3 * len(nodes)
+    rigid = rigid_interfaces(nodes, interfaces, weights)
+
+    boundary = np.concatenate([itf.dofs for itf in rigid])
+    _check_restraint(nodes, boundary)
+    interior = np.setdiff1d(np.arange(n_dofs), boundary)
+    if n_modes > len(interior) - 1:
+        raise ReductionError(
+            f"too many modes requested: n_modes={n_modes}, but the interior has only "
+            f"{len(interior)} DOFs; ask for at most {max(len(interior) - 1, 0)} or refine the mesh"
+        )
+    k_rows = stiffness[interior]
+    k_ii = k_rows[:, interior].tocsc()
+    k_ib = k_rows[:, boundary]
+    m_ii = mass[interior][:, interior].tocsc()
+    solve = factorize_spd(k_ii, _NOT_RESTRAINED)
+
+    # Static modes, eq. (HCB-3): boundary rows = T, interior rows = -K_ii^{-1} K_ib T.
+    kept = list(range(0 if reference == "none" else 1, len(rigid)))
+    offsets = np.cumsum([0] + [len(itf.dofs) for itf in rigid])
+    t_all = np.zeros((len(boundary), 6 * len(kept)))
+    for col, k in enumerate(kept):
+        t_all[offsets[k] : offsets[k + 1], 6 * col : 6 * col + 6] = rigid_interface_map(
+            nodes[rigid[k].nodes], rigid[k].center
+        )
+    n_static = t_all.shape[1]
+    basis = np.zeros((n_dofs, n_static + n_modes))
+    basis[boundary, :n_static] = t_all
+    if n_static:
+        basis[interior, :n_static] = solve(-(k_ib @ t_all))
+
+    # Fixed-interface modes, eq. (HCB-4), with the factorisation of K_ii reused for shift-invert.
+    eigenvalues, vectors = lowest_eigenpairs(k_ii, m_ii, n_modes, solve, verify_count=verify_mode_count)
+    basis[interior, n_static:] = vectors
+    frequencies = np.sqrt(np.clip(eigenvalues, 0.0, None)) / (2.0 * np.pi)
+    labels = [f"interface {k} {c}" for k in kept for c in ("tx", "ty", "tz", "rx", "ry", "rz")]
+    labels += [f"fixed-interface {i + 1} ({f:.6g} Hz)" for i, f in enumerate(frequencies)]
+
+    if reference == "mean_axis":
+        basis = _mean_axis_projection(basis, mass, nodes)
+        labels = [f"{label}, mean-axis projected" for label in labels]
+    reduced_mass, reduced_stiffness = _reduced_matrices(basis, mass, stiffness)
+    if orthonormalize:
+        basis, reduced_mass, reduced_stiffness, labels = _orthonormalized(basis, reduced_mass, reduced_stiffness)
+    result = CraigBamptonBasis(
+        basis, n_static, frequencies, reduced_mass, reduced_stiffness, rigid, tuple(labels), reference, orthonormalize
+    )
+    logger.info("%s", result.summary())
+    return result
+
+
+def _symmetric(a: NDArray) -> NDArray[np.float64]:
+    return 0.5 * (a + a.T)
+
+
+def _reduced_matrices(basis: NDArray, mass: sp.csr_matrix, stiffness: sp.csr_matrix):
+    """Psi^T M Psi and Psi^T K Psi, symmetrised (round-off only)."""
+    return _symmetric(basis.T @ (mass @ basis)), _symmetric(basis.T @ (stiffness @ basis))
+
+
+def _orthonormalized(basis: NDArray, m_red: NDArray, k_red: NDArray):
+    """Psi V with K_red V = M_red V Lambda, V^T M_red V = I (eq. (HCB-7)); the span, and hence the
+    reference condition (e.g. zero on the frame interface), is unchanged."""
+    values, v = eigh(k_red, m_red)
+    v = fix_signs(v)
+    labels = [f"orthonormal {i + 1} ({f:.6g} Hz)" for i, f in enumerate(np.sqrt(np.clip(values, 0, None)) / 2 / np.pi)]
+    return basis @ v, _symmetric(v.T @ m_red @ v), _symmetric(v.T @ k_red @ v), labels

@@ -1,0 +1,295 @@
+r"""Run the Bennett scene quasi-statically or dynamically, evaluate its sensors, write results.
+
+Sensors (names as in the project's issues): ``drive_angle`` (link 3 about h3 relative to
+the base, rad), ``driving_torque`` (N m, applied to link 3 about the joint axis),
+``coupler_point`` (mean of link 2's two joint points, m), ``joint_angles`` (4 relative
+rotations about the joint axes, rad), ``link{k}_node{j}`` (three tracked surface nodes of
+links 1, 2, 3, m), ``energy_kinetic``, ``energy_strain``, ``energy_potential`` (J) and
+``constraint_residual`` (largest |g|), ``joint_reactions`` (rows x 5 x 6: clamp, joints 0..3;
+force and torque on each joint's side 1 in its joint frame 0, N and N m, :mod:`ffrf.system.reactions`;
+names in the metadata's ``joint_reaction_names``). The ideal coupler point at the same drive angle
+comes from the motion polynomial (:mod:`kinematics`), giving ``coupler_deviation`` (same
+drive angle) and ``coupler_distance_to_path`` (closest point of the ideal curve).
+
+An energy balance closes the books: the drive's work against the changes of kinetic,
+gravity and strain energy plus the damping dissipation (``energy_balance_residual``).
+Results are written as ``DIR/results.npz`` (``time`` and one array per sensor, SI units)
+and ``DIR/metadata.json`` (scene settings, versions, timings, summary, and under ``assembly``
+the stress state of the assembled links, :mod:`ffrf.output.assembly_stress`).
+"""
+
+from __future__ import annotations
+
+import logging
+import platform
+import time as wallclock
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.integrate import cumulative_simpson
+
+from ffrf.body.flexible_body import node_positions
+from ffrf.numerics.small_linalg import cross3
+from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
+from ffrf.output.tables import write_results as write_tables
+from ffrf.scenes.bennett_scene import BennettScene
+from ffrf.scenes.builder import assemble
+from ffrf.solvers.simulate import MODES, simulate
+from ffrf.system.joints import MarkerJoint
+from ffrf.system.packed_system import newton_model
+from ffrf.system.reactions import joint_poses, joint_reactions
+
+__all__ = [
+    "BennettResult",
+    "run_bennett",
+    "evaluate_sensors",
+    "ideal_coupler_points",
+    "choose_mode",
+    "inertia_number",
+    "write_results",
+    "energy_balance",
+]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class BennettResult:
+    """Output times, sensors (name -> array), the coordinates ``q`` (rows = times), metadata and
+    the stress state of the static assembly the run started from."""
+
+    time: NDArray[np.float64]
+    sensors: dict[str, NDArray[np.float64]]
+    q: NDArray[np.float64]
+    metadata: dict = field(default_factory=dict)
+    assembly: AssemblyStress | None = None
+
+    def summary(self) -> dict[str, float]:
+        s = self.sensors
+        return {
+            "max_coupler_deviation_m": float(np.max(np.linalg.norm(s["coupler_deviation"], axis=1))),
+            "max_coupler_distance_to_path_m": float(np.max(s["coupler_distance_to_path"])),
+            "max_abs_driving_torque_Nm": float(np.max(np.abs(s["driving_torque"]))),
+            "max_constraint_residual": float(np.max(s["constraint_residual"])),
+            "energy_balance_relative": float(
+                np.max(np.abs(s["energy_balance_residual"])) / max(np.max(np.abs(s["energy_drive_work"])), 1e-300)
+            ),
+        }
+
+
+#: Largest inertia number (:func:`inertia_number`) for which quasi-static is chosen.
+INERTIA_LIMIT = 0.01
+
+
+def inertia_number(scene: BennettScene) -> float:
+    """Inertial against gravity forces of the moving links: ``max(omega^2, alpha_ramp) L / g`` with
+    the longest link ``L`` (m), the drive's rate ``omega`` and the ramp's peak angular acceleration
+    ``alpha_ramp`` (a Froude number; infinite without gravity). Measured on the PLA scene
+    (``bench/hard_cases.py``, speed case): the quasi-static driving torque is off by about 0.75 times
+    this number of its peak (0.28 % at 1 rpm, 2.7 % at 10 rpm, 28 % at 60 rpm)."""
+    g = float(np.linalg.norm(scene.gravity))
+    omega = float(scene.drive.omega)
+    alpha = float(np.max(np.abs(scene.drive.acceleration(np.linspace(0.0, scene.drive.ramp_time, 65)))))
+    length = float(max(scene.linkage.a))
+    return float("inf") if g == 0.0 else max(omega * omega, alpha) * length / g
+
+
+def choose_mode(scene: BennettScene) -> tuple[str, float]:
+    """``quasi_static`` when the drive is slow compared with the links' vibrations (the time to
+    turn one radian at full speed against the longest fixed-interface period of any link, ratio
+    > 100) *and* with gravity (:func:`inertia_number` below :data:`INERTIA_LIMIT`: inertia
+    changes the driving torque by less than about 1 %), else ``dynamic``. Returns the mode and
+    the vibration ratio. The second test matters: at 60 rpm the vibration ratio is still about
+    100 while inertia changes the torque by 28 % (``docs/hard_cases.md``)."""
+    longest = max(
+        1.0 / float(link.reduction.fixed_interface_frequencies_hz[0])
+        for link in scene.links
+        if link.reduction.fixed_interface_frequencies_hz.size
+    )
+    ratio = (1.0 / scene.drive.omega) / longest
+    slow = ratio > 100.0 and inertia_number(scene) < INERTIA_LIMIT
+    return ("quasi_static" if slow else "dynamic"), ratio
+
+
+def _joints(scene: BennettScene) -> list[MarkerJoint]:
+    return [c for c in scene.system.constraints if isinstance(c, MarkerJoint) and c.name != "clamp"]
+
+
+def _relative_angle(poses: tuple) -> float:
+    """Rotation of side 1 against side 0 about z0 (rad), from :func:`ffrf.system.reactions.joint_poses`."""
+    _, axes0, _, axes1 = poses
+    return float(np.arctan2(cross3(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0]))
+
+
+def ideal_coupler_points(scene: BennettScene, drive_angles: NDArray) -> NDArray[np.float64]:
+    """Coupler point of the ideal linkage (motion polynomial) at the given drive angles."""
+    linkage = scene.linkage
+    t = linkage.parameter_from_joint(linkage.home_theta[3] - np.asarray(drive_angles), joint=3)
+    return linkage.coupler_pose(t).act(linkage.coupler_point())
+
+
+def _distance_to_polyline(points: NDArray, curve: NDArray) -> NDArray[np.float64]:
+    start, end = curve, np.roll(curve, -1, axis=0)
+    seg = end - start
+    seg2 = np.einsum("ij,ij->i", seg, seg)
+    out = np.empty(len(points))
+    chunk = 32  # points per vectorised block: (32, segments, 3) temporaries of a few MB
+    for k in range(0, len(points), chunk):
+        rel = points[k : k + chunk, None, :] - start[None]
+        s = np.clip(np.einsum("cij,ij->ci", rel, seg) / seg2, 0.0, 1.0)
+        gap = rel - s[..., None] * seg
+        out[k : k + chunk] = np.sqrt(np.min(np.einsum("cij,cij->ci", gap, gap), axis=1))
+    return out
+
+
+def evaluate_sensors(
+    scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray | None, multipliers: NDArray
+) -> dict[str, NDArray]:
+    """All sensors of the module docstring at every output row."""
+    system = scene.system
+    model = newton_model(system)  # its constraint values: the fast path's kernel when supported
+    joints = _joints(scene)
+    tracked = scene.tracked_nodes
+    sensors: dict[str, list] = {
+        k: []
+        for k in (
+            "drive_angle",
+            "driving_torque",
+            "coupler_point",
+            "joint_angles",
+            "energy_kinetic",
+            "energy_strain",
+            "energy_potential",
+            "constraint_residual",
+            "joint_reactions",
+        )
+    }
+    for k, nodes in tracked.items():
+        for j in range(len(nodes)):
+            sensors[f"link{k}_node{j}"] = []
+    for row, t in enumerate(time):
+        qq = q[row]
+        sensors["drive_angle"].append(scene.drive_angle(float(t)))
+        sensors["driving_torque"].append(multipliers[row, -1])
+        # (p0, axes0, p1, axes1) per joint, reused by the reactions below
+        poses = {j.name: joint_poses(j, [qq[system.block(i)] for i in j.bodies]) for j in joints}
+        sensors["joint_angles"].append([_relative_angle(poses[j.name]) for j in joints])
+        # Link 2 is the far side of joint 1 and the near side of joint 2 (point p1 and point p0).
+        sensors["coupler_point"].append(0.5 * (poses[joints[1].name][2] + poses[joints[2].name][0]))
+        energies = system.energies(qq, np.zeros_like(qq) if qd is None else qd[row])
+        sensors["energy_kinetic"].append(energies["kinetic"])
+        sensors["energy_strain"].append(energies["strain"])
+        sensors["energy_potential"].append(energies["potential"])
+        sensors["constraint_residual"].append(np.abs(model.constraint_values(qq, float(t))).max())
+        reactions = joint_reactions(system, qq, multipliers[row], float(t), poses)
+        sensors["joint_reactions"].append([np.concatenate([r.force_local, r.torque_local]) for r in reactions.values()])
+        for k, nodes in tracked.items():
+            positions = node_positions(
+                qq[system.block(k)], scene.links[k].fe.nodes, scene.links[k].reduction.basis, nodes
+            )
+            for j, position in enumerate(positions):
+                sensors[f"link{k}_node{j}"].append(position)
+    out = {k: np.array(v) for k, v in sensors.items()}
+    ideal = ideal_coupler_points(scene, out["drive_angle"])
+    out["coupler_ideal"] = ideal
+    out["coupler_deviation"] = out["coupler_point"] - ideal
+    curve = ideal_coupler_points(scene, scene.start_angle + np.linspace(0.0, 2 * np.pi, 4000, endpoint=False))
+    out["coupler_distance_to_path"] = _distance_to_polyline(out["coupler_point"], curve)
+    out.update(energy_balance(scene, time, out, qd))
+    return out
+
+
+def _cumulative_integral(values: NDArray, x: NDArray) -> NDArray:
+    """Cumulative Simpson integral (fourth order for smooth samples; trapezoid below 3 samples)."""
+    if len(x) < 3:
+        return np.concatenate([[0.0], np.cumsum(0.5 * (values[1:] + values[:-1]) * np.diff(x))])
+    return cumulative_simpson(values, x=x, initial=0.0)
+
+
+def energy_balance(scene: BennettScene, time: NDArray, sensors: dict, qd: NDArray | None) -> dict[str, NDArray]:
+    """Work of the drive (integral of torque over the drive angle), damping dissipation (integral of
+    zetad^T D zetad over time) and the balance residual W - (dE_kin + dE_pot + dE_strain + D)."""
+    work = _cumulative_integral(sensors["driving_torque"], sensors["drive_angle"])
+    if qd is None:
+        dissipated = np.zeros_like(work)
+    else:
+        rate = np.array(
+            [
+                sum(
+                    float(v[scene.system.block(k)][7:] @ link.body.damping @ v[scene.system.block(k)][7:])
+                    for k, link in enumerate(scene.links)
+                )
+                for v in qd
+            ]
+        )
+        dissipated = _cumulative_integral(rate, time)
+    stored = sum(
+        sensors[f"energy_{kind}"] - sensors[f"energy_{kind}"][0] for kind in ("kinetic", "potential", "strain")
+    )
+    return {
+        "energy_drive_work": work,
+        "energy_dissipated": dissipated,
+        "energy_balance_residual": work - stored - dissipated,
+    }
+
+
+def run_bennett(
+    scene: BennettScene,
+    mode: str = "auto",
+    n_outputs: int = 241,
+    step: float = 1e-3,
+    rho_inf: float = 0.9,
+    progress: Callable[[float, float], None] | None = None,
+    t_end: float | None = None,
+) -> BennettResult:
+    """Assemble (static, with misalignment continuation), then run over the drive's ramp and
+    revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
+    generalized-alpha with ``step`` (s) starting from the assembled state at rest. ``t_end``
+    shortens the run (default: the scene's ramp plus revolutions)."""
+    chosen, ratio = choose_mode(scene)
+    mode = chosen if mode == "auto" else mode
+    if mode not in MODES:
+        raise ValueError(f"mode must be 'auto', 'quasi_static' or 'dynamic', got {mode!r}")
+    started = wallclock.perf_counter()
+    assembly = assemble(scene)
+    stress = scene_assembly_stress(scene, assembly.q, assembly.multipliers)
+    assembled = wallclock.perf_counter()
+    t_end = scene.t_end if t_end is None else float(t_end)
+    run = simulate(scene.system, assembly.q, mode, t_end, n_outputs, step=step, rho_inf=rho_inf, progress=progress)
+    times, q, qd, lam = run.time, run.q, run.qd, run.multipliers
+    solved = wallclock.perf_counter()
+    sensors = evaluate_sensors(scene, times, q, qd, lam)
+    metadata = dict(
+        scene.settings,
+        mode=mode,
+        quasi_static_ratio=ratio,
+        inertia_number=inertia_number(scene),
+        t_end=t_end,
+        n_outputs=len(times),
+        joint_reaction_names=[c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)],
+        step=step if mode == "dynamic" else None,
+        rho_inf=rho_inf if mode == "dynamic" else None,
+        timings_s={
+            "assembly": assembled - started,
+            "solve": solved - assembled,
+            "sensors": wallclock.perf_counter() - solved,
+        },
+        python=platform.python_version(),
+        numpy=np.__version__,
+        n_coordinates=scene.system.n_coordinates,
+        n_constraints=scene.system.n_constraints,
+        modes_per_link=[link.reduction.n_modes for link in scene.links],
+        assembly=stress.as_dict(),
+    )
+    out = BennettResult(times, sensors, q, metadata, stress)
+    out.metadata["summary"] = out.summary()
+    return out
+
+
+def write_results(result: BennettResult, directory: str | Path) -> Path:
+    """``DIR/results.npz`` (time + sensors), the same as ``DIR/results.csv`` and ``DIR/metadata.json``
+    (:func:`ffrf.output.tables.write_results`)."""
+    return write_tables(directory, {"time": result.time, **result.sensors}, result.metadata)

@@ -1,0 +1,143 @@
+"""Scenes as TOML files: run a linkage built from your own meshes without writing Python.
+
+A scene lists bodies (a mesh file or one of the paper's parametric links), their material,
+element order, number of modes and interfaces; joints between interfaces (or the ground);
+an optional drive; gravity, damping, solver settings and sensors. All lengths are metres
+unless a body says ``unit = "mm"`` for its mesh. Joint axes and points, interfaces and sensor points
+are given where the meshes are (mesh coordinates); bodies start there unless a ``pose`` moves
+them. The file is a scene description for the one builder, :mod:`ffrf.scenes.builder`, which also
+builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_description`)::
+
+    [scene]
+    name = "hinged link"
+    gravity = [0.0, 0.0, -9.81]
+    beta = 0.005                      # stiffness-proportional damping
+    mode = "dynamic"                  # or "quasi_static"
+    t_end = 1.0
+    step = 1e-3                       # dynamic time step
+    rho_inf = 0.9
+    outputs = 101
+    joint_offsets = "body"            # joint point off its interface centre: "body" (as Exudyn) or "marker" frame
+
+    [[bodies]]
+    name = "link"
+    mesh = "link.msh"                 # any meshio volume mesh; or: parametric = {link = 1, alpha3_deg = 90, h = 0.006}
+    unit = "mm"                       # optional, scales the mesh to metres
+    material = {E = 1.2e9, nu = 0.33, rho = 450.0}
+    order = 2                         # default 2: linear tetrahedra are too stiff in bending
+    modes = 4
+    pose = {position = [0, 0, 0], euler_parameters = [1, 0, 0, 0]}   # optional start pose of the body frame
+    interfaces = [                    # the first is the body's frame interface
+        {name = "bore0", group = "joint0"},
+        {name = "bore1", cylinder = {point = [0.1, 0, 0], direction = [0, 0, 1], radius = 0.0095,
+                                     axial_extent = [-0.01, 0.01]}},
+        {name = "pad", nodes_file = "pad_nodes.txt"},   # 0-based node indices, optional 2nd column: weights
+    ]
+
+    [[joints]]
+    name = "hinge"
+    type = "revolute"                 # "revolute", "fixed" or "driven_revolute"
+    body0 = "ground"                  # or a body name, with interface0 = "..."
+    body1 = "link"
+    interface1 = "bore0"
+    axis = [0.0, 1.0, 0.0]            # joint axis (world, at t = 0)
+    point = [0.0, 0.0, 0.0]           # joint point (world, at t = 0); default: interface1's centre
+    drive = {rpm = 1.0, ramp_time = 1.0}   # driven_revolute only: the paper's cosine ramp (or omega = rad/s)
+    # As built: axis0/point0 (body0's side) and axis1/point1 (body1's side) instead of axis/point;
+    # the run starts from a static assembly that closes the misfit (ffrf.scenes.builder).
+
+    [[sensors]]
+    name = "tip"
+    body = "link"
+    point = [0.2, 0.0, 0.0]           # the mesh node nearest to this point (mesh coordinates); or node = index
+    surface = true                    # optional: the nearest node on the body's surface
+
+Every interface selector weights its nodes by the surface area of the boundary triangles they span
+(``ffrf.fe.interfaces``), unless a ``nodes_file`` gives a weight per node in a second column. The file is
+checked against :mod:`ffrf.scenes.scene_schema` before anything is built: an unknown or misspelt key, a wrong
+type or an impossible value is a :class:`SceneError` naming the key, where it is and the fix.
+"""
+
+from __future__ import annotations
+
+import logging
+import time as wallclock
+import tomllib
+from pathlib import Path
+
+from numpy.typing import NDArray
+
+from ffrf.body.flexible_body import node_positions
+from ffrf.errors import SceneError
+from ffrf.output.tables import write_results
+from ffrf.scenes.builder import Scene, build_scene, start_state
+from ffrf.solvers.simulate import simulate
+
+__all__ = ["SceneError", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
+
+log = logging.getLogger(__name__)
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and build a TOML scene (see the module docstring)."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
+        raise SceneError(f"{path}: cannot read the scene ({error})") from error
+    scene = build_scene(data, path.parent, path.name)
+    return scene if "name" in scene.settings else _renamed(scene, path.stem)
+
+
+def _renamed(scene: Scene, name: str) -> Scene:
+    from dataclasses import replace
+
+    return replace(scene, name=name)
+
+
+def sensor_arrays(scene: Scene, q: NDArray, multipliers: NDArray) -> dict[str, NDArray]:
+    """Sensor positions (rows = q's rows) and the multiplier of each driven joint's angle
+    equation, ``<joint>_torque`` (N m, applied to the joint's side 1)."""
+    arrays = {}
+    for name, (body, node) in scene.sensors.items():
+        b = scene.bodies[body]
+        arrays[name] = node_positions(q[:, scene.system.block(body)], b.fe.nodes, b.reduction.basis, [node])[:, 0]
+    rows = scene.system.rows
+    for k, constraint in enumerate(scene.system.all_constraints):
+        if constraint.name in scene.driven:
+            arrays[f"{constraint.name}_torque"] = multipliers[:, int(rows[k + 1]) - 1]
+    return arrays
+
+
+def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> tuple[NDArray, NDArray, NDArray]:
+    """The scene's dynamic or quasi-static run from ``q0`` (default :func:`start_state`):
+    output times, coordinates and multipliers (rows = times)."""
+    s = scene.settings
+    q0 = start_state(scene) if q0 is None else q0
+    run = simulate(
+        scene.system,
+        q0,
+        s.get("mode", "dynamic"),
+        float(s.get("t_end", 1.0)),
+        int(s.get("outputs", 101)),
+        step=float(s.get("step", 1e-3)),
+        rho_inf=float(s.get("rho_inf", 0.9)),
+        progress=progress,
+    )
+    return run.time, run.q, run.multipliers
+
+
+def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
+    """Static start, then the dynamic or quasi-static run; writes ``results.npz``, ``results.csv`` and
+    ``metadata.json``."""
+    started = wallclock.perf_counter()
+    time, q, lam = simulate_scene(scene, progress=progress)
+    metadata = dict(
+        scene=scene.name,
+        settings=scene.settings,
+        bodies=[b.name for b in scene.bodies],
+        modes=[b.reduction.n_modes for b in scene.bodies],
+        wall_time_s=wallclock.perf_counter() - started,
+    )
+    write_results(directory, {"time": time, **sensor_arrays(scene, q, lam)}, metadata)
+    return metadata

@@ -1,0 +1,1 @@
+"""Statics and quasi-statics, generalized-alpha, the variational midpoint rule and shared pieces."""

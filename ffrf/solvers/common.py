@@ -1,0 +1,59 @@
+r"""Pieces every solver shares: the result of a time integration, consistent initial
+accelerations (Eq. (G4)) and polynomial extrapolation of past values (Eq. (S2)).
+
+They live here so that no integrator imports another (``docs/architecture.md``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ffrf.numerics.rank_revealing import factor
+from ffrf.system.multibody import MultibodySystem
+
+__all__ = ["IntegrationResult", "consistent_accelerations", "extrapolation_weights"]
+
+
+@dataclass
+class IntegrationResult:
+    """Time histories at the output steps (rows) and solver statistics."""
+
+    time: NDArray[np.float64]
+    q: NDArray[np.float64]
+    qd: NDArray[np.float64]
+    qdd: NDArray[np.float64]
+    multipliers: NDArray[np.float64]
+    newton_iterations: NDArray[np.int64]
+    wall_time: float
+    complete: bool = True
+    step_sizes: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))  # one per accepted step
+
+
+def consistent_accelerations(system: MultibodySystem, q, qd, t: float = 0.0):
+    r"""Solve :math:`[M\ C_q^T; C_q\ 0][\ddot q; \lambda] = [Q; -(C_q\dot q)_q\dot q]` (Eq. (G4)).
+
+    With redundant constraints (a closed loop of rigid bodies) the matrix is singular by the rank
+    rule (R1); the accelerations are still unique, and the multipliers are the minimum-norm ones."""
+    n, k = system.n_coordinates, system.n_constraints
+    mass = system.mass_matrix(q)
+    forces = -system.body_residuals(q, qd, np.zeros(n))  # M*0 - Q = -Q
+    cq = system.constraint_jacobian(q, t)
+    matrix = np.block([[mass, cq.T], [cq, np.zeros((k, k))]])
+    rhs = np.concatenate([forces, -system.constraint_acceleration_term(q, qd, t)])
+    solution = factor(matrix, what="consistent-acceleration matrix").solve(rhs)
+    return solution[:n], solution[n:]
+
+
+def extrapolation_weights(times: NDArray, t: float) -> NDArray[np.float64]:
+    r"""Eq. (S2): Lagrange weights :math:`\ell_i(t) = \prod_{j\ne i}(t - t_j)/(t_i - t_j)` of the
+    polynomial through values at ``times``, evaluated at ``t``."""
+    times = np.asarray(times, dtype=float)
+    weights = np.ones(times.size)
+    for i in range(times.size):
+        for j in range(times.size):
+            if j != i:
+                weights[i] *= (t - times[j]) / (times[i] - times[j])
+    return weights

@@ -1,0 +1,450 @@
+r"""Generalized-alpha for index-3 constrained mechanical systems (Arnold and Bruels 2007).
+
+Parameters from the spectral radius at infinity :math:`\rho_\infty` (Chung and Hulbert 1993):
+
+.. math:: \alpha_m = \frac{2\rho_\infty - 1}{\rho_\infty + 1},\quad \alpha_f = \frac{\rho_\infty}{\rho_\infty + 1},\quad
+          \gamma = \tfrac12 + \alpha_f - \alpha_m,\quad \beta = \tfrac14(\gamma + \tfrac12)^2.
+
+Step ``n -> n+1`` with the algorithmic acceleration ``a`` (Arnold and Bruels, Alg. 1; ``docs/formulation.md`` Eq. (G2)):
+
+.. math::
+    q_{n+1} &= q_n + h\dot q_n + h^2(\tfrac12 - \beta)a_n + h^2\beta a_{n+1},\\
+    \dot q_{n+1} &= \dot q_n + h(1-\gamma)a_n + h\gamma a_{n+1},\\
+    (1-\alpha_m)a_{n+1} + \alpha_m a_n &= (1-\alpha_f)\ddot q_{n+1} + \alpha_f\ddot q_n,
+
+and the equations of motion and position constraints hold at :math:`t_{n+1}`. Newton's
+unknowns are :math:`\ddot q_{n+1}` and :math:`\lambda_{n+1}`; with
+:math:`\beta' = h^2\beta(1-\alpha_f)/(1-\alpha_m)` and :math:`\gamma' = h\gamma(1-\alpha_f)/(1-\alpha_m)`
+the iteration matrix is (Eq. (G3))
+
+.. math:: \begin{bmatrix} M + \beta'(K_t + H) + \gamma' D_t & C_q^T\\ C_q & 0\end{bmatrix},
+
+the constraint rows divided by :math:`\beta'` so that it stays well conditioned for small
+steps and stiff bodies (Bottasso, Dopico and Trainelli 2008). :math:`K_t, D_t` are the exact
+derivatives of :math:`M\ddot q - Q` (including :math:`\partial(M\ddot q)/\partial q`) and
+:math:`H = \partial(C_q^T\lambda)/\partial q`, so full Newton converges quadratically.
+"""
+
+from __future__ import annotations
+
+import logging
+import time as wallclock
+import warnings
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+from scipy.linalg.lapack import dgecon as gecon
+from scipy.linalg.lapack import dgetrs as getrs
+
+from ffrf.errors import NewtonDivergence, SingularIterationMatrix
+from ffrf.numerics.rank_revealing import WELL_CONDITIONED, factor
+from ffrf.solvers.common import IntegrationResult, consistent_accelerations, extrapolation_weights
+from ffrf.solvers.newton_kernels import CONVERGED, EXHAUSTED, NOT_FINITE, REFACTOR, alpha_iterations, should_refactor
+from ffrf.system.multibody import MultibodySystem
+from ffrf.system.packed_system import PackedSystem, contiguous, newton_model
+
+__all__ = [
+    "AlphaParameters",
+    "IntegrationResult",
+    "NewtonDivergence",
+    "SingularIterationMatrix",
+    "StepControl",
+    "generalized_alpha",
+    "consistent_accelerations",
+]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class AlphaParameters:
+    """Generalized-alpha coefficients from the spectral radius ``rho_inf`` in [0, 1]."""
+
+    rho_inf: float
+    alpha_m: float = field(init=False)
+    alpha_f: float = field(init=False)
+    gamma: float = field(init=False)
+    beta: float = field(init=False)
+
+    def __post_init__(self):
+        if not 0.0 <= self.rho_inf <= 1.0:
+            raise ValueError(f"rho_inf must lie in [0, 1], got {self.rho_inf}")
+        am = (2.0 * self.rho_inf - 1.0) / (self.rho_inf + 1.0)
+        af = self.rho_inf / (self.rho_inf + 1.0)
+        gamma = 0.5 + af - am
+        object.__setattr__(self, "alpha_m", am)
+        object.__setattr__(self, "alpha_f", af)
+        object.__setattr__(self, "gamma", gamma)
+        object.__setattr__(self, "beta", 0.25 * (gamma + 0.5) ** 2)
+
+
+def _factor_iteration_matrix(
+    model: MultibodySystem | PackedSystem, q, qd, qdd, lam, t: float, beta_p: float, gamma_p: float
+):
+    """Eq. (G3), LU-factored. A poorly conditioned matrix (LAPACK's estimate) is judged by the rank
+    rule (R1); a singular one stops the run, since LU's solve would only spread inf and NaN."""
+    matrix = model.iteration_matrix(q, qd, qdd, lam, t, 1.0, beta_p, gamma_p)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)  # decided below, by the rank rule
+        factors = scipy.linalg.lu_factor(matrix, check_finite=False)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rcond = gecon(factors[0], np.abs(matrix).sum(axis=0).max(), norm="1")[0]
+    if not rcond > WELL_CONDITIONED:
+        try:
+            deficiency = factor(matrix, what=f"iteration matrix at t = {t:g}").rank_deficiency
+        except FloatingPointError as error:
+            raise _Singular(str(error)) from error
+        if deficiency:
+            raise _Singular(
+                f"the iteration matrix at t = {t:.6g} s is singular ({deficiency} zero singular value(s)): "
+                "redundant constraints (a closed loop of rigid bodies) or a coordinate without mass or stiffness; "
+                "give the links modes, or remove the redundant joint directions"
+            )
+    return factors
+
+
+class _Singular(Exception):
+    """Raised inside a step; :func:`generalized_alpha` turns it into :class:`SingularIterationMatrix`."""
+
+
+@dataclass(frozen=True)
+class StepControl:
+    r"""Optional step-size control (``docs/formulation.md``, Eq. (G5)).
+
+    After each converged step the local error of the positions is estimated as
+    :math:`e = (\beta - \tfrac16)h^2(\ddot q_{n+1} - \ddot q_n)` (Zienkiewicz and Xie 1991,
+    for the Newmark family, which generalized-alpha's update belongs to), and the step is
+    accepted when :math:`\max_i |e_i| / (\mathrm{atol} + \mathrm{rtol}|q_i|) \le 1`. The next
+    step is scaled by :math:`0.9\,r^{-1/3}` (the error is :math:`O(h^3)`), limited to
+    [0.2, 2] and to [``min_step``, ``max_step``]; a rejected step or a Newton failure halves it.
+    Steps are shortened to land on every output time. Use it with ``rho_inf < 1``: with
+    ``rho_inf = 1`` unresolved high-frequency modes keep undamped oscillations in the
+    accelerations, which no acceleration-based estimate can tell from truncation error.
+    Measured on the flexible bar pendulum (``tests/test_ffrf_body/test_step_control.py``): the
+    tip error follows the tolerance (2.4e-5, 7.1e-6, 1.5e-6 m at 1e-5, 1e-6, 1e-7) with as many
+    steps as a uniform step of the same accuracy needs; its gain is on runs whose time scale
+    changes (ramps, impacts, the start of a motion).
+    """
+
+    atol: float = 1e-6
+    rtol: float = 1e-6
+    min_step: float = 1e-8
+    max_step: float = float("inf")
+
+    def error_ratio(self, beta: float, h: float, qdd_new: NDArray, qdd_old: NDArray, q: NDArray) -> float:
+        error = (beta - 1.0 / 6.0) * h * h * (qdd_new - qdd_old)
+        return float(np.max(np.abs(error) / (self.atol + self.rtol * np.abs(q))))
+
+    def next_step(self, h: float, ratio: float) -> float:
+        factor = 2.0 if ratio <= 0.0 else min(2.0, max(0.2, 0.9 * ratio ** (-1.0 / 3.0)))
+        return min(self.max_step, max(self.min_step, factor * h))
+
+
+@dataclass
+class _State:
+    q: NDArray
+    qd: NDArray
+    qdd: NDArray
+    accel: NDArray  # algorithmic acceleration a
+    lam: NDArray
+
+
+@dataclass
+class _Newton:
+    """Newton settings and the factorised iteration matrix kept between steps (modified Newton)."""
+
+    model: object
+    par: AlphaParameters
+    tolerance: float
+    max_iterations: int
+    modified: bool
+    factors: tuple | None = None
+    factored_step: float = 0.0
+
+
+def _fast_iterations(
+    newton: _Newton,
+    model: PackedSystem,
+    t: float,
+    h: float,
+    beta_p: float,
+    gamma_p: float,
+    bases: tuple,
+    qdd: NDArray,
+    lam: NDArray,
+    refactor_each: bool,
+) -> tuple[int, int, float, float]:
+    """The Newton iterations of :func:`_step` on the fast path: jitted runs between factorisations
+    (:func:`ffrf.solvers.newton_kernels.alpha_iterations`), same tests and order as the Python loop.
+    Updates ``qdd`` and ``lam`` in place; returns ``(status, iterations, increment, gap)``."""
+    q_base, qd_base, accel_base, to_accel = bases
+    par = newton.par
+    used, previous = 0, np.inf
+    increment = gap_max = np.inf
+    while used < newton.max_iterations:
+        if newton.factors is None or refactor_each:
+            accel = accel_base + to_accel * qdd
+            newton.factors = _factor_iteration_matrix(
+                model, q_base + h * h * par.beta * accel, qd_base + h * par.gamma * accel, qdd, lam, t, beta_p, gamma_p
+            )
+            newton.factored_step = h
+        limit = 1 if refactor_each else newton.max_iterations - used
+        lu, pivots = newton.factors
+        status, count, increment, gap_max = (
+            int(x) if k < 2 else float(x)
+            for k, x in enumerate(
+                alpha_iterations(
+                    model.bodies,
+                    model.joints,
+                    model.gravity,
+                    model.phi(t),
+                    lu,
+                    pivots,
+                    contiguous(q_base),
+                    contiguous(qd_base),
+                    contiguous(accel_base),
+                    float(to_accel),
+                    h * h * par.beta,
+                    h * par.gamma,
+                    float(beta_p),
+                    float(gamma_p),
+                    qdd,
+                    lam,
+                    float(newton.tolerance),
+                    int(limit),
+                    float(previous),
+                    int(used),
+                )
+            )
+        )
+        used += count
+        if status in (CONVERGED, NOT_FINITE):
+            return status, used, increment, gap_max
+        if status == REFACTOR:
+            newton.factors = None  # should_refactor asked for a new iteration matrix
+        previous = increment
+    return EXHAUSTED, used, increment, gap_max
+
+
+def _predicted_unknowns(state: _State, h: float, before: tuple | None) -> tuple[NDArray, NDArray]:
+    """Eq. (G6): Newton's start for ``(qdd, lambda)`` at the end of a step of length ``h``, the
+    linear extrapolation from the state and ``before = (qdd, lambda, h)`` of the accepted step that
+    led to it. Without ``before``, or after a much shorter step (one cut to land on an output, whose
+    difference quotient would amplify Newton's tolerance), the state's own values."""
+    if before is None or not 0.0 < h / before[2] <= 2.0:
+        return state.qdd.copy(), state.lam.copy()
+    qdd_before, lam_before, h_before = before
+    weights = extrapolation_weights(np.array([-h_before, 0.0]), h)  # the line through both steps' values
+    return weights[0] * qdd_before + weights[1] * state.qdd, weights[0] * lam_before + weights[1] * state.lam
+
+
+def _step(newton: _Newton, state: _State, t: float, h: float, before: tuple | None = None):
+    """One generalized-alpha step of length ``h`` to time ``t`` (Eqs. (G2), (G3)), Newton starting
+    from the prediction (G6) with ``before`` (a retry starts from the state's own values). Returns
+    the new state and the Newton iterations, or ``(None, iterations, diagnostics)`` if Newton failed."""
+    par, model = newton.par, newton.model
+    beta_p = h * h * par.beta * (1.0 - par.alpha_f) / (1.0 - par.alpha_m)
+    gamma_p = h * par.gamma * (1.0 - par.alpha_f) / (1.0 - par.alpha_m)
+    to_accel = (1.0 - par.alpha_f) / (1.0 - par.alpha_m)
+    if newton.factored_step != h:
+        newton.factors = None  # the iteration matrix depends on h
+    n = state.q.shape[0]
+    q_base = state.q + h * state.qd + h * h * (0.5 - par.beta) * state.accel
+    qd_base = state.qd + h * (1.0 - par.gamma) * state.accel
+    accel_base = (par.alpha_f * state.qdd - par.alpha_m * state.accel) / (1.0 - par.alpha_m)
+    total = 0  # Newton iterations of this step, retries included
+    diagnostics = ""
+
+    def accepted(qdd_new: NDArray, lam_new: NDArray) -> _State:
+        """The state at t from the converged unknowns (Eq. (G2))."""
+        accel = accel_base + to_accel * qdd_new
+        return _State(q_base + h * h * par.beta * accel, qd_base + h * par.gamma * accel, qdd_new, accel, lam_new)
+
+    for attempt in range(2 if newton.modified else 1):
+        qdd_new, lam_new = _predicted_unknowns(state, h, before if attempt == 0 else None)
+        if isinstance(model, PackedSystem):
+            status, used, increment, gap_max = _fast_iterations(
+                newton,
+                model,
+                t,
+                h,
+                beta_p,
+                gamma_p,
+                (q_base, qd_base, accel_base, to_accel),
+                qdd_new,
+                lam_new,
+                refactor_each=not newton.modified or attempt == 1,
+            )
+            if status == CONVERGED:
+                return accepted(qdd_new, lam_new), total + used, ""
+            if status == NOT_FINITE:
+                return None, total + used, f"NaN in the residual (iteration {used})"
+            total += newton.max_iterations
+            newton.factors = None
+            diagnostics = f"largest constraint residual {gap_max:.3e}, last acceleration increment {increment:.3e}"
+            continue
+        previous = np.inf
+        for iteration in range(1, newton.max_iterations + 1):
+            a_new = accel_base + to_accel * qdd_new
+            q_new = q_base + h * h * par.beta * a_new
+            qd_new = qd_base + h * par.gamma * a_new
+            residual, gap = model.residual(q_new, qd_new, qdd_new, lam_new, t)
+            if not (np.all(np.isfinite(residual)) and np.all(np.isfinite(gap))):
+                return None, total + iteration, f"NaN in the residual (iteration {iteration})"
+            if newton.factors is None or not newton.modified or attempt == 1:
+                newton.factors = _factor_iteration_matrix(model, q_new, qd_new, qdd_new, lam_new, t, beta_p, gamma_p)
+                newton.factored_step = h
+            # LAPACK getrs directly: what lu_solve calls, without its ~30 us of wrapper per iteration
+            delta = getrs(*newton.factors, -np.concatenate([residual, gap / beta_p]))[0]
+            qdd_new += delta[:n]
+            lam_new += delta[n:]
+            increment = np.abs(delta[:n]).max()
+            position_scale = newton.tolerance * max(1.0, np.abs(q_new).max())
+            velocity_scale = newton.tolerance * max(1.0, np.abs(qd_new).max())
+            if (
+                beta_p * increment <= position_scale
+                and gamma_p * increment <= velocity_scale
+                and np.abs(gap).max() <= newton.tolerance
+            ):
+                return accepted(qdd_new, lam_new), total + iteration, ""
+            if should_refactor(iteration, increment, previous, beta_p, gamma_p, position_scale, velocity_scale):
+                newton.factors = None  # rebuild the iteration matrix at the next iteration
+            previous = increment
+        total += newton.max_iterations
+        newton.factors = None
+        diagnostics = (
+            f"largest constraint residual {np.abs(gap).max():.3e}, last acceleration increment {increment:.3e}"
+        )
+    return None, total, diagnostics
+
+
+def generalized_alpha(
+    system: MultibodySystem,
+    q0: NDArray,
+    qd0: NDArray,
+    t_end: float,
+    step: float,
+    rho_inf: float = 0.9,
+    tolerance: float = 1e-10,
+    max_iterations: int = 12,
+    modified_newton: bool = True,
+    output_every: int = 1,
+    progress: Callable[[float, float], None] | None = None,
+    *,
+    fast_path: bool = True,
+    step_control: StepControl | None = None,
+) -> IntegrationResult:
+    """Integrate from ``t = 0`` to ``t_end`` with fixed steps ``step`` (s), or, with a
+    :class:`StepControl`, with steps chosen by its error estimate (starting from ``step``);
+    either way the output times are the multiples of ``output_every * step``.
+
+    Newton stops when the increments it makes in positions (``beta' |dqdd|``) and velocities
+    (``gamma' |dqdd|``) are below ``tolerance`` times ``max(1, |q|)`` and ``max(1, |qd|)`` and the
+    constraints hold to ``tolerance`` (their own units, m or dimensionless). With
+    ``modified_newton`` the factorised iteration matrix is kept across iterations and steps
+    and rebuilt when :func:`ffrf.solvers.newton_kernels.should_refactor` asks for it (Eq. (G3) in
+    ``docs/formulation.md``) or a step fails, which is then retried with a fresh matrix; each step
+    starts from the prediction (G6). The converged solution is the same, only the work differs. Raises :class:`NewtonDivergence` with the partial results.
+    ``fast_path`` evaluates Newton's residual and matrix with the whole-system kernels of
+    :mod:`ffrf.system.packed_system` when the system is supported (else, and with ``False``, with the
+    reference Python implementation of :class:`MultibodySystem`; both agree to round-off).
+    ``newton_iterations`` of the result has one entry per accepted step (with
+    ``step_control``, ``step_sizes`` in the same order).
+    """
+    if step <= 0 or t_end <= 0:
+        raise ValueError(f"step and t_end must be positive, got step={step}, t_end={t_end}")
+    par = AlphaParameters(rho_inf)
+    n_steps = int(round(t_end / step))
+    h = t_end / n_steps
+    n = system.n_coordinates
+    newton = _Newton(newton_model(system, fast_path), par, tolerance, max_iterations, modified_newton)
+
+    q, qd = np.array(q0, dtype=float), np.array(qd0, dtype=float)
+    if q.shape != (n,) or qd.shape != (n,):
+        raise ValueError(f"initial state must have {n} coordinates, got {q.shape} and {qd.shape}")
+    qdd, lam = consistent_accelerations(system, q, qd, 0.0)
+    state = _State(q, qd, qdd, qdd.copy(), lam)
+    before = None  # (qdd, lambda, h) of the accepted step before ``state``, for Newton's start (G6)
+    history = {"time": [0.0], "q": [q.copy()], "qd": [qd.copy()], "qdd": [qdd.copy()], "lam": [lam.copy()]}
+    iterations, step_sizes = [], []
+    started = wallclock.perf_counter()
+
+    def record(t: float, s: _State) -> None:
+        for key, value in (("time", t), ("q", s.q), ("qd", s.qd), ("qdd", s.qdd), ("lam", s.lam)):
+            history[key].append(value.copy() if key != "time" else value)
+
+    def result(complete: bool) -> IntegrationResult:
+        return IntegrationResult(
+            np.array(history["time"]),
+            np.array(history["q"]),
+            np.array(history["qd"]),
+            np.array(history["qdd"]),
+            np.array(history["lam"]),
+            np.array(iterations, dtype=np.int64),
+            wallclock.perf_counter() - started,
+            complete,
+            np.array(step_sizes),
+        )
+
+    def guarded_step(t_new: float, h_new: float):
+        try:
+            return _step(newton, state, t_new, h_new, before)
+        except _Singular as error:
+            raise SingularIterationMatrix(str(error), result(False)) from None
+
+    if step_control is None:
+        for k in range(1, n_steps + 1):
+            t = k * h
+            new, count, diagnostics = guarded_step(t, h)
+            if new is None:
+                raise NewtonDivergence(
+                    f"Newton did not converge at t = {t:.6g} s after {max_iterations} iterations: {diagnostics}; "
+                    "reduce the step size or check the constraints",
+                    result(False),
+                )
+            before = (state.qdd, state.lam, h)
+            state = new
+            iterations.append(count)
+            step_sizes.append(h)
+            if k % output_every == 0 or k == n_steps:
+                record(t, state)
+            if progress is not None:
+                progress(t, t_end)
+        return result(True)
+
+    outputs = list(np.minimum(h * output_every * np.arange(1, int(np.ceil(n_steps / output_every)) + 1), t_end))
+    t, trial = 0.0, h
+    while outputs:
+        target = outputs[0]
+        h_try = min(trial, target - t)
+        landing = h_try >= target - t - 1e-12 * max(1.0, target)
+        if landing:
+            h_try = target - t
+        new, count, diagnostics = guarded_step(target if landing else t + h_try, h_try)
+        ratio = np.inf if new is None else step_control.error_ratio(par.beta, h_try, new.qdd, state.qdd, new.q)
+        if new is None or ratio > 1.0:
+            if h_try <= step_control.min_step * (1.0 + 1e-12):
+                reason = diagnostics if new is None else f"local error {ratio:.3g} times the tolerance"
+                raise NewtonDivergence(
+                    f"no step above min_step = {step_control.min_step:g} s succeeds at "
+                    f"t = {t:.6g} s ({reason}); relax the tolerances or check the model",
+                    result(False),
+                )
+            trial = max(step_control.min_step, 0.5 * h_try if new is None else step_control.next_step(h_try, ratio))
+            continue
+        t = target if landing else t + h_try
+        before = (state.qdd, state.lam, h_try)
+        state = new
+        iterations.append(count)
+        step_sizes.append(h_try)
+        if landing:
+            record(t, state)
+            outputs.pop(0)
+        if progress is not None:
+            progress(t, t_end)
+        # a step cut short to land on an output says nothing about the next one's size
+        trial = step_control.next_step(h_try, ratio) if not landing or h_try >= trial else trial
+    return result(True)

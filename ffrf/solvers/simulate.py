@@ -1,0 +1,65 @@
+"""One run of a system: quasi-static equilibria or a dynamic generalized-alpha run, with the output
+stride that puts ``outputs`` rows between t = 0 and ``t_end``. Every scene runs through here."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.solvers.static_solver import quasi_static
+from ffrf.system.multibody import MultibodySystem
+
+__all__ = ["MODES", "Run", "simulate", "output_stride"]
+
+MODES = ("quasi_static", "dynamic")
+
+
+@dataclass(frozen=True)
+class Run:
+    """Output times and coordinates, velocities (``None`` for quasi-static runs) and multipliers."""
+
+    time: NDArray[np.float64]
+    q: NDArray[np.float64]
+    qd: NDArray[np.float64] | None
+    multipliers: NDArray[np.float64]
+
+
+def output_stride(t_end: float, step: float, outputs: int) -> int:
+    """Time steps between two outputs so that about ``outputs`` rows span [0, t_end]."""
+    return max(1, int(round(t_end / step / max(outputs - 1, 1))))
+
+
+def simulate(
+    system: MultibodySystem,
+    q0: NDArray,
+    mode: str,
+    t_end: float,
+    outputs: int,
+    *,
+    step: float = 1e-3,
+    rho_inf: float = 0.9,
+    progress: Callable[[float, float], None] | None = None,
+) -> Run:
+    """``quasi_static``: equilibria at ``outputs`` equally spaced times; ``dynamic``: generalized-alpha
+    from ``q0`` at rest with time step ``step`` and spectral radius ``rho_inf``."""
+    if mode == "quasi_static":
+        times = np.linspace(0.0, t_end, outputs)
+        solution = quasi_static(system, q0, times, progress=progress)
+        return Run(times, solution.q, None, solution.multipliers)
+    if mode == "dynamic":
+        result = generalized_alpha(
+            system,
+            q0,
+            np.zeros_like(q0),
+            t_end,
+            step,
+            rho_inf=rho_inf,
+            output_every=output_stride(t_end, step, outputs),
+            progress=progress,
+        )
+        return Run(result.time, result.q, result.qd, result.multipliers)
+    raise ValueError(f"run mode {mode!r}: use one of {list(MODES)}")

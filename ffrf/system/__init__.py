@@ -1,0 +1,1 @@
+"""Markers, constraints, joints, drives, the multibody system, its packed kernels and reactions."""

@@ -1,0 +1,172 @@
+r"""A multibody system: flexible bodies, constraints and gravity, on one coordinate vector.
+
+The coordinates are the bodies' blocks ``[R, p, zeta]`` one after another; the multipliers
+are the constraints' in order, beginning with one Euler-parameter normalisation per body.
+The system provides the pieces of the index-3 DAE (``docs/formulation.md``, Eq. (G1))
+
+.. math:: M(q)\ddot q - Q(q, \dot q) + C_q^T\lambda = 0, \qquad g(q, t) = 0,
+
+and their exact derivatives for Newton's method.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ffrf.body.flexible_body import FlexibleBody
+from ffrf.system.constraints import (
+    Constraint,
+    EulerNormalization,
+    constraint_hessian_term,
+    constraint_velocity_derivative,
+)
+
+__all__ = ["MultibodySystem"]
+
+
+@dataclass(frozen=True, eq=False)
+class MultibodySystem:
+    """Bodies, constraints (normalisations are added first) and the gravity vector (m/s^2)."""
+
+    bodies: tuple[FlexibleBody, ...]
+    constraints: tuple[Constraint, ...] = ()
+    gravity: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    offsets: NDArray[np.int64] = field(init=False, repr=False)
+    all_constraints: tuple[Constraint, ...] = field(init=False, repr=False)
+    rows: NDArray[np.int64] = field(init=False, repr=False)
+
+    def __post_init__(self):
+        sizes = [b.n_coordinates for b in self.bodies]
+        object.__setattr__(self, "offsets", np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64))
+        names = [b.name for b in self.bodies]
+        if len(set(names)) != len(names):
+            raise ValueError(f"body names must be unique, got {names}")
+        for c in self.constraints:
+            bad = [i for i in c.bodies if not 0 <= i < len(self.bodies)]
+            if bad:
+                raise ValueError(
+                    f"constraint {c.name!r} refers to unknown body index {bad}; there are "
+                    f"{len(self.bodies)} bodies {names}"
+                )
+        normalisations = tuple(
+            EulerNormalization((i,), f"{b.name}: Euler parameter norm") for i, b in enumerate(self.bodies)
+        )
+        constraints = normalisations + tuple(self.constraints)
+        object.__setattr__(self, "all_constraints", constraints)
+        object.__setattr__(
+            self, "rows", np.concatenate([[0], np.cumsum([c.size for c in constraints])]).astype(np.int64)
+        )
+        object.__setattr__(self, "gravity", np.asarray(self.gravity, dtype=float))
+
+    @property
+    def n_coordinates(self) -> int:
+        return int(self.offsets[-1])
+
+    @property
+    def n_constraints(self) -> int:
+        return int(self.rows[-1])
+
+    def block(self, i: int) -> slice:
+        return slice(int(self.offsets[i]), int(self.offsets[i + 1]))
+
+    def body_residuals(self, q, qd, qdd) -> NDArray[np.float64]:
+        """Eqs. (F8)-(F11) for all bodies: ``M qdd - Q`` (without constraint forces)."""
+        out = np.empty(self.n_coordinates)
+        for i, body in enumerate(self.bodies):
+            s = self.block(i)
+            out[s] = body.residual(q[s], qd[s], qdd[s], self.gravity)
+        return out
+
+    def constraint_values(self, q, t) -> NDArray[np.float64]:
+        return np.concatenate([c.value([q[self.block(i)] for i in c.bodies], t) for c in self.all_constraints])
+
+    def constraint_jacobian(self, q, t) -> NDArray[np.float64]:
+        out = np.zeros((self.n_constraints, self.n_coordinates))
+        for k, c in enumerate(self.all_constraints):
+            rows = slice(int(self.rows[k]), int(self.rows[k + 1]))
+            for i, block in zip(c.bodies, c.jacobian([q[self.block(i)] for i in c.bodies], t)):
+                out[rows, self.block(i)] += block
+        return out
+
+    def constraint_hessian(self, q, multipliers, t) -> NDArray[np.float64]:
+        r""":math:`\partial(C_q^T\lambda)/\partial q` (exact)."""
+        out = np.zeros((self.n_coordinates, self.n_coordinates))
+        for k, c in enumerate(self.all_constraints):
+            lam = multipliers[int(self.rows[k]) : int(self.rows[k + 1])]
+            blocks = constraint_hessian_term(c, [q[self.block(i)] for i in c.bodies], lam, t)
+            for a, i in enumerate(c.bodies):
+                for b, j in enumerate(c.bodies):
+                    out[self.block(i), self.block(j)] += blocks[a][b]
+        return out
+
+    def constraint_acceleration_term(self, q, qd, t) -> NDArray[np.float64]:
+        r""":math:`(C_q\dot q)_q\dot q` for consistent initial accelerations (scleronomic constraints)."""
+        return np.concatenate(
+            [
+                constraint_velocity_derivative(
+                    c, [q[self.block(i)] for i in c.bodies], [qd[self.block(i)] for i in c.bodies], t
+                )
+                for c in self.all_constraints
+            ]
+        )
+
+    def residual(self, q, qd, qdd, lam, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        r"""Eq. (G1): ``M qdd - Q + C_q^T lambda`` and ``g(q, t)`` (what Newton drives to zero)."""
+        forces = self.body_residuals(q, qd, qdd) + self.constraint_jacobian(q, t).T @ lam
+        return forces, self.constraint_values(q, t)
+
+    def iteration_matrix(
+        self, q, qd, qdd, lam, t: float, mass_factor: float, beta_p: float, gamma_p: float
+    ) -> NDArray[np.float64]:
+        r"""Eq. (FP6): ``[[c M + beta' (K_t + H) + gamma' D_t, C_q^T], [C_q, 0]]``, with ``c = 1`` for
+        generalized-alpha (Eq. (G3)) and ``c = 0, beta' = 1, gamma' = 0`` for statics (Eq. (S1))."""
+        jq, jqd = self.body_tangents(q, qd, qdd)
+        upper = beta_p * (jq + self.constraint_hessian(q, lam, t))
+        if gamma_p != 0.0:
+            upper += gamma_p * jqd
+        if mass_factor != 0.0:
+            upper += mass_factor * self.mass_matrix(q)
+        cq = self.constraint_jacobian(q, t)
+        return np.block([[upper, cq.T], [cq, np.zeros((cq.shape[0], cq.shape[0]))]])
+
+    def body_tangents(self, q, qd, qdd) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Block-diagonal exact ``d(M qdd - Q)/dq`` and ``d(M qdd - Q)/dqd``."""
+        n = self.n_coordinates
+        jq, jqd = np.zeros((n, n)), np.zeros((n, n))
+        for i, body in enumerate(self.bodies):
+            s = self.block(i)
+            jq[s, s], jqd[s, s] = body.jacobians(q[s], qd[s], qdd[s], self.gravity)
+        return jq, jqd
+
+    def mass_matrix(self, q) -> NDArray[np.float64]:
+        n = self.n_coordinates
+        out = np.zeros((n, n))
+        for i, body in enumerate(self.bodies):
+            s = self.block(i)
+            out[s, s] = body.mass_matrix(q[s])
+        return out
+
+    def energies(self, q, qd) -> dict[str, float]:
+        """Kinetic, strain and gravity potential energy (J)."""
+        kinetic = sum(b.kinetic_energy(q[self.block(i)], qd[self.block(i)]) for i, b in enumerate(self.bodies))
+        strain = sum(b.strain_energy(q[self.block(i)]) for i, b in enumerate(self.bodies))
+        potential = sum(b.potential_energy(q[self.block(i)], self.gravity) for i, b in enumerate(self.bodies))
+        return {"kinetic": kinetic, "strain": strain, "potential": potential}
+
+    def initial_state(
+        self, positions: ArrayLike | None = None, rotations: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
+        """Coordinates with bodies at ``positions`` (n x 3), Euler parameters ``rotations`` (n x 4, default identity), zeta = 0."""
+        q = np.zeros(self.n_coordinates)
+        for i in range(len(self.bodies)):
+            s = self.block(i)
+            q[s.start + 3] = 1.0
+            if positions is not None:
+                q[s.start : s.start + 3] = np.asarray(positions, float)[i]
+            if rotations is not None:
+                r = np.asarray(rotations, float)[i]
+                q[s.start + 3 : s.start + 7] = r / np.linalg.norm(r)
+        return q

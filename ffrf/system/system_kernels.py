@@ -1,0 +1,311 @@
+r"""Numba kernels of a whole multibody system packed into plain arrays (the fast path).
+
+One call evaluates, for every body and constraint of a :class:`ffrf.system.packed_system.PackedSystem`,
+what :class:`ffrf.system.multibody.MultibodySystem` assembles body by body and constraint by constraint
+in Python (``docs/formulation.md``, Eqs. (G1), (G3), (FP4)-(FP6)):
+
+* body terms: Eqs. (F8)-(F11) with :func:`ffrf.body.flexible_body.body_residual`, exact tangents
+  with :func:`ffrf.body.flexible_body.body_jacobians` (complex step, inside the kernel);
+* constraints: Euler normalisations (Eq. (R2)) and marker joints (Eqs. (J1)-(J3)) with
+  :func:`ffrf.system.marker_kernels.marker_frame`; the term :math:`H = \partial(C_q^T\lambda)/\partial q`
+  analytically from :func:`ffrf.system.marker_kernels.marker_frame_hessian` (Eq. (FP5)).
+
+Packed data (built by :func:`ffrf.system.packed_system.pack_system`), plain arrays only so that a call
+costs microseconds; arrays of different sizes per body or joint are concatenated flat
+(``flat[starts[i]:starts[i + 1]]``, reshaped in the kernel):
+
+``bodies = (offsets, mass, exact_gravity, real, complex, starts)``: coordinate offsets (B+1), and
+per body the modal moments of Eq. (F4), ``K_r`` and ``D_r``, in the order ``s0, s1, x2, c, d,
+mred, kred, dred``: ``real`` and ``complex`` are tuples of eight flat float64 and complex128
+buffers (the latter for the complex-step tangents), ``starts`` is (8, B+1).
+
+``joints = (kind, body0, body1, rows, locked, side0, side1)``: per constraint its kind (0: Euler
+normalisation of ``body1``, 1: marker joint), bodies (-1: ground), first row (J+1, the last is
+the total), locked directions (J, 6); each side is ``(point (J, 3), rotation (J, 3, 3), offset
+(J, 3), P flat, Theta flat, starts (J+1))``: the marker point, joint rotation and offset and the
+marker's ``3 x m`` matrices ``P`` and :math:`\Theta`. A ground side keeps its joint point in
+``point`` and its joint axes in ``rotation`` (already composed) and has no modes.
+``phi`` holds each constraint's prescribed angle :math:`\varphi(t)` (0 when it has none).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ffrf.body.body_kernels import mass_matrix
+from ffrf.body.flexible_body import body_jacobians, body_residual
+from ffrf.numerics.small_linalg import dot, mat_mat, vec_mat
+from ffrf.system.marker_kernels import marker_frame, marker_frame_hessian
+
+__all__ = [
+    "system_residual",
+    "system_jacobian",
+    "system_hessian",
+    "system_body_tangents",
+    "system_mass_matrix",
+    "system_iteration_matrix",
+]
+
+EULER, MARKER_JOINT = 0, 1
+
+
+@njit(cache=True)
+def _moments(buffers, starts, b, m):
+    """Body ``b``'s ``s0, s1, x2, c, d, mred, kred, dred`` (``m`` modes) as views of the flat buffers."""
+
+    def view(k):
+        return buffers[k][starts[k, b] : starts[k, b + 1]]
+
+    return (
+        view(0),
+        view(1).reshape(3, m),
+        view(2).reshape(3, 3),
+        view(3).reshape(3, 3, m),
+        view(4).reshape(3, 3, m, m),
+        view(5).reshape(m, m),
+        view(6).reshape(m, m),
+        view(7).reshape(m, m),
+    )
+
+
+@njit(cache=True)
+def _side_data(side, j):
+    """Point, P, Theta, rotation and offset of joint ``j``'s ``side`` (layout in the module docstring)."""
+    point, rotation, offset, modes, rotation_modes, starts = side
+    m = (starts[j + 1] - starts[j]) // 3
+    return (
+        point[j],
+        modes[starts[j] : starts[j + 1]].reshape(3, m),
+        rotation_modes[starts[j] : starts[j + 1]].reshape(3, m),
+        rotation[j],
+        offset[j],
+    )
+
+
+@njit(cache=True)
+def _side(body, point, modes, rotation_modes, rotation, offset, q, offsets):
+    """Joint point, axes, dp/dq and d axes/dq of one side of a joint (no columns on the ground, ``body < 0``)."""
+    if body < 0:
+        return point.copy(), rotation.copy(), np.zeros((3, 0)), np.zeros((3, 3, 0))
+    return marker_frame(q[offsets[body] : offsets[body + 1]], point, modes, rotation_modes, rotation, offset)
+
+
+@njit(cache=True)
+def _pad(d_point, d_axes, start, total):
+    """Side derivatives as columns ``start:`` of the joint's coordinates ``[q_0, q_1]`` (``total`` of them)."""
+    n = d_point.shape[1]
+    out_point = np.zeros((3, total))
+    out_axes = np.zeros((3, 3, total))
+    out_point[:, start : start + n] = d_point
+    out_axes[:, :, start : start + n] = d_axes
+    return out_point, out_axes
+
+
+@njit(cache=True)
+def _joint_coordinates(joints, j, offsets):
+    """Global indices of the joint's coordinates ``[q_0, q_1]`` and ``n_0``."""
+    b0, b1 = joints[1][j], joints[2][j]
+    n0 = 0 if b0 < 0 else offsets[b0 + 1] - offsets[b0]
+    n1 = offsets[b1 + 1] - offsets[b1]
+    index = np.empty(n0 + n1, dtype=np.int64)
+    for i in range(n0):
+        index[i] = offsets[b0] + i
+    for i in range(n1):
+        index[n0 + i] = offsets[b1] + i
+    return index, n0
+
+
+@njit(cache=True)
+def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
+    r"""Eqs. (J1)-(J3) of joint ``j``: values, Jacobian rows on ``[q_0, q_1]`` and, with ``want_hessian``,
+    :math:`\partial(C_q^T\lambda)/\partial q` on ``[q_0, q_1]`` (Eqs. (FP4)-(FP5)); same row order as
+    :meth:`ffrf.system.joints.MarkerJoint.jacobian`."""
+    index, n0 = _joint_coordinates(joints, j, offsets)
+    total = index.shape[0]
+    locked = joints[4][j]
+    size = 0
+    for i in range(6):
+        size += locked[i]
+    b0, b1 = joints[1][j], joints[2][j]
+    side0 = _side_data(joints[5], j)
+    side1 = _side_data(joints[6], j)
+    p0, axes0, dp0_side, da0_side = _side(b0, *side0, q, offsets)
+    p1, axes1, dp1_side, da1_side = _side(b1, *side1, q, offsets)
+    dp0, da0 = _pad(dp0_side, da0_side, 0, total)
+    dp1, da1 = _pad(dp1_side, da1_side, n0, total)
+    values = np.empty(size)
+    rows = np.zeros((size, total))
+    hessian = np.zeros((total, total))
+    w_p0, w_p1 = np.zeros(3), np.zeros(3)
+    w_a0, w_a1 = np.zeros((3, 3)), np.zeros((3, 3))
+    gap = p1 - p0
+    d_gap = dp1 - dp0
+    row = 0
+    if locked[0] and locked[1] and locked[2]:  # (J1), world components
+        for i in range(3):
+            values[i] = gap[i]
+            rows[i] = d_gap[i]
+            w_p1[i] += lam[i]
+            w_p0[i] -= lam[i]
+        row = 3
+    else:  # (J1), components of J_0^T (p_1 - p_0)
+        for i in range(3):
+            if locked[i]:
+                values[row] = dot(axes0[:, i], gap)
+                rows[row] = vec_mat(axes0[:, i], d_gap) + vec_mat(gap, da0[i])
+                if want_hessian:
+                    w_a0[:, i] += lam[row] * gap
+                    w_p1 += lam[row] * axes0[:, i]
+                    w_p0 -= lam[row] * axes0[:, i]
+                    product = mat_mat(da0[i].T, d_gap)
+                    hessian += lam[row] * (product + product.T)
+                row += 1
+    for r in range(3):  # (J2)-(J3): z0.y1, z0.x1, x0'.y1
+        if not locked[3 + r]:
+            continue
+        k1 = 1 if r != 1 else 0
+        c0, c1, k0 = 1.0, 0.0, 2
+        if r == 2:
+            c0, c1, k0 = np.cos(phi[j]), np.sin(phi[j]), 0
+        x = c0 * axes0[:, k0] + c1 * axes0[:, 1]
+        dx = c0 * da0[k0] + c1 * da0[1]
+        y = axes1[:, k1]
+        values[row] = dot(x, y)
+        rows[row] = vec_mat(x, da1[k1]) + vec_mat(y, dx)
+        if want_hessian:
+            w_a0[:, k0] += c0 * lam[row] * y
+            w_a0[:, 1] += c1 * lam[row] * y
+            w_a1[:, k1] += lam[row] * x
+            product = mat_mat(dx.T, da1[k1])
+            hessian += lam[row] * (product + product.T)
+        row += 1
+    if want_hessian:  # Eq. (FP5): second derivatives of each side's point and axes, weighted
+        if b0 >= 0:
+            hessian[:n0, :n0] += marker_frame_hessian(q[offsets[b0] : offsets[b0 + 1]], *side0, w_p0, w_a0)
+        hessian[n0:, n0:] += marker_frame_hessian(q[offsets[b1] : offsets[b1 + 1]], *side1, w_p1, w_a1)
+    return values, rows, hessian, index
+
+
+@njit(cache=True)
+def _euler(joints, j, q, offsets):
+    """Eq. (R2) normalisation p.p - 1 of body ``joints[2][j]``: value and its Jacobian on ``p``."""
+    start = offsets[joints[2][j]] + 3
+    p = q[start : start + 4]
+    return dot(p, p) - 1.0, 2.0 * p, start
+
+
+@njit(cache=True)
+def _constraints(joints, offsets, q, phi, lam, want_jacobian, want_hessian, n):
+    """Values ``g``, Jacobian ``C_q`` (k x n, if wanted), ``C_q^T lambda`` and ``H`` (n x n, if wanted)."""
+    row_starts = joints[3]
+    k = row_starts[-1]
+    values = np.empty(k)
+    jacobian = np.zeros((k if want_jacobian else 0, n))
+    forces = np.zeros(n)
+    hessian = np.zeros((n if want_hessian else 0, n if want_hessian else 0))
+    for j in range(joints[0].shape[0]):
+        r0 = row_starts[j]
+        if joints[0][j] == EULER:
+            value, grad, start = _euler(joints, j, q, offsets)
+            values[r0] = value
+            for i in range(4):
+                forces[start + i] += grad[i] * lam[r0]
+                if want_jacobian:
+                    jacobian[r0, start + i] += grad[i]
+                if want_hessian:
+                    hessian[start + i, start + i] += 2.0 * lam[r0]
+            continue
+        size = row_starts[j + 1] - r0
+        lam_j = lam[r0 : r0 + size]
+        vals, rows, block, index = _marker_joint(joints, j, q, offsets, phi, lam_j, want_hessian)
+        values[r0 : r0 + size] = vals
+        contribution = vec_mat(lam_j, rows)
+        for a in range(index.shape[0]):
+            forces[index[a]] += contribution[a]
+            if want_jacobian:
+                for r in range(size):
+                    jacobian[r0 + r, index[a]] += rows[r, a]
+            if want_hessian:
+                for b in range(index.shape[0]):
+                    hessian[index[a], index[b]] += block[a, b]
+    return values, jacobian, forces, hessian
+
+
+@njit(cache=True)
+def _body_residuals(bodies, q, qd, qdd, gravity):
+    """Eqs. (F8)-(F11) of every body: ``M qdd - Q``."""
+    offsets = bodies[0]
+    out = np.empty(offsets[-1])
+    for b in range(offsets.shape[0] - 1):
+        s, e = offsets[b], offsets[b + 1]
+        moments = _moments(bodies[3], bodies[5], b, e - s - 7)
+        out[s:e] = body_residual(q[s:e], qd[s:e], qdd[s:e], gravity, bodies[1][b], *moments, bodies[2][b])
+    return out
+
+
+@njit(cache=True)
+def system_residual(bodies, joints, q, qd, qdd, lam, gravity, phi):
+    r"""Eq. (G1): ``M qdd - Q + C_q^T lambda`` (n) and ``g`` (k)."""
+    values, _, forces, _ = _constraints(joints, bodies[0], q, phi, lam, False, False, q.shape[0])
+    return _body_residuals(bodies, q, qd, qdd, gravity) + forces, values
+
+
+@njit(cache=True)
+def system_jacobian(bodies, joints, q, phi):
+    """``C_q`` (k x n)."""
+    lam = np.zeros(joints[3][-1])
+    return _constraints(joints, bodies[0], q, phi, lam, True, False, q.shape[0])[1]
+
+
+@njit(cache=True)
+def system_hessian(bodies, joints, q, lam, phi):
+    r"""Eq. (FP4): :math:`H = \partial(C_q^T\lambda)/\partial q` (n x n)."""
+    return _constraints(joints, bodies[0], q, phi, lam, False, True, q.shape[0])[3]
+
+
+@njit(cache=True)
+def system_body_tangents(bodies, q, qd, qdd, gravity, velocity=True):
+    """Block-diagonal exact ``d(M qdd - Q)/dq`` and ``d(M qdd - Q)/dqd`` (zero with ``velocity=False``)."""
+    offsets = bodies[0]
+    n = offsets[-1]
+    jac_q, jac_qd = np.zeros((n, n)), np.zeros((n, n))
+    for b in range(offsets.shape[0] - 1):
+        s, e = offsets[b], offsets[b + 1]
+        moments = _moments(bodies[4], bodies[5], b, e - s - 7)
+        jq, jqd = body_jacobians(q[s:e], qd[s:e], qdd[s:e], gravity, bodies[1][b], *moments, bodies[2][b], velocity)
+        jac_q[s:e, s:e] = jq
+        jac_qd[s:e, s:e] = jqd
+    return jac_q, jac_qd
+
+
+@njit(cache=True)
+def system_mass_matrix(bodies, q):
+    """Block-diagonal Eq. (F8)."""
+    offsets = bodies[0]
+    n = offsets[-1]
+    out = np.zeros((n, n))
+    for b in range(offsets.shape[0] - 1):
+        s, e = offsets[b], offsets[b + 1]
+        s0, s1, x2, c, d, mred, _, _ = _moments(bodies[3], bodies[5], b, e - s - 7)
+        out[s:e, s:e] = mass_matrix(q[s + 3 : s + 7], q[s + 7 : e], bodies[1][b], s0, s1, x2, c, d, mred)
+    return out
+
+
+@njit(cache=True)
+def system_iteration_matrix(bodies, joints, q, qd, qdd, lam, gravity, phi, mass_factor, beta_p, gamma_p):
+    r"""Eq. (FP6): ``[[c M + beta' (K_t + H) + gamma' D_t, C_q^T], [C_q, 0]]`` in one pass;
+    ``c = 1`` for generalized-alpha (Eq. (G3)), ``c = 0, beta' = 1, gamma' = 0`` for statics (Eq. (S1))."""
+    n = q.shape[0]
+    _, jacobian, _, hessian = _constraints(joints, bodies[0], q, phi, lam, True, True, n)
+    k = jacobian.shape[0]
+    jac_q, jac_qd = system_body_tangents(bodies, q, qd, qdd, gravity, gamma_p != 0.0)
+    out = np.zeros((n + k, n + k))
+    out[:n, :n] = beta_p * (jac_q + hessian)
+    if gamma_p != 0.0:
+        out[:n, :n] += gamma_p * jac_qd
+    if mass_factor != 0.0:
+        out[:n, :n] += mass_factor * system_mass_matrix(bodies, q)
+    out[:n, n:] = jacobian.T
+    out[n:, :n] = jacobian
+    return out
