@@ -7,7 +7,10 @@ Data flow: geometry (:mod:`ffrf.geometry.link_geometry`, gmsh OCC) -> linear tet
 -> markers and joints (:mod:`ffrf.system.markers`, :mod:`ffrf.system.joints`) -> system
 (:mod:`ffrf.system.multibody`) -> generalized-alpha, variational midpoint or static solution
 (:mod:`ffrf.solvers.generalized_alpha`, :mod:`ffrf.solvers.variational_midpoint`, :mod:`ffrf.solvers.static_solver`)
--> the Bennett scene and its sensors (:mod:`ffrf.scenes.bennett_scene`, :mod:`ffrf.scenes.bennett_run`).
+-> scenes: one builder from a description (:mod:`ffrf.scenes.builder`) for scene files
+(:mod:`ffrf.scenes.scene_file`) and the paper's Bennett scenes (:mod:`ffrf.scenes.bennett_scene`,
+runs and sensors in :mod:`ffrf.scenes.bennett_run`). Layers and where to change what:
+``docs/architecture.md``.
 The equations are derived in ``docs/formulation.md``.
 This package never imports Exudyn.
 """
@@ -16,7 +19,18 @@ from ffrf.body.flexible_body import FlexibleBody
 
 # Floating frame of reference bodies, constraints, joints and solvers.
 from ffrf.body.modal_moments import ModalMoments, modal_moments
-from ffrf.errors import NewtonDivergence, ReductionError, StaticDivergence
+from ffrf.errors import (
+    FEInputError,
+    GeometryError,
+    InterfaceError,
+    MaterialError,
+    MeshError,
+    NewtonDivergence,
+    ReductionError,
+    SceneError,
+    SingularIterationMatrix,
+    StaticDivergence,
+)
 from ffrf.fe.fe_model import FEModel, rigid_body_modes
 from ffrf.fe.interfaces import (
     InterfaceNodes,
@@ -61,9 +75,13 @@ from ffrf.reduction.reduced_io import (
     reduction_fingerprint,
     save_reduced_body,
 )
+from ffrf.scenes.builder import Scene, assemble, build_scene
+from ffrf.scenes.scene_file import load_scene, run_scene
 from ffrf.solvers.common import IntegrationResult
 from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.solvers.simulate import simulate
 from ffrf.solvers.static_solver import StaticSolution, quasi_static, static_equilibrium
+from ffrf.solvers.step_control import StepControl
 from ffrf.solvers.variational_midpoint import variational_midpoint
 from ffrf.system.constraints import EulerNormalization, GroundPerpendicular, GroundPoint
 from ffrf.system.drives import CosineRamp, rpm
@@ -71,14 +89,14 @@ from ffrf.system.joints import GroundFrame, MarkerJoint, driven_revolute_joint, 
 from ffrf.system.markers import BodyMarker, frame_marker, node_marker, rigid_interface_marker
 from ffrf.system.multibody import MultibodySystem
 
-from .errors import FEInputError, GeometryError, InterfaceError, MaterialError, MeshError
-
 __all__ = [
     "FEInputError",
     "GeometryError",
     "InterfaceError",
     "MaterialError",
     "MeshError",
+    "SceneError",
+    "SingularIterationMatrix",
     "FEModel",
     "rigid_body_modes",
     "InterfaceNodes",
@@ -151,4 +169,11 @@ __all__ = [
     "StaticSolution",
     "quasi_static",
     "static_equilibrium",
+    "StepControl",
+    "simulate",
+    "Scene",
+    "build_scene",
+    "assemble",
+    "load_scene",
+    "run_scene",
 ]

@@ -30,8 +30,8 @@ from __future__ import annotations
 import logging
 import time as wallclock
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 import scipy.linalg
@@ -43,18 +43,11 @@ from ffrf.errors import NewtonDivergence, SingularIterationMatrix
 from ffrf.numerics.rank_revealing import WELL_CONDITIONED, factor
 from ffrf.solvers.common import IntegrationResult, consistent_accelerations, extrapolation_weights
 from ffrf.solvers.newton_kernels import CONVERGED, EXHAUSTED, NOT_FINITE, REFACTOR, alpha_iterations, should_refactor
+from ffrf.solvers.step_control import StepControl
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import PackedSystem, contiguous, newton_model
 
-__all__ = [
-    "AlphaParameters",
-    "IntegrationResult",
-    "NewtonDivergence",
-    "SingularIterationMatrix",
-    "StepControl",
-    "generalized_alpha",
-    "consistent_accelerations",
-]
+__all__ = ["AlphaParameters", "generalized_alpha"]
 
 log = logging.getLogger(__name__)
 
@@ -108,39 +101,6 @@ def _factor_iteration_matrix(
 
 class _Singular(Exception):
     """Raised inside a step; :func:`generalized_alpha` turns it into :class:`SingularIterationMatrix`."""
-
-
-@dataclass(frozen=True)
-class StepControl:
-    r"""Optional step-size control (``docs/formulation.md``, Eq. (G5)).
-
-    After each converged step the local error of the positions is estimated as
-    :math:`e = (\beta - \tfrac16)h^2(\ddot q_{n+1} - \ddot q_n)` (Zienkiewicz and Xie 1991,
-    for the Newmark family, which generalized-alpha's update belongs to), and the step is
-    accepted when :math:`\max_i |e_i| / (\mathrm{atol} + \mathrm{rtol}|q_i|) \le 1`. The next
-    step is scaled by :math:`0.9\,r^{-1/3}` (the error is :math:`O(h^3)`), limited to
-    [0.2, 2] and to [``min_step``, ``max_step``]; a rejected step or a Newton failure halves it.
-    Steps are shortened to land on every output time. Use it with ``rho_inf < 1``: with
-    ``rho_inf = 1`` unresolved high-frequency modes keep undamped oscillations in the
-    accelerations, which no acceleration-based estimate can tell from truncation error.
-    Measured on the flexible bar pendulum (``tests/test_ffrf_body/test_step_control.py``): the
-    tip error follows the tolerance (2.4e-5, 7.1e-6, 1.5e-6 m at 1e-5, 1e-6, 1e-7) with as many
-    steps as a uniform step of the same accuracy needs; its gain is on runs whose time scale
-    changes (ramps, impacts, the start of a motion).
-    """
-
-    atol: float = 1e-6
-    rtol: float = 1e-6
-    min_step: float = 1e-8
-    max_step: float = float("inf")
-
-    def error_ratio(self, beta: float, h: float, qdd_new: NDArray, qdd_old: NDArray, q: NDArray) -> float:
-        error = (beta - 1.0 / 6.0) * h * h * (qdd_new - qdd_old)
-        return float(np.max(np.abs(error) / (self.atol + self.rtol * np.abs(q))))
-
-    def next_step(self, h: float, ratio: float) -> float:
-        factor = 2.0 if ratio <= 0.0 else min(2.0, max(0.2, 0.9 * ratio ** (-1.0 / 3.0)))
-        return min(self.max_step, max(self.min_step, factor * h))
 
 
 @dataclass

@@ -32,7 +32,7 @@ generalized-alpha with :math:`\rho_\infty < 1` for everything else.
 from __future__ import annotations
 
 import time as wallclock
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray

@@ -51,6 +51,21 @@ CASES = {
         ["exactly one of group, cylinder or nodes_file"],
     ),
     "zero joint axis": ("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 0.0]", ["'axis' has zero length"]),
+    "one side's axis and the common axis": (
+        "axis = [0.0, 1.0, 0.0]",
+        "axis = [0.0, 1.0, 0.0]\naxis1 = [0.0, 1.0, 0.0]",
+        ["give either axis/point (both sides) or axis1/point1 (side 1), not both"],
+    ),
+    "drive speed twice": (
+        'type = "revolute"',
+        'type = "driven_revolute"\ndrive = {rpm = 1.0, omega = 0.1}',
+        ["drive: give exactly one of rpm", "omega = ... (rad/s)"],
+    ),
+    "start pose not a rotation": (
+        "modes = 3",
+        "modes = 3\npose = {euler_parameters = [1.0, 0.1, 0.0, 0.0]}",
+        ["'euler_parameters' must have unit length", "norm 1.00499"],
+    ),
     "unknown joint type": ('type = "revolute"', 'type = "prismatic"', ["'type' must be one of", "driven_revolute"]),
     "drive on a plain revolute": (
         'type = "revolute"',

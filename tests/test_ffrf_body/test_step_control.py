@@ -9,7 +9,8 @@ import pytest
 from pendulum_fixtures import pendulum, tip_position
 
 from ffrf.errors import NewtonDivergence
-from ffrf.solvers.generalized_alpha import StepControl, generalized_alpha
+from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.solvers.step_control import StepControl
 
 T_END, RHO = 0.2, 0.8
 

@@ -28,7 +28,8 @@ from scipy.sparse.linalg import splu, spsolve
 
 from ffrf.errors import FEInputError, InterfaceError, ReductionError
 from ffrf.reduction.component_modes_post import free_free_frequencies_hz
-from ffrf.reduction.craig_bampton import count_eigenvalues_below, craig_bampton, lowest_eigenpairs
+from ffrf.numerics.eigen import count_eigenvalues_below, lowest_eigenpairs
+from ffrf.reduction.craig_bampton import craig_bampton
 from ffrf.reduction.invariants import inertia_invariants
 
 

@@ -1,0 +1,131 @@
+"""The one scene builder (``ffrf.scenes.builder``): start poses, as-built joints closed by the
+assembly continuation, and the paper's Bennett scenes as plain scene descriptions.
+
+Truth is independent of the builder: a rotated start pose with rotated gravity must give the rotated
+motion (the equations are frame-invariant), and a body held by one fixed joint whose two sides
+disagree must end up rigidly moved onto the ground's frame and point, without strain energy."""
+
+import json
+
+import numpy as np
+from scene_fixtures import PENDULUM, write_bar
+from scipy.spatial.transform import Rotation
+
+from ffrf.scenes.bennett_scene import VARIANTS, bennett_description
+from ffrf.scenes.builder import assemble, build_scene
+from ffrf.scenes.scene_file import load_scene, sensor_arrays, simulate_scene
+from ffrf.scenes.scene_schema import check_scene
+from ffrf.system.joints import frame_from_axis
+
+
+def _pendulum_tip(tmp_path, name: str, text: str):
+    (tmp_path / name).write_text(text)
+    scene = load_scene(tmp_path / name)
+    _, q, lam = simulate_scene(scene)
+    return scene, sensor_arrays(scene, q, lam)["tip"]
+
+
+def test_a_rotated_start_pose_with_rotated_gravity_gives_the_rotated_motion(tmp_path):
+    write_bar(tmp_path)
+    scene, tip = _pendulum_tip(tmp_path, "plain.toml", PENDULUM)
+    hinge = scene.bodies[0].markers["hinge"].point  # the joint point (mesh coordinates)
+    turn = Rotation.from_rotvec([0.0, 0.7, 0.0])  # about the hinge axis y, through the hinge point
+    rotation = turn.as_matrix()
+    euler = np.roll(turn.as_quat(), 1).tolist()  # scalar first
+    position = hinge - rotation @ hinge
+    gravity = rotation @ np.array([0.0, 0.0, -9.81])
+    posed = PENDULUM.replace("gravity = [0.0, 0.0, -9.81]", f"gravity = {gravity.tolist()}").replace(
+        "modes = 3\n",
+        f"modes = 3\npose = {{position = {position.tolist()}, euler_parameters = {euler}}}\n",
+    )
+    _, tip_posed = _pendulum_tip(tmp_path, "posed.toml", posed)
+    expected = hinge + (tip - hinge) @ rotation.T
+    swing = np.abs(tip - tip[0]).max()
+    assert swing > 0.01  # the pendulum does swing
+    np.testing.assert_allclose(tip_posed, expected, rtol=0, atol=5e-12)  # measured 4.4e-14 m
+
+
+FIXED_WITH_MISFIT = """
+[scene]
+gravity = [0.0, 0.0, 0.0]
+[[bodies]]
+name = "bar"
+mesh = "bar.vtu"
+unit = "mm"
+material = {E = 1e8, nu = 0.3, rho = 450.0}
+order = 1
+modes = 3
+interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]
+[[joints]]
+name = "mount"
+type = "fixed"
+body0 = "ground"
+body1 = "bar"
+interface1 = "hinge"
+axis0 = AXIS0
+point0 = POINT0
+axis1 = [0.0, 1.0, 0.0]
+point1 = POINT1
+[[sensors]]
+name = "tip"
+body = "bar"
+point = [0.2, 0.0, 0.0]
+"""
+
+
+def test_a_fixed_joint_with_misfit_moves_the_body_rigidly_onto_the_ground_frame(tmp_path):
+    """Side 0 (ground) is tilted by 3 deg and shifted by 2 mm against side 1 (the bar's bore): one
+    joint, so the assembly is a rigid motion, by the rotation that takes the bar's joint frame onto
+    the ground's, without strain."""
+    write_bar(tmp_path)
+    axis0 = Rotation.from_rotvec(np.radians(3.0) * np.array([1.0, 0.0, 1.0]) / np.sqrt(2.0)).apply([0.0, 1.0, 0.0])
+    origin = "[0.0, 0.0, 0.0]"
+    aligned = FIXED_WITH_MISFIT.replace("AXIS0", "[0.0, 1.0, 0.0]").replace("POINT0", origin)
+    hinge = load_scene_text(tmp_path, aligned.replace("POINT1", origin)).bodies[0].markers["hinge"].point
+    point0 = hinge + np.array([0.0, 0.0, 2e-3])
+    text = FIXED_WITH_MISFIT.replace("AXIS0", str(axis0.tolist())).replace("POINT0", str(point0.tolist()))
+    scene = load_scene_text(tmp_path, text.replace("POINT1", str(hinge.tolist())))
+    assert abs(scene.misfit_degrees - 3.0) < 1e-12
+    solution = assemble(scene)
+    q = solution.q
+    # The rotation Q with Q J1 = J0 for the two joint frames of the builder's convention.
+    frame1 = frame_from_axis([0.0, 1.0, 0.0])
+    frame0 = frame_from_axis(axis0, frame1[:, 0])
+    rotation = frame0 @ frame1.T
+    tip_mesh = scene.bodies[0].fe.nodes[scene.sensors["tip"][1]]
+    expected = point0 + rotation @ (tip_mesh - hinge)
+    tip = sensor_arrays(scene, q[None], solution.multipliers[None])["tip"][0]
+    np.testing.assert_allclose(tip, expected, rtol=0, atol=2e-12)  # measured 1.4e-14 m
+    assert scene.system.energies(q, np.zeros_like(q))["strain"] < 1e-14
+    assert np.abs(scene.system.constraint_values(q, 0.0)).max() < 1e-12
+
+
+def load_scene_text(tmp_path, text: str):
+    (tmp_path / "scene.toml").write_text(text)
+    return load_scene(tmp_path / "scene.toml")
+
+
+def test_bennett_scenes_are_plain_scene_descriptions():
+    """Every Bennett variant is data in the scene-file format (JSON round trip unchanged, accepted
+    by the scene schema), with the base's h3 misaligned by alpha_3 - 90 deg against link 3's."""
+    for variant, (_, alpha3) in VARIANTS.items():
+        description = bennett_description(variant)
+        assert json.loads(json.dumps(description)) == description
+        check_scene(description, variant)
+        drive = [j for j in description["joints"] if j["type"] == "driven_revolute"]
+        assert len(drive) == 1
+        a, b = (np.array(drive[0][f"axis{s}"]) for s in "01")
+        angle = np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b)), a @ b))
+        assert abs(angle - abs(alpha3 - 90.0)) < 1e-9
+
+
+def test_a_bennett_description_builds_like_a_file(tmp_path):
+    """The builder takes the Bennett description as it takes a file (coarse links): closed at the
+    start pose up to the base's misalignment, which the assembly closes."""
+    description = bennett_description("pla1", h=0.012, n_modes=2)
+    scene = build_scene(description, where="pla1 coarse")
+    assert np.abs(scene.with_misfit(0.0).constraint_values(scene.q_initial, 0.0)).max() < 1e-12
+    assert np.abs(scene.system.constraint_values(scene.q_initial, 0.0)).max() > 1e-4  # 1 deg misfit
+    q = assemble(scene).q
+    assert np.abs(scene.system.constraint_values(q, 0.0)).max() < 1e-10
+    assert scene.system.energies(q, np.zeros_like(q))["strain"] > 0.0  # the misfit stays in the links
