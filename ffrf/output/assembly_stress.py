@@ -1,6 +1,6 @@
 r"""Stress state of an assembled linkage: von Mises stress, strain energy and joint reactions per link.
 
-After the static assembly (:func:`ffrf.scenes.bennett_scene.assemble`: gravity, then the
+After the static assembly (:func:`ffrf.scenes.builder.assemble`: gravity, then the
 misalignment of the variants ``pla1``/``pla2`` closed elastically by continuation) every link
 carries the elastic displacement :math:`u = \Psi\zeta` in its body frame (Eq. (HCB-3),
 ``docs/formulation.md``). Per link this module reports
@@ -17,7 +17,7 @@ carries the elastic displacement :math:`u = \Psi\zeta` in its body frame (Eq. (H
   driving torque.
 
 The pure functions take plain arrays; :func:`scene_assembly_stress`
-adapts a Bennett scene (duck-typed: ``links[k].fe``, ``.reduction``, ``.interfaces``) and
+adapts any built scene (:class:`ffrf.scenes.builder.Scene`: ``bodies[k].fe``, ``.reduction``, ``.interfaces``) and
 :func:`write_assembly_vtu` writes the deformed assembly for ParaView.
 """
 
@@ -193,7 +193,7 @@ def scene_assembly_stress(scene, q: ArrayLike, multipliers: ArrayLike | None = N
             )
             bodies_of[joint.name] = tuple(joint.bodies)
     out = []
-    for link in scene.links:
+    for link in scene.bodies:
         zeta = q[system.block(link.index)][7:]
         features = {name: link.fe.nodes[itf.nodes] for name, itf in link.interfaces.items()}
         stress = link_stress(link.index, link.fe, link.reduction.basis @ zeta, features)
@@ -224,7 +224,7 @@ def write_assembly_vtu(path: str | Path, scene, stress: AssemblyStress) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     points, elastic, reference, tets, nodal, body, offset = [], [], [], [], [], [], 0
-    for link, link_result in zip(scene.links, stress.links):
+    for link, link_result in zip(scene.bodies, stress.links, strict=True):
         fe = link.fe
         n = len(fe.mesh.points)
         current, world_elastic = _frame_points(fe, link.reduction.basis, stress.q[scene.system.block(link.index)])
