@@ -196,7 +196,7 @@ def bennett_description(
             joint["drive"] = {
                 "omega": float(omega),
                 "ramp_time": float(ramp_time),
-                "start_angle_deg": float(np.degrees(start_angle)),
+                "start_angle": float(start_angle),
             }
         joints.append(joint)
     settings = {
@@ -239,7 +239,8 @@ def build_bennett(
         variant, h, order, n_modes, beta, omega, ramp_time, start_angle, gravity, exact_gravity, joint_offsets
     )
     scene = build_scene(description, where=f"Bennett {variant}")
-    drive = CosineRamp(omega, ramp_time)
+    angle = next(j.angle for j in scene.joints if j.angle is not None)  # the drive the system runs with
+    drive = angle.ramp
     material, alpha3 = VARIANTS[variant]
     settings = dict(
         scene.settings,

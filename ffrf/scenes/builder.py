@@ -249,9 +249,10 @@ def _body(k: int, entry: dict, base: Path, settings: dict, reductions: dict[str,
 
 def _drive(spec: dict) -> RampedAngle:
     omega = float(spec["omega"]) if "omega" in spec else rpm(float(spec["rpm"]))
-    return RampedAngle(
-        math.radians(float(spec.get("start_angle_deg", 0.0))), CosineRamp(omega, float(spec.get("ramp_time", 1.0)))
+    start = (
+        float(spec["start_angle"]) if "start_angle" in spec else math.radians(float(spec.get("start_angle_deg", 0.0)))
     )
+    return RampedAngle(float(start), CosineRamp(omega, float(spec.get("ramp_time", 1.0))))
 
 
 def _joint_geometry(spec: dict, index: dict[str, int], bodies: tuple[SceneBody, ...]) -> JointGeometry:

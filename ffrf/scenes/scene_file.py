@@ -42,7 +42,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     interface1 = "bore0"
     axis = [0.0, 1.0, 0.0]            # joint axis (world, at t = 0)
     point = [0.0, 0.0, 0.0]           # joint point (world, at t = 0); default: interface1's centre
-    drive = {rpm = 1.0, ramp_time = 1.0}   # driven_revolute only: the paper's cosine ramp (or omega = rad/s)
+    drive = {rpm = 1.0, ramp_time = 1.0}   # driven_revolute only: the paper's cosine ramp (or omega = rad/s);
+                                      # start_angle_deg = 0 (or start_angle, rad)
     # As built: axis0/point0 (body0's side) and axis1/point1 (body1's side) instead of axis/point;
     # the run starts from a static assembly that closes the misfit (ffrf.scenes.builder).
 

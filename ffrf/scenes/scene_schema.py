@@ -128,6 +128,7 @@ DRIVE = {
     "rpm": Key("number", False, _nonzero),
     "omega": Key("number", False, _nonzero),
     "ramp_time": Key("number", False, _positive),
+    "start_angle": Key("number"),
     "start_angle_deg": Key("number"),
 }
 JOINT = {
@@ -275,6 +276,8 @@ def _check_joint(joint: dict, interfaces: Mapping[str, set[str]], where: str) ->
         raise SceneError(f"{where}: a {kind} joint has no drive; use type = \"driven_revolute\" or remove 'drive'")
     if "drive" in joint and ("rpm" in joint["drive"]) == ("omega" in joint["drive"]):
         raise SceneError(f"{where}, drive: give exactly one of rpm = ... (rev/min) or omega = ... (rad/s)")
+    if "drive" in joint and "start_angle" in joint["drive"] and "start_angle_deg" in joint["drive"]:
+        raise SceneError(f"{where}, drive: give start_angle (rad) or start_angle_deg, not both")
     for side in ("0", "1"):
         if f"axis{side}" in joint and "axis" in joint or f"point{side}" in joint and "point" in joint:
             raise SceneError(
