@@ -30,8 +30,8 @@ from __future__ import annotations
 
 import platform
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -130,7 +130,7 @@ def _trajectory_metrics(a: SolverRun, b: SolverRun, scale_m: float) -> dict:
 
 def _energy_balance(scene, system, run: SolverRun, qd: NDArray | None = None) -> float:
     """Drive work minus the change of stored energy, relative to the work (Simpson over the rows)."""
-    from ffrf.scenes.bennett_run import energy_balance
+    from ffrf.output.energy_balance import energy_balance
 
     energies = [
         system.energies(q, np.zeros_like(q) if qd is None else v) for q, v in zip(run.q, run.q if qd is None else qd)
@@ -138,7 +138,7 @@ def _energy_balance(scene, system, run: SolverRun, qd: NDArray | None = None) ->
     sensors = {"driving_torque": run.torque, "drive_angle": run.drive_angle}
     for kind in ("kinetic", "potential", "strain"):
         sensors[f"energy_{kind}"] = np.array([e[kind] for e in energies])
-    balance = energy_balance(scene, run.time, sensors, qd)
+    balance = energy_balance(system, run.time, sensors, qd)
     return float(
         np.abs(balance["energy_balance_residual"]).max() / max(np.abs(balance["energy_drive_work"]).max(), 1e-300)
     )

@@ -29,11 +29,11 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.integrate import cumulative_simpson
 
 from ffrf.body.flexible_body import node_positions
 from ffrf.numerics.small_linalg import cross3
 from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
+from ffrf.output.energy_balance import energy_balance
 from ffrf.output.tables import write_results as write_tables
 from ffrf.scenes.bennett_scene import BennettScene
 from ffrf.scenes.builder import assemble
@@ -50,7 +50,6 @@ __all__ = [
     "choose_mode",
     "inertia_number",
     "write_results",
-    "energy_balance",
 ]
 
 log = logging.getLogger(__name__)
@@ -198,42 +197,8 @@ def evaluate_sensors(
     out["coupler_deviation"] = out["coupler_point"] - ideal
     curve = ideal_coupler_points(scene, scene.start_angle + np.linspace(0.0, 2 * np.pi, 4000, endpoint=False))
     out["coupler_distance_to_path"] = _distance_to_polyline(out["coupler_point"], curve)
-    out.update(energy_balance(scene, time, out, qd))
+    out.update(energy_balance(scene.system, time, out, qd))
     return out
-
-
-def _cumulative_integral(values: NDArray, x: NDArray) -> NDArray:
-    """Cumulative Simpson integral (fourth order for smooth samples; trapezoid below 3 samples)."""
-    if len(x) < 3:
-        return np.concatenate([[0.0], np.cumsum(0.5 * (values[1:] + values[:-1]) * np.diff(x))])
-    return cumulative_simpson(values, x=x, initial=0.0)
-
-
-def energy_balance(scene: BennettScene, time: NDArray, sensors: dict, qd: NDArray | None) -> dict[str, NDArray]:
-    """Work of the drive (integral of torque over the drive angle), damping dissipation (integral of
-    zetad^T D zetad over time) and the balance residual W - (dE_kin + dE_pot + dE_strain + D)."""
-    work = _cumulative_integral(sensors["driving_torque"], sensors["drive_angle"])
-    if qd is None:
-        dissipated = np.zeros_like(work)
-    else:
-        rate = np.array(
-            [
-                sum(
-                    float(v[scene.system.block(k)][7:] @ link.body.damping @ v[scene.system.block(k)][7:])
-                    for k, link in enumerate(scene.links)
-                )
-                for v in qd
-            ]
-        )
-        dissipated = _cumulative_integral(rate, time)
-    stored = sum(
-        sensors[f"energy_{kind}"] - sensors[f"energy_{kind}"][0] for kind in ("kinetic", "potential", "strain")
-    )
-    return {
-        "energy_drive_work": work,
-        "energy_dissipated": dissipated,
-        "energy_balance_residual": work - stored - dissipated,
-    }
 
 
 def run_bennett(
