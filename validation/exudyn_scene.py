@@ -162,10 +162,12 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
         if tb.source == "exudyn"
     }
     started = time.perf_counter()
-    times, q, lam = simulate_scene(equivalent)
+    run = simulate_scene(equivalent)
+    times, q, lam = run.time, run.q, run.multipliers
     solve_ours = time.perf_counter() - started
     ours = sensor_arrays(equivalent, q, lam)
-    times_exact, q_exact, lam_exact = simulate_scene(exact)
+    run_exact = simulate_scene(exact)
+    q_exact, lam_exact = run_exact.q, run_exact.multipliers
     exact_arrays = sensor_arrays(exact, q_exact, lam_exact)
     theirs, setup_exudyn, solve_exudyn = run_exudyn_scene(scene, bases, times)
 

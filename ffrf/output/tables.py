@@ -54,12 +54,16 @@ def _json_value(value):
     return str(value)
 
 
-def write_results(directory: str | Path, arrays: dict[str, NDArray], metadata: dict) -> Path:
-    """``DIR/results.npz`` (``arrays``: time and one array per sensor, SI units), the same as
+def write_results(
+    directory: str | Path, arrays: dict[str, NDArray], metadata: dict, coordinates: NDArray | None = None
+) -> Path:
+    """``DIR/results.npz`` (``arrays``: time and one array per sensor, SI units; and the coordinates
+    ``q``, rows = times, when given, so that any quantity can be recomputed later), the sensors as
     ``DIR/results.csv`` (:func:`write_csv`) and ``DIR/metadata.json``; returns ``DIR``."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    np.savez(directory / "results.npz", **arrays)
+    extra = {} if coordinates is None else {"q": coordinates}
+    np.savez(directory / "results.npz", **arrays, **extra)
     write_csv(directory / "results.csv", arrays)
     (directory / "metadata.json").write_text(json.dumps(metadata, indent=2, default=_json_value))
     return directory

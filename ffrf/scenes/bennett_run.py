@@ -30,17 +30,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.body.flexible_body import node_positions
-from ffrf.numerics.small_linalg import cross3
 from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
-from ffrf.output.energy_balance import energy_balance
+from ffrf.output.sensors import scene_sensors
 from ffrf.output.tables import write_results as write_tables
 from ffrf.scenes.bennett_scene import BennettScene
 from ffrf.scenes.builder import assemble
 from ffrf.solvers.simulate import MODES, simulate
 from ffrf.system.joints import MarkerJoint
-from ffrf.system.packed_system import newton_model
-from ffrf.system.reactions import joint_poses, joint_reactions
 
 __all__ = [
     "BennettResult",
@@ -117,12 +113,6 @@ def _joints(scene: BennettScene) -> list[MarkerJoint]:
     return [c for c in scene.system.constraints if isinstance(c, MarkerJoint) and c.name != "clamp"]
 
 
-def _relative_angle(poses: tuple) -> float:
-    """Rotation of side 1 against side 0 about z0 (rad), from :func:`ffrf.system.reactions.joint_poses`."""
-    _, axes0, _, axes1 = poses
-    return float(np.arctan2(cross3(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0]))
-
-
 def ideal_coupler_points(scene: BennettScene, drive_angles: NDArray) -> NDArray[np.float64]:
     """Coupler point of the ideal linkage (motion polynomial) at the given drive angles."""
     linkage = scene.linkage
@@ -147,57 +137,20 @@ def _distance_to_polyline(points: NDArray, curve: NDArray) -> NDArray[np.float64
 def evaluate_sensors(
     scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray | None, multipliers: NDArray
 ) -> dict[str, NDArray]:
-    """All sensors of the module docstring at every output row."""
-    system = scene.system
-    model = newton_model(system)  # its constraint values: the fast path's kernel when supported
+    """All sensors of the module docstring at every output row: the scene sensors of any run
+    (:func:`ffrf.output.sensors.scene_sensors`) and the Bennett ones built from them."""
+    out = scene_sensors(scene, time, q, multipliers, qd)
     joints = _joints(scene)
-    tracked = scene.tracked_nodes
-    sensors: dict[str, list] = {
-        k: []
-        for k in (
-            "drive_angle",
-            "driving_torque",
-            "coupler_point",
-            "joint_angles",
-            "energy_kinetic",
-            "energy_strain",
-            "energy_potential",
-            "constraint_residual",
-            "joint_reactions",
-        )
-    }
-    for k, nodes in tracked.items():
-        for j in range(len(nodes)):
-            sensors[f"link{k}_node{j}"] = []
-    for row, t in enumerate(time):
-        qq = q[row]
-        sensors["drive_angle"].append(scene.drive_angle(float(t)))
-        sensors["driving_torque"].append(multipliers[row, -1])
-        # (p0, axes0, p1, axes1) per joint, reused by the reactions below
-        poses = {j.name: joint_poses(j, [qq[system.block(i)] for i in j.bodies]) for j in joints}
-        sensors["joint_angles"].append([_relative_angle(poses[j.name]) for j in joints])
-        # Link 2 is the far side of joint 1 and the near side of joint 2 (point p1 and point p0).
-        sensors["coupler_point"].append(0.5 * (poses[joints[1].name][2] + poses[joints[2].name][0]))
-        energies = system.energies(qq, np.zeros_like(qq) if qd is None else qd[row])
-        sensors["energy_kinetic"].append(energies["kinetic"])
-        sensors["energy_strain"].append(energies["strain"])
-        sensors["energy_potential"].append(energies["potential"])
-        sensors["constraint_residual"].append(np.abs(model.constraint_values(qq, float(t))).max())
-        reactions = joint_reactions(system, qq, multipliers[row], float(t), poses)
-        sensors["joint_reactions"].append([np.concatenate([r.force_local, r.torque_local]) for r in reactions.values()])
-        for k, nodes in tracked.items():
-            positions = node_positions(
-                qq[system.block(k)], scene.links[k].fe.nodes, scene.links[k].reduction.basis, nodes
-            )
-            for j, position in enumerate(positions):
-                sensors[f"link{k}_node{j}"].append(position)
-    out = {k: np.array(v) for k, v in sensors.items()}
+    out["joint_angles"] = np.column_stack([out[f"{j.name}_angle"] for j in joints])
+    names = [c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)]
+    out["joint_reactions"] = np.stack([out[f"{name}_reaction"] for name in names], axis=1)
+    # Link 2 is the far side of joint 1 and the near side of joint 2 (point 1 and point 0).
+    out["coupler_point"] = 0.5 * (out[f"{joints[1].name}_point1"] + out[f"{joints[2].name}_point0"])
     ideal = ideal_coupler_points(scene, out["drive_angle"])
     out["coupler_ideal"] = ideal
     out["coupler_deviation"] = out["coupler_point"] - ideal
     curve = ideal_coupler_points(scene, scene.start_angle + np.linspace(0.0, 2 * np.pi, 4000, endpoint=False))
     out["coupler_distance_to_path"] = _distance_to_polyline(out["coupler_point"], curve)
-    out.update(energy_balance(scene.system, time, out, qd))
     return out
 
 
@@ -255,6 +208,6 @@ def run_bennett(
 
 
 def write_results(result: BennettResult, directory: str | Path) -> Path:
-    """``DIR/results.npz`` (time + sensors), the same as ``DIR/results.csv`` and ``DIR/metadata.json``
-    (:func:`ffrf.output.tables.write_results`)."""
-    return write_tables(directory, {"time": result.time, **result.sensors}, result.metadata)
+    """``DIR/results.npz`` (time, sensors and the coordinates ``q``), the sensors as ``DIR/results.csv``
+    and ``DIR/metadata.json`` (:func:`ffrf.output.tables.write_results`)."""
+    return write_tables(directory, {"time": result.time, **result.sensors}, result.metadata, coordinates=result.q)

@@ -68,11 +68,11 @@ from pathlib import Path
 
 from numpy.typing import NDArray
 
-from ffrf.body.flexible_body import node_positions
 from ffrf.errors import SceneError
+from ffrf.output.sensors import node_sensors, scene_sensors
 from ffrf.output.tables import write_results
 from ffrf.scenes.builder import Scene, build_scene, start_state
-from ffrf.solvers.simulate import simulate
+from ffrf.solvers.simulate import Run, simulate
 
 __all__ = ["SceneError", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
 
@@ -97,12 +97,9 @@ def _renamed(scene: Scene, name: str) -> Scene:
 
 
 def sensor_arrays(scene: Scene, q: NDArray, multipliers: NDArray) -> dict[str, NDArray]:
-    """Sensor positions (rows = q's rows) and the multiplier of each driven joint's angle
-    equation, ``<joint>_torque`` (N m, applied to the joint's side 1)."""
-    arrays = {}
-    for name, (body, node) in scene.sensors.items():
-        b = scene.bodies[body]
-        arrays[name] = node_positions(q[:, scene.system.block(body)], b.fe.nodes, b.reduction.basis, [node])[:, 0]
+    """The scene's node sensors (rows = q's rows) and each driven joint's torque, ``<joint>_torque``
+    (N m, applied to the joint's side 1): the quantities its Exudyn twin also measures."""
+    arrays = node_sensors(scene, q)
     rows = scene.system.rows
     for k, constraint in enumerate(scene.system.all_constraints):
         if constraint.name in scene.driven:
@@ -110,12 +107,11 @@ def sensor_arrays(scene: Scene, q: NDArray, multipliers: NDArray) -> dict[str, N
     return arrays
 
 
-def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> tuple[NDArray, NDArray, NDArray]:
-    """The scene's dynamic or quasi-static run from ``q0`` (default :func:`start_state`):
-    output times, coordinates and multipliers (rows = times)."""
+def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> Run:
+    """The scene's dynamic or quasi-static run from ``q0`` (default :func:`start_state`)."""
     s = scene.settings
     q0 = start_state(scene) if q0 is None else q0
-    run = simulate(
+    return simulate(
         scene.system,
         q0,
         s.get("mode", "dynamic"),
@@ -125,20 +121,22 @@ def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> tu
         rho_inf=float(s.get("rho_inf", 0.9)),
         progress=progress,
     )
-    return run.time, run.q, run.multipliers
 
 
 def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
-    """Static start, then the dynamic or quasi-static run; writes ``results.npz``, ``results.csv`` and
-    ``metadata.json``."""
+    """Static start, then the dynamic or quasi-static run; writes ``results.npz`` (time, every sensor of
+    :func:`ffrf.output.sensors.scene_sensors` and the coordinates ``q``), ``results.csv`` (the sensors)
+    and ``metadata.json``."""
     started = wallclock.perf_counter()
-    time, q, lam = simulate_scene(scene, progress=progress)
+    run = simulate_scene(scene, progress=progress)
     metadata = dict(
         scene=scene.name,
         settings=scene.settings,
         bodies=[b.name for b in scene.bodies],
         modes=[b.reduction.n_modes for b in scene.bodies],
+        n_coordinates=scene.system.n_coordinates,
         wall_time_s=wallclock.perf_counter() - started,
     )
-    write_results(directory, {"time": time, **sensor_arrays(scene, q, lam)}, metadata)
+    sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
+    write_results(directory, {"time": run.time, **sensors}, metadata, coordinates=run.q)
     return metadata

@@ -21,8 +21,8 @@ from ffrf.system.joints import frame_from_axis
 def _pendulum_tip(tmp_path, name: str, text: str):
     (tmp_path / name).write_text(text)
     scene = load_scene(tmp_path / name)
-    _, q, lam = simulate_scene(scene)
-    return scene, sensor_arrays(scene, q, lam)["tip"]
+    run = simulate_scene(scene)
+    return scene, sensor_arrays(scene, run.q, run.multipliers)["tip"]
 
 
 def test_a_rotated_start_pose_with_rotated_gravity_gives_the_rotated_motion(tmp_path):

@@ -1,0 +1,97 @@
+"""Sensors of any run: what rows of coordinates ``q`` (and velocities, multipliers) of a scene mean.
+
+For every output row, and for any scene built by :mod:`ffrf.scenes.builder` (duck-typed: ``system``,
+``bodies[k].fe``, ``bodies[k].reduction``, ``sensors`` name -> (body, node)):
+
+* node sensors: world positions of the scene's sensor nodes (Eq. (F1)), m;
+* for every joint ``J`` (a :class:`~ffrf.system.joints.MarkerJoint`): ``J_angle``, the rotation of side 1
+  against side 0 about side 0's z axis (rad); ``J_reaction``, force and torque on side 1 in joint
+  frame 0 (N, N m; :mod:`ffrf.system.reactions`); for a driven joint ``J_torque``, the multiplier of its
+  angle equation, the driving torque applied to side 1 (N m); ``J_point0``, ``J_point1``, the joint
+  point on each side (world, m);
+* ``energy_kinetic``, ``energy_strain``, ``energy_potential`` (J) and ``constraint_residual``
+  (largest |g|), and with exactly one driven joint its work and the energy balance
+  (:mod:`ffrf.output.energy_balance`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ffrf.body.flexible_body import node_positions
+from ffrf.numerics.small_linalg import cross3
+from ffrf.output.energy_balance import energy_balance
+from ffrf.system.joints import MarkerJoint
+from ffrf.system.multibody import MultibodySystem
+from ffrf.system.packed_system import newton_model
+from ffrf.system.reactions import joint_poses, joint_reactions
+
+__all__ = ["relative_angle", "joint_rows", "node_sensors", "scene_sensors"]
+
+
+def relative_angle(poses: tuple) -> float:
+    """Rotation of side 1 against side 0 about z0 (rad), from :func:`ffrf.system.reactions.joint_poses`."""
+    _, axes0, _, axes1 = poses
+    return float(np.arctan2(cross3(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0]))
+
+
+def _marker_joints(system: MultibodySystem) -> list[tuple[int, MarkerJoint]]:
+    return [(k, c) for k, c in enumerate(system.all_constraints) if isinstance(c, MarkerJoint)]
+
+
+def joint_rows(
+    system: MultibodySystem, time: NDArray, q: NDArray, multipliers: NDArray, qd: NDArray | None = None
+) -> dict[str, NDArray]:
+    """Per joint ``J``: ``J_angle``, ``J_reaction`` (rows x 6), ``J_torque`` (driven joints), the joint
+    points of side 0 and side 1 ``J_point0``, ``J_point1`` (world; equal where the joint holds), plus
+    energies and ``constraint_residual``; rows = ``q``'s rows."""
+    model = newton_model(system)  # its constraint values: the fast path's kernel when supported
+    joints = _marker_joints(system)
+    rows: dict[str, list] = {k: [] for k in ("energy_kinetic", "energy_strain", "energy_potential")}
+    rows["constraint_residual"] = []
+    for _, joint in joints:
+        for kind in ("angle", "reaction", "point0", "point1") + (("torque",) if joint.angle is not None else ()):
+            rows[f"{joint.name}_{kind}"] = []
+    for row, t in enumerate(time):
+        qq = q[row]
+        poses = {j.name: joint_poses(j, [qq[system.block(i)] for i in j.bodies]) for _, j in joints}
+        reactions = joint_reactions(system, qq, multipliers[row], float(t), poses)
+        for k, joint in joints:
+            rows[f"{joint.name}_angle"].append(relative_angle(poses[joint.name]))
+            rows[f"{joint.name}_point0"].append(poses[joint.name][0])
+            rows[f"{joint.name}_point1"].append(poses[joint.name][2])
+            reaction = reactions[joint.name]
+            rows[f"{joint.name}_reaction"].append(np.concatenate([reaction.force_local, reaction.torque_local]))
+            if joint.angle is not None:  # the angle equation is the joint's last row
+                rows[f"{joint.name}_torque"].append(multipliers[row, int(system.rows[k + 1]) - 1])
+        energies = system.energies(qq, np.zeros_like(qq) if qd is None else qd[row])
+        for kind in ("kinetic", "strain", "potential"):
+            rows[f"energy_{kind}"].append(energies[kind])
+        rows["constraint_residual"].append(np.abs(model.constraint_values(qq, float(t))).max())
+    return {name: np.array(values) for name, values in rows.items()}
+
+
+def node_sensors(scene, q: NDArray) -> dict[str, NDArray]:
+    """World positions (rows x 3) of every sensor node of ``scene``."""
+    out = {}
+    for name, (body, node) in scene.sensors.items():
+        b = scene.bodies[body]
+        out[name] = node_positions(q[:, scene.system.block(body)], b.fe.nodes, b.reduction.basis, [node])[:, 0]
+    return out
+
+
+def scene_sensors(
+    scene, time: NDArray, q: NDArray, multipliers: NDArray, qd: NDArray | None = None
+) -> dict[str, NDArray]:
+    """Every sensor of the module docstring; with exactly one driven joint also ``drive_angle``,
+    ``driving_torque`` and the energy balance."""
+    system = scene.system
+    out = {**node_sensors(scene, q), **joint_rows(system, time, q, multipliers, qd)}
+    driven = [j for _, j in _marker_joints(system) if j.angle is not None]
+    if len(driven) == 1:
+        joint = driven[0]
+        out["drive_angle"] = np.array([joint.angle(float(t)) for t in time])
+        out["driving_torque"] = out[f"{joint.name}_torque"]
+        out.update(energy_balance(system, time, out, qd))
+    return out
