@@ -57,6 +57,12 @@ Every interface selector weights its nodes by the surface area of the boundary t
 (``ffrf.fe.interfaces``), unless a ``nodes_file`` gives a weight per node in a second column. The file is
 checked against :mod:`ffrf.scenes.scene_schema` before anything is built: an unknown or misspelt key, a wrong
 type or an impossible value is a :class:`SceneError` naming the key, where it is and the fix.
+
+A run (``python -m ffrf run SCENE.toml --out DIR``) writes ``results.npz`` with the output times, every
+sensor of :func:`ffrf.output.sensors.scene_sensors` (the listed node sensors; per joint its angle, the
+joint point of each side, the reaction on side 1 in joint frame 0 and a driven joint's torque;
+energies, the constraint residual and, with one driven joint, the energy balance) and the coordinates
+``q``; the sensors again as ``results.csv``; and ``metadata.json``.
 """
 
 from __future__ import annotations
