@@ -64,7 +64,16 @@ from ffrf.system.joints import (
 from ffrf.system.markers import BodyMarker, attach_joint_point, rigid_interface_marker
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["SceneBody", "JointGeometry", "Scene", "build_scene", "assemble", "start_state", "STEPS_PER_DEGREE"]
+__all__ = [
+    "SceneBody",
+    "JointGeometry",
+    "Scene",
+    "build_scene",
+    "assemble",
+    "start_state",
+    "starts_static",
+    "STEPS_PER_DEGREE",
+]
 
 log = logging.getLogger(__name__)
 
@@ -360,9 +369,14 @@ def assemble(
     return solution
 
 
+def starts_static(scene: Scene) -> bool:
+    """Whether a run starts from :func:`assemble`: ``static_start`` if given, else for quasi-static
+    runs and whenever a joint has a misfit."""
+    s = scene.settings
+    return bool(s.get("static_start", s.get("mode", "dynamic") != "dynamic" or scene.misfit_degrees > 0.0))
+
+
 def start_state(scene: Scene) -> NDArray[np.float64]:
     """The state a run starts from: the bodies' poses, assembled statically (:func:`assemble`) when
-    ``static_start`` (default: for quasi-static runs, or when a joint has a misfit)."""
-    s = scene.settings
-    static = s.get("static_start", s.get("mode", "dynamic") != "dynamic" or scene.misfit_degrees > 0.0)
-    return assemble(scene).q if static else scene.q_initial.copy()
+    :func:`starts_static`."""
+    return assemble(scene).q if starts_static(scene) else scene.q_initial.copy()

@@ -62,7 +62,9 @@ A run (``python -m ffrf run SCENE.toml --out DIR``) writes ``results.npz`` with 
 sensor of :func:`ffrf.output.sensors.scene_sensors` (the listed node sensors; per joint its angle, the
 joint point of each side, the reaction on side 1 in joint frame 0 and a driven joint's torque;
 energies, the constraint residual and, with one driven joint, the energy balance) and the coordinates
-``q``; the sensors again as ``results.csv``; and ``metadata.json``.
+``q``; the sensors again as ``results.csv``; ``metadata.json``; and, when the run starts from a static
+assembly, the assembled state with its stresses as ``assembly.vtu`` (per body in the metadata under
+``assembly``: largest von Mises stress and where, strain energy, joint reactions).
 """
 
 from __future__ import annotations
@@ -75,9 +77,10 @@ from pathlib import Path
 from numpy.typing import NDArray
 
 from ffrf.errors import SceneError
+from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
 from ffrf.output.sensors import node_sensors, scene_sensors
 from ffrf.output.tables import write_results
-from ffrf.scenes.builder import Scene, build_scene, start_state
+from ffrf.scenes.builder import Scene, assemble, build_scene, start_state, starts_static
 from ffrf.solvers.simulate import Run, simulate
 
 __all__ = ["SceneError", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
@@ -130,19 +133,28 @@ def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> Ru
 
 
 def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
-    """Static start, then the dynamic or quasi-static run; writes ``results.npz`` (time, every sensor of
-    :func:`ffrf.output.sensors.scene_sensors` and the coordinates ``q``), ``results.csv`` (the sensors)
-    and ``metadata.json``."""
+    """The run of the module docstring: static assembly when the scene starts static (its stress
+    state in the metadata under ``assembly`` and as ``assembly.vtu``), then the dynamic or
+    quasi-static run; writes ``results.npz``, ``results.csv`` and ``metadata.json``."""
     started = wallclock.perf_counter()
-    run = simulate_scene(scene, progress=progress)
+    directory = Path(directory)
     metadata = dict(
         scene=scene.name,
         settings=scene.settings,
         bodies=[b.name for b in scene.bodies],
         modes=[b.reduction.n_modes for b in scene.bodies],
         n_coordinates=scene.system.n_coordinates,
-        wall_time_s=wallclock.perf_counter() - started,
     )
+    q0 = scene.q_initial.copy()
+    if starts_static(scene):
+        assembly = assemble(scene)
+        q0 = assembly.q
+        stress = scene_assembly_stress(scene, assembly.q, assembly.multipliers)
+        metadata["assembly"] = stress.as_dict()
+        directory.mkdir(parents=True, exist_ok=True)
+        write_assembly_vtu(directory / "assembly.vtu", scene, stress)
+    run = simulate_scene(scene, q0, progress=progress)
     sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
+    metadata["wall_time_s"] = wallclock.perf_counter() - started
     write_results(directory, {"time": run.time, **sensors}, metadata, coordinates=run.q)
     return metadata
