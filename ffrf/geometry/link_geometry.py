@@ -1,4 +1,4 @@
-"""Parametric Bennett link built with gmsh's OpenCASCADE kernel from its two joint axes.
+"""Parametric link built with gmsh's OpenCASCADE kernel from its two joint axes (any skew pair).
 
 A link carries two joint axes (lines in space). Its geometry is
 
@@ -190,6 +190,20 @@ def common_normal_feet(axis_a: Axis, axis_b: Axis) -> NDArray[np.float64]:
     return np.stack([axis_a.point + t_a * axis_a.direction, axis_b.point + t_b * axis_b.direction])
 
 
+def _points_on_axes(points: ArrayLike, axes: tuple[Axis, Axis], names: tuple[str, str]) -> NDArray[np.float64]:
+    """The given joint points, checked to lie on their axes (to 1e-9 m)."""
+    points = np.asarray(points, dtype=float).reshape(2, 3)
+    for point, axis, name in zip(points, axes, names, strict=True):
+        rel = point - axis.point
+        off = float(np.linalg.norm(rel - (rel @ axis.direction) * axis.direction))
+        if not off < 1e-9:
+            raise GeometryError(
+                f"joint point {point.tolist()} of interface {name!r} is {off:.3g} m off its axis through "
+                f"{axis.point.tolist()}; give a point on the axis"
+            )
+    return points
+
+
 def _frame_along(start: NDArray, end: NDArray, hint: NDArray) -> NDArray[np.float64]:
     """Right-handed frame (columns e1, e2, e3): e1 along start->end, e2 = hint made orthogonal."""
     e1 = (end - start) / np.linalg.norm(end - start)
@@ -276,6 +290,7 @@ def build_link(
     design: LinkDesign = LinkDesign(),
     names: tuple[str, str] = ("joint_a", "joint_b"),
     mount: bool = False,
+    joint_points: ArrayLike | None = None,
 ) -> LinkGeometry:
     """Build the link solid in the open gmsh session (OCC kernel) with physical groups.
 
@@ -288,9 +303,13 @@ def build_link(
     design : dimensions.
     names : physical-group names of the two bore surfaces.
     mount : add the base link's mounting block (physical group ``"mount"``).
+    joint_points : (2, 3) the joint point on each axis (default: the feet of the common normal).
+        Where a loop has DH offsets d_i != 0, the two links meeting at a joint have different
+        feet on its axis; giving both the same joint point keeps their housings stacked by the
+        offset rule, and the arm, which joins the housing centres, is cranked accordingly.
     """
     axes = (Axis.of(axis_a), Axis.of(axis_b))
-    feet = common_normal_feet(*axes)
+    feet = common_normal_feet(*axes) if joint_points is None else _points_on_axes(joint_points, axes, names)
     s = design.housing_offset
     centers = np.stack([feet[0] + s * axes[0].direction, feet[1] - s * axes[1].direction])
     span = float(np.linalg.norm(centers[1] - centers[0]))
@@ -385,6 +404,7 @@ def mesh_link(
     mount: bool = False,
     msh_path: str | Path | None = None,
     name: str = "link",
+    joint_points: ArrayLike | None = None,
 ) -> tuple[TetMesh, LinkGeometry]:
     """Build and mesh a link with linear tetrahedra of maximum edge ``h`` (metres).
 
@@ -394,7 +414,7 @@ def mesh_link(
     from ffrf.geometry.meshing import configure_meshing, gmsh_session, mesh_current_model
 
     with gmsh_session(name) as gmsh:
-        geometry = build_link(gmsh, axis_a, axis_b, design, names, mount)
+        geometry = build_link(gmsh, axis_a, axis_b, design, names, mount, joint_points)
         configure_meshing(h)
         mesh = mesh_current_model(name)
         if msh_path is not None:

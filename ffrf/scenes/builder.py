@@ -45,7 +45,14 @@ from ffrf.fe.interfaces import (
     interface_in_cylinder,
 )
 from ffrf.fe.materials import Material
-from ffrf.geometry.link_geometry import LinkGeometry, bennett_axes, mesh_link, paper_link_axes
+from ffrf.geometry.link_geometry import (
+    Axis,
+    LinkGeometry,
+    bennett_axes,
+    common_normal_feet,
+    mesh_link,
+    paper_link_axes,
+)
 from ffrf.mesh.tet_mesh import TetMesh, read_mesh
 from ffrf.reduction.craig_bampton import CraigBamptonBasis, craig_bampton
 from ffrf.reduction.reduced_io import reduction_fingerprint
@@ -201,9 +208,25 @@ def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | 
             raise SceneError(f"{where}: mesh file {path} not found; give a path relative to the scene file")
         return read_mesh(path, unit=entry.get("unit")), None
     spec = entry["parametric"]
-    first, second, names = paper_link_axes(spec["link"], bennett_axes(float(spec.get("alpha3_deg", 90.0))))
+    h = float(spec.get("h", 6e-3))
+    if "link" in spec:  # the paper's link k
+        first, second, names = paper_link_axes(spec["link"], bennett_axes(float(spec.get("alpha3_deg", 90.0))))
+        return mesh_link(
+            first, second, h=h, names=names, mount=spec.get("mount", spec["link"] == 0), name=entry["name"]
+        )
+    a, b = spec["axes"]
+    joint_points = None
+    if "joint_point" in a or "joint_point" in b:
+        feet = common_normal_feet(Axis.of((a["point"], a["direction"])), Axis.of((b["point"], b["direction"])))
+        joint_points = [a.get("joint_point", feet[0]), b.get("joint_point", feet[1])]
     return mesh_link(
-        first, second, h=float(spec.get("h", 6e-3)), names=names, mount=spec["link"] == 0, name=entry["name"]
+        (a["point"], a["direction"]),
+        (b["point"], b["direction"]),
+        h=h,
+        names=(a["name"], b["name"]),
+        mount=spec.get("mount", False),
+        name=entry["name"],
+        joint_points=joint_points,
     )
 
 

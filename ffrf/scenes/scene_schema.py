@@ -91,9 +91,17 @@ MATERIAL = {
     "nu": Key("number", True, _between(-1.0, 0.5, closed=False)),
     "rho": Key("number", True, _positive),
 }
+LINK_AXIS = {
+    "name": Key("string", True),
+    "point": Key("vector3", True),
+    "direction": Key("vector3", True, _nonzero_vector),
+    "joint_point": Key("vector3"),
+}
 PARAMETRIC = {
-    "link": Key("integer", True, _one_of((0, 1, 2, 3))),
+    "link": Key("integer", False, _one_of((0, 1, 2, 3))),
     "alpha3_deg": Key("number"),
+    "axes": Key("tables", keys=LINK_AXIS),
+    "mount": Key("boolean"),
     "h": Key("number", False, _between(*PARAMETRIC_H_RANGE, closed=True)),
 }
 CYLINDER = {
@@ -254,6 +262,16 @@ def _check_body(body: dict, where: str) -> None:
         raise SceneError(
             f'{where}: give exactly one of mesh = "file" or parametric = {{link = ...}}, got {sources or "neither"}'
         )
+    spec = body.get("parametric")
+    if spec is not None and ("link" in spec) == ("axes" in spec):
+        raise SceneError(
+            f"{where}, parametric: give exactly one of link = 0..3 (the paper's link) or axes = [{{name, point, "
+            "direction}, {...}] (any two skew axes)"
+        )
+    if spec is not None and "axes" in spec and len(spec["axes"]) != 2:
+        raise SceneError(f"{where}, parametric: a link has exactly two axes, got {len(spec['axes'])}")
+    if spec is not None and "axes" in spec and "alpha3_deg" in spec:
+        raise SceneError(f"{where}, parametric: alpha3_deg belongs to the paper's links (link = ...), not to axes")
     if "unit" in body and "mesh" not in body:
         raise SceneError(f"{where}: 'unit' scales a mesh file; a parametric link is in metres, remove 'unit'")
     if not body["interfaces"]:

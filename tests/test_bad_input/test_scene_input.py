@@ -3,6 +3,8 @@
 Each case edits the valid bar-pendulum scene of ``scene_fixtures`` by one text replacement; the
 schema refuses it before any body is built, so the cases are cheap."""
 
+import re
+
 import pytest
 from scene_fixtures import PENDULUM, write_bar
 
@@ -135,3 +137,30 @@ def test_unreadable_mesh_file_is_a_mesh_error(tmp_path):
     (tmp_path / "scene.toml").write_text(PENDULUM)
     with pytest.raises(MeshError, match="bar.vtu: meshio cannot read it"):
         load_scene(tmp_path / "scene.toml")
+
+
+PARAMETRIC_BODY = {
+    "name": "link",
+    "material": {"E": 1.2e9, "nu": 0.33, "rho": 450.0},
+    "interfaces": [{"name": "a", "group": "a"}],
+}
+AXIS_A = {"name": "a", "point": [0.0, 0.0, 0.0], "direction": [0.0, 0.0, 1.0]}
+AXIS_B = {"name": "b", "point": [0.1, 0.0, 0.0], "direction": [0.0, 1.0, 0.0]}
+PARAMETRIC_CASES = {
+    "paper link and axes": ({"link": 1, "axes": [AXIS_A, AXIS_B]}, "give exactly one of link = 0..3"),
+    "three axes on a link": ({"axes": [AXIS_A, AXIS_B, AXIS_B]}, "a link has exactly two axes, got 3"),
+    "joint point off its axis": (
+        {"axes": [dict(AXIS_A, joint_point=[0.0, 0.01, 0.0]), AXIS_B], "h": 0.012},
+        "joint point [0.0, 0.01, 0.0] of interface 'a' is 0.01 m off its axis",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(PARAMETRIC_CASES))
+def test_bad_parametric_link_is_refused(case):
+    from ffrf.errors import GeometryError
+    from ffrf.scenes.builder import build_scene
+
+    spec, words = PARAMETRIC_CASES[case]
+    with pytest.raises((SceneError, GeometryError), match=re.escape(words)):
+        build_scene({"bodies": [dict(PARAMETRIC_BODY, parametric=spec)]})

@@ -151,3 +151,49 @@ def test_a_run_with_misfit_writes_its_assembly_and_every_sensor(tmp_path):
     assert np.abs(data["mount_reaction"]).max() < 1e-9  # measured 9e-11 N (Newton tolerance)
     assert data["constraint_residual"].max() < 5e-12  # measured 4.9e-14
     np.testing.assert_allclose(data["mount_point1"], data["mount_point0"], rtol=0, atol=1e-12)
+
+
+def _axes_link(first, second, names, joint_points=None) -> dict:
+    axes = []
+    for k, (axis, name) in enumerate(zip((first, second), names, strict=True)):
+        entry = {"name": name, "point": axis.point.tolist(), "direction": axis.direction.tolist()}
+        if joint_points is not None:
+            entry["joint_point"] = [float(v) for v in joint_points[k]]
+        axes.append(entry)
+    return {
+        "name": "link",
+        "parametric": {"axes": axes, "h": 0.012},
+        "material": {"E": 1.2e9, "nu": 0.33, "rho": 450.0},
+        "order": 1,
+        "modes": 2,
+        "interfaces": [{"name": n, "group": n} for n in names],
+    }
+
+
+def test_a_parametric_link_from_two_axes_is_the_papers_link_from_the_same_axes():
+    from ffrf.geometry.link_geometry import bennett_axes, paper_link_axes
+
+    first, second, names = paper_link_axes(1, bennett_axes(90.0))  # as the builder makes link = 1
+    by_axes = build_scene({"bodies": [_axes_link(first, second, names)]}).bodies[0]
+    by_index = build_scene(
+        {"bodies": [dict(_axes_link(first, second, names), parametric={"link": 1, "h": 0.012})]}
+    ).bodies[0]
+    np.testing.assert_array_equal(by_axes.fe.nodes, by_index.fe.nodes)
+    np.testing.assert_array_equal(by_axes.reduction.basis, by_index.reduction.basis)
+
+
+def test_a_cranked_link_puts_its_housings_at_the_given_joint_points():
+    """DH offsets d != 0: the joint point on each axis is given, 15 mm from the common normal's foot;
+    each bore (interface) centre lies on its axis, the housing offset s from its joint point."""
+    from ffrf.geometry.link_geometry import LinkDesign, common_normal_feet, paper_link_axes
+
+    first, second, names = paper_link_axes(2)
+    feet = common_normal_feet(first, second)
+    points = np.array([feet[0] - 0.015 * first.direction, feet[1] + 0.015 * second.direction])
+    body = build_scene({"bodies": [_axes_link(first, second, names, points)]}).bodies[0]
+    s = LinkDesign().housing_offset
+    np.testing.assert_allclose(body.geometry.joint_points, points, rtol=0, atol=1e-15)
+    for k, (axis, name, sign) in enumerate(zip((first, second), names, (1.0, -1.0), strict=True)):
+        centre = body.markers[name].point
+        # the bore's area-weighted centre: its faceting at h = 12 mm moves it by 1.4e-5 m (measured)
+        np.testing.assert_allclose(centre, points[k] + sign * s * axis.direction, rtol=0, atol=1e-4)
