@@ -1,9 +1,10 @@
 """Sensors of any run: what rows of coordinates ``q`` (and velocities, multipliers) of a scene mean.
 
 For every output row, and for any scene built by :mod:`ffrf.scenes.builder` (duck-typed: ``system``,
-``bodies[k].fe``, ``bodies[k].reduction``, ``sensors`` name -> (body, node)):
+``bodies[k].fe``, ``bodies[k].reduction``, ``sensors`` name -> (body, node), ``joint_sensors``):
 
-* node sensors: world positions of the scene's sensor nodes (Eq. (F1)), m;
+* node sensors: world positions of the scene's sensor nodes (Eq. (F1)), m; joint-point sensors: the
+  mean of the named joints' points on one body (the paper's coupler point: link 2's two joint points);
 * for every joint ``J`` (a :class:`~ffrf.system.joints.MarkerJoint`): ``J_angle``, the rotation of side 1
   against side 0 about side 0's z axis (rad); ``J_reaction``, force and torque on side 1 in joint
   frame 0 (N, N m; :mod:`ffrf.system.reactions`); for a driven joint ``J_torque``, the multiplier of its
@@ -88,6 +89,8 @@ def scene_sensors(
     ``driving_torque`` and the energy balance."""
     system = scene.system
     out = {**node_sensors(scene, q), **joint_rows(system, time, q, multipliers, qd)}
+    for name, parts in scene.joint_sensors.items():  # the mean of joint points on one body
+        out[name] = np.mean([out[f"{joint}_point{side}"] for joint, side in parts], axis=0)
     driven = [j for _, j in _marker_joints(system) if j.angle is not None]
     if len(driven) == 1:
         joint = driven[0]

@@ -144,8 +144,6 @@ def evaluate_sensors(
     out["joint_angles"] = np.column_stack([out[f"{j.name}_angle"] for j in joints])
     names = [c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)]
     out["joint_reactions"] = np.stack([out[f"{name}_reaction"] for name in names], axis=1)
-    # Link 2 is the far side of joint 1 and the near side of joint 2 (point 1 and point 0).
-    out["coupler_point"] = 0.5 * (out[f"{joints[1].name}_point1"] + out[f"{joints[2].name}_point0"])
     ideal = ideal_coupler_points(scene, out["drive_angle"])
     out["coupler_ideal"] = ideal
     out["coupler_deviation"] = out["coupler_point"] - ideal

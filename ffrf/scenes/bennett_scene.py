@@ -207,6 +207,8 @@ def bennett_description(
         "joint_offsets": joint_offsets,
         "static_start": True,
     }
+    # The paper's coupler point: the mean of link 2's two joint points.
+    sensors.append({"name": "coupler_point", "body": "link2", "joints": ["joint1", "joint2"]})
     return {"scene": settings, "bodies": bodies, "joints": joints, "sensors": sensors}
 
 

@@ -132,7 +132,8 @@ class JointGeometry:
 @dataclass(frozen=True, eq=False)
 class Scene:
     """A built scene: the description it came from, its bodies and joints, the as-built system,
-    the start state from the bodies' poses, the sensors (name -> body, node) and the settings."""
+    the start state from the bodies' poses, the node sensors (name -> body, node), the joint-point
+    sensors (name -> (joint, side) pairs whose points they average) and the settings."""
 
     name: str
     description: dict
@@ -141,6 +142,7 @@ class Scene:
     system: MultibodySystem
     q_initial: NDArray[np.float64]
     sensors: dict[str, tuple[int, int]]
+    joint_sensors: dict[str, tuple[tuple[str, int], ...]]
     settings: dict
 
     @property
@@ -190,11 +192,19 @@ def build_scene(
         block = system.block(body.index)
         q_initial[block.start : block.start + 3] = pose.get("position", [0.0, 0.0, 0.0])
         q_initial[block.start + 3 : block.start + 7] = pose.get("euler_parameters", [1.0, 0.0, 0.0, 0.0])
+    specs = description.get("sensors", [])
     sensors = {
-        spec["name"]: (index[spec["body"]], _sensor_node(spec, bodies[index[spec["body"]]]))
-        for spec in description.get("sensors", [])
+        s["name"]: (index[s["body"]], _sensor_node(s, bodies[index[s["body"]]])) for s in specs if "joints" not in s
     }
-    return Scene(settings.get("name", where), description, bodies, joints, system, q_initial, sensors, settings)
+    by_name = {j.name: j for j in joints}
+    joint_sensors = {
+        s["name"]: tuple((name, by_name[name].bodies.index(index[s["body"]])) for name in s["joints"])
+        for s in specs
+        if "joints" in s
+    }
+    return Scene(
+        settings.get("name", where), description, bodies, joints, system, q_initial, sensors, joint_sensors, settings
+    )
 
 
 #: Reductions built in this process, by content (see :func:`build_scene`).

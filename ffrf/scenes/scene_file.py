@@ -54,7 +54,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     [[sensors]]
     name = "tip"
     body = "link"
-    point = [0.2, 0.0, 0.0]           # the mesh node nearest to this point (mesh coordinates); or node = index
+    point = [0.2, 0.0, 0.0]           # the mesh node nearest to this point (mesh coordinates); or node = index,
+                                      # or joints = ["hinge", ...]: the mean of these joints' points on this body
     surface = true                    # optional: the nearest node on the body's surface
 
 Every interface selector weights its nodes by the surface area of the boundary triangles they span

@@ -160,6 +160,7 @@ SENSOR = {
     "point": Key("vector3"),
     "node": Key("integer", False, _non_negative),
     "surface": Key("boolean"),
+    "joints": Key("strings"),
 }
 SETTINGS = {
     "name": Key("string"),
@@ -192,6 +193,7 @@ _KIND_NAMES = {
     "pair": "a list of 2 numbers",
     "table": "a table {...}",
     "tables": "a list of tables ([[...]] or [{...}, ...])",
+    "strings": "a list of strings",
 }
 
 
@@ -210,6 +212,9 @@ def _type_problem(kind: str, value) -> str | None:
         if not isinstance(value, list) or len(value) != size or not all(_is_number(v) for v in value):
             return f"must be {_KIND_NAMES[kind]}, got {value!r}"
         return None if all(math.isfinite(v) for v in value) else f"must be finite, got {value!r}"
+    if kind == "strings":
+        ok = isinstance(value, list) and value and all(isinstance(v, str) for v in value)
+        return None if ok else f"must be {_KIND_NAMES[kind]} (at least one), got {value!r}"
     expected = {"string": str, "boolean": bool, "table": dict}.get(kind)
     if expected is not None:
         return None if isinstance(value, expected) else f"must be {_KIND_NAMES[kind]}, got {value!r}"
@@ -351,5 +356,14 @@ def check_scene(document: dict, where: str = "scene") -> None:
         label = f"{where}, sensors[{k}]{_label(sensor)}"
         if sensor["body"] not in interfaces:
             raise SceneError(f"{label}: unknown body {sensor['body']!r}; bodies are {sorted(interfaces)}")
-        if ("point" in sensor) == ("node" in sensor):
-            raise SceneError(f"{label}: give exactly one of point = [x, y, z] (m) or node = index")
+        if sum(key in sensor for key in ("point", "node", "joints")) != 1:
+            raise SceneError(
+                f"{label}: give exactly one of point = [x, y, z] (m), node = index or joints = [names] (the mean "
+                "of their joint points on this body)"
+            )
+        for name in sensor.get("joints", []):
+            sides = next((j for j in joints if j.get("name", "joint") == name), None)
+            if sides is None:
+                raise SceneError(f"{label}: unknown joint {name!r}; joints are {[j.get('name') for j in joints]}")
+            if sensor["body"] not in (sides["body0"], sides["body1"]):
+                raise SceneError(f"{label}: joint {name!r} does not hold body {sensor['body']!r}")

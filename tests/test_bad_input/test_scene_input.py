@@ -90,6 +90,11 @@ CASES = {
         ["sensors[0] 'tip'", "unknown body 'beam'"],
     ),
     "sensor point and node": ("point = [0.2, 0.0, 0.0]", "point = [0.2, 0.0, 0.0]\nnode = 3", ["exactly one of point"]),
+    "sensor on an unknown joint": (
+        "point = [0.2, 0.0, 0.0]",
+        'joints = ["hing"]',
+        ["sensors[0] 'tip': unknown joint 'hing'; joints are ['hinge']"],
+    ),
     "missing mesh file": ('mesh = "bar.vtu"', 'mesh = "missing.vtu"', ["missing.vtu not found"]),
     "not TOML": ("[scene]", "[scene", ["cannot read the scene"]),
 }

@@ -197,3 +197,21 @@ def test_a_cranked_link_puts_its_housings_at_the_given_joint_points():
         centre = body.markers[name].point
         # the bore's area-weighted centre: its faceting at h = 12 mm moves it by 1.4e-5 m (measured)
         np.testing.assert_allclose(centre, points[k] + sign * s * axis.direction, rtol=0, atol=1e-4)
+
+
+def test_a_joint_point_sensor_of_a_hinge_stays_on_the_ground(tmp_path):
+    """A sensor on the hinge's joint point (the pendulum's side) moves with the bar but must stay at
+    the ground's hinge point while the bar swings: the constraint, seen by the sensor."""
+    write_bar(tmp_path)
+    text = PENDULUM + '\n[[sensors]]\nname = "pin"\nbody = "bar"\njoints = ["hinge"]\n'
+    (tmp_path / "pin.toml").write_text(text)
+    scene = load_scene(tmp_path / "pin.toml")
+    run = simulate_scene(scene)
+    from ffrf.output.sensors import scene_sensors
+
+    sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
+    hinge = scene.bodies[0].markers["hinge"].point
+    assert np.abs(sensors["tip"] - sensors["tip"][0]).max() > 0.01  # the bar swings
+    np.testing.assert_allclose(
+        sensors["pin"], np.broadcast_to(hinge, sensors["pin"].shape), rtol=0, atol=2e-15
+    )  # measured 1.9e-17 m
