@@ -40,6 +40,7 @@ __all__ = [
     "interface_from_nodes_file",
     "interface_from_triangles",
     "interface_in_cylinder",
+    "interface_around_axis",
     "triangles_in_cylinder",
     "triangles_spanned_by",
 ]
@@ -312,3 +313,31 @@ def interface_in_cylinder(
             f"tol {tol!r} m); check the axis, the radius and the units (metres)"
         )
     return interface_from_triangles(model, name, tris)
+
+
+def interface_around_axis(
+    model: FEModel, name: str, point: ArrayLike, direction: ArrayLike, tol: float = 1e-4
+) -> InterfaceNodes:
+    """The bore around a joint axis, found from the axis alone: the boundary triangles on the
+    cylinder through the boundary vertices nearest to the axis (radius r_min, within ``tol``), over
+    the axial extent of those vertices. For meshes of parts whose joint axes are known (scans,
+    STL files) but whose bores carry no named group."""
+    d = np.asarray(direction, dtype=float)
+    norm = np.linalg.norm(d)
+    if not norm > 0.0:
+        raise InterfaceError(f"interface {name!r}: axis direction {direction!r} has zero length")
+    d = d / norm
+    mesh = model.mesh
+    vertices = np.unique(boundary_triangles(mesh))
+    rel = mesh.points[vertices] - np.asarray(point, dtype=float)
+    t = rel @ d
+    r = np.linalg.norm(rel - np.outer(t, d), axis=1)
+    radius = float(r.min())
+    if radius <= tol:
+        raise InterfaceError(
+            f"interface {name!r} of {mesh.name}: the axis through {np.round(point, 6).tolist()} touches the body's "
+            f"surface ({radius:.3g} m away); a bore around it has a radius > 0: check the axis and the units"
+        )
+    on_bore = np.abs(r - radius) <= tol
+    extent = (float(t[on_bore].min()), float(t[on_bore].max()))
+    return interface_in_cylinder(model, name, point, d, radius, extent, tol)

@@ -40,6 +40,7 @@ from ffrf.fe.fe_model import FEModel
 from ffrf.fe.interfaces import (
     InterfaceNodes,
     boundary_triangles,
+    interface_around_axis,
     interface_from_group,
     interface_from_nodes_file,
     interface_in_cylinder,
@@ -255,6 +256,9 @@ def _interface(fe: FEModel, spec: dict, base: Path) -> InterfaceNodes:
             tuple(c["axial_extent"]),
             float(c.get("tolerance", 1e-4)),
         )
+    if "axis" in spec:
+        a = spec["axis"]
+        return interface_around_axis(fe, name, a["point"], a["direction"], float(a.get("tolerance", 1e-4)))
     return interface_from_nodes_file(fe, name, base / spec["nodes_file"])
 
 

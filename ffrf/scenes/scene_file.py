@@ -36,6 +36,7 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
         {name = "bore1", cylinder = {point = [0.1, 0, 0], direction = [0, 0, 1], radius = 0.0095,
                                      axial_extent = [-0.01, 0.01]}},
         {name = "pad", nodes_file = "pad_nodes.txt"},   # 0-based node indices, optional 2nd column: weights
+        {name = "bore2", axis = {point = [0.2, 0, 0], direction = [0, 0, 1]}},  # the bore nearest the axis
     ]
 
     [[joints]]

@@ -111,8 +111,14 @@ CYLINDER = {
     "axial_extent": Key("pair", True, _ordered_pair),
     "tolerance": Key("number", False, _positive),
 }
+AROUND_AXIS = {
+    "point": Key("vector3", True),
+    "direction": Key("vector3", True, _nonzero_vector),
+    "tolerance": Key("number", False, _positive),
+}
 INTERFACE = {
     "name": Key("string", True),
+    "axis": Key("table", keys=AROUND_AXIS),
     "group": Key("string"),
     "cylinder": Key("table", keys=CYLINDER),
     "nodes_file": Key("string"),
@@ -283,11 +289,11 @@ def _check_body(body: dict, where: str) -> None:
         raise SceneError(f"{where}: list at least one interface (the first is the body's frame)")
     _unique(body["interfaces"], "interfaces", where)
     for k, interface in enumerate(body["interfaces"]):
-        selectors = [key for key in ("group", "cylinder", "nodes_file") if key in interface]
+        selectors = [key for key in ("group", "cylinder", "axis", "nodes_file") if key in interface]
         if len(selectors) != 1:
             raise SceneError(
                 f"{where}, interfaces[{k}]{_label(interface)}: select it by exactly one of group, "
-                f"cylinder or nodes_file, got {selectors or 'none'}"
+                f"cylinder, axis or nodes_file, got {selectors or 'none'}"
             )
 
 

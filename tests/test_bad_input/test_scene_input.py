@@ -50,7 +50,7 @@ CASES = {
     "two selectors": (
         'nodes_file = "hinge.txt"}',
         'nodes_file = "hinge.txt", group = "end"}',
-        ["exactly one of group, cylinder or nodes_file"],
+        ["exactly one of group, cylinder, axis or nodes_file"],
     ),
     "zero joint axis": ("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 0.0]", ["'axis' has zero length"]),
     "one side's axis and the common axis": (
@@ -169,3 +169,14 @@ def test_bad_parametric_link_is_refused(case):
     spec, words = PARAMETRIC_CASES[case]
     with pytest.raises((SceneError, GeometryError), match=re.escape(words)):
         build_scene({"bodies": [dict(PARAMETRIC_BODY, parametric=spec)]})
+
+
+def test_an_axis_on_the_surface_finds_no_bore():
+    """``axis = {...}`` interface selection along an edge of a solid bar: no bore around it."""
+    from body_fixtures import bar_model
+
+    from ffrf.errors import InterfaceError
+    from ffrf.fe.interfaces import interface_around_axis
+
+    with pytest.raises(InterfaceError, match=r"interface 'pin' of .*touches the body's surface"):
+        interface_around_axis(bar_model(), "pin", [0.0, 0.0, 0.0], [0.0, 1.0, 0.0])

@@ -215,3 +215,24 @@ def test_a_joint_point_sensor_of_a_hinge_stays_on_the_ground(tmp_path):
     np.testing.assert_allclose(
         sensors["pin"], np.broadcast_to(hinge, sensors["pin"].shape), rtol=0, atol=2e-15
     )  # measured 1.9e-17 m
+
+
+def test_a_bore_found_from_its_axis_is_the_meshed_bore():
+    """``axis = {point, direction}`` finds the same bore as the mesher's named group: same nodes, same
+    area weights (the selection is independent: radii and extents of the boundary vertices)."""
+    from ffrf.geometry.link_geometry import bennett_axes, paper_link_axes
+
+    first, second, names = paper_link_axes(1, bennett_axes(90.0))
+    by_group = _axes_link(first, second, names)
+    by_axis = dict(
+        by_group,
+        interfaces=[
+            {"name": names[0], "group": names[0]},
+            {"name": names[1], "axis": {"point": second.point.tolist(), "direction": second.direction.tolist()}},
+        ],
+    )
+    named = build_scene({"bodies": [by_group]}).bodies[0].interfaces[names[1]]
+    found = build_scene({"bodies": [by_axis]}).bodies[0].interfaces[names[1]]
+    np.testing.assert_array_equal(np.sort(found.nodes), np.sort(named.nodes))
+    order_found, order_named = np.argsort(found.nodes), np.argsort(named.nodes)
+    np.testing.assert_allclose(found.weights[order_found], named.weights[order_named], rtol=1e-12, atol=0)
