@@ -1,4 +1,4 @@
-"""Exact kinematics of single-loop linkages: dual quaternions, Pluecker lines, DH, Bennett.
+"""Exact kinematics of single-loop linkages: dual quaternions, Pluecker lines, DH, Bennett, any nR loop.
 
 Conventions (stated once, tested in ``tests/kinematics``): SI units (metres, radians);
 quaternions scalar first; active rotations; dual quaternion products compose like 4x4
@@ -24,6 +24,7 @@ from .dh import (
 from .dual_quaternion import DualQuaternion
 from .mobility import MobilityReport, rigid_mobility
 from .pluecker import CommonNormal, Line, angle, common_normal, distance
+from .single_loop import LoopFoldError, LoopMotion, SingleLoop, trace_motion
 
 __all__ = [
     "PAPER_A",
@@ -36,8 +37,11 @@ __all__ = [
     "DualQuaternion",
     "Line",
     "LoopClosureError",
+    "LoopFoldError",
+    "LoopMotion",
     "MobilityReport",
     "MotionPolynomial",
+    "SingleLoop",
     "angle",
     "common_normal",
     "dh_axes",
@@ -49,5 +53,6 @@ __all__ = [
     "loop_closure_residual",
     "open_loop_axes",
     "rigid_mobility",
+    "trace_motion",
     "wrap_angle",
 ]

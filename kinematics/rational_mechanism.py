@@ -1,0 +1,78 @@
+r"""Mechanisms of Rational Linkages read as single loops, and their joint angles.
+
+A ``rational_linkages.RationalMechanism`` holds two factorisations of one motion polynomial,
+:math:`C(t) = (t - h_1)(t - h_2)\cdots = (t - k_1)(t - k_2)\cdots`, with the axes in the home pose
+:math:`C(\infty) = 1`. Read as a loop (:class:`kinematics.single_loop.SingleLoop`), its joints are
+:math:`h_1, h_2, \dots` followed by the second factorisation reversed, :math:`\dots, k_2, k_1`
+(``RationalMechanism.get_screw_axes``), and the tool link is link ``m``, ``m`` the length of the
+first factorisation. A factor :math:`t - h` with :math:`h = s + v + \varepsilon w` turns by
+
+.. math:: \varphi = 2\,\mathrm{atan2}(-|v|,\; t - s)                          \qquad (L5)
+
+about the line of :math:`v` (``docs/formulation.md``; for a unit axis :math:`t = -\cot(\varphi/2)`,
+the convention of :mod:`kinematics.bennett`). In the loop's product (L2) the second factorisation
+appears inverted, so its joints turn by :math:`-\varphi`. Rational Linkages' own joint angle
+(``joint_angle_to_t_param``) is :math:`-\varphi_0` modulo :math:`2\pi`.
+
+``rational_linkages`` is imported only here and only when a mechanism is read.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .pluecker import Line
+from .single_loop import SingleLoop
+
+__all__ = ["MODELS", "factor_joint_angles", "load_model", "loop_from_mechanism", "tool_link"]
+
+#: The 4R and 6R mechanisms that ``rational_linkages.models`` ships.
+MODELS = ("bennett_ark24", "collisions_free_6r", "plane_fold_6r", "interp_4poses_6r")
+
+
+def load_model(name: str) -> Any:
+    """The ``RationalMechanism`` ``rational_linkages.models.<name>()``, one of :data:`MODELS`."""
+    if name not in MODELS:
+        raise ValueError(f"unknown Rational Linkages model {name!r}; choose one of {', '.join(MODELS)}")
+    try:
+        from rational_linkages import models
+    except ImportError as error:  # pragma: no cover - rational_linkages is a test dependency
+        raise ImportError(
+            "reading Rational Linkages mechanisms needs the package rational_linkages: "
+            "pip install 'rational_linkages~=3.0.1'"
+        ) from error
+    return getattr(models, name)()
+
+
+def loop_from_mechanism(mechanism: Any, scale: float = 1.0) -> SingleLoop:
+    """The mechanism's axes in its home pose as a :class:`SingleLoop`, lengths times ``scale``."""
+    if not (np.isfinite(scale) and scale > 0.0):
+        raise ValueError(f"scale must be a positive number, got {scale}")
+    lines = [
+        Line(np.asarray(axis.direction, dtype=float), scale * np.asarray(axis.moment, dtype=float))
+        for axis in mechanism.get_screw_axes()
+    ]
+    return SingleLoop(tuple(lines))
+
+
+def tool_link(mechanism: Any) -> int:
+    """Index of the link that the motion polynomial moves (the end of the first factorisation)."""
+    return len(mechanism.factorizations[0].dq_axes)
+
+
+def _factor_angles(factorization: Any, t: float) -> NDArray[np.float64]:
+    """Eq. (L5) for every factor ``t - h`` of one factorisation."""
+    angles = []
+    for axis in factorization.dq_axes:
+        coefficients = np.asarray(axis.array(), dtype=float)
+        angles.append(2.0 * np.arctan2(-np.linalg.norm(coefficients[1:4]), t - coefficients[0]))
+    return np.array(angles)
+
+
+def factor_joint_angles(mechanism: Any, t: float) -> NDArray[np.float64]:
+    """Joint rotations from home of the loop :func:`loop_from_mechanism` at curve parameter ``t``."""
+    first, second = mechanism.factorizations
+    return np.concatenate([_factor_angles(first, t), -_factor_angles(second, t)[::-1]])

@@ -1,0 +1,362 @@
+r"""Any single loop of revolute joints: closure, mobility and motion by continuation.
+
+A loop of ``n`` revolute joints is given by its joint axes :math:`h_0 \dots h_{n-1}` (Pluecker
+lines, :mod:`kinematics.pluecker`) in one assembled *home* pose. Links are numbered as in the
+paper: link 0 (the base) carries :math:`h_{n-1}` and :math:`h_0`, link ``k`` carries
+:math:`h_{k-1}` and :math:`h_k`; joint ``i`` turns link ``i + 1`` against link ``i`` about
+:math:`h_i`. With joint rotations :math:`\varphi_i` measured from the home pose, link ``k`` is
+displaced by the product of exponentials (``docs/formulation.md``, (L1))
+
+.. math:: \sigma_k = R_0(\varphi_0) R_1(\varphi_1)\cdots R_{k-1}(\varphi_{k-1}), \qquad
+          R_i(\varphi) = \cos\tfrac\varphi2 + \sin\tfrac\varphi2\, h_i,
+
+each :math:`R_i` a rotation about the *home* axis :math:`h_i` (the right factor acts first, so
+the axes of earlier joints carry the later ones). The loop closes when (L2)
+
+.. math:: \sigma_n = R_0(\varphi_0)\cdots R_{n-1}(\varphi_{n-1}) = \pm 1 ,
+
+which is the paper's closure equation :math:`(t_0 - h_0)\cdots(t_{n-1} - h_{n-1}) \in \mathbb R`
+with :math:`t_i = -\cot(\varphi_i/2)`. Differentiating (L2), the loop product moves with the
+spatial twist :math:`\sum_i \dot\varphi_i \xi_i`, where :math:`\xi_i = (l_i, m_i)` are the
+Pluecker coordinates of axis ``i`` in its current pose, :math:`\sigma_i h_i \tilde\sigma_i`
+(L3). The closure Jacobian is the ``6 x n`` matrix of these lines; the loop's first-order
+mobility is ``n - rank``. A loop that moves (a Bennett linkage, the 6R mechanisms of Rational
+Linkages) keeps rank ``n - 1`` along its motion; where the rank drops further the pose is
+singular (a bifurcation or a dead point of the loop).
+
+The motion is traced by continuation (L4): predictor along the kernel of the Jacobian, corrector
+by Gauss-Newton on the closure residual with the driving joint held. Nothing here needs a motion
+polynomial, so misaligned (as-built) loops and loops from any source are treated alike; where a
+motion polynomial exists (Bennett, Rational Linkages) it is an independent check of the result.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from .dh import DHParameters, LoopClosureError, dh_axes, dh_from_axes
+from .dual_quaternion import DualQuaternion
+from .pluecker import Line
+
+__all__ = [
+    "LoopFoldError",
+    "LoopMotion",
+    "SingleLoop",
+    "trace_motion",
+]
+
+#: Closure tolerance of the corrector, relative to the loop's size (translation) and in rad.
+CLOSURE_TOLERANCE = 1e-13
+
+
+class LoopFoldError(ValueError):
+    """The driving joint cannot turn further: the motion folds back (the joint is a rocker)."""
+
+
+def rotation_about(line: Line, angle: float) -> NDArray[np.float64]:
+    r"""4x4 matrix of the rotation :math:`R(\varphi)` about ``line`` by ``angle`` (Rodrigues)."""
+    rotation = Rotation.from_rotvec(angle * line.direction).as_matrix()
+    matrix = np.eye(4)
+    matrix[:3, :3] = rotation
+    matrix[:3, 3] = line.point - rotation @ line.point
+    return matrix
+
+
+@dataclass(frozen=True)
+class SingleLoop:
+    r"""A closed loop of ``n >= 4`` revolute joints: its axes :math:`h_0 \dots h_{n-1}` at home.
+
+    ``scale`` (m) is the loop's size (largest distance between neighbouring axes, or their
+    largest distance from the origin when all axes intersect); closure tolerances are relative
+    to it.
+    """
+
+    axes: tuple[Line, ...]
+
+    def __post_init__(self) -> None:
+        axes = tuple(self.axes)
+        if len(axes) < 4:
+            raise ValueError(f"a single-loop linkage needs at least 4 revolute joints, got {len(axes)} axes")
+        if not all(isinstance(axis, Line) for axis in axes):
+            raise TypeError("SingleLoop axes must be kinematics.Line objects (Line.from_point_direction(p, l))")
+        for i, axis in enumerate(axes):
+            following = axes[(i + 1) % len(axes)]
+            if axis.is_close(following, tol=1e-12) or axis.is_close(following.reversed(), tol=1e-12):
+                raise ValueError(f"axes h_{i} and h_{(i + 1) % len(axes)} coincide: merge the two joints")
+        object.__setattr__(self, "axes", axes)
+
+    # -- construction -----------------------------------------------------------------------
+    @classmethod
+    def from_dh(
+        cls,
+        a: ArrayLike,
+        alpha: ArrayLike,
+        d: ArrayLike | None = None,
+        theta: ArrayLike | None = None,
+    ) -> SingleLoop:
+        """From DH parameters (paper's convention, :mod:`kinematics.dh`) and closing joint angles.
+
+        Raises :class:`kinematics.dh.LoopClosureError` when the chain does not close at ``theta``.
+        """
+        return cls(tuple(dh_axes(a, alpha, d, theta)))
+
+    @classmethod
+    def from_points_directions(cls, points: ArrayLike, directions: ArrayLike) -> SingleLoop:
+        """From a point on each axis and its direction, ``(n, 3)`` each (metres)."""
+        points = np.asarray(points, dtype=float)
+        directions = np.asarray(directions, dtype=float)
+        if points.ndim != 2 or points.shape[1] != 3 or directions.shape != points.shape:
+            raise ValueError(f"points and directions must both be (n, 3), got {points.shape} and {directions.shape}")
+        return cls(
+            tuple(
+                Line.from_point_direction(point, direction) for point, direction in zip(points, directions, strict=True)
+            )
+        )
+
+    # -- geometry ---------------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        return len(self.axes)
+
+    @property
+    def scale(self) -> float:
+        """Largest distance between neighbouring axes, else from the origin (m); 1 if all vanish."""
+        dh = self.dh()
+        size = max(float(np.max(dh.a)), float(np.max(np.abs(dh.d))))
+        if size == 0.0:
+            size = max(float(np.linalg.norm(axis.point)) for axis in self.axes)
+        return size if size > 0.0 else 1.0
+
+    def dh(self) -> DHParameters:
+        """DH parameters of the home pose (:func:`kinematics.dh.dh_from_axes`); ``theta`` at home."""
+        return dh_from_axes(list(self.axes))
+
+    # -- poses ------------------------------------------------------------------------------
+    def link_transforms(self, phi: ArrayLike) -> NDArray[np.float64]:
+        r"""Displacements :math:`\sigma_0 \dots \sigma_n` of Eq. (L1) as 4x4 matrices, ``(n + 1, 4, 4)``.
+
+        ``sigma[k]`` moves link ``k`` from home; ``sigma[n]`` is the loop product of (L2), the
+        identity when ``phi`` closes the loop.
+        """
+        phi = self._angles(phi)
+        transforms = np.empty((self.n + 1, 4, 4))
+        transforms[0] = np.eye(4)
+        for i, axis in enumerate(self.axes):
+            transforms[i + 1] = transforms[i] @ rotation_about(axis, phi[i])
+        return transforms
+
+    def link_poses(self, phi: ArrayLike) -> DualQuaternion:
+        r"""Eq. (L1) in the paper's algebra: unit dual quaternions :math:`\sigma_0 \dots \sigma_{n-1}`."""
+        phi = self._angles(phi)
+        pose = DualQuaternion.identity()
+        poses = [pose.coeffs]
+        for i in range(self.n - 1):
+            h = self.axes[i].to_dual_quaternion()
+            pose = pose * (DualQuaternion.identity() * np.cos(phi[i] / 2) + h * np.sin(phi[i] / 2))
+            poses.append(pose.coeffs)
+        return DualQuaternion(np.array(poses))
+
+    def current_axes(self, phi: ArrayLike) -> list[Line]:
+        r"""Axes in the pose ``phi``: :math:`h_i` moved with link ``i`` (Eq. (L3))."""
+        transforms = self.link_transforms(phi)
+        lines = []
+        for axis, transform in zip(self.axes, transforms[: self.n], strict=True):
+            rotation, shift = transform[:3, :3], transform[:3, 3]
+            lines.append(Line.from_point_direction(rotation @ axis.point + shift, rotation @ axis.direction))
+        return lines
+
+    # -- closure ----------------------------------------------------------------------------
+    def closure_residual(self, phi: ArrayLike) -> NDArray[np.float64]:
+        """Residual of Eq. (L2): translation (m) and rotation vector (rad) of the loop product, ``(6,)``."""
+        product = self.link_transforms(phi)[self.n]
+        return np.concatenate([product[:3, 3], Rotation.from_matrix(product[:3, :3]).as_rotvec()])
+
+    def jacobian(self, phi: ArrayLike) -> NDArray[np.float64]:
+        r"""Closure Jacobian of Eq. (L3), ``(6, n)``: column ``i`` is :math:`(m_i, l_i)` of axis ``i`` now.
+
+        Rows follow :meth:`closure_residual` (translation, then rotation). The translation rows
+        are the exact derivative of the loop product's translation :math:`p`,
+        :math:`l_i \times p + m_i`; the rotation rows :math:`l_i` are exact where the loop closes.
+        """
+        transforms = self.link_transforms(phi)
+        translation = transforms[self.n][:3, 3]
+        jacobian = np.empty((6, self.n))
+        for i, axis in enumerate(self.axes):
+            rotation, shift = transforms[i][:3, :3], transforms[i][:3, 3]
+            direction = rotation @ axis.direction
+            moment = np.cross(rotation @ axis.point + shift, direction)
+            jacobian[:3, i] = np.cross(direction, translation) + moment
+            jacobian[3:, i] = direction
+        return jacobian
+
+    def singular_values(self, phi: ArrayLike) -> NDArray[np.float64]:
+        """Singular values of the closure Jacobian, lengths scaled by :attr:`scale` (dimensionless)."""
+        jacobian = self.jacobian(phi)
+        jacobian[:3] /= self.scale
+        return np.linalg.svd(jacobian, compute_uv=False)
+
+    def mobility(self, phi: ArrayLike | None = None, rtol: float = 1e-8) -> int:
+        """First-order degrees of freedom ``n - rank`` at ``phi`` (default home).
+
+        The rank counts singular values above ``rtol`` times the largest (lengths scaled by
+        :attr:`scale`), so the verdict does not depend on units.
+        """
+        values = self.singular_values(np.zeros(self.n) if phi is None else phi)
+        return self.n - int(np.sum(values > rtol * values[0]))
+
+    def close(self, phi: ArrayLike, driver: int, max_iterations: int = 30) -> NDArray[np.float64]:
+        """Joint angles that close the loop with joint ``driver`` held at ``phi[driver]`` (Gauss-Newton).
+
+        Raises :class:`kinematics.dh.LoopClosureError` if the residual does not fall below
+        :data:`CLOSURE_TOLERANCE` (relative to :attr:`scale`).
+        """
+        phi = self._angles(phi).copy()
+        free = np.array([i for i in range(self.n) if i != driver])
+        weights = np.array([1.0 / self.scale] * 3 + [1.0] * 3)
+        for _ in range(max_iterations):
+            residual = weights * self.closure_residual(phi)
+            if np.max(np.abs(residual)) <= CLOSURE_TOLERANCE:
+                return phi
+            jacobian = weights[:, None] * self.jacobian(phi)[:, free]
+            step, *_ = np.linalg.lstsq(jacobian, -residual, rcond=None)
+            phi[free] += step
+        raise LoopClosureError(
+            f"the loop does not close with joint {driver} at {np.degrees(phi[driver]):.6g} deg: residual "
+            f"{np.max(np.abs(weights * self.closure_residual(phi))):.3e} after {max_iterations} Gauss-Newton "
+            "iterations (the drive may have passed a dead point; take smaller steps)"
+        )
+
+    def _angles(self, phi: ArrayLike) -> NDArray[np.float64]:
+        phi = np.asarray(phi, dtype=float)
+        if phi.shape != (self.n,):
+            raise ValueError(f"expected {self.n} joint angles, got shape {phi.shape}")
+        if not np.all(np.isfinite(phi)):
+            raise ValueError(f"joint angles contain NaN or infinity: {phi}")
+        return phi
+
+
+@dataclass(frozen=True)
+class LoopMotion:
+    """A loop's motion sampled at driver angles: joint rotations from home and closure quality.
+
+    ``phi`` is ``(m, n)`` (rad, from the home pose), ``driver_angles`` ``(m,)`` (rad, joint
+    ``driver``'s rotation from home), ``residual`` the largest closure residual per pose
+    (relative to the loop's size), ``singular_values`` the closure Jacobian's per pose.
+    """
+
+    loop: SingleLoop
+    driver: int
+    driver_angles: NDArray[np.float64]
+    phi: NDArray[np.float64]
+    residual: NDArray[np.float64]
+    singular_values: NDArray[np.float64]
+
+    @property
+    def singularity_measure(self) -> NDArray[np.float64]:
+        """Smallest singular value that a 1-dof loop keeps, over the largest, per pose (0: singular)."""
+        return self.singular_values[:, self.loop.n - 2] / self.singular_values[:, 0]
+
+    def link_transforms(self) -> NDArray[np.float64]:
+        """Displacements of every link at every pose, ``(m, n, 4, 4)`` (Eq. (L1))."""
+        return np.array([self.loop.link_transforms(phi)[: self.loop.n] for phi in self.phi])
+
+    def path(self, link: int, point: ArrayLike) -> NDArray[np.float64]:
+        """Path ``(m, 3)`` of a point fixed to ``link``, given in world coordinates at home."""
+        point = np.append(np.asarray(point, dtype=float), 1.0)
+        return np.array([(self.loop.link_transforms(phi)[link] @ point)[:3] for phi in self.phi])
+
+
+def trace_motion(
+    loop: SingleLoop,
+    driver: int = 0,
+    n_poses: int = 360,
+    revolution: float = 2.0 * np.pi,
+    start: ArrayLike | None = None,
+    fold_tolerance: float = 1e-3,
+) -> LoopMotion:
+    r"""The loop's motion over ``revolution`` of joint ``driver``, at ``n_poses`` equal steps (Eq. (L4)).
+
+    Each step predicts along the kernel of the closure Jacobian (the tangent of the motion,
+    scaled so that the driver advances by the step), then closes the loop by Gauss-Newton with
+    the driver held (:meth:`SingleLoop.close`); a step that does not close is halved up to six
+    times. ``start`` are closing joint angles to start from (default: home, all zero).
+
+    Raises :class:`LoopFoldError` when the driver's share of the tangent falls below
+    ``fold_tolerance`` (a dead point: the driver cannot turn further; drive another joint) and
+    ``ValueError`` when the loop is not mobile at the start (first-order mobility 0).
+    """
+    if not 0 <= driver < loop.n:
+        raise ValueError(f"driver must be a joint index 0..{loop.n - 1}, got {driver}")
+    if n_poses < 2:
+        raise ValueError(f"n_poses must be at least 2, got {n_poses}")
+    phi = np.zeros(loop.n) if start is None else loop.close(np.asarray(start, dtype=float), driver)
+    if loop.mobility(phi) < 1:
+        raise ValueError(
+            "the loop is rigid: its closure Jacobian has full rank at the start, so no joint can move "
+            "(check the axes, or use kinematics.rigid_mobility to see how far it is from moving)"
+        )
+    step = revolution / n_poses
+    targets = phi[driver] + step * np.arange(n_poses)
+    poses = [phi.copy()]
+    tangent = _tangent(loop, phi, driver, None, fold_tolerance)
+    for target in targets[1:]:
+        phi, tangent = _advance(loop, phi, tangent, driver, target, fold_tolerance)
+        poses.append(phi.copy())
+    angles = np.array(poses)
+    weights = np.array([1.0 / loop.scale] * 3 + [1.0] * 3)
+    residual = np.array([np.max(np.abs(weights * loop.closure_residual(p))) for p in angles])
+    values = np.array([loop.singular_values(p) for p in angles])
+    return LoopMotion(loop, driver, angles[:, driver], angles, residual, values)
+
+
+def _tangent(
+    loop: SingleLoop, phi: NDArray, driver: int, previous: NDArray | None, fold_tolerance: float
+) -> NDArray[np.float64]:
+    """Kernel vector of the closure Jacobian, oriented like ``previous`` (or driver forward), driver share 1."""
+    jacobian = loop.jacobian(phi)
+    jacobian[:3] /= loop.scale
+    kernel = np.linalg.svd(jacobian)[2][-1]
+    if previous is not None and kernel @ previous < 0.0 or previous is None and kernel[driver] < 0.0:
+        kernel = -kernel
+    if abs(kernel[driver]) < fold_tolerance:
+        raise LoopFoldError(
+            f"joint {driver} cannot turn further at {np.degrees(phi[driver]):.4g} deg from home: the motion "
+            f"folds back there (the joint's share of the motion is {abs(kernel[driver]):.2e}); drive another joint"
+        )
+    return kernel / kernel[driver]
+
+
+def _advance(
+    loop: SingleLoop, phi: NDArray, tangent: NDArray, driver: int, target: float, fold_tolerance: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """From ``phi`` to the closing pose with the driver at ``target``, halving the step if needed.
+
+    When even 1/64 of the step does not close, the driver has reached a dead point between the last
+    closed pose and the next: :class:`LoopFoldError`, naming the last angle reached.
+    """
+    pieces = 1
+    reached, reached_tangent = phi, tangent
+    while pieces <= 64:
+        current, current_tangent = phi, tangent
+        try:
+            for k in range(1, pieces + 1):
+                goal = phi[driver] + (target - phi[driver]) * k / pieces
+                guess = current + (goal - current[driver]) * current_tangent
+                guess[driver] = goal
+                current = loop.close(guess, driver)
+                current_tangent = _tangent(loop, current, driver, current_tangent, fold_tolerance)
+            return current, current_tangent
+        except LoopClosureError:
+            if abs(current[driver] - phi[driver]) > abs(reached[driver] - phi[driver]):
+                reached, reached_tangent = current, current_tangent
+            pieces *= 2
+    share = 1.0 / float(np.linalg.norm(reached_tangent))
+    raise LoopFoldError(
+        f"joint {driver} cannot turn further than {np.degrees(reached[driver]):.4g} deg from home: the loop does "
+        f"not close beyond it (a dead point: the joint's share of the motion has fallen to {share:.2e}); "
+        "drive another joint"
+    )
