@@ -277,6 +277,7 @@ def trace_motion(
     revolution: float = 2.0 * np.pi,
     start: ArrayLike | None = None,
     fold_tolerance: float = 1e-3,
+    endpoint: bool = False,
 ) -> LoopMotion:
     r"""The loop's motion over ``revolution`` of joint ``driver``, at ``n_poses`` equal steps (Eq. (L4)).
 
@@ -299,8 +300,7 @@ def trace_motion(
             "the loop is rigid: its closure Jacobian has full rank at the start, so no joint can move "
             "(check the axes, or use kinematics.rigid_mobility to see how far it is from moving)"
         )
-    step = revolution / n_poses
-    targets = phi[driver] + step * np.arange(n_poses)
+    targets = phi[driver] + np.linspace(0.0, revolution, n_poses, endpoint=endpoint)
     poses = [phi.copy()]
     tangent = _tangent(loop, phi, driver, None, fold_tolerance)
     for target in targets[1:]:

@@ -1,0 +1,99 @@
+"""Any single-loop linkage as a scene (ffrf.scenes.linkage_scene) against independent truth.
+
+- the paper's Bennett scenes, nominal and misaligned, which the generic description must reproduce;
+- Rational Linkages' motion polynomial of its collision-free 6R, which a flexible model with stiff
+  links must follow when nothing loads it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ffrf.fe.materials import RIGID
+from ffrf.output.sensors import scene_sensors
+from ffrf.scenes.bennett_scene import bennett_description
+from ffrf.scenes.builder import build_scene, start_state
+from ffrf.scenes.linkage_scene import BoreError, drive_sign, joint_points, linkage_description
+from ffrf.solvers.static_solver import quasi_static
+from kinematics import BennettLinkage, SingleLoop
+from kinematics.dual_quaternion import DualQuaternion
+from kinematics.rational_mechanism import load_model, loop_from_mechanism, tool_link
+
+
+def _numbers(value):
+    """Every number in a nested description, in order (strings and names left out)."""
+    if isinstance(value, dict):
+        return [x for key in sorted(value) for x in _numbers(value[key])]
+    if isinstance(value, list | tuple):
+        return [x for item in value for x in _numbers(item)]
+    if isinstance(value, bool | str) or value is None:
+        return []
+    return [float(value)]
+
+
+@pytest.mark.parametrize(("variant", "twist_deg"), [("pla", 0.0), ("pla1", 1.0), ("pla2", 2.0)])
+def test_bennett_variants_are_generic_linkages_with_a_bore_error(variant, twist_deg):
+    """The paper's misaligned base (alpha_3 = 91, 92 deg) is a bore error of joint 3 on link 0, turned about the
+    base's common normal; every axis, joint point, start pose and drive of the paper's description is reproduced."""
+    paper = bennett_description(variant)
+    errors = (BoreError(joint=3, link=0, twist=np.radians(twist_deg)),) if twist_deg else ()
+    generic = linkage_description(
+        SingleLoop(BennettLinkage.paper().axes), driver=3, start_angle=np.radians(-90.0), bore_errors=errors
+    )
+    for ours, theirs in zip(generic["joints"], paper["joints"], strict=True):
+        assert ours["name"] == theirs["name"] and ours["body0"] == theirs["body0"]
+        assert np.max(np.abs(np.subtract(_numbers(ours), _numbers(theirs))), initial=0.0) < 1e-15
+    for ours, theirs in zip(generic["bodies"], paper["bodies"], strict=True):
+        assert np.max(np.abs(np.subtract(_numbers(ours["pose"]), _numbers(theirs["pose"])))) < 1e-15
+        assert [i["name"] for i in ours["interfaces"]] == [i["name"] for i in theirs["interfaces"]]
+    assert generic["sensors"][-1] == paper["sensors"][-1]  # the coupler point
+
+
+def test_bore_error_changes_the_dh_parameters_it_names():
+    """A twist error of joint 1 on link 1 changes that link's DH twist alpha_0 by the error, an offset its length."""
+    loop = loop_from_mechanism(load_model("collisions_free_6r"), scale=0.1)
+    error = BoreError(joint=1, link=1, twist=np.radians(0.5), offset=2e-4)
+    link1 = linkage_description(loop, bore_errors=(error,))["bodies"][1]["parametric"]["axes"]
+    built = SingleLoop.from_points_directions(
+        [a["point"] for a in link1] + [p.point for p in loop.axes[2:]],
+        [a["direction"] for a in link1] + [p.direction for p in loop.axes[2:]],
+    ).dh()
+    nominal = loop.dh()
+    assert abs(built.alpha[0] - nominal.alpha[0] - np.radians(0.5)) < 1e-12
+    assert abs(built.a[0] - nominal.a[0] - 2e-4) < 1e-12
+    with pytest.raises(ValueError, match="link 1 carries joints 0 and 1"):
+        linkage_description(loop, bore_errors=(BoreError(joint=3, link=1, twist=0.01),))
+
+
+def test_joint_points_lie_on_their_axes_between_the_feet_of_the_normals():
+    loop = loop_from_mechanism(load_model("collisions_free_6r"), scale=0.1)
+    points = joint_points(loop)
+    for axis, point in zip(loop.axes, points, strict=True):
+        assert axis.distance_to_point(point) < 1e-15
+
+
+def test_stiff_6r_follows_the_motion_polynomial_of_rational_linkages():
+    """collisions_free_6r at 1/10 scale, E = 1e15 Pa, no gravity: the flexible model's coupler point (mean of link
+    3's joint points) over ramp and one revolution equals the point moved by C(t) of Rational Linkages, at the t of
+    its own joint-angle map for the drive angle (measured 4.7e-15 m; with gravity the links' 1e-10 strain gives
+    3.3e-9 m)."""
+    mechanism = load_model("collisions_free_6r")
+    loop = loop_from_mechanism(mechanism, scale=0.1)
+    description = linkage_description(loop, material=RIGID, h=12e-3, order=1, n_modes=2, gravity=(0.0, 0.0, 0.0))
+    scene = build_scene(description, where="collisions_free_6r")
+    times = np.linspace(0.0, float(scene.settings["t_end"]), 25)
+    solution = quasi_static(scene.system, start_state(scene), times)
+    coupler = scene_sensors(scene, times, solution.q, solution.multipliers)["coupler_point"]
+    drive = next(j.angle for j in scene.joints if j.angle is not None)
+    tool = tool_link(mechanism)
+    points = joint_points(loop)
+    home_point = 0.5 * (points[tool - 1] + points[tool])
+    first = mechanism.factorizations[0]
+    worst = 0.0
+    for t, ours in zip(times, coupler, strict=True):
+        phi0 = drive_sign(0, loop.n) * drive(t)
+        parameter = first.joint_angle_to_t_param(float(np.mod(-phi0, 2.0 * np.pi)))  # Rational Linkages' map
+        pose = DualQuaternion(np.asarray(mechanism.evaluate(parameter), dtype=float)).normalized()
+        worst = max(worst, float(np.linalg.norm(ours - pose.act(home_point / 0.1) * 0.1)))
+    assert worst < 1e-12
