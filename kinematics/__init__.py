@@ -22,9 +22,9 @@ from .dh import (
     wrap_angle,
 )
 from .dual_quaternion import DualQuaternion
-from .mobility import MobilityReport, rigid_mobility
+from .mobility import LoopMobility, MobilityReport, explain_mobility, rigid_mobility
 from .pluecker import CommonNormal, Line, angle, common_normal, distance
-from .single_loop import LoopFoldError, LoopMotion, SingleLoop, trace_motion
+from .single_loop import LoopFoldError, LoopMotion, SingleLoop, follow_driver, trace_motion
 
 __all__ = [
     "PAPER_A",
@@ -38,6 +38,7 @@ __all__ = [
     "Line",
     "LoopClosureError",
     "LoopFoldError",
+    "LoopMobility",
     "LoopMotion",
     "MobilityReport",
     "MotionPolynomial",
@@ -48,7 +49,9 @@ __all__ = [
     "dh_from_axes",
     "dh_matrix",
     "dh_transform",
+    "follow_driver",
     "distance",
+    "explain_mobility",
     "home_configuration",
     "loop_closure_residual",
     "open_loop_axes",

@@ -20,8 +20,9 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from .dh import _loop_arrays, dh_matrix, home_configuration, loop_closure_residual
+from .single_loop import SingleLoop
 
-__all__ = ["MobilityReport", "rigid_mobility"]
+__all__ = ["LoopMobility", "MobilityReport", "explain_mobility", "rigid_mobility"]
 
 
 @dataclass(frozen=True)
@@ -123,4 +124,99 @@ def rigid_mobility(
         rotation_residual=closure.rotation,
         translation_tolerance=tolerance * length,
         rotation_tolerance=tolerance,
+    )
+
+
+@dataclass(frozen=True)
+class LoopMobility:
+    """Why a loop of revolute joints moves or not (:func:`explain_mobility`).
+
+    ``first_order``: ``n - rank`` of the closure Jacobian at home (Eq. (L3));
+    ``singular_values``: the Jacobian's, lengths scaled by the loop's size; ``turn``: the driver's
+    trial rotation (rad); ``gap_translation`` (m) and ``gap_rotation`` (rad): the closest rigid closure
+    with the driver turned by ``turn`` (zero for a mobile loop); ``conditions``: for a 4R with
+    ``d = 0``, the violated Bennett conditions (empty when none).
+    """
+
+    n: int
+    driver: int
+    first_order: int
+    singular_values: NDArray[np.float64]
+    turn: float
+    gap_translation: float
+    gap_rotation: float
+    scale: float
+    conditions: tuple[str, ...]
+
+    @property
+    def mobile(self) -> bool:
+        """A finite motion: the loop closes, to 1e-9 of its size and 1e-9 rad, with the driver turned."""
+        return self.gap_translation <= 1e-9 * self.scale and self.gap_rotation <= 1e-9
+
+    def summary(self) -> str:
+        head = f"{self.n}R loop, joint {self.driver} driven: "
+        if self.mobile:
+            kind = "overconstrained" if self.n < 7 else "generic"
+            return head + f"mobile ({kind}; first-order mobility {self.first_order})"
+        why = (
+            f"rigid: its closure Jacobian has full rank (smallest singular value "
+            f"{self.singular_values[-1] / self.singular_values[0]:.3g} of the largest)"
+            if self.first_order == 0
+            else f"only infinitesimally mobile (first-order mobility {self.first_order}, no finite motion)"
+        )
+        text = (
+            head
+            + f"NOT mobile, {why}; turning joint {self.driver} by {np.degrees(self.turn):.3g} deg leaves a closure "
+            f"gap of {1e3 * self.gap_translation:.4g} mm and {np.degrees(self.gap_rotation):.4g} deg"
+        )
+        if self.conditions:
+            text += "; violated: " + "; ".join(self.conditions)
+        return text
+
+
+def _bennett_violations(loop: SingleLoop, rtol: float = 1e-9) -> tuple[str, ...]:
+    """The Bennett conditions a 4R loop with d = 0 violates (kinematics.bennett), each with its numbers."""
+    dh = loop.dh()
+    if loop.n != 4 or np.any(np.abs(dh.d) > rtol * loop.scale):
+        return ()
+    a, alpha = dh.a, dh.alpha
+    violations = []
+    for i, j in ((0, 2), (1, 3)):
+        if abs(a[i] - a[j]) > rtol * loop.scale:
+            violations.append(f"a{i} = a{j} ({1e3 * a[i]:.6g} mm vs {1e3 * a[j]:.6g} mm)")
+        if abs(np.sin(alpha[i] - alpha[j])) > rtol:
+            violations.append(f"alpha{i} = alpha{j} ({np.degrees(alpha[i]):.6g} deg vs {np.degrees(alpha[j]):.6g} deg)")
+    s0, s1 = np.sin(alpha[0]), np.sin(alpha[1])
+    if abs(a[0] * s1 - a[1] * s0) > rtol * loop.scale:
+        violations.append(f"a0 sin(alpha1) = a1 sin(alpha0) ({1e3 * a[0] * s1:.6g} mm vs {1e3 * a[1] * s0:.6g} mm)")
+    return tuple(violations)
+
+
+def explain_mobility(loop: SingleLoop, driver: int = 0, turn: float = np.radians(1.0)) -> LoopMobility:
+    """Does the loop move when joint ``driver`` turns by ``turn`` from home, and if not, by how much does it
+    miss? The closest rigid closure with the driver held (least squares over the other joints, translation
+    scaled by the loop's size) measures the gap; for a 4R the violated Bennett conditions are named."""
+    if not 0 <= driver < loop.n:
+        raise ValueError(f"driver must be a joint index 0..{loop.n - 1}, got {driver}")
+    free = [i for i in range(loop.n) if i != driver]
+    weights = np.array([1.0 / loop.scale] * 3 + [1.0] * 3)
+
+    def residual(x: NDArray) -> NDArray:
+        phi = np.zeros(loop.n)
+        phi[free] = x
+        phi[driver] = turn
+        return weights * loop.closure_residual(phi)
+
+    fit = least_squares(residual, np.zeros(loop.n - 1), xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    gap = fit.fun / weights
+    return LoopMobility(
+        n=loop.n,
+        driver=driver,
+        first_order=loop.mobility(),
+        singular_values=loop.singular_values(np.zeros(loop.n)),
+        turn=float(turn),
+        gap_translation=float(np.linalg.norm(gap[:3])),
+        gap_rotation=float(np.linalg.norm(gap[3:])),
+        scale=loop.scale,
+        conditions=_bennett_violations(loop),
     )

@@ -44,6 +44,7 @@ from .pluecker import Line
 
 __all__ = [
     "LoopFoldError",
+    "follow_driver",
     "LoopMotion",
     "SingleLoop",
     "trace_motion",
@@ -217,13 +218,15 @@ class SingleLoop:
         phi = self._angles(phi).copy()
         free = np.array([i for i in range(self.n) if i != driver])
         weights = np.array([1.0 / self.scale] * 3 + [1.0] * 3)
+        converged = False
         for _ in range(max_iterations):
             residual = weights * self.closure_residual(phi)
-            if np.max(np.abs(residual)) <= CLOSURE_TOLERANCE:
-                return phi
             jacobian = weights[:, None] * self.jacobian(phi)[:, free]
             step, *_ = np.linalg.lstsq(jacobian, -residual, rcond=None)
             phi[free] += step
+            if converged:  # one more (quadratically convergent) step puts the residual at round-off
+                return phi
+            converged = bool(np.max(np.abs(residual)) <= CLOSURE_TOLERANCE)
         raise LoopClosureError(
             f"the loop does not close with joint {driver} at {np.degrees(phi[driver]):.6g} deg: residual "
             f"{np.max(np.abs(weights * self.closure_residual(phi))):.3e} after {max_iterations} Gauss-Newton "
@@ -281,36 +284,65 @@ def trace_motion(
 ) -> LoopMotion:
     r"""The loop's motion over ``revolution`` of joint ``driver``, at ``n_poses`` equal steps (Eq. (L4)).
 
-    Each step predicts along the kernel of the closure Jacobian (the tangent of the motion,
-    scaled so that the driver advances by the step), then closes the loop by Gauss-Newton with
-    the driver held (:meth:`SingleLoop.close`); a step that does not close is halved up to six
-    times. ``start`` are closing joint angles to start from (default: home, all zero).
+    ``start`` are closing joint angles to start from (default: home, all zero). With ``endpoint`` the
+    last pose is at the end of ``revolution`` (as :func:`numpy.linspace`); ``revolution`` may be
+    negative. See :func:`follow_driver` for the method and the errors.
+    """
+    if n_poses < 2:
+        raise ValueError(f"n_poses must be at least 2, got {n_poses}")
+    first = 0.0 if start is None else float(np.asarray(start, dtype=float)[driver])
+    angles = first + np.linspace(0.0, revolution, n_poses, endpoint=endpoint)
+    return follow_driver(loop, driver, angles, start, fold_tolerance=fold_tolerance)
 
-    Raises :class:`LoopFoldError` when the driver's share of the tangent falls below
-    ``fold_tolerance`` (a dead point: the driver cannot turn further; drive another joint) and
+
+def follow_driver(
+    loop: SingleLoop,
+    driver: int,
+    angles: ArrayLike,
+    start: ArrayLike | None = None,
+    max_step: float = np.radians(2.0),
+    fold_tolerance: float = 1e-3,
+) -> LoopMotion:
+    r"""The loop's poses with joint ``driver`` at each of ``angles`` (rad from home), in order (Eq. (L4)).
+
+    The motion is followed continuously from ``start`` (closing joint angles, default home) through
+    the angles in the given order, in steps of at most ``max_step``. Each step predicts along the
+    kernel of the closure Jacobian (the tangent of the motion, scaled so that the driver advances by
+    the step), then closes the loop by Gauss-Newton with the driver held (:meth:`SingleLoop.close`);
+    a step that does not close is halved up to six times.
+
+    Raises :class:`LoopFoldError` at a dead point of the driver (its share of the tangent below
+    ``fold_tolerance``, or no closure within 1/64 of a step: drive another joint) and
     ``ValueError`` when the loop is not mobile at the start (first-order mobility 0).
     """
     if not 0 <= driver < loop.n:
         raise ValueError(f"driver must be a joint index 0..{loop.n - 1}, got {driver}")
-    if n_poses < 2:
-        raise ValueError(f"n_poses must be at least 2, got {n_poses}")
+    angles = np.asarray(angles, dtype=float)
+    if angles.ndim != 1 or angles.size == 0 or not np.all(np.isfinite(angles)) or not max_step > 0.0:
+        raise ValueError(
+            f"angles must be a non-empty 1-D array of finite driver angles (rad), got shape {angles.shape}"
+        )
     phi = np.zeros(loop.n) if start is None else loop.close(np.asarray(start, dtype=float), driver)
     if loop.mobility(phi) < 1:
         raise ValueError(
             "the loop is rigid: its closure Jacobian has full rank at the start, so no joint can move "
             "(check the axes, or use kinematics.rigid_mobility to see how far it is from moving)"
         )
-    targets = phi[driver] + np.linspace(0.0, revolution, n_poses, endpoint=endpoint)
-    poses = [phi.copy()]
     tangent = _tangent(loop, phi, driver, None, fold_tolerance)
-    for target in targets[1:]:
-        phi, tangent = _advance(loop, phi, tangent, driver, target, fold_tolerance)
+    poses = []
+    for target in angles:
+        pieces = max(1, int(np.ceil(abs(target - phi[driver]) / max_step)))
+        start_angle = phi[driver]
+        for k in range(1, pieces + 1):
+            phi, tangent = _advance(
+                loop, phi, tangent, driver, start_angle + (target - start_angle) * k / pieces, fold_tolerance
+            )
         poses.append(phi.copy())
-    angles = np.array(poses)
+    joint_angles = np.array(poses)
     weights = np.array([1.0 / loop.scale] * 3 + [1.0] * 3)
-    residual = np.array([np.max(np.abs(weights * loop.closure_residual(p))) for p in angles])
-    values = np.array([loop.singular_values(p) for p in angles])
-    return LoopMotion(loop, driver, angles[:, driver], angles, residual, values)
+    residual = np.array([np.max(np.abs(weights * loop.closure_residual(p))) for p in joint_angles])
+    values = np.array([loop.singular_values(p) for p in joint_angles])
+    return LoopMotion(loop, driver, joint_angles[:, driver], joint_angles, residual, values)
 
 
 def _tangent(
