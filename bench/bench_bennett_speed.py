@@ -14,15 +14,17 @@ BLAS threads: on a small shared machine OpenBLAS threads on ~100 x 100 matrices 
 other processes (a 105 x 105 SVD took 0.5 s instead of 8 ms); this script pins BLAS to one
 thread unless ``--blas-threads`` says otherwise.
 
-Run: .venv/bin/python bench/bench_bennett_speed.py [--h 0.006 --modes 4] [--cold] [--skip-quasi-static]
+Run: .venv/bin/python bench/bench_bennett_speed.py [--h 0.006 --modes 4] [--cold] [--skip-quasi-static] [--json FILE]
 """
 
 import argparse
+import json
 import os
 import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 
 def _pin_blas(threads: int) -> None:
@@ -35,7 +37,7 @@ import time, numpy as np
 started = time.perf_counter()
 from ffrf.scenes.bennett_scene import build_bennett
 from ffrf.system.packed_system import pack_system
-scene = build_bennett("pla", h={h}, order=1, n_modes={modes})
+scene = build_bennett("pla", h={h}, order={order}, n_modes={modes})
 built = time.perf_counter()
 packed = pack_system(scene.system)
 q, z, lam = scene.q_start, np.zeros_like(scene.q_start), np.zeros(scene.system.n_constraints)
@@ -49,13 +51,17 @@ print(time.perf_counter() - built)
 """
 
 
-def cold_compile_seconds(h: float, modes: int) -> float:
+def cold_compile_seconds(h: float, order: int, modes: int) -> float:
     """First residual, iteration matrix, dynamic step and static pose in a fresh process with an
     empty numba cache."""
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=os.getcwd())
         out = subprocess.run(
-            [sys.executable, "-c", _COLD.format(h=h, modes=modes)], env=env, check=True, capture_output=True, text=True
+            [sys.executable, "-c", _COLD.format(h=h, order=order, modes=modes)],
+            env=env,
+            check=True,
+            capture_output=True,
+            text=True,
         )
     return float(out.stdout.strip().splitlines()[-1])
 
@@ -63,6 +69,7 @@ def cold_compile_seconds(h: float, modes: int) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--h", type=float, default=6e-3, help="tetrahedron size (m)")
+    parser.add_argument("--order", type=int, choices=(1, 2), default=2, help="tetrahedron order")
     parser.add_argument("--modes", type=int, default=4, help="fixed-interface modes per link")
     parser.add_argument("--t-dynamic", type=float, default=0.3, help="dynamic run length (s)")
     parser.add_argument("--step", type=float, default=1e-3, help="generalized-alpha step (s)")
@@ -70,6 +77,7 @@ def main() -> None:
     parser.add_argument("--skip-quasi-static", action="store_true")
     parser.add_argument("--cold", action="store_true", help="also time numba compilation with an empty cache")
     parser.add_argument("--blas-threads", type=int, default=1)
+    parser.add_argument("--json", type=Path, help="also write the figures here (SI units)")
     args = parser.parse_args()
     _pin_blas(args.blas_threads)
 
@@ -80,9 +88,19 @@ def main() -> None:
     from ffrf.solvers.static_solver import quasi_static
     from ffrf.system.packed_system import pack_system
 
-    scene = build_bennett("pla", h=args.h, order=1, n_modes=args.modes)
+    started = time.perf_counter()
+    scene = build_bennett("pla", h=args.h, order=args.order, n_modes=args.modes)
+    built = time.perf_counter()
     system = scene.system
     q0 = assemble(scene).q
+    report = {
+        "h_m": args.h,
+        "order": args.order,
+        "modes": args.modes,
+        "n_coordinates": system.n_coordinates,
+        "build_s": built - started,
+        "assembly_s": time.perf_counter() - built,
+    }
     print(
         f"PLA Bennett, h = {1e3 * args.h:g} mm, {args.modes} modes per link: {system.n_coordinates} coordinates, "
         f"{system.n_constraints} constraints; fast path supported: {pack_system(system) is not None}"
@@ -103,6 +121,19 @@ def main() -> None:
             f"  {'fast     ' if fast else 'reference'}  {1e3 * r.wall_time / steps:8.3f} ms/step  "
             f"{r.newton_iterations.mean():.2f} iterations/step"
         )
+    report["dynamic"] = {
+        "t_end_s": args.t_dynamic,
+        "step_s": args.step,
+        "steps": steps,
+        **{
+            name: {
+                "per_step_s": runs[fast].wall_time / steps,
+                "iterations_per_step": runs[fast].newton_iterations.mean(),
+            }
+            for name, fast in (("reference", False), ("fast", True))
+        },
+        "speed_up": runs[False].wall_time / runs[True].wall_time,
+    }
     lam_ref = runs[False].multipliers
     print(
         f"  speed-up {runs[False].wall_time / runs[True].wall_time:.1f}x; max |q_fast - q_ref| = "
@@ -129,17 +160,29 @@ def main() -> None:
                 f"  {label:28s} {seconds[label]:8.2f} s  {sum(iterations)} Newton iterations "
                 f"({np.mean(iterations):.2f} per pose)"
             )
+        report["quasi_static"] = {
+            "equilibria": args.outputs,
+            **{
+                label.replace(", ", "_").replace(" ", "_"): {
+                    "wall_s": seconds[label],
+                    "iterations_per_pose": float(np.mean(solutions[label].iterations)),
+                }
+                for label in variants
+            },
+            "speed_up": seconds["reference"] / seconds["fast"],
+        }
         ref, fast = solutions["reference"], solutions["fast"]
         print(
             f"  speed-up {seconds['reference'] / seconds['fast']:.1f}x; max |q_fast - q_ref| = "
             f"{np.abs(fast.q - ref.q).max():.1e}, driving torque relative "
-            f"{np.abs(fast.multipliers[:, -1] - ref.multipliers[:, -1]).max() / np.abs(ref.multipliers[:, -1]).max():.1e}"
+            f"{np.abs(fast.multipliers[:, -1] - ref.multipliers[:, -1]).max() / np.abs(ref.multipliers[:, -1]).max():.1e}"  # noqa: E501
         )
     if args.cold:
-        print(
-            f"numba cold compile (first residual + iteration matrix, empty cache): "
-            f"{cold_compile_seconds(args.h, args.modes):.1f} s"
-        )
+        report["cold_compile_s"] = cold_compile_seconds(args.h, args.order, args.modes)
+        print(f"numba cold compile (first residual + iteration matrix, empty cache): {report['cold_compile_s']:.1f} s")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(report, indent=2))
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ source scripts/ensure-venv.sh
 set +e
 mkdir -p docs/results
 log_dir=$(mktemp -d)
+load_start=$(cut -d" " -f1-3 /proc/loadavg)
 runs=()
 failed=0
 
@@ -46,21 +47,17 @@ for threads in 1 2; do
     run_suite "threads-$threads" "" "$threads" "$@"
 done
 
-printf '%s\n' "${runs[@]}" | PYTEST_ARGS="$*" .venv/bin/python -c "
-import json, os, platform, subprocess, sys, datetime
-cpu = next((line.split(':', 1)[1].strip() for line in open('/proc/cpuinfo') if line.startswith('model name')), '?')
+printf '%s\n' "${runs[@]}" | PYTEST_ARGS="$*" LOAD_START="$load_start" .venv/bin/python -c "
+import json, os, sys
+from ffrf.output.provenance import provenance
 rows = []
 for line in sys.stdin.read().splitlines():
     label, core, loaded, threads, summary, seconds, code = line.split('|')
     rows.append(dict(label=label, coretype=core or 'detected', loaded_kernel=loaded, blas_threads=threads or 'default',
                      pytest=summary, seconds=int(seconds), exit_code=int(code)))
-import numpy, scipy
-out = dict(command=' '.join(['./scripts/blas-matrix.sh', os.environ['PYTEST_ARGS']]).strip(), date=datetime.date.today().isoformat(),
-           machine=dict(cpu=cpu, cores=os.cpu_count(), python=platform.python_version()),
-           versions=dict(numpy=numpy.__version__, scipy=scipy.__version__),
-           commit=subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True, text=True).stdout.strip(),
-           runs=rows)
-json.dump(out, open('docs/results/blas_matrix.json', 'w'), indent=1)
+command = ' '.join(['./scripts/blas-matrix.sh', os.environ['PYTEST_ARGS']]).strip()
+meta = provenance(command, load_at_start=[float(x) for x in os.environ['LOAD_START'].split()])
+json.dump(dict(meta=meta, results=dict(runs=rows)), open('docs/results/blas_matrix.json', 'w'), indent=1)
 print('wrote docs/results/blas_matrix.json')
 "
 exit $failed
