@@ -4,7 +4,7 @@ frame of the previous joint, DH parameters from the identified lines."""
 
 from .branches import LinkAxisFit, fit_link_axis, identify_branch, project_into_previous_frame
 from .circle_fit import CircleFit, IdentificationError, fit_circle
-from .loop import IdentifiedLoop, bennett_ratios, identify_axes, identify_dh
+from .loop import IdentifiedLoop, bennett_ratios, identify_axes, identify_dh, identify_loop
 from .records import LinkRecord, clean_record, moving_average, read_simulation_result, read_vicon_csv
 from .runs import RecordIdentification, RunStatistics, identify_record, run_statistics
 
@@ -23,6 +23,7 @@ __all__ = [
     "identify_axes",
     "identify_branch",
     "identify_dh",
+    "identify_loop",
     "identify_record",
     "moving_average",
     "project_into_previous_frame",

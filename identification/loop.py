@@ -1,4 +1,4 @@
-r"""DH parameters of a Bennett loop from tracked link trajectories.
+r"""DH parameters of a single loop (the Bennett 4R first, any nR) from tracked link trajectories.
 
 Links follow the paper's numbering (link 0 = base, fixed; link 2 = coupler). Branch A is
 base -> link 1 -> link 2, giving the axes :math:`h_0` (link 1 about the base) and
@@ -30,15 +30,15 @@ from kinematics import PAPER_ALPHA, DHParameters, Line, dh_from_axes, wrap_angle
 from .branches import LinkAxisFit, identify_branch
 from .circle_fit import IdentificationError
 
-__all__ = ["IdentifiedLoop", "identify_dh", "identify_axes", "bennett_ratios"]
+__all__ = ["IdentifiedLoop", "identify_dh", "identify_axes", "identify_loop", "identify_loop_axes", "bennett_ratios"]
 
 
 @dataclass(frozen=True)
 class IdentifiedLoop:
-    """Result of an identification: the axes :math:`h_0..h_3` (configuration of the first
-    frame), the DH parameters, the Bennett ratios, and the per-link axis fits."""
+    """Result of an identification: the axes :math:`h_0..h_{n-1}` (configuration of the first
+    frame), the DH parameters, the Bennett ratios (4R only, else empty), and the per-link axis fits."""
 
-    axes: tuple[Line, Line, Line, Line]
+    axes: tuple[Line, ...]
     dh: DHParameters
     ratios: dict[str, float]
     nominal_alpha: NDArray[np.float64]
@@ -74,10 +74,10 @@ def bennett_ratios(dh: DHParameters) -> dict[str, float]:
     }
 
 
-def _link_points(trajectories: dict, link: int) -> NDArray[np.float64]:
+def _link_points(trajectories: dict, link: int, n: int) -> NDArray[np.float64]:
     if link not in trajectories:
         raise IdentificationError(
-            f"no trajectory for link {link}: links 1, 2 and 3 must be tracked (link 0 is the fixed base)"
+            f"no trajectory for link {link}: links 1 to {n - 1} must be tracked (link 0 is the fixed base)"
         )
     points = np.asarray(trajectories[link], dtype=float)
     if not np.all(np.isfinite(points)):
@@ -87,13 +87,41 @@ def _link_points(trajectories: dict, link: int) -> NDArray[np.float64]:
     return points
 
 
+def identify_loop_axes(
+    trajectories: dict[int, ArrayLike], n: int, tool_link: int
+) -> tuple[list[Line], dict[str, LinkAxisFit]]:
+    r"""The unoriented axes ``[h0 .. h_{n-1}]`` of an nR loop and their fits, from links 1 .. n-1.
+
+    Branch A runs base -> link 1 -> ... -> ``tool_link`` and gives :math:`h_0 \dots h_{m-1}`
+    (``m = tool_link``); branch B runs base -> link n-1 -> ... -> ``tool_link`` and gives
+    :math:`h_{n-1}, h_{n-2} \dots h_m` (:func:`identification.branches.identify_branch`).
+    """
+    if n < 4 or not 0 < tool_link < n:
+        raise IdentificationError(
+            f"a loop of n >= 4 joints with a tool link 1..n-1 is needed, got n = {n}, tool {tool_link}"
+        )
+    points = {k: _link_points(trajectories, k, n) for k in range(1, n)}
+    first = list(range(1, tool_link + 1))
+    second = list(range(n - 1, tool_link - 1, -1))
+    fits_a = identify_branch(
+        [points[k] for k in first],
+        [
+            f"link {k} (about h{k - 1})" if k == 1 else f"link {k} seen from link {k - 1} (about h{k - 1})"
+            for k in first
+        ],
+    )
+    fits_b = identify_branch(
+        [points[k] for k in second],
+        [f"link {k} (about h{k})" if k == n - 1 else f"link {k} seen from link {k + 1} (about h{k})" for k in second],
+    )
+    fits = {f"h{k - 1}": fit for k, fit in zip(first, fits_a, strict=True)}
+    fits |= {f"h{k}": fit for k, fit in zip(second, fits_b, strict=True)}
+    return [fits[f"h{i}"].axis for i in range(n)], fits
+
+
 def identify_axes(trajectories: dict[int, ArrayLike]) -> tuple[list[Line], dict[str, LinkAxisFit]]:
-    """The unoriented axes ``[h0, h1, h2, h3]`` and the link fits, from links 1, 2, 3."""
-    link1, link2, link3 = (_link_points(trajectories, k) for k in (1, 2, 3))
-    fit1, fit21 = identify_branch([link1, link2], ["link 1 (about h0)", "link 2 seen from link 1 (about h1)"])
-    fit3, fit23 = identify_branch([link3, link2], ["link 3 (about h3)", "link 2 seen from link 3 (about h2)"])
-    axes = [fit1.axis, fit21.axis, fit23.axis, fit3.axis]
-    return axes, {"h0": fit1, "h1": fit21, "h2": fit23, "h3": fit3}
+    """The unoriented axes ``[h0, h1, h2, h3]`` and the link fits of the Bennett loop, from links 1, 2, 3."""
+    return identify_loop_axes(trajectories, 4, 2)
 
 
 def _orient(axes: list[Line], nominal_alpha: NDArray, keep: int) -> tuple[list[Line], DHParameters]:
@@ -111,17 +139,33 @@ def _orient(axes: list[Line], nominal_alpha: NDArray, keep: int) -> tuple[list[L
     return best[1], best[2]
 
 
+def identify_loop(
+    trajectories: dict[int, ArrayLike], nominal_alpha: ArrayLike, tool_link: int | None = None
+) -> IdentifiedLoop:
+    """DH parameters of an nR loop (n = ``len(nominal_alpha)``) from tracked positions of links 1 .. n-1.
+
+    ``trajectories`` maps the link index to ``(frames, 3)`` (one tracked point) or ``(frames, k, 3)``
+    (several points) positions in metres, frames in time order; ``tool_link`` is where the two branches
+    meet (default ``n // 2``, the coupler of a 4R). ``nominal_alpha`` (rad) only orients the fitted
+    axes: every axis but the last is flipped to bring the twists closest to it, and :math:`h_{n-1}` so
+    that link ``n - 1`` turns negatively about it along the record (module docstring).
+    """
+    nominal_alpha = np.asarray(nominal_alpha, dtype=float)
+    n = nominal_alpha.size
+    axes, fits = identify_loop_axes(trajectories, n, n // 2 if tool_link is None else tool_link)
+    last = fits[f"h{n - 1}"]
+    if last.angles[-1] - last.angles[0] > 0:  # link n-1 about the fitted direction of h_{n-1}
+        axes[n - 1] = axes[n - 1].reversed()
+    oriented, dh = _orient(axes, nominal_alpha, keep=n - 1)
+    ratios = bennett_ratios(dh) if n == 4 else {}
+    return IdentifiedLoop(tuple(oriented), dh, ratios, nominal_alpha, fits)
+
+
 def identify_dh(trajectories: dict[int, ArrayLike], nominal_alpha: ArrayLike = PAPER_ALPHA) -> IdentifiedLoop:
-    """DH parameters of the loop from tracked positions of links 1, 2 and 3.
+    """DH parameters of the Bennett loop from tracked positions of links 1, 2 and 3 (:func:`identify_loop`).
 
     ``trajectories`` maps the link index to ``(frames, 3)`` (one tracked point) or
     ``(frames, k, 3)`` (several points) positions in metres, frames in time order.
     ``nominal_alpha`` (rad) only orients the fitted axes (see the module docstring).
     """
-    nominal_alpha = np.asarray(nominal_alpha, dtype=float)
-    axes, fits = identify_axes(trajectories)
-    turn = fits["h3"].angles[-1] - fits["h3"].angles[0]  # link 3 about the fitted h3 direction
-    if turn > 0:
-        axes[3] = axes[3].reversed()
-    oriented, dh = _orient(axes, nominal_alpha, keep=3)
-    return IdentifiedLoop(tuple(oriented), dh, bennett_ratios(dh), nominal_alpha, fits)
+    return identify_loop(trajectories, nominal_alpha, tool_link=2)
