@@ -48,7 +48,9 @@ def test_rational_mechanisms_are_identified_exactly(name):
     identified = identify_loop(record, nominal, tool_link=tool_link(mechanism))
     assert _same_lines(identified.axes, loop.axes) < 1e-12
     # The DH parameters of the true axes, oriented as identified, are the identified ones.
-    oriented = [b if a.direction @ b.direction > 0 else b.reversed() for a, b in zip(identified.axes, loop.axes)]
+    oriented = [
+        b if a.direction @ b.direction > 0 else b.reversed() for a, b in zip(identified.axes, loop.axes, strict=True)
+    ]
     true = dh_from_axes(oriented)
     assert np.max(np.abs(identified.dh.a - true.a)) < 1e-12
     assert np.max(np.abs(identified.dh.d - true.d)) < 1e-12
