@@ -12,11 +12,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ffrf.scenes.bennett_scene import paper_max_coupler_deviation
+
 from . import figures
 from .bennett_validation import TARGETS, BennettValidation
 
 __all__ = [
-    "PAPER_MAX_COUPLER_DEVIATION_MM",
     "write_report",
     "write_summary",
     "identified_dh",
@@ -24,9 +25,6 @@ __all__ = [
     "format_sci",
     "markdown_table",
 ]
-
-#: The paper's maximum coupler deviations (Results, simulated; rigid: "< 0.001").
-PAPER_MAX_COUPLER_DEVIATION_MM = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}
 
 
 def format_length(x: float) -> str:
@@ -167,7 +165,7 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
         ),
     ]
     dev = m["coupler_deviation_from_ideal_m"]
-    paper = PAPER_MAX_COUPLER_DEVIATION_MM.get(variant)
+    paper = paper_max_coupler_deviation(variant)
     lines += [
         "",
         "## Coupler deviation from the ideal path (motion polynomial)",
@@ -182,11 +180,7 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
                     ("exudyn", dev["exudyn"]),
                 )
             ]
-            + (
-                [["paper (its STL links, 2 mm, 32 modes)", f"{'< ' if variant == 'rigid' else ''}{paper}", ""]]
-                if paper is not None
-                else []
-            ),
+            + ([["paper (its STL links, 2 mm, 32 modes)", paper, ""]] if paper else []),
         ),
         "",
         "![coupler deviation](coupler_deviation.png) ![path](coupler_path.png)",
@@ -357,14 +351,13 @@ def write_summary(validations: list[BennettValidation], directory: str | Path) -
     for v in validations:
         m, variant = v.metrics, v.settings.variant
         dev = m["coupler_deviation_from_ideal_m"]
-        paper = PAPER_MAX_COUPLER_DEVIATION_MM.get(variant)
         worst = max(t["relative_to_elastic_deviation"] for t in m["trajectories"].values())
         rows.append(
             [
                 variant,
                 f"{1e3 * dev['inhouse']:.4f}",
                 f"{1e3 * dev['exudyn']:.4f}",
-                ("< " if variant == "rigid" else "") + f"{paper}",
+                paper_max_coupler_deviation(variant),
                 f"{1e3 * m['max_abs_driving_torque_Nm']['production']:.2f}",
                 f"{1e3 * m['max_abs_driving_torque_Nm']['exudyn']:.2f}",
                 format_sci(worst),

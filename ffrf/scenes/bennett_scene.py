@@ -44,7 +44,15 @@ from ffrf.system.markers import JOINT_OFFSETS
 from ffrf.system.multibody import MultibodySystem
 from kinematics import PAPER_A, PAPER_ALPHA, BennettLinkage
 
-__all__ = ["VARIANTS", "BennettScene", "bennett_description", "build_bennett", "assemble"]
+__all__ = [
+    "VARIANTS",
+    "PAPER_MAX_COUPLER_DEVIATION_MM",
+    "paper_max_coupler_deviation",
+    "BennettScene",
+    "bennett_description",
+    "build_bennett",
+    "assemble",
+]
 
 #: The paper's four simulation variants: material and base-link twist alpha_3 (deg).
 VARIANTS: dict[str, tuple[Material, float]] = {
@@ -53,6 +61,20 @@ VARIANTS: dict[str, tuple[Material, float]] = {
     "pla1": (PLA, 91.0),
     "pla2": (PLA, 92.0),
 }
+#: The paper's maximum coupler deviations from the ideal path per variant (mm; Sect. "Results",
+#: simulated, its STL links at 2 mm with 32 modes). The rigid one is a bound: "< 0.001".
+PAPER_MAX_COUPLER_DEVIATION_MM: dict[str, float] = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}
+
+
+def paper_max_coupler_deviation(variant: str) -> str:
+    """The paper's maximum coupler deviation of ``variant`` as its table states it, in mm
+    (``"< 0.001"`` for the rigid bound, ``"0.211"`` ...); ``""`` for a variant the paper has not."""
+    value = PAPER_MAX_COUPLER_DEVIATION_MM.get(variant)
+    if value is None:
+        return ""
+    return f"< {value}" if variant == "rigid" else f"{value}"
+
+
 #: Where along each link's arm (fraction from its first to its second joint point) a surface node
 #: is tracked, as the paper tracks three nodes per link.
 TRACKED_FRACTIONS = (0.3, 0.5, 0.7)
