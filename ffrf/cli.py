@@ -16,7 +16,8 @@ from pathlib import Path
 from ffrf.fe.fe_model import FEModel
 from ffrf.fe.interfaces import interface_from_group
 from ffrf.fe.materials import PLA
-from ffrf.geometry.link_geometry import LinkDesign, bennett_axes, mesh_link, paper_link_axes
+from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
+from ffrf.geometry.link_geometry import LinkDesign, mesh_link
 from ffrf.mesh.tet_mesh import quality_summary, write_vtu
 
 from .errors import FEInputError

@@ -13,7 +13,7 @@ are built there); the simulation starts from the ideal configuration at ``start_
 of the driver, where link ``k`` is displaced by the motion polynomial's pose of link ``k``.
 Misaligned variants (base twist 91 or 92 deg) cannot be assembled rigidly: the base's
 joint-3 frame is turned from the nominal axis to its own bore axis in small steps of a
-static solution (:func:`ffrf.scenes.builder.assemble`), and the assembly stresses remain in the links.
+static solution (:func:`ffrf.scenes.assembly.assemble`), and the assembly stresses remain in the links.
 
 **Joint points off the bore centre.** The two housings at a joint are stacked along its axis,
 so each joint point lies ``o`` = 8.5 mm from its bore's weighted centre. ``joint_offsets``
@@ -37,8 +37,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.fe.materials import PLA, RIGID, Material
-from ffrf.geometry.link_geometry import bennett_axes, common_normal_feet, paper_link_axes
-from ffrf.scenes.builder import Scene, SceneBody, assemble, build_scene
+from ffrf.geometry.joint_axes import bennett_axes, common_normal_feet, paper_link_axes
+from ffrf.scenes.assembly import assemble
+from ffrf.scenes.builder import Scene, SceneBody, build_scene
 from ffrf.system.drives import CosineRamp, rpm
 from ffrf.system.markers import JOINT_OFFSETS
 from ffrf.system.multibody import MultibodySystem
