@@ -43,7 +43,7 @@ from .exudyn_items import (
     add_mesh_node_sensor,
 )
 from .exudyn_solvers import check_output_times, dynamic_settings, solve_dynamic
-from .single_body_scenes import Scene, hinge_frame
+from .single_body_scenes import Scene
 
 __all__ = ["TrajectoryResult", "run_exudyn", "run_ffrf", "ffrf_system"]
 
@@ -88,7 +88,7 @@ class TrajectoryResult:
 def _add_exudyn_hinge(mbs, scene: Scene, body_object: int) -> None:
     """Interface marker on bore 0 (our weights) + ground marker + GenericJoint (free rz)."""
     body = scene.body
-    frame = hinge_frame(scene.hinge.axis)  # world = body axes at t = 0 (identity reference rotation)
+    frame = scene.hinge.frame()  # world = body axes at t = 0 (identity reference rotation)
     centre_world = np.asarray(scene.position, dtype=float) + body.frame_center
     m_ground = add_ground_marker(mbs, add_ground(mbs), frame, centre_world)
     m_body = add_interface_marker(mbs, body_object, body.frame_nodes, body.frame_weights, frame)
@@ -186,7 +186,7 @@ def ffrf_system(scene: Scene, exact_gravity: bool = False):
     )
     constraints = ()
     if scene.hinge is not None:
-        frame = hinge_frame(scene.hinge.axis)
+        frame = scene.hinge.frame()
         centre = body.frame_center
         constraints = (
             GroundPoint(

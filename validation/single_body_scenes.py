@@ -12,11 +12,11 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from .reduced_body import ReducedBody, static_deflection, tip_node
 
-__all__ = ["Hinge", "Scene", "hinge_frame", "pendulum_scene", "free_body_scene"]
+__all__ = ["Hinge", "Scene", "pendulum_scene", "free_body_scene"]
 
 
 @dataclass(frozen=True)
@@ -24,6 +24,18 @@ class Hinge:
     """Revolute joint to ground at the frame-interface centre, about the world ``axis``."""
 
     axis: tuple[float, float, float] = (0.0, 1.0, 0.0)
+
+    def __post_init__(self):
+        if not np.linalg.norm(np.asarray(self.axis, dtype=float)) > 0:
+            raise ValueError(f"hinge axis must be non-zero, got {self.axis!r}")
+
+    def frame(self) -> NDArray[np.float64]:
+        """The joint frame (columns x, y, z; z the unit ``axis``), as every joint of ours builds it
+        (:func:`ffrf.system.joints.frame_from_axis`); x and y are the normals of our
+        ``GroundPerpendicular``."""
+        from ffrf.system.joints import frame_from_axis
+
+        return frame_from_axis(self.axis)
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,22 +91,6 @@ class Scene:
 
     def with_step(self, step: float) -> Scene:
         return replace(self, step=step)
-
-
-def hinge_frame(axis: ArrayLike) -> NDArray[np.float64]:
-    """Rotation matrix whose third column is the unit ``axis`` (the joint z-axis).
-
-    Its first two columns are the unit normals used by our ``GroundPerpendicular``.
-    """
-    z = np.asarray(axis, dtype=float)
-    norm = np.linalg.norm(z)
-    if not norm > 0:
-        raise ValueError(f"hinge axis must be non-zero, got {axis!r}")
-    z = z / norm
-    helper = np.eye(3)[int(np.argmin(np.abs(z)))]
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(z, x), z])
 
 
 def pendulum_scene(
