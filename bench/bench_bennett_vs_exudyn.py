@@ -59,14 +59,9 @@ def main(argv=None) -> dict:
     import exudyn
 
     from ffrf.scenes.bennett_scene import build_bennett
-    from validation.exudyn_bennett import (
-        compare,
-        exudyn_convention_system,
-        run_exudyn_bennett,
-        run_ffrf_bennett,
-        static_exudyn_bennett,
-        static_ffrf_bennett,
-    )
+    from validation.bennett_trajectory import compare, run_ffrf_bennett, static_ffrf_bennett
+    from validation.exudyn_bennett import run_exudyn_bennett, static_exudyn_bennett
+    from validation.exudyn_conventions import exudyn_convention_system
 
     started = time.perf_counter()
     scene = build_bennett(args.variant, h=args.h, order=1, n_modes=args.modes, exact_gravity=False)

@@ -1,7 +1,7 @@
 """Momentum and energy of a free, spinning, elastically excited flexible bar over 10^4 steps:
 generalized-alpha (rho_inf = 1 and 0.8) against the variational midpoint integrator (issue 5).
 
-The scene is the validation's free body (``validation.exudyn_ffrf.free_body_scene``: 0.2 m bar,
+The scene is the validation's free body (``validation.single_body_scenes.free_body_scene``: 0.2 m bar,
 omega_bar = (1, 2, 30) rad/s, v = (0.1, 0, 0) m/s, elastic excitation from a 10 mN tip load), no
 damping, no gravity. Momenta are summed node by node with the full FE mass matrix (independent
 of the modal moments the solvers use); energy is kinetic + strain. Our generalized-alpha equals
@@ -65,7 +65,9 @@ def measure(system, body, result, wall: float) -> dict:
 
 def run_exudyn_points(h: float, steps: int) -> list[dict]:
     """Exudyn on the same scene: completion and time only."""
-    from validation.exudyn_ffrf import bar_body, free_body_scene, run_exudyn
+    from validation.exudyn_ffrf import run_exudyn
+    from validation.reduced_body import bar_body
+    from validation.single_body_scenes import free_body_scene
 
     out = []
     for rho_inf in (1.0, 0.8):
@@ -93,7 +95,9 @@ def run(sizes: list[float], steps: int) -> list[dict]:
     from ffrf.errors import NewtonDivergence
     from ffrf.solvers.generalized_alpha import generalized_alpha
     from ffrf.solvers.variational_midpoint import variational_midpoint
-    from validation.exudyn_ffrf import bar_body, ffrf_system, free_body_scene
+    from validation.exudyn_ffrf import ffrf_system
+    from validation.reduced_body import bar_body
+    from validation.single_body_scenes import free_body_scene
 
     body = bar_body()
     out = []

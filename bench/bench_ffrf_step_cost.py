@@ -17,7 +17,9 @@ import scipy.sparse as sp
 
 from ffrf import FEModel, craig_bampton, interface_from_group, mesh_link, paper_link_axes
 from ffrf.fe.materials import PLA
-from validation.exudyn_ffrf import ReducedBody, pendulum_scene, run_exudyn, run_ffrf
+from validation.exudyn_ffrf import run_exudyn, run_ffrf
+from validation.reduced_body import ReducedBody
+from validation.single_body_scenes import pendulum_scene
 
 
 def link_body(h: float, n_modes: int = 8) -> ReducedBody:

@@ -1,6 +1,6 @@
 """Benchmark: time per step of our FFRF solver and Exudyn on the flexible pendulum scene.
 
-The scene is the one of ``tests/test_validation`` (``validation.exudyn_ffrf.pendulum_scene``):
+The scene is the one of ``tests/test_validation`` (``validation.single_body_scenes.pendulum_scene``):
 PLA-like bar 0.2 x 0.02 x 0.01 m hinged at one end, released from horizontal, rho_inf = 0.8,
 beta = 1e-3 s, HCB with 6 + ``--modes`` modes, area weights. Two mesh sizes with the same m;
 the bore node count grows with the mesh, which is what Exudyn's marker cost depends on.
@@ -37,7 +37,8 @@ MESHES = {"coarse": (8, 2, 2), "fine": (24, 4, 4)}
 
 
 def scene_for(mesh: str, modes: int, step: float, t_end: float):
-    from validation.exudyn_ffrf import bar_body, pendulum_scene
+    from validation.reduced_body import bar_body
+    from validation.single_body_scenes import pendulum_scene
 
     body = bar_body(divisions=MESHES[mesh], n_modes=modes, weights="area")
     return pendulum_scene(body, step=step, t_end=t_end, beta=1e-3, rho_inf=0.8)

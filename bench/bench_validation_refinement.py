@@ -53,13 +53,9 @@ def main(argv=None) -> dict:
 
     from ffrf.scenes.bennett_scene import assemble, build_bennett
     from validation.bennett_validation import dynamic_solve, from_exudyn, run_ours
-    from validation.exudyn_bennett import (
-        assemble_exudyn_bennett,
-        bennett_bodies,
-        exudyn_convention_system,
-        run_exudyn_bennett,
-    )
-    from validation.exudyn_twin import twin_bases
+    from validation.exudyn_bennett import assemble_exudyn_bennett, bennett_bodies, run_exudyn_bennett
+    from validation.exudyn_conventions import exudyn_convention_system
+    from validation.twin_bases import twin_bases
 
     scene = build_bennett(args.variant, h=args.h, order=1, n_modes=args.modes).with_exact_gravity(False)
     convert = (lambda s: exudyn_convention_system(s, True)) if args.exudyn_jacobian else None

@@ -144,8 +144,8 @@ def make_scene(material=None, alpha3_deg: float = 90.0, **kwargs):
 
     ``build_bennett`` takes both from its ``VARIANTS`` table only, so the pair is registered
     under a temporary name for the call (the scene keeps it in ``settings['variant']``)."""
-    from ffrf.scenes import bennett_scene
     from ffrf.fe.materials import PLA
+    from ffrf.scenes import bennett_scene
 
     material = PLA if material is None else material
     name = f"hard:E={material.E:g}:alpha3={alpha3_deg:g}"
@@ -342,7 +342,8 @@ def exudyn_dynamic(scene, t_end: float, step: float, rho_inf: float = 0.9) -> st
     """Our generalized-alpha against the Exudyn twin from the same assembled state (Exudyn's
     simplified gravity in both): largest coupler difference and driving-torque difference."""
     from ffrf.scenes.bennett_scene import assemble
-    from validation.exudyn_bennett import compare, run_exudyn_bennett, run_ffrf_bennett
+    from validation.bennett_trajectory import compare, run_ffrf_bennett
+    from validation.exudyn_bennett import run_exudyn_bennett
 
     twin_scene = scene.with_exact_gravity(False)
     q0 = assemble(twin_scene).q
@@ -526,7 +527,8 @@ def case_misalignment(ctx: Context) -> None:
 def exudyn_assembly(scene, ours) -> str:
     """Exudyn's own static assembly with continuation against ours (simplified gravity in both)."""
     from ffrf.scenes.bennett_scene import assemble
-    from validation.exudyn_bennett import assemble_exudyn_bennett, system_points
+    from validation.bennett_trajectory import system_points
+    from validation.exudyn_bennett import assemble_exudyn_bennett
 
     twin_scene = scene.with_exact_gravity(False)
     try:

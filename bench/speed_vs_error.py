@@ -128,7 +128,7 @@ def _build(order: int, h: float, modes: int):
 
 def _exudyn_setup(scene):
     from validation.exudyn_bennett import bennett_bodies
-    from validation.exudyn_twin import twin_bases
+    from validation.twin_bases import twin_bases
 
     started = time.perf_counter()
     bases = twin_bases(bennett_bodies(scene))

@@ -43,15 +43,8 @@ from ffrf.fe.interfaces import (
 )
 from ffrf.fe.materials import PLA, RIGID, Material
 from ffrf.fe.modal import Modes, clamped_modes, free_free_modes
-from ffrf.geometry.link_geometry import (
-    PAPER_AXES,
-    Axis,
-    LinkDesign,
-    LinkGeometry,
-    build_link,
-    mesh_link,
-    paper_link_axes,
-)
+from ffrf.geometry.joint_axes import PAPER_AXES, Axis, paper_link_axes
+from ffrf.geometry.link_geometry import LinkDesign, LinkGeometry, build_link, mesh_link
 from ffrf.geometry.meshing import gmsh_session, mesh_stl
 from ffrf.mesh.tet_mesh import (
     TetMesh,
@@ -75,7 +68,8 @@ from ffrf.reduction.reduced_io import (
     reduction_fingerprint,
     save_reduced_body,
 )
-from ffrf.scenes.builder import Scene, assemble, build_scene
+from ffrf.scenes.assembly import assemble
+from ffrf.scenes.builder import Scene, build_scene
 from ffrf.scenes.scene_file import load_scene, run_scene
 from ffrf.solvers.common import IntegrationResult
 from ffrf.solvers.generalized_alpha import generalized_alpha

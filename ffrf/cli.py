@@ -16,7 +16,8 @@ from pathlib import Path
 from ffrf.fe.fe_model import FEModel
 from ffrf.fe.interfaces import interface_from_group
 from ffrf.fe.materials import PLA
-from ffrf.geometry.link_geometry import LinkDesign, bennett_axes, mesh_link, paper_link_axes
+from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
+from ffrf.geometry.link_geometry import LinkDesign, mesh_link
 from ffrf.mesh.tet_mesh import quality_summary, write_vtu
 
 from .errors import FEInputError
@@ -166,7 +167,7 @@ def _run_bennett(args: argparse.Namespace) -> int:
     import time
 
     from ffrf.scenes.bennett_run import choose_mode, run_bennett, write_results
-    from ffrf.scenes.bennett_scene import build_bennett
+    from ffrf.scenes.bennett_scene import PAPER_MAX_COUPLER_DEVIATION_MM, build_bennett
 
     started = time.perf_counter()
     _output_folder(args.out)
@@ -206,7 +207,7 @@ def _run_bennett(args: argparse.Namespace) -> int:
     plot_coupler_deviation({args.variant: result}, args.out / "coupler_deviation.png")
     plot_driving_torque({args.variant: result}, args.out / "driving_torque.png")
     summary = result.summary()
-    paper = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}[args.variant]
+    paper = PAPER_MAX_COUPLER_DEVIATION_MM[args.variant]
     print(
         f"{args.variant}: max coupler deviation from the ideal path "
         f"{1e3 * summary['max_coupler_deviation_m']:.4f} mm at the same drive angle, "

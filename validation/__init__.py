@@ -1,6 +1,10 @@
-"""Cross-validation against Exudyn: the equivalent Exudyn model of our scenes (the FFRF
-pendulum and free body, :mod:`validation.exudyn_ffrf`; the Bennett linkage,
-:mod:`validation.exudyn_bennett`), mode-by-mode and trajectory-by-trajectory comparisons
-(:mod:`validation.modes`, :mod:`validation.bennett_validation`) and readable reports
-(:mod:`validation.report`, ``python -m validation``). Exudyn is imported lazily; ``ffrf``
-never imports it."""
+"""Cross-validation against Exudyn: the equivalent Exudyn model of our scenes, built from one set
+of items (:mod:`validation.exudyn_items`, solver settings in :mod:`validation.exudyn_solvers`) for
+the single-body scenes (:mod:`validation.reduced_body`, :mod:`validation.single_body_scenes`, run
+in :mod:`validation.exudyn_ffrf`), whole systems (:mod:`validation.exudyn_twin`,
+:mod:`validation.twin_bases`), the Bennett linkage (:mod:`validation.exudyn_bennett`,
+:mod:`validation.bennett_trajectory`, :mod:`validation.exudyn_conventions`) and scene files
+(:mod:`validation.exudyn_scene`); mode-by-mode and trajectory-by-trajectory comparisons
+(:mod:`validation.modes`, :mod:`validation.bennett_validation`, :mod:`validation.bennett_metrics`)
+and readable reports (:mod:`validation.report`, ``python -m validation``). Exudyn is imported
+lazily; ``ffrf`` never imports it."""

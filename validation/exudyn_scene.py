@@ -86,18 +86,9 @@ def _torque_keys(scene) -> dict[str, str]:
 def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> tuple[dict, float, float]:
     """Exudyn's run of ``scene`` at our output ``times``: sensor arrays named as ours
     (positions, ``<joint>_torque`` with our sign), set-up and solution wall times."""
-    import exudyn as exu
-
-    from .exudyn_twin import (
-        add_node_sensor,
-        build_twin,
-        exudyn_settings,
-        read_twin,
-        solve_static,
-        static_settings,
-        sweep_settings,
-        to_twin_layout,
-    )
+    from .exudyn_solvers import dynamic_settings, solve_dynamic, solve_static, static_settings, sweep_settings
+    from .exudyn_twin import add_node_sensor, build_twin, read_twin
+    from .twin_bases import to_twin_layout
 
     s = scene.settings
     mode = s.get("mode", "dynamic")
@@ -109,7 +100,7 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
     if s.get("static_start", mode != "dynamic"):
         twin = build_twin(bodies, scene.system, q0, beta, symbolic=False, frozen_drive_time=0.0, bases=bases)
         twin.mbs.Assemble()
-        solve_static(twin, static_settings(2, tolerance))
+        solve_static(twin.mbs, static_settings(2, tolerance))
         data = read_twin(twin, scene.system, q0)
         q0 = data["twin_q"][-1]
         # Exudyn's static multipliers have the opposite sign of its dynamic ones (and ours).
@@ -123,11 +114,10 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
     t_end = float(times[-1])
     if mode == "dynamic":
         step = float(s.get("step", 1e-3))
-        solver = exu.MainSolverImplicitSecondOrder()
-        if not solver.SolveSystem(twin.mbs, exudyn_settings(t_end, step, float(s.get("rho_inf", 0.9)), tolerance)):
-            raise RuntimeError(f"Exudyn did not finish the scene: {solver.GetErrorString()}")
+        settings = dynamic_settings(t_end, step, float(s.get("rho_inf", 0.9)), tolerance, tolerance)
+        solve_dynamic(twin.mbs, settings, "the scene")
     else:
-        solve_static(twin, sweep_settings(times, tolerance))
+        solve_static(twin.mbs, sweep_settings(times, tolerance))
     solve = time.perf_counter() - started
     data = read_twin(twin, scene.system, q0)
     rows = np.array([int(np.argmin(np.abs(data["time"] - t))) for t in times])
@@ -149,7 +139,7 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
 
     from ffrf.scenes.scene_file import load_scene, sensor_arrays, simulate_scene
 
-    from .exudyn_twin import twin_bases
+    from .twin_bases import twin_bases
 
     started = time.perf_counter()
     scene = load_scene(path)
@@ -158,7 +148,7 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
     bases = twin_bases(scene_bodies(scene), basis)
     modes = {
         b.name: compare_modes(b.fe, b.reduction, tb.matrix, tb.fixed_interface_frequencies_hz, tb.setup_s)
-        for b, tb in zip(scene.bodies, bases)
+        for b, tb in zip(scene.bodies, bases, strict=True)
         if tb.source == "exudyn"
     }
     started = time.perf_counter()
@@ -222,7 +212,7 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
 def write_scene_report(v: SceneValidation, directory: str | Path) -> Path:
     """``report.md`` (verdict first), ``metrics.json``, ``difference.png`` and ``mac.png``."""
     from . import figures
-    from .report import format_length, format_sci, markdown_table
+    from .markdown import checks_table, format_length, format_sci, markdown_table
 
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
@@ -246,13 +236,7 @@ def write_scene_report(v: SceneValidation, directory: str | Path) -> Path:
         f"settings; Exudyn {m['versions']['exudyn']} reduces the bodies itself. Time: ours "
         f"{ti['integration']:.2f} s, Exudyn {te['integration']:.2f} s.",
         "",
-        markdown_table(
-            ["check", "measured", "target", ""],
-            [
-                [c["name"], format_sci(c["value"]), f"{c['target']:g}", "met" if c["passed"] else "**missed**"]
-                for c in m["checks"]
-            ],
-        ),
+        checks_table(m["checks"]),
         "",
         "## Sensors",
         "",

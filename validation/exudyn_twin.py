@@ -3,8 +3,11 @@ r"""The Exudyn twin of any of our multibody systems of reduced flexible bodies.
 Given our bodies (nodes, consistent M and K, interface node sets and weights, reduction) and
 a :class:`ffrf.system.multibody.MultibodySystem` of :class:`ffrf.system.joints.MarkerJoint` s, the twin has
 
+Its items are those every twin uses (:mod:`validation.exudyn_items`):
+
 * per body an ``ObjectFFRFreducedOrder`` (``FEMinterface`` with our nodes, M and K and either
-  Exudyn's own Craig-Bampton modes on the same interfaces, :func:`twin_bases`, or ours), with
+  Exudyn's own Craig-Bampton modes on the same interfaces, :func:`validation.twin_bases.twin_bases`,
+  or ours), with
   ``positionRef``/``rotationMatrixRef`` and modal initial values from the start state, gravity
   through ``LoadMassProportional`` (our ``exact_gravity=False``, Eq. (F10)) and
   ``stiffnessProportionalDamping``;
@@ -24,30 +27,34 @@ Sensors: the rigid and modal nodes of every body, the ``TorqueLocal`` of every d
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
-from types import SimpleNamespace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.system.drives import RampedAngle
 
+from .exudyn_items import (
+    add_coordinates_sensor,
+    add_ffrf_body,
+    add_generic_joint,
+    add_ground,
+    add_ground_marker,
+    add_interface_marker,
+    add_marker_position_sensor,
+    add_mesh_node_sensor,
+    add_torque_sensor,
+)
+from .twin_bases import TwinBasis
+
 __all__ = [
     "TwinBody",
-    "TwinBasis",
     "ExudynTwin",
-    "twin_bases",
-    "to_twin_layout",
     "build_twin",
     "add_node_sensor",
     "add_marker_sensor",
     "read_twin",
-    "static_settings",
-    "sweep_settings",
-    "solve_static",
     "joint_key",
-    "exudyn_settings",
     "q_from_twin",
 ]
 
@@ -63,18 +70,6 @@ class TwinBody:
     interfaces: dict
     markers: dict
     reduction: object
-
-
-@dataclass(frozen=True)
-class TwinBasis:
-    """The mode basis of one body in the twin: Exudyn's own HCB (``source="exudyn"``) or ours."""
-
-    matrix: NDArray[np.float64]  # (3N, m)
-    fixed_interface_frequencies_hz: NDArray[np.float64]
-    source: str
-    setup_s: float
-    to_ours: NDArray[np.float64]  # (m, m): our modal coordinates of the same displacement field
-    from_ours: NDArray[np.float64]
 
 
 @dataclass
@@ -99,58 +94,6 @@ class ExudynTwin:
 def joint_key(name: str) -> str:
     """Exudyn item name of one of our joints: its name up to the first blank (``joint3 (drive)`` -> ``joint3``)."""
     return name.split(" ")[0]
-
-
-def _modal_map(mass, source: NDArray, target: NDArray) -> NDArray[np.float64]:
-    """Mass-orthogonal projection of span(source) onto target's coordinates, (target^T M target)^-1 target^T M
-    source; exact when both span the same space (our and Exudyn's HCB bases do, to 1e-13)."""
-    m_target = target.T @ (mass @ target)
-    return np.linalg.solve(m_target, target.T @ (mass @ source))
-
-
-def twin_bases(bodies: list[TwinBody], source: str = "exudyn") -> list[TwinBasis]:
-    """Per body: Exudyn's own HCB modes on our nodes, M, K, interface node sets and weights
-    (:func:`validation.modes.exudyn_hcb`), or ``source="ffrf"``: our basis as is."""
-    from .modes import exudyn_hcb
-
-    if source not in ("exudyn", "ffrf"):
-        raise ValueError(f"basis source must be 'exudyn' or 'ffrf', got {source!r}")
-    out = []
-    for body in bodies:
-        ours = np.asarray(body.reduction.basis)
-        frequencies_ours = body.reduction.fixed_interface_frequencies_hz
-        if source == "ffrf":
-            eye = np.eye(ours.shape[1])
-            out.append(TwinBasis(ours, frequencies_ours, "ffrf", 0.0, eye, eye))
-            continue
-        started = time.perf_counter()
-        itfs = list(body.interfaces.values())
-        basis, frequencies = exudyn_hcb(
-            body.fe, [i.nodes for i in itfs], [i.weights for i in itfs], frequencies_ours.size
-        )
-        elapsed = time.perf_counter() - started
-        out.append(
-            TwinBasis(
-                basis,
-                np.sort(frequencies),
-                "exudyn",
-                elapsed,
-                _modal_map(body.fe.mass, basis, ours),
-                _modal_map(body.fe.mass, ours, basis),
-            )
-        )
-    return out
-
-
-def to_twin_layout(system, q: NDArray, bases: list[TwinBasis] | None) -> NDArray[np.float64]:
-    """Our coordinates with each body's modal part in the twin's basis."""
-    q = np.array(q, dtype=float)
-    if bases is None:
-        return q
-    for k, basis in enumerate(bases):
-        block = system.block(k)
-        q[..., block.start + 7 : block.stop] = q[..., block.start + 7 : block.stop] @ basis.from_ours.T
-    return q
 
 
 def _drive_function(angle, frozen_time: float | None, symbolic: bool):
@@ -200,46 +143,41 @@ def build_twin(
     default our basis). ``frozen_drive_time``: drives held at their angle at this time (static solves, whose quasi-time
     would otherwise turn them). Call ``twin.mbs.Assemble()`` after adding sensors."""
     import exudyn as exu
-    import exudyn.itemInterface as eii
-    from exudyn.FEM import ObjectFFRFreducedOrderInterface
 
     from ffrf.body.euler_parameters import rotation_matrix
     from ffrf.system.joints import GroundFrame, MarkerJoint
-
-    from .exudyn_ffrf import _exudyn_fem
 
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
     objects, rigid_nodes, modal_nodes, reference = [], [], [], []
     for k, body in enumerate(bodies):
         block = np.asarray(q0[system.block(k)], dtype=float)
-        basis = np.asarray(body.reduction.basis) if bases is None else bases[k].matrix
-        fem = _exudyn_fem(
-            SimpleNamespace(
-                nodes=np.asarray(body.fe.nodes), mass=body.fe.mass, stiffness=body.fe.stiffness, basis=basis
-            )
-        )
-        info = ObjectFFRFreducedOrderInterface(fem).AddObjectFFRFreducedOrder(
+        items = add_ffrf_body(
             mbs,
-            positionRef=[float(v) for v in block[:3]],
-            rotationMatrixRef=rotation_matrix(block[3:7]),
-            gravity=[float(v) for v in system.gravity],
-            stiffnessProportionalDamping=float(beta),
+            body.fe.nodes,
+            body.fe.mass,
+            body.fe.stiffness,
+            np.asarray(body.reduction.basis) if bases is None else bases[k].matrix,
+            block[:3],
+            rotation_matrix(block[3:7]),
+            block[7:],
+            system.gravity,
+            beta,
             name=body.name,
         )
-        mbs.SetNodeParameter(info["nGenericODE2"], "initialCoordinates", [float(z) for z in block[7:]])
-        objects.append(info["oFFRFreducedOrder"])
-        rigid_nodes.append(info["nRigidBody"])
-        modal_nodes.append(info["nGenericODE2"])
-        reference.append(np.asarray(mbs.GetNodeParameter(info["nRigidBody"], "referenceCoordinates"), dtype=float))
+        objects.append(items.body)
+        rigid_nodes.append(items.rigid_node)
+        modal_nodes.append(items.modal_node)
+        reference.append(np.asarray(mbs.GetNodeParameter(items.rigid_node, "referenceCoordinates"), dtype=float))
 
-    ground = mbs.AddObject(eii.ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
+    ground = add_ground(mbs)
     markers, joints, keep, notes = {}, {}, [], []
 
     def add_marker(marker, rotation, offset, label):
         if isinstance(marker, GroundFrame):
-            ht = exu.HT(rotation=marker.rotation @ rotation, translation=marker.point + marker.rotation @ offset)
-            return mbs.AddMarker(eii.MarkerBodyRigid(bodyNumber=ground, localHT=ht, name=label))
+            return add_ground_marker(
+                mbs, ground, marker.rotation @ rotation, marker.point + marker.rotation @ offset, label
+            )
         body = bodies[marker.body]
         name = _interface_name(body, marker)
         itf = body.interfaces[name]
@@ -250,20 +188,9 @@ def build_twin(
             )
         # Exudyn's marker point is the interface's weighted centre plus localHT's translation, in the body frame.
         translation = marker.point - body.markers[name].point + offset
-        return mbs.AddMarker(
-            eii.MarkerSuperElementRigid(
-                bodyNumber=objects[marker.body],
-                meshNodeNumbers=[int(i) for i in itf.nodes],
-                weightingFactors=[float(w) for w in itf.weights],
-                useAlternativeApproach=True,
-                rotationsExponentialMap=2,
-                localHT=exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(translation, float)),
-                name=label,
-            )
-        )
+        return add_interface_marker(mbs, objects[marker.body], itf.nodes, itf.weights, rotation, translation, label)
 
     used_symbolic = False
-    out = exu.OutputVariableType
     sensors = {}
     for c in system.constraints:
         if not isinstance(c, MarkerJoint):
@@ -272,9 +199,7 @@ def build_twin(
         m0 = add_marker(c.marker0, c.rotation0, c.offset0, f"{key}:m0")
         m1 = add_marker(c.marker1, c.rotation1, c.offset1, f"{key}:m1")
         markers[key] = (m0, m1)
-        joint = mbs.AddObject(
-            eii.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=[int(v) for v in c.locked], name=key)
-        )
+        joint = add_generic_joint(mbs, m0, m1, c.locked, key)
         joints[key] = joint
         if c.angle is None:
             continue
@@ -293,22 +218,10 @@ def build_twin(
             function = _drive_function(c.angle, frozen_drive_time, False)
         mbs.SetObjectParameter(joint, "offsetUserFunction", function)
         keep.append(function)
-        sensors[f"torque:{key}"] = mbs.AddSensor(
-            eii.SensorObject(
-                objectNumber=joint, outputVariableType=out.TorqueLocal, storeInternal=True, writeToFile=False
-            )
-        )
+        sensors[f"torque:{key}"] = add_torque_sensor(mbs, joint)
     for k in range(len(bodies)):
-        sensors[f"rigid{k}"] = mbs.AddSensor(
-            eii.SensorNode(
-                nodeNumber=rigid_nodes[k], outputVariableType=out.Coordinates, storeInternal=True, writeToFile=False
-            )
-        )
-        sensors[f"modal{k}"] = mbs.AddSensor(
-            eii.SensorNode(
-                nodeNumber=modal_nodes[k], outputVariableType=out.Coordinates, storeInternal=True, writeToFile=False
-            )
-        )
+        sensors[f"rigid{k}"] = add_coordinates_sensor(mbs, rigid_nodes[k])
+        sensors[f"modal{k}"] = add_coordinates_sensor(mbs, modal_nodes[k])
     return ExudynTwin(
         sc,
         mbs,
@@ -328,33 +241,12 @@ def build_twin(
 
 def add_node_sensor(twin: ExudynTwin, name: str, body: int, node: int) -> None:
     """World position of mesh node ``node`` of body ``body``."""
-    import exudyn as exu
-    import exudyn.itemInterface as eii
-
-    twin.sensors[name] = twin.mbs.AddSensor(
-        eii.SensorSuperElement(
-            bodyNumber=twin.objects[body],
-            meshNodeNumber=int(node),
-            outputVariableType=exu.OutputVariableType.Position,
-            storeInternal=True,
-            writeToFile=False,
-        )
-    )
+    twin.sensors[name] = add_mesh_node_sensor(twin.mbs, twin.objects[body], node)
 
 
 def add_marker_sensor(twin: ExudynTwin, name: str, marker: int) -> None:
     """World position of an Exudyn marker."""
-    import exudyn as exu
-    import exudyn.itemInterface as eii
-
-    twin.sensors[name] = twin.mbs.AddSensor(
-        eii.SensorMarker(
-            markerNumber=marker,
-            outputVariableType=exu.OutputVariableType.Position,
-            storeInternal=True,
-            writeToFile=False,
-        )
-    )
+    twin.sensors[name] = add_marker_position_sensor(twin.mbs, marker)
 
 
 def q_from_twin(twin: ExudynTwin, system, q0: NDArray, rigid: list, modal: list, our_basis: bool = True) -> NDArray:
@@ -386,44 +278,3 @@ def read_twin(twin: ExudynTwin, system, q0: NDArray) -> dict[str, NDArray]:
     out["q"] = q_from_twin(twin, system, q0, rigid, modal)
     out["twin_q"] = q_from_twin(twin, system, q0, rigid, modal, our_basis=False)
     return out
-
-
-def exudyn_settings(t_end: float, step: float, rho_inf: float, tolerance: float = 1e-10):
-    """:func:`validation.exudyn_ffrf.exudyn_settings`: generalized-alpha index 3, fixed steps, full Newton."""
-    from .exudyn_ffrf import exudyn_settings as settings
-
-    plan = SimpleNamespace(n_steps=int(round(t_end / step)), t_end=t_end, rho_inf=rho_inf, step=step)
-    return settings(plan, False, tolerance, tolerance)
-
-
-def static_settings(load_steps: int, tolerance: float, duration: float = 1.0, load_factor: bool = True):
-    """``SolveStatic`` settings: fixed load steps over ``duration`` of quasi-time (drives turn with
-    it), loads ramped with the steps only if ``load_factor``; dense solver; Newton to ``tolerance``."""
-    import exudyn as exu
-
-    s = exu.SimulationSettings()
-    s.staticSolver.numberOfLoadSteps = load_steps
-    s.staticSolver.loadStepDuration = duration
-    s.staticSolver.useLoadFactor = load_factor
-    s.staticSolver.adaptiveStep = False
-    s.staticSolver.newton.relativeTolerance = tolerance
-    s.staticSolver.newton.absoluteTolerance = tolerance
-    s.staticSolver.newton.maxIterations = 50
-    s.staticSolver.verboseMode = 0
-    s.linearSolver.solverType = exu.LinearSolverType.EXUdense
-    s.solution.file.write = False
-    return s
-
-
-def sweep_settings(times: NDArray, tolerance: float):
-    """``SolveStatic`` settings for equilibria at equally spaced ``times`` from 0: one load step per
-    interval, the drives turned by the quasi-time, loads always fully on (``useLoadFactor=False``)."""
-    return static_settings(len(times) - 1, tolerance, duration=float(times[-1]), load_factor=False)
-
-
-def solve_static(twin: ExudynTwin, settings) -> None:
-    import exudyn as exu
-
-    solver = exu.MainSolverStatic()
-    if not solver.SolveSystem(twin.mbs, settings):
-        raise RuntimeError(f"Exudyn SolveStatic failed: {solver.GetErrorString()}")

@@ -12,38 +12,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ffrf.scenes.bennett_scene import paper_max_coupler_deviation
+
 from . import figures
-from .bennett_validation import TARGETS, BennettValidation
+from .bennett_metrics import TARGETS
+from .bennett_validation import BennettValidation
+from .markdown import checks_table, format_length, format_sci, markdown_table
 
-__all__ = [
-    "PAPER_MAX_COUPLER_DEVIATION_MM",
-    "write_report",
-    "write_summary",
-    "identified_dh",
-    "format_length",
-    "format_sci",
-    "markdown_table",
-]
-
-#: The paper's maximum coupler deviations (Results, simulated; rigid: "< 0.001").
-PAPER_MAX_COUPLER_DEVIATION_MM = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}
-
-
-def format_length(x: float) -> str:
-    """A length in the unit that reads best: nm, um or mm."""
-    if abs(x) < 1e-6:
-        return f"{1e9 * x:.3g} nm"
-    return f"{1e6 * x:.3g} um" if abs(x) < 1e-3 else f"{1e3 * x:.4g} mm"
-
-
-def format_sci(x: float) -> str:
-    return f"{x:.2e}"
-
-
-def markdown_table(header: list[str], rows: list[list]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
-    return "\n".join(lines)
+__all__ = ["write_report", "write_summary", "identified_dh"]
 
 
 def _verdict(m: dict) -> list[str]:
@@ -57,7 +33,8 @@ def _verdict(m: dict) -> list[str]:
         f"Exudyn {m['versions']['exudyn']} reduces the links itself.",
         "",
         f"- Quasi-static revolution: coupler point differs by at most {format_length(c['max_abs_diff_m'])} "
-        f"({format_sci(c['relative_to_elastic_deviation'])} of its {format_length(m['coupler_deviation_from_ideal_m']['exudyn'])} "
+        f"({format_sci(c['relative_to_elastic_deviation'])} of its "
+        f"{format_length(m['coupler_deviation_from_ideal_m']['exudyn'])} "
         f"elastic deviation, at least 1 um; target {TARGETS['trajectory']:g}), tracked nodes by "
         f"{format_length(worst['max_abs_diff_m'])}, "
         f"driving torque by {format_sci(t['max_rel_diff'])} of its maximum (target {TARGETS['torque']:g}).",
@@ -119,6 +96,22 @@ def _attribution(copied: dict) -> str:
     )
 
 
+def _trajectory_table(trajectories: dict) -> str:
+    """Per sensor: max and RMS difference, and the max relative to the coupler's elastic deviation."""
+    return markdown_table(
+        ["sensor", "max abs diff", "RMS", "max / coupler's elastic deviation"],
+        [
+            [
+                name,
+                format_length(t["max_abs_diff_m"]),
+                format_length(t["rms_diff_m"]),
+                format_sci(t["relative_to_elastic_deviation"]),
+            ]
+            for name, t in trajectories.items()
+        ],
+    )
+
+
 def write_report(v: BennettValidation, directory: str | Path) -> Path:
     """Write ``report.md``, ``metrics.json`` and the figures into ``directory``; return the report path."""
     out = Path(directory)
@@ -158,16 +151,10 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
         "",
         "## Checks against the targets",
         "",
-        markdown_table(
-            ["check", "measured", "target", ""],
-            [
-                [c["name"], format_sci(c["value"]), f"{c['target']:g}", "met" if c["passed"] else "**missed**"]
-                for c in m["checks"]
-            ],
-        ),
+        checks_table(m["checks"]),
     ]
     dev = m["coupler_deviation_from_ideal_m"]
-    paper = PAPER_MAX_COUPLER_DEVIATION_MM.get(variant)
+    paper = paper_max_coupler_deviation(variant)
     lines += [
         "",
         "## Coupler deviation from the ideal path (motion polynomial)",
@@ -182,11 +169,7 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
                     ("exudyn", dev["exudyn"]),
                 )
             ]
-            + (
-                [["paper (its STL links, 2 mm, 32 modes)", f"{'< ' if variant == 'rigid' else ''}{paper}", ""]]
-                if paper is not None
-                else []
-            ),
+            + ([["paper (its STL links, 2 mm, 32 modes)", paper, ""]] if paper else []),
         ),
         "",
         "![coupler deviation](coupler_deviation.png) ![path](coupler_path.png)",
@@ -197,18 +180,7 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
         "",
         "## Trajectories, quasi-static revolution (ours with Exudyn's gravity model vs Exudyn)",
         "",
-        markdown_table(
-            ["sensor", "max abs diff", "RMS", "max / coupler's elastic deviation"],
-            [
-                [
-                    name,
-                    format_length(t["max_abs_diff_m"]),
-                    format_length(t["rms_diff_m"]),
-                    format_sci(t["relative_to_elastic_deviation"]),
-                ]
-                for name, t in m["trajectories"].items()
-            ],
-        ),
+        _trajectory_table(m["trajectories"]),
         "",
         f"Driving torque: max abs diff {1e3 * m['torque']['max_abs_diff_Nm']:.3e} N mm of "
         f"{1e3 * m['torque']['max_abs_Nm']:.4g} N mm ({format_sci(m['torque']['max_rel_diff'])}).",
@@ -221,18 +193,7 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
             "",
             f"## Dynamic window: 0..{d['t_end']:g} s, step {s.step:g} s, rho_inf {s.rho_inf:g}",
             "",
-            markdown_table(
-                ["sensor", "max abs diff", "RMS", "max / coupler's elastic deviation"],
-                [
-                    [
-                        n,
-                        format_length(t["max_abs_diff_m"]),
-                        format_length(t["rms_diff_m"]),
-                        format_sci(t["relative_to_elastic_deviation"]),
-                    ]
-                    for n, t in d["trajectories"].items()
-                ],
-            ),
+            _trajectory_table(d["trajectories"]),
             "",
             f"Driving torque: {format_sci(d['torque']['max_rel_diff'])} of its maximum. Constraint residuals "
             f"(our equations): ours {format_sci(d['constraint_residual']['inhouse'])}, Exudyn's run "
@@ -244,7 +205,7 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
         lines += ["", "## Modes (fixed-interface, ours vs Exudyn's own Craig-Bampton on the same matrices)", ""]
         rows = []
         for name, c in v.modes.items():
-            for i, (fo, fe) in enumerate(zip(c.frequencies_hz, c.exudyn_frequencies_hz)):
+            for i, (fo, fe) in enumerate(zip(c.frequencies_hz, c.exudyn_frequencies_hz, strict=True)):
                 rows.append(
                     [name, i, f"{fo:.6f}", f"{fe:.6f}", format_sci(abs(fo / fe - 1.0)), f"{c.diagonal_mac[i]:.12f}"]
                 )
@@ -268,23 +229,16 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
             ["comparison", "max abs diff (nodes, coupler)", "relative to elastic deviation", "torque"],
             [
                 [
-                    "exact gravity vs Exudyn's LoadMassProportional (modelling)",
-                    format_length(md["exact_vs_exudyn_gravity"]["max_abs_diff_m"]),
-                    format_sci(md["exact_vs_exudyn_gravity"]["relative_to_elastic_deviation"]),
-                    format_sci(md["exact_vs_exudyn_gravity"]["torque_max_rel_diff"]),
-                ],
-                [
-                    "exact vs Exudyn's marker rotation Jacobian (ours both)",
-                    format_length(md["exact_vs_exudyn_marker_jacobian"]["max_abs_diff_m"]),
-                    format_sci(md["exact_vs_exudyn_marker_jacobian"]["relative_to_elastic_deviation"]),
-                    format_sci(md["exact_vs_exudyn_marker_jacobian"]["torque_max_rel_diff"]),
-                ],
-                [
-                    "ours with both Exudyn choices vs Exudyn (solver only)",
-                    format_length(md["with_exudyn_jacobian_vs_exudyn"]["max_abs_diff_m"]),
-                    format_sci(md["with_exudyn_jacobian_vs_exudyn"]["relative_to_elastic_deviation"]),
-                    format_sci(md["with_exudyn_jacobian_vs_exudyn"]["torque_max_rel_diff"]),
-                ],
+                    label,
+                    format_length(md[key]["max_abs_diff_m"]),
+                    format_sci(md[key]["relative_to_elastic_deviation"]),
+                    format_sci(md[key]["torque_max_rel_diff"]),
+                ]
+                for key, label in (
+                    ("exact_vs_exudyn_gravity", "exact gravity vs Exudyn's LoadMassProportional (modelling)"),
+                    ("exact_vs_exudyn_marker_jacobian", "exact vs Exudyn's marker rotation Jacobian (ours both)"),
+                    ("with_exudyn_jacobian_vs_exudyn", "ours with both Exudyn choices vs Exudyn (solver only)"),
+                )
             ],
         ),
         "",
@@ -293,7 +247,8 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
         f"{format_sci(m['energy_balance_relative']['inhouse'])}, ours with Exudyn's Jacobian "
         f"{format_sci(m['energy_balance_relative']['inhouse_exudyn_jacobian'])}, Exudyn's run "
         f"{format_sci(m['energy_balance_relative']['exudyn'])}. Constraint residuals in our equations: ours "
-        f"{format_sci(m['constraint_residual']['inhouse'])}, Exudyn's run {format_sci(m['constraint_residual']['exudyn'])}.",
+        f"{format_sci(m['constraint_residual']['inhouse'])}, Exudyn's run "
+        f"{format_sci(m['constraint_residual']['exudyn'])}.",
     ]
     ti, te = m["timing_s"]["inhouse"], m["timing_s"]["exudyn"]
     lines += [
@@ -303,20 +258,8 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
         markdown_table(
             ["", "set-up", "quasi-static revolution", "dynamic window", "total"],
             [
-                [
-                    "ours",
-                    f"{ti['setup']:.2f}",
-                    f"{ti['integration']:.2f}",
-                    f"{ti.get('dynamic_window', 0):.2f}",
-                    f"{ti['total']:.2f}",
-                ],
-                [
-                    "Exudyn",
-                    f"{te['setup']:.2f}",
-                    f"{te['integration']:.2f}",
-                    f"{te.get('dynamic_window', 0):.2f}",
-                    f"{te['total']:.2f}",
-                ],
+                [label] + [f"{t.get(k, 0):.2f}" for k in ("setup", "integration", "dynamic_window", "total")]
+                for label, t in (("ours", ti), ("Exudyn", te))
             ],
         ),
         "",
@@ -357,14 +300,13 @@ def write_summary(validations: list[BennettValidation], directory: str | Path) -
     for v in validations:
         m, variant = v.metrics, v.settings.variant
         dev = m["coupler_deviation_from_ideal_m"]
-        paper = PAPER_MAX_COUPLER_DEVIATION_MM.get(variant)
         worst = max(t["relative_to_elastic_deviation"] for t in m["trajectories"].values())
         rows.append(
             [
                 variant,
                 f"{1e3 * dev['inhouse']:.4f}",
                 f"{1e3 * dev['exudyn']:.4f}",
-                ("< " if variant == "rigid" else "") + f"{paper}",
+                paper_max_coupler_deviation(variant),
                 f"{1e3 * m['max_abs_driving_torque_Nm']['production']:.2f}",
                 f"{1e3 * m['max_abs_driving_torque_Nm']['exudyn']:.2f}",
                 format_sci(worst),

@@ -87,26 +87,12 @@ class FlexibleBody:
         return 7 + self.moments.n_modes
 
     def residual(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, gravity: ArrayLike) -> NDArray[np.float64]:
-        return body_residual(
-            np.asarray(q, float),
-            np.asarray(qd, float),
-            np.asarray(qdd, float),
-            np.asarray(gravity, float),
-            self.moments.mass,
-            *self._packed,
-            self.exact_gravity,
-        )
+        return body_residual(*_floats(q, qd, qdd, gravity), self.moments.mass, *self._packed, self.exact_gravity)
 
     def jacobians(self, q, qd, qdd, gravity) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Exact ``(df/dq, df/dqd)``, each ``(7+m, 7+m)``."""
         return body_jacobians(
-            np.asarray(q, float),
-            np.asarray(qd, float),
-            np.asarray(qdd, float),
-            np.asarray(gravity, float),
-            self.moments.mass,
-            *self._packed_complex,
-            self.exact_gravity,
+            *_floats(q, qd, qdd, gravity), self.moments.mass, *self._packed_complex, self.exact_gravity
         )
 
     def mass_matrix(self, q: ArrayLike) -> NDArray[np.float64]:
@@ -140,6 +126,11 @@ class FlexibleBody:
         mm = self.moments
         s = mm.s0 + mm.s1 @ q[7:]
         return -float(np.asarray(gravity, float) @ (mm.mass * q[:3] + rotation_matrix(q[3:7]) @ s))
+
+
+def _floats(*arrays: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+    """Each argument as a float64 array, the dtype the body kernels are compiled for."""
+    return tuple(np.asarray(a, float) for a in arrays)
 
 
 def node_positions(q: ArrayLike, nodes: ArrayLike, basis: ArrayLike, indices: ArrayLike) -> NDArray[np.float64]:

@@ -1,6 +1,6 @@
 """Parametric link built with gmsh's OpenCASCADE kernel from its two joint axes (any skew pair).
 
-A link carries two joint axes (lines in space). Its geometry is
+A link carries two joint axes (lines in space, :mod:`ffrf.geometry.joint_axes`). Its geometry is
 
 * a cylindrical housing coaxial with each axis, with a through bearing bore
   (default radius 9.5 mm: the outer radius of two 626 bearings, 6 mm wide each);
@@ -30,87 +30,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ffrf.errors import GeometryError
+from ffrf.geometry.joint_axes import Axis, common_normal_feet
 from ffrf.mesh.tet_mesh import MAX_LINK_EXTENT_M, TetMesh
 
-__all__ = [
-    "Axis",
-    "LinkDesign",
-    "LinkGeometry",
-    "PAPER_AXES",
-    "paper_link_axes",
-    "bennett_axes",
-    "common_normal_feet",
-    "build_link",
-    "mesh_link",
-]
+__all__ = ["LinkDesign", "LinkGeometry", "build_link", "mesh_link"]
 
 logger = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class Axis:
-    """A line in space: a point on it and a unit direction (metres, world frame)."""
-
-    point: NDArray[np.float64]
-    direction: NDArray[np.float64]
-
-    def __post_init__(self) -> None:
-        p = np.asarray(self.point, dtype=float).reshape(3)
-        d = np.asarray(self.direction, dtype=float).reshape(3)
-        n = np.linalg.norm(d)
-        if not n > 0.0:
-            raise GeometryError(f"Axis through {p.tolist()}: direction {d.tolist()} has zero length")
-        object.__setattr__(self, "point", p)
-        object.__setattr__(self, "direction", d / n)
-
-    @classmethod
-    def of(cls, obj) -> "Axis":
-        """Accept an :class:`Axis`, any object with ``.point`` and ``.direction``, or a (point, direction) pair."""
-        if isinstance(obj, Axis):
-            return obj
-        if hasattr(obj, "point") and hasattr(obj, "direction"):
-            return cls(obj.point, obj.direction)
-        point, direction = obj
-        return cls(point, direction)
-
-
-#: The paper's four joint axes h0..h3 in the folded home configuration (metres).
-PAPER_AXES: tuple[Axis, ...] = (
-    Axis((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-    Axis((-0.11, 0.0, 0.0), (0.0, 0.5, -np.sqrt(3.0) / 2.0)),
-    Axis((0.11, 0.0, 0.0), (0.0, np.sqrt(3.0) / 2.0, 0.5)),
-    Axis((0.22, 0.0, 0.0), (0.0, -1.0, 0.0)),
-)
-
-
-def bennett_axes(alpha3_deg: float = 90.0) -> tuple[Axis, Axis, Axis, Axis]:
-    """Joint axes h0..h3 of the paper's linkage (:data:`kinematics.PAPER_A`, ``PAPER_ALPHA``)
-    with the base-link twist ``alpha3_deg``.
-
-    The base link (link 0) carries (h3, h0). With alpha_3 != 90 deg the loop does not
-    close, so its h3 is where the *base link* puts it: :func:`kinematics.open_loop_axes`
-    chains h0..h3 through links 0..2 (nominal) and returns that closing axis, which
-    replaces h3 here (the base's bore axis; link 3 keeps the nominal h3).
-    """
-    from kinematics import PAPER_A, PAPER_ALPHA, open_loop_axes
-
-    if not np.isfinite(alpha3_deg):
-        raise GeometryError(
-            f"base-link twist alpha3_deg={alpha3_deg!r} is not a finite angle; give it in degrees, "
-            "e.g. 90 (paper: 90, 91, 92)"
-        )
-    alpha = np.array(PAPER_ALPHA)
-    alpha[3] = np.radians(alpha3_deg)
-    axes, closing_axis = open_loop_axes(PAPER_A, alpha)
-    return tuple(Axis.of(a) for a in axes[:3]) + (Axis.of(closing_axis),)
-
-
-def paper_link_axes(link: int, axes=PAPER_AXES) -> tuple[Axis, Axis, tuple[str, str]]:
-    """Axes and interface names of link ``link`` (0 = base): it carries (h_{i-1}, h_i)."""
-    if link not in (0, 1, 2, 3):
-        raise GeometryError(f"link index {link!r} must be 0, 1, 2 or 3 (0 = base)")
-    first, second = (link - 1) % 4, link
-    return Axis.of(axes[first]), Axis.of(axes[second]), (f"joint{first}", f"joint{second}")
 
 
 @dataclass(frozen=True)
@@ -167,27 +92,6 @@ class LinkGeometry:
     def length(self) -> float:
         """Length of the common normal between the two axes (the link's a_i)."""
         return float(np.linalg.norm(self.joint_points[1] - self.joint_points[0]))
-
-
-def common_normal_feet(axis_a: Axis, axis_b: Axis) -> NDArray[np.float64]:
-    """Feet of the common normal of two skew lines, shape (2, 3).
-
-    Closest points p_a + t_a d_a, p_b + t_b d_b from the stationarity of
-    |(p_a + t_a d_a) - (p_b + t_b d_b)|^2 (e.g. Eberly, 3D Game Engine Design, sec. 14.1).
-    """
-    w0 = axis_a.point - axis_b.point
-    b = float(axis_a.direction @ axis_b.direction)
-    d = float(axis_a.direction @ w0)
-    e = float(axis_b.direction @ w0)
-    denom = 1.0 - b * b
-    if denom < 1e-10:
-        raise GeometryError(
-            f"link axes through {axis_a.point.tolist()} and {axis_b.point.tolist()} are parallel; "
-            "their common normal is not unique, a Bennett link needs skew axes"
-        )
-    t_a = (b * e - d) / denom
-    t_b = (e - b * d) / denom
-    return np.stack([axis_a.point + t_a * axis_a.direction, axis_b.point + t_b * axis_b.direction])
 
 
 def _points_on_axes(points: ArrayLike, axes: tuple[Axis, Axis], names: tuple[str, str]) -> NDArray[np.float64]:
@@ -251,7 +155,7 @@ def _classify_surfaces(gmsh, geometry_axes, centers, design: LinkDesign, mount) 
     found: dict[int | str, list[int]] = {0: [], 1: [], "mount": []}
     for _, tag in gmsh.model.getEntities(2):
         pts = _surface_samples(gmsh, tag)
-        for i, (axis, center) in enumerate(zip(geometry_axes, centers)):
+        for i, (axis, center) in enumerate(zip(geometry_axes, centers, strict=True)):
             rel = pts - center
             t = rel @ axis.direction
             r = np.linalg.norm(rel - np.outer(t, axis.direction), axis=1)
@@ -275,7 +179,7 @@ def _trim_to_housing_slabs(occ, parts: list[int], axes, centers, design: LinkDes
     cap = 2.0 * (design.arm_width + design.arm_thickness + design.mount_height)
     clearance_radius = design.housing_outer_radius + design.axial_gap
     tools = []
-    for axis, center in zip(axes, centers):
+    for axis, center in zip(axes, centers, strict=True):
         for sign in (-1.0, 1.0):
             base = center + sign * 0.5 * design.housing_length * axis.direction
             tools.append((3, occ.addCylinder(*base, *(sign * cap * axis.direction), clearance_radius)))
@@ -325,7 +229,7 @@ def build_link(
         )
     occ = gmsh.model.occ
     housings = []
-    for axis, center in zip(axes, centers):
+    for axis, center in zip(axes, centers, strict=True):
         base = center - 0.5 * design.housing_length * axis.direction
         housings.append(occ.addCylinder(*base, *(design.housing_length * axis.direction), design.housing_outer_radius))
     frame = _frame_along(centers[0], centers[1], axes[0].direction)
@@ -350,7 +254,7 @@ def build_link(
     parts = _trim_to_housing_slabs(occ, parts, axes, centers, design)
     solid, _ = occ.fuse([(3, housings[0])], [(3, housings[1])] + parts)
     bores = []
-    for axis, center in zip(axes, centers):
+    for axis, center in zip(axes, centers, strict=True):
         length = _bore_cut_length(design)
         base = center - 0.5 * length * axis.direction
         bores.append((3, occ.addCylinder(*base, *(length * axis.direction), design.bore_radius)))

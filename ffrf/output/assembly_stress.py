@@ -1,6 +1,6 @@
 r"""Stress state of an assembled linkage: von Mises stress, strain energy and joint reactions per link.
 
-After the static assembly (:func:`ffrf.scenes.builder.assemble`: gravity, then the
+After the static assembly (:func:`ffrf.scenes.assembly.assemble`: gravity, then the
 misalignment of the variants ``pla1``/``pla2`` closed elastically by continuation) every link
 carries the elastic displacement :math:`u = \Psi\zeta` in its body frame (Eq. (HCB-3),
 ``docs/formulation.md``). Per link this module reports

@@ -33,8 +33,8 @@ from numpy.typing import NDArray
 from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
 from ffrf.output.sensors import scene_sensors
 from ffrf.output.tables import write_results as write_tables
+from ffrf.scenes.assembly import assemble
 from ffrf.scenes.bennett_scene import BennettScene
-from ffrf.scenes.builder import assemble
 from ffrf.solvers.simulate import MODES, simulate
 from ffrf.system.joints import MarkerJoint
 

@@ -13,7 +13,7 @@ are built there); the simulation starts from the ideal configuration at ``start_
 of the driver, where link ``k`` is displaced by the motion polynomial's pose of link ``k``.
 Misaligned variants (base twist 91 or 92 deg) cannot be assembled rigidly: the base's
 joint-3 frame is turned from the nominal axis to its own bore axis in small steps of a
-static solution (:func:`ffrf.scenes.builder.assemble`), and the assembly stresses remain in the links.
+static solution (:func:`ffrf.scenes.assembly.assemble`), and the assembly stresses remain in the links.
 
 **Joint points off the bore centre.** The two housings at a joint are stacked along its axis,
 so each joint point lies ``o`` = 8.5 mm from its bore's weighted centre. ``joint_offsets``
@@ -37,14 +37,23 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.fe.materials import PLA, RIGID, Material
-from ffrf.geometry.link_geometry import bennett_axes, common_normal_feet, paper_link_axes
-from ffrf.scenes.builder import Scene, SceneBody, assemble, build_scene
+from ffrf.geometry.joint_axes import bennett_axes, common_normal_feet, paper_link_axes
+from ffrf.scenes.assembly import assemble
+from ffrf.scenes.builder import Scene, SceneBody, build_scene
 from ffrf.system.drives import CosineRamp, rpm
 from ffrf.system.markers import JOINT_OFFSETS
 from ffrf.system.multibody import MultibodySystem
 from kinematics import PAPER_A, PAPER_ALPHA, BennettLinkage
 
-__all__ = ["VARIANTS", "BennettScene", "bennett_description", "build_bennett", "assemble"]
+__all__ = [
+    "VARIANTS",
+    "PAPER_MAX_COUPLER_DEVIATION_MM",
+    "paper_max_coupler_deviation",
+    "BennettScene",
+    "bennett_description",
+    "build_bennett",
+    "assemble",
+]
 
 #: The paper's four simulation variants: material and base-link twist alpha_3 (deg).
 VARIANTS: dict[str, tuple[Material, float]] = {
@@ -53,6 +62,20 @@ VARIANTS: dict[str, tuple[Material, float]] = {
     "pla1": (PLA, 91.0),
     "pla2": (PLA, 92.0),
 }
+#: The paper's maximum coupler deviations from the ideal path per variant (mm; Sect. "Results",
+#: simulated, its STL links at 2 mm with 32 modes). The rigid one is a bound: "< 0.001".
+PAPER_MAX_COUPLER_DEVIATION_MM: dict[str, float] = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}
+
+
+def paper_max_coupler_deviation(variant: str) -> str:
+    """The paper's maximum coupler deviation of ``variant`` as its table states it, in mm
+    (``"< 0.001"`` for the rigid bound, ``"0.211"`` ...); ``""`` for a variant the paper has not."""
+    value = PAPER_MAX_COUPLER_DEVIATION_MM.get(variant)
+    if value is None:
+        return ""
+    return f"< {value}" if variant == "rigid" else f"{value}"
+
+
 #: Where along each link's arm (fraction from its first to its second joint point) a surface node
 #: is tracked, as the paper tracks three nodes per link.
 TRACKED_FRACTIONS = (0.3, 0.5, 0.7)

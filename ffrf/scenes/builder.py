@@ -15,7 +15,7 @@ joint frames are, with :func:`~ffrf.system.joints.frame_from_axis`,
 
 .. math:: J_1 = F(z_1),\qquad J_0 = F(z_0, x_{J_1}),
 
-and such a linkage cannot be assembled rigidly. :func:`assemble` starts from the closable
+and such a linkage cannot be assembled rigidly. :func:`ffrf.scenes.assembly.assemble` starts from the closable
 configuration in which side 0 takes side 1's frame and point, then turns side 0's frame along the
 geodesic to its own and moves its point along the straight line, ``fraction`` = 0 .. 1, with one
 static equilibrium per step (4 steps per degree of the largest axis misfit); the assembly stress
@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,7 +34,7 @@ from numpy.typing import NDArray
 
 from ffrf.body.flexible_body import FlexibleBody
 from ffrf.body.modal_moments import modal_moments
-from ffrf.errors import SceneError, StaticDivergence
+from ffrf.errors import SceneError
 from ffrf.fe.fe_model import FEModel
 from ffrf.fe.interfaces import (
     InterfaceNodes,
@@ -46,19 +45,12 @@ from ffrf.fe.interfaces import (
     interface_in_cylinder,
 )
 from ffrf.fe.materials import Material
-from ffrf.geometry.link_geometry import (
-    Axis,
-    LinkGeometry,
-    bennett_axes,
-    common_normal_feet,
-    mesh_link,
-    paper_link_axes,
-)
+from ffrf.geometry.joint_axes import Axis, bennett_axes, common_normal_feet, paper_link_axes
+from ffrf.geometry.link_geometry import LinkGeometry, mesh_link
 from ffrf.mesh.tet_mesh import TetMesh, read_mesh
 from ffrf.reduction.craig_bampton import CraigBamptonBasis, craig_bampton
 from ffrf.reduction.reduced_io import reduction_fingerprint
 from ffrf.scenes.scene_schema import check_scene
-from ffrf.solvers.static_solver import StaticSolution, static_equilibrium
 from ffrf.system.drives import CosineRamp, RampedAngle, rpm
 from ffrf.system.joints import (
     GroundFrame,
@@ -72,21 +64,10 @@ from ffrf.system.joints import (
 from ffrf.system.markers import BodyMarker, attach_joint_point, rigid_interface_marker
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = [
-    "SceneBody",
-    "JointGeometry",
-    "Scene",
-    "build_scene",
-    "assemble",
-    "start_state",
-    "starts_static",
-    "STEPS_PER_DEGREE",
-]
+__all__ = ["SceneBody", "JointGeometry", "Scene", "build_scene"]
 
 log = logging.getLogger(__name__)
 
-#: Continuation steps of :func:`assemble` per degree of the largest axis misfit.
-STEPS_PER_DEGREE = 4
 #: A sensor point farther than this fraction of its body's bounding-box diagonal from every node is a mistake.
 SENSOR_REACH = 0.1
 
@@ -372,48 +353,3 @@ def _sensor_node(spec: dict, body: SceneBody) -> int:
             "metres, where the body's mesh is"
         )
     return int(candidates[np.argmin(distances)])
-
-
-def assemble(
-    scene: Scene,
-    steps: int | None = None,
-    t: float = 0.0,
-    q0: NDArray | None = None,
-    convert: Callable[[MultibodySystem], MultibodySystem] | None = None,
-) -> StaticSolution:
-    """Static assembly at time ``t`` from ``q0`` (default the bodies' poses): gravity in two load
-    steps on the closable system, then the misfit in ``steps`` increments (default
-    :data:`STEPS_PER_DEGREE` per degree of the largest axis misfit, at least 1). ``convert`` maps
-    each intermediate system (e.g. to other joint conventions)."""
-    if steps is None:
-        steps = max(1, math.ceil(STEPS_PER_DEGREE * scene.misfit_degrees - 1e-6))
-    convert = (lambda system: system) if convert is None else convert
-    q = scene.q_initial if q0 is None else q0
-    k = 0
-    try:
-        solution = static_equilibrium(convert(scene.with_misfit(0.0)), q, t=t, load_steps=2)
-        for k in range(1, steps + 1):
-            solution = static_equilibrium(convert(scene.with_misfit(k / steps)), solution.q, t=t)
-    except StaticDivergence as error:
-        # Name the scene and the continuation step: the solver's own message knows neither.
-        gap = float(np.abs(scene.system.constraint_values(q, t)).max())
-        raise StaticDivergence(
-            f"static assembly of scene {scene.name!r} ({scene.misfit_degrees:.3g} deg of axis misfit) failed at "
-            f"continuation step {k}/{steps} (gravity and a joint gap of {gap:.3g} at the start): {error}. The bodies "
-            "must absorb the misfit elastically from the start pose; check the joints' axes (axis0, axis1), or "
-            "for a large misfit assemble in more steps (assemble(scene, steps=...))"
-        ) from error
-    return solution
-
-
-def starts_static(scene: Scene) -> bool:
-    """Whether a run starts from :func:`assemble`: ``static_start`` if given, else for quasi-static
-    runs and whenever a joint has a misfit."""
-    s = scene.settings
-    return bool(s.get("static_start", s.get("mode", "dynamic") != "dynamic" or scene.misfit_degrees > 0.0))
-
-
-def start_state(scene: Scene) -> NDArray[np.float64]:
-    """The state a run starts from: the bodies' poses, assembled statically (:func:`assemble`) when
-    :func:`starts_static`."""
-    return assemble(scene).q if starts_static(scene) else scene.q_initial.copy()

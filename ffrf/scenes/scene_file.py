@@ -86,7 +86,8 @@ from ffrf.errors import SceneError
 from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
 from ffrf.output.sensors import node_sensors, scene_sensors
 from ffrf.output.tables import write_results
-from ffrf.scenes.builder import Scene, assemble, build_scene, start_state, starts_static
+from ffrf.scenes.assembly import assemble, start_state, starts_static
+from ffrf.scenes.builder import Scene, build_scene
 from ffrf.solvers.simulate import Run, simulate
 
 __all__ = ["SceneError", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]

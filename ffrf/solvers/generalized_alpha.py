@@ -23,6 +23,11 @@ the constraint rows divided by :math:`\beta'` so that it stays well conditioned 
 steps and stiff bodies (Bottasso, Dopico and Trainelli 2008). :math:`K_t, D_t` are the exact
 derivatives of :math:`M\ddot q - Q` (including :math:`\partial(M\ddot q)/\partial q`) and
 :math:`H = \partial(C_q^T\lambda)/\partial q`, so full Newton converges quadratically.
+
+One module of about 400 lines on purpose: the parameters, the step equations above and their
+Newton iteration (with its factor reuse and singularity handling) are one algorithm read next to
+these equations; what integrators share already lives in :mod:`ffrf.solvers.common`,
+:mod:`ffrf.solvers.newton_kernels` and :mod:`ffrf.solvers.step_control`.
 """
 
 from __future__ import annotations

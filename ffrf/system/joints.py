@@ -22,7 +22,7 @@ all six with :math:`\varphi(t)`. The constraint force on body ``k`` is :math:`-C
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -223,18 +223,7 @@ def fixed_joint(
     marker0, marker1, rotation0=None, rotation1=None, offset0=None, offset1=None, name: str = "fixed"
 ) -> MarkerJoint:
     """All six relative motions locked."""
-    joint = revolute_joint(marker0, marker1, rotation0, rotation1, offset0, offset1, name)
-    return MarkerJoint(
-        joint.bodies,
-        name,
-        joint.marker0,
-        joint.marker1,
-        joint.rotation0,
-        joint.rotation1,
-        joint.offset0,
-        joint.offset1,
-        (True,) * 6,
-    )
+    return replace(revolute_joint(marker0, marker1, rotation0, rotation1, offset0, offset1, name), locked=(True,) * 6)
 
 
 def driven_revolute_joint(
@@ -249,15 +238,4 @@ def driven_revolute_joint(
 ) -> MarkerJoint:
     """Revolute whose relative rotation about z is prescribed, :math:`\\varphi(t)` (rad), Eq. (J3)."""
     joint = revolute_joint(marker0, marker1, rotation0, rotation1, offset0, offset1, name)
-    return MarkerJoint(
-        joint.bodies,
-        name,
-        joint.marker0,
-        joint.marker1,
-        joint.rotation0,
-        joint.rotation1,
-        joint.offset0,
-        joint.offset1,
-        (True,) * 6,
-        angle,
-    )
+    return replace(joint, locked=(True,) * 6, angle=angle)

@@ -66,9 +66,10 @@ class PackedSystem:
             self._last_angles[:] = [t, values]
         return self._last_angles[1]
 
-    def residual(self, q, qd, qdd, lam, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Eq. (G1): ``M qdd - Q + C_q^T lambda`` and ``g(q, t)``."""
-        return system_residual(
+    def _kernel_arguments(self, q, qd, qdd, lam, t: float) -> tuple:
+        """The arguments every system kernel starts with: packed bodies and joints, the state as
+        contiguous arrays, gravity and the prescribed angles at ``t``."""
+        return (
             self.bodies,
             self.joints,
             contiguous(q),
@@ -79,22 +80,16 @@ class PackedSystem:
             self.phi(t),
         )
 
+    def residual(self, q, qd, qdd, lam, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Eq. (G1): ``M qdd - Q + C_q^T lambda`` and ``g(q, t)``."""
+        return system_residual(*self._kernel_arguments(q, qd, qdd, lam, t))
+
     def iteration_matrix(
         self, q, qd, qdd, lam, t: float, mass_factor: float, beta_p: float, gamma_p: float
     ) -> NDArray[np.float64]:
         """Eq. (FP6): ``[[c M + beta' (K_t + H) + gamma' D_t, C_q^T], [C_q, 0]]``."""
         return system_iteration_matrix(
-            self.bodies,
-            self.joints,
-            contiguous(q),
-            contiguous(qd),
-            contiguous(qdd),
-            contiguous(lam),
-            self.gravity,
-            self.phi(t),
-            float(mass_factor),
-            float(beta_p),
-            float(gamma_p),
+            *self._kernel_arguments(q, qd, qdd, lam, t), float(mass_factor), float(beta_p), float(gamma_p)
         )
 
     def body_residuals(self, q, qd, qdd) -> NDArray[np.float64]:
@@ -108,18 +103,8 @@ class PackedSystem:
         return system_mass_matrix(self.bodies, contiguous(q))
 
     def constraint_values(self, q, t: float) -> NDArray[np.float64]:
-        n = self.n_coordinates
-        zeros = np.zeros(n)
-        return system_residual(
-            self.bodies,
-            self.joints,
-            contiguous(q),
-            zeros,
-            zeros,
-            np.zeros(self.n_constraints),
-            self.gravity,
-            self.phi(t),
-        )[1]
+        zeros = np.zeros(self.n_coordinates)
+        return self.residual(q, zeros, zeros, np.zeros(self.n_constraints), t)[1]
 
     def constraint_jacobian(self, q, t: float) -> NDArray[np.float64]:
         return system_jacobian(self.bodies, self.joints, contiguous(q), self.phi(t))

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ffrf.scenes.bennett_run import run_bennett, write_results
-from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.scenes.bennett_scene import PAPER_MAX_COUPLER_DEVIATION_MM, build_bennett, paper_max_coupler_deviation
 
 COARSE = dict(h=6e-3, order=1, n_modes=2)
 
@@ -92,3 +92,16 @@ def test_paraview_series(runs, tmp_path):
     body = frame.point_data["body"]
     assert np.abs(frame.point_data["displacement"][body == 0]).max() < 1e-3
     assert np.abs(frame.point_data["displacement"][body == 2]).max() > 1e-2
+
+
+def test_paper_deviation_table():
+    """The paper's maximum coupler deviations (Sect. "Results"), one per variant, as its table states
+    them: the rigid one is a bound."""
+    assert PAPER_MAX_COUPLER_DEVIATION_MM == {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}
+    assert [paper_max_coupler_deviation(v) for v in ("rigid", "pla", "pla1", "pla2")] == [
+        "< 0.001",
+        "0.211",
+        "1.215",
+        "2.305",
+    ]
+    assert paper_max_coupler_deviation("scene.toml") == ""

@@ -72,16 +72,16 @@ def test_near_rigid_energy_balance_closes_with_small_steps(ctx, rigid_scene):
 def test_assembly_failure_names_scene_step_and_remedy(monkeypatch):
     """A failed static assembly says which scene (and its misfit: alpha_3 - 90 deg), which
     continuation step, the solver's own diagnosis, and what to do."""
-    from ffrf.scenes import builder
+    from ffrf.scenes import assembly
 
     scene = hard_cases.make_scene(PLA, 92.0, **COARSE)
 
     def fail(*args, **kwargs):
         raise StaticDivergence("static Newton did not converge in 25 iterations: last increment 1e-3")
 
-    monkeypatch.setattr(builder, "static_equilibrium", fail)
+    monkeypatch.setattr(assembly, "static_equilibrium", fail)
     with pytest.raises(StaticDivergence) as info:
-        builder.assemble(scene)
+        assembly.assemble(scene)
     message = str(info.value)
     assert f"scene {scene.name!r} (2 deg of axis misfit)" in message
     assert "continuation step 0/8" in message

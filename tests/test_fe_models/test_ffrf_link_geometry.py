@@ -18,7 +18,7 @@ from ffrf import (
     paper_link_axes,
     quality_summary,
 )
-from ffrf.geometry.link_geometry import common_normal_feet
+from ffrf.geometry.joint_axes import common_normal_feet
 
 H = 0.006  # coarse on purpose: tests check geometry, not accuracy
 DESIGN = LinkDesign()

@@ -11,8 +11,9 @@ import numpy as np
 from scene_fixtures import PENDULUM, write_bar
 from scipy.spatial.transform import Rotation
 
+from ffrf.scenes.assembly import assemble
 from ffrf.scenes.bennett_scene import VARIANTS, bennett_description
-from ffrf.scenes.builder import assemble, build_scene
+from ffrf.scenes.builder import build_scene
 from ffrf.scenes.scene_file import load_scene, sensor_arrays, simulate_scene
 from ffrf.scenes.scene_schema import check_scene
 from ffrf.system.joints import frame_from_axis
@@ -171,7 +172,7 @@ def _axes_link(first, second, names, joint_points=None) -> dict:
 
 
 def test_a_parametric_link_from_two_axes_is_the_papers_link_from_the_same_axes():
-    from ffrf.geometry.link_geometry import bennett_axes, paper_link_axes
+    from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
 
     first, second, names = paper_link_axes(1, bennett_axes(90.0))  # as the builder makes link = 1
     by_axes = build_scene({"bodies": [_axes_link(first, second, names)]}).bodies[0]
@@ -185,7 +186,8 @@ def test_a_parametric_link_from_two_axes_is_the_papers_link_from_the_same_axes()
 def test_a_cranked_link_puts_its_housings_at_the_given_joint_points():
     """DH offsets d != 0: the joint point on each axis is given, 15 mm from the common normal's foot;
     each bore (interface) centre lies on its axis, the housing offset s from its joint point."""
-    from ffrf.geometry.link_geometry import LinkDesign, common_normal_feet, paper_link_axes
+    from ffrf.geometry.joint_axes import common_normal_feet, paper_link_axes
+    from ffrf.geometry.link_geometry import LinkDesign
 
     first, second, names = paper_link_axes(2)
     feet = common_normal_feet(first, second)
@@ -220,7 +222,7 @@ def test_a_joint_point_sensor_of_a_hinge_stays_on_the_ground(tmp_path):
 def test_a_bore_found_from_its_axis_is_the_meshed_bore():
     """``axis = {point, direction}`` finds the same bore as the mesher's named group: same nodes, same
     area weights (the selection is independent: radii and extents of the boundary vertices)."""
-    from ffrf.geometry.link_geometry import bennett_axes, paper_link_axes
+    from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
 
     first, second, names = paper_link_axes(1, bennett_axes(90.0))
     by_group = _axes_link(first, second, names)

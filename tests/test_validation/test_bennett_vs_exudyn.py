@@ -5,7 +5,7 @@ Coarse PLA scene (``build_bennett("pla", h=6e-3, order=1, n_modes=2, exact_gravi
 angle) so that gravity excites the links while the cosine ramp begins to turn the drive;
 generalized-alpha, h = 1e-3 s, rho_inf = 0.9, 0.2 s; and the static equilibrium at t = 0.
 
-Two modelling conventions matter (``validation.exudyn_bennett``):
+Two modelling conventions matter (``validation.exudyn_conventions``):
 
 1. where a joint point's offset from its bore centre lives: Exudyn applies the ``localHT``
    translation of ``MarkerSuperElementRigid`` in the body frame, as our scenes do by default
@@ -27,15 +27,9 @@ from functools import lru_cache
 import numpy as np
 
 from ffrf.scenes.bennett_scene import assemble, build_bennett
-from validation.exudyn_bennett import (
-    compare,
-    exudyn_convention_system,
-    probe_marker_offset,
-    run_exudyn_bennett,
-    run_ffrf_bennett,
-    static_exudyn_bennett,
-    static_ffrf_bennett,
-)
+from validation.bennett_trajectory import compare, run_ffrf_bennett, static_ffrf_bennett
+from validation.exudyn_bennett import run_exudyn_bennett, static_exudyn_bennett
+from validation.exudyn_conventions import exudyn_convention_system, probe_marker_offset
 
 STEP, T_END, RHO_INF = 1e-3, 0.2, 0.9
 #: Issue 7 targets: driving torque (relative) and coupler / tracked nodes (relative to the elastic motion).

@@ -13,16 +13,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
-from validation.exudyn_ffrf import (
-    ReducedBody,
-    Scene,
-    TrajectoryResult,
-    bar_body,
-    free_body_scene,
-    pendulum_scene,
-    run_exudyn,
-    run_ffrf,
-)
+from validation.exudyn_ffrf import TrajectoryResult, run_exudyn, run_ffrf
+from validation.reduced_body import ReducedBody, bar_body
+from validation.single_body_scenes import Scene, free_body_scene, pendulum_scene
 
 # Agreement of the two solvers, about 100x the largest difference measured on 2026-11-24 (AMD EPYC):
 #: tracked node and frame positions (m); measured 2.8e-12 m on the 0.2 m bar.

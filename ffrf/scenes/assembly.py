@@ -1,0 +1,71 @@
+r"""The static assembly of a scene and the state its run starts from.
+
+:func:`assemble` closes the joints of a built scene (:mod:`ffrf.scenes.builder`) by
+continuation: gravity in two load steps on the closable system (every joint's side 0 takes side
+1's frame and point), then each misfit joint's side 0 turned and moved to its own frame and point
+in ``steps`` increments (``Scene.with_misfit(fraction)``), one static equilibrium each; the
+assembly stress stays in the bodies.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ffrf.errors import StaticDivergence
+from ffrf.scenes.builder import Scene
+from ffrf.solvers.static_solver import StaticSolution, static_equilibrium
+from ffrf.system.multibody import MultibodySystem
+
+__all__ = ["assemble", "start_state", "starts_static", "STEPS_PER_DEGREE"]
+
+#: Continuation steps of :func:`assemble` per degree of the largest axis misfit.
+STEPS_PER_DEGREE = 4
+
+
+def assemble(
+    scene: Scene,
+    steps: int | None = None,
+    t: float = 0.0,
+    q0: NDArray | None = None,
+    convert: Callable[[MultibodySystem], MultibodySystem] | None = None,
+) -> StaticSolution:
+    """Static assembly at time ``t`` from ``q0`` (default the bodies' poses): gravity in two load
+    steps on the closable system, then the misfit in ``steps`` increments (default
+    :data:`STEPS_PER_DEGREE` per degree of the largest axis misfit, at least 1). ``convert`` maps
+    each intermediate system (e.g. to other joint conventions)."""
+    if steps is None:
+        steps = max(1, math.ceil(STEPS_PER_DEGREE * scene.misfit_degrees - 1e-6))
+    convert = (lambda system: system) if convert is None else convert
+    q = scene.q_initial if q0 is None else q0
+    k = 0
+    try:
+        solution = static_equilibrium(convert(scene.with_misfit(0.0)), q, t=t, load_steps=2)
+        for k in range(1, steps + 1):
+            solution = static_equilibrium(convert(scene.with_misfit(k / steps)), solution.q, t=t)
+    except StaticDivergence as error:
+        # Name the scene and the continuation step: the solver's own message knows neither.
+        gap = float(np.abs(scene.system.constraint_values(q, t)).max())
+        raise StaticDivergence(
+            f"static assembly of scene {scene.name!r} ({scene.misfit_degrees:.3g} deg of axis misfit) failed at "
+            f"continuation step {k}/{steps} (gravity and a joint gap of {gap:.3g} at the start): {error}. The bodies "
+            "must absorb the misfit elastically from the start pose; check the joints' axes (axis0, axis1), or "
+            "for a large misfit assemble in more steps (assemble(scene, steps=...))"
+        ) from error
+    return solution
+
+
+def starts_static(scene: Scene) -> bool:
+    """Whether a run starts from :func:`assemble`: ``static_start`` if given, else for quasi-static
+    runs and whenever a joint has a misfit."""
+    s = scene.settings
+    return bool(s.get("static_start", s.get("mode", "dynamic") != "dynamic" or scene.misfit_degrees > 0.0))
+
+
+def start_state(scene: Scene) -> NDArray[np.float64]:
+    """The state a run starts from: the bodies' poses, assembled statically (:func:`assemble`) when
+    :func:`starts_static`."""
+    return assemble(scene).q if starts_static(scene) else scene.q_initial.copy()

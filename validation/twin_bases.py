@@ -1,0 +1,82 @@
+"""The mode basis of each body in an Exudyn twin: Exudyn's own Craig-Bampton modes on our
+nodes, M, K, interface node sets and weights (:func:`validation.modes.exudyn_hcb`), or ours, and
+the maps between the two bases' modal coordinates (both span the same space, to 1e-13).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from .exudyn_twin import TwinBody
+
+__all__ = ["TwinBasis", "twin_bases", "to_twin_layout"]
+
+
+@dataclass(frozen=True)
+class TwinBasis:
+    """The mode basis of one body in the twin: Exudyn's own HCB (``source="exudyn"``) or ours."""
+
+    matrix: NDArray[np.float64]  # (3N, m)
+    fixed_interface_frequencies_hz: NDArray[np.float64]
+    source: str
+    setup_s: float
+    to_ours: NDArray[np.float64]  # (m, m): our modal coordinates of the same displacement field
+    from_ours: NDArray[np.float64]
+
+
+def _modal_map(mass, source: NDArray, target: NDArray) -> NDArray[np.float64]:
+    """Mass-orthogonal projection of span(source) onto target's coordinates, (target^T M target)^-1 target^T M
+    source; exact when both span the same space (our and Exudyn's HCB bases do, to 1e-13)."""
+    m_target = target.T @ (mass @ target)
+    return np.linalg.solve(m_target, target.T @ (mass @ source))
+
+
+def twin_bases(bodies: list[TwinBody], source: str = "exudyn") -> list[TwinBasis]:
+    """Per body of the twin: Exudyn's own HCB modes on our nodes, M, K, interface node sets and weights
+    (:func:`validation.modes.exudyn_hcb`), or ``source="ffrf"``: our basis as is."""
+    from .modes import exudyn_hcb
+
+    if source not in ("exudyn", "ffrf"):
+        raise ValueError(f"basis source must be 'exudyn' or 'ffrf', got {source!r}")
+    out = []
+    for body in bodies:
+        ours = np.asarray(body.reduction.basis)
+        frequencies_ours = body.reduction.fixed_interface_frequencies_hz
+        if source == "ffrf":
+            eye = np.eye(ours.shape[1])
+            out.append(TwinBasis(ours, frequencies_ours, "ffrf", 0.0, eye, eye))
+            continue
+        started = time.perf_counter()
+        itfs = list(body.interfaces.values())
+        basis, frequencies = exudyn_hcb(
+            body.fe, [i.nodes for i in itfs], [i.weights for i in itfs], frequencies_ours.size
+        )
+        elapsed = time.perf_counter() - started
+        out.append(
+            TwinBasis(
+                basis,
+                np.sort(frequencies),
+                "exudyn",
+                elapsed,
+                _modal_map(body.fe.mass, basis, ours),
+                _modal_map(body.fe.mass, ours, basis),
+            )
+        )
+    return out
+
+
+def to_twin_layout(system, q: NDArray, bases: list[TwinBasis] | None) -> NDArray[np.float64]:
+    """Our coordinates with each body's modal part in the twin's basis."""
+    q = np.array(q, dtype=float)
+    if bases is None:
+        return q
+    for k, basis in enumerate(bases):
+        block = system.block(k)
+        q[..., block.start + 7 : block.stop] = q[..., block.start + 7 : block.stop] @ basis.from_ours.T
+    return q
