@@ -12,8 +12,9 @@ import pytest
 
 from ffrf.fe.materials import RIGID
 from ffrf.output.sensors import scene_sensors
+from ffrf.scenes.assembly import start_state
 from ffrf.scenes.bennett_scene import bennett_description
-from ffrf.scenes.builder import build_scene, start_state
+from ffrf.scenes.builder import build_scene
 from ffrf.scenes.linkage_scene import BoreError, drive_sign, joint_points, linkage_description
 from ffrf.solvers.static_solver import quasi_static
 from kinematics import BennettLinkage, SingleLoop
