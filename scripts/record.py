@@ -3,7 +3,7 @@
     .venv/bin/python scripts/record.py docs/results/NAME.json --json out/x.json -- CMD ARGS...
 
 runs ``CMD ARGS...`` (``python`` is this interpreter), reads the JSON the command wrote to
-``--json`` (a file, or ``DIR/results.json`` style paths as the command writes them) and writes
+each ``--json`` (one file: its content; several: ``{file stem: content}``) and writes
 ``{"meta": ..., "results": ...}`` to the result file: the command, the UTC date, the machine (CPU,
 cores, load averages at start and end), the versions of the installed packages and the git commit
 (``ffrf/output/provenance.py``). ``--select KEY`` keeps only those top-level keys of the results;
@@ -47,7 +47,9 @@ def _rows_by(value, field: str, name: str):
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("result", type=Path, help="the result file to write, docs/results/NAME.json")
-    parser.add_argument("--json", type=Path, required=True, help="the JSON file the command writes")
+    parser.add_argument(
+        "--json", type=Path, action="append", required=True, help="a JSON file the command writes (repeatable)"
+    )
     parser.add_argument("--select", nargs="*", help="keep only these top-level keys of the command's JSON")
     parser.add_argument("--rows-by", help="key lists of rows by this field (see the module's docstring)")
     parser.add_argument("--rows-name", default="rows", help="name of the keyed rows (default: rows)")
@@ -61,14 +63,17 @@ def main(argv=None) -> int:
 
     load = load_average()
     started = time.perf_counter()
-    if args.json.exists():
-        args.json.unlink()
+    for path in args.json:
+        path.unlink(missing_ok=True)
     status = subprocess.run(run, cwd=ROOT).returncode
     wall = time.perf_counter() - started
-    if not args.json.exists():
-        print(f"record: {' '.join(shown)} wrote no {args.json} (exit status {status}); nothing recorded")
+    missing = [str(path) for path in args.json if not path.exists()]
+    if missing:
+        print(f"record: {' '.join(shown)} wrote no {', '.join(missing)} (exit status {status}); nothing recorded")
         return 1
-    results = json.loads(args.json.read_text())
+    results = {path.stem: json.loads(path.read_text()) for path in args.json}
+    if len(results) == 1:
+        results = next(iter(results.values()))
     if args.select:
         results = {k: results[k] for k in args.select if k in results}
     if args.rows_by:

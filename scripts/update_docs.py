@@ -14,6 +14,9 @@ of mantissa decimals in scientific notation (``4.5e-10``).
     .venv/bin/python scripts/update_docs.py           # rewrite every figure from its file
     .venv/bin/python scripts/update_docs.py --check   # list every disagreement, exit status 1 if any
 
+Tables that are whole outputs of one measurement are generated between ``<!-- table NAME -->`` and
+``<!-- /table -->`` by the function ``NAME`` of ``TABLES`` below; the check compares those blocks too.
+
 ``tests/test_docs/test_doc_figures.py`` runs the check.
 """
 
@@ -194,17 +197,274 @@ def check_or_update(docs=DOCS, update: bool = False) -> list[str]:
     return problems
 
 
+# ------------------------------------------------------------------------------------------------
+# Generated tables
+# ------------------------------------------------------------------------------------------------
+RESULTS = ROOT / "docs" / "results"
+TABLE = re.compile(r"(<!-- table (?P<name>[a-z_]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
+
+
+def _results(name: str) -> dict | None:
+    path = RESULTS / f"{name}.json"
+    return json.loads(path.read_text())["results"] if path.is_file() else None
+
+
+def _source(*names: str) -> str:
+    return "Source: " + ", ".join(f"[`{n}.json`](results/{n}.json)" for n in names if (RESULTS / f"{n}.json").is_file())
+
+
+def _row(cells) -> str:
+    return "| " + " | ".join(str(c) for c in cells) + " |"
+
+
+def _header(*cells: str) -> list[str]:
+    return [_row(cells), _row(["---"] * len(cells))]
+
+
+def _e(x: float, digits: int = 1) -> str:
+    return format_like(f"1.{'0' * digits}e0" if digits else "1e0", x)
+
+
+VARIANTS = ("rigid", "pla", "pla1", "pla2")
+DISCRETISATIONS = (
+    ("bennett_variants_default", "**default: P2, 6 mm, 4 modes**"),
+    ("bennett_variants_p2_4mm", "**P2, 4 mm, 4 modes**"),
+    ("bennett_variants_paper", "**paper's: P1, 2 mm, 32 modes**"),
+)
+
+
+def table_bennett_variants() -> str:
+    """The four variants at each recorded discretisation (``bench/bench_bennett_variants.py``)."""
+    lines = _header(
+        "discretisation",
+        "variant",
+        "max deviation (mm)",
+        "distance to path (mm)",
+        "paper (mm)",
+        "max abs torque (N mm)",
+        "assembly max von Mises (MPa)",
+        "strain energy (mJ)",
+        "build (s)",
+        "run (s)",
+    )
+    names = []
+    for name, label in DISCRETISATIONS:
+        data = _results(name)
+        if data is None:
+            continue
+        names.append(name)
+        for k, variant in enumerate(VARIANTS):
+            r = data["variants"][variant]
+            nodes = r["nodes_per_link"]
+            first = f"{label} ({min(nodes)} to {max(nodes)} nodes per link, {r['n_coordinates']} coordinates)"
+            paper = ("< " if variant == "rigid" else "") + f"{r['paper_max_deviation_mm']:g}"
+            lines.append(
+                _row(
+                    [
+                        first if k == 0 else "",
+                        variant,
+                        f"{r['max_coupler_deviation_mm']:.4g}",
+                        f"{r['max_distance_to_path_mm']:.4g}",
+                        paper,
+                        f"{r['max_abs_driving_torque_Nmm']:.2f}",
+                        f"{r['assembly_max_von_mises_MPa']:.3g}",
+                        f"{r['assembly_strain_energy_mJ']:.3g}",
+                        f"{r['wall_time_s']['build']:.1f}",
+                        f"{r['wall_time_s']['run']:.1f}",
+                    ]
+                )
+            )
+    return "\n".join(lines + ["", _source(*names)])
+
+
+def table_assembly_stress_per_link() -> str:
+    """Largest von Mises stress per link, default discretisation (paper's in brackets)."""
+    default, paper = _results("bennett_variants_default"), _results("bennett_variants_paper")
+    lines = _header("variant", "link 0 (base)", "link 1", "link 2 (coupler)", "link 3")
+    for variant in VARIANTS:
+        ours = default["variants"][variant]["assembly_von_mises_per_link_MPa"]
+        theirs = paper["variants"][variant]["assembly_von_mises_per_link_MPa"] if paper else [None] * 4
+        cells = [f"{a:.3f}" + (f" ({b:.3f})" if b is not None else "") for a, b in zip(ours, theirs, strict=True)]
+        lines.append(_row([variant, *cells]))
+    return "\n".join(lines + ["", _source("bennett_variants_default", "bennett_variants_paper")])
+
+
+def table_validation_summary() -> str:
+    """Ours against Exudyn per variant (``python -m validation summary``)."""
+    data = _results("validation_summary")
+    lines = _header(
+        "variant",
+        "coupler deviation ours / Exudyn (mm)",
+        "paper (mm)",
+        "nodes and coupler: max diff (relative to the elastic deviation)",
+        "torque diff (quasi-static / dynamic window)",
+        "with Exudyn's Jacobian copied",
+        "targets",
+    )
+    for variant in VARIANTS:
+        m = data[variant]["metrics"]
+        dev = m["coupler_deviation_from_ideal_m"]
+        worst = max(m["trajectories"].values(), key=lambda t: t["max_abs_diff_m"])
+        copied = m["modelling_differences"]["with_exudyn_jacobian_vs_exudyn"]
+        paper = {"rigid": "< 0.001", "pla": "0.211", "pla1": "1.215", "pla2": "2.305"}[variant]
+        lines.append(
+            _row(
+                [
+                    variant,
+                    f"{1e3 * dev['inhouse']:.4g} / {1e3 * dev['exudyn']:.4g}",
+                    paper,
+                    f"{_e(worst['max_abs_diff_m'])} m ({_e(worst['relative_to_elastic_deviation'], 0)})",
+                    f"{_e(m['torque']['max_rel_diff'])} / {_e(m['dynamic']['torque']['max_rel_diff'])}",
+                    f"{_e(copied['max_abs_diff_m'])} m, {_e(copied['torque_max_rel_diff'])}",
+                    "met" if m["passed"] else "missed",
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("validation_summary")])
+
+
+def table_validation_refinement() -> str:
+    """Each solver against itself at half the step, and ours against Exudyn (``bench_validation_refinement``)."""
+    lines = _header(
+        "variant, our Jacobian", "step (s)", "ours: h vs h/2 (m)", "Exudyn: h vs h/2 (m)", "ours vs Exudyn (m)"
+    )
+    names = []
+    for name, label in (
+        ("validation_refinement_pla", "pla, exact"),
+        ("validation_refinement_pla1", "pla1, exact"),
+        ("validation_refinement_pla1_exudyn_jacobian", "pla1, Exudyn's"),
+    ):
+        data = _results(name)
+        if data is None:
+            continue
+        names.append(name)
+        for k, row in enumerate(data["rows"].values()):
+            own = [_e(row[key], 2) if key in row else "" for key in ("ours_self_m", "exudyn_self_m")]
+            lines.append(_row([label if k == 0 else "", f"{row['step']:g}", *own, _e(row["ours_vs_exudyn_m"])]))
+    return "\n".join(lines + ["", _source(*names)])
+
+
+def table_conservation() -> str:
+    """Momentum and energy of the free flexible bar over 10^4 steps (``bench/bench_conservation.py``)."""
+    lines = _header(
+        "integrator",
+        "h (s)",
+        "linear momentum",
+        "angular momentum",
+        "energy error",
+        "energy drift",
+        "Newton/step",
+        "time (s)",
+        "completed",
+    )
+    for p in _results("conservation"):
+        if "linear_momentum_rel" not in p:  # Exudyn: completion only
+            lines.append(
+                _row(
+                    [
+                        p["integrator"],
+                        f"{p['step_s']:g}",
+                        "",
+                        "",
+                        "",
+                        "",
+                        "",
+                        f"{p['wall_s']:.0f}",
+                        "yes" if p["complete"] else "no",
+                    ]
+                )
+            )
+            continue
+        lines.append(
+            _row(
+                [
+                    p["integrator"],
+                    f"{p['step_s']:g}",
+                    _e(p["linear_momentum_rel"]),
+                    _e(p["angular_momentum_rel"]),
+                    _e(p["energy_error_rel"]),
+                    _e(p["energy_drift_rel"]),
+                    f"{p['newton_per_step']:.1f}",
+                    f"{p['wall_s']:.0f}",
+                    "yes" if p["complete"] else "no",
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("conservation")])
+
+
+def table_speed_vs_error_quasi_static() -> str:
+    """Both solvers on the same quasi-static points (``bench/speed_vs_error.py --qs-points ...``)."""
+    points = _results("speed_vs_error_quasi_static")["results"]
+    lines = _header(
+        "setting",
+        "coupler error ours / Exudyn (m)",
+        "set-up ours / Exudyn (s)",
+        "run ours / Exudyn (s)",
+        "run: Exudyn / ours",
+        "peak memory ours / Exudyn (MiB)",
+    )
+    settings = {}
+    for p in points:
+        settings.setdefault((p["order"], p["h"], p["modes"]), {})[p["solver"]] = p
+    for (order, h, modes), pair in settings.items():
+        ours, theirs = pair["ffrf"], pair.get("exudyn")
+        both = [ours] + ([theirs] if theirs else [])
+        lines.append(
+            _row(
+                [
+                    f"P{order}, {1e3 * h:g} mm, {modes} modes",
+                    " / ".join(_e(q["coupler_error_m"], 2) for q in both),
+                    " / ".join(f"{q['setup_s']:.1f}" for q in both),
+                    " / ".join(f"{q['integration_s']:.2f}" for q in both),
+                    f"{theirs['integration_s'] / ours['integration_s']:.0f}" if theirs else "",
+                    " / ".join(f"{q['peak_mem_mb']:.0f}" for q in both),
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("speed_vs_error_quasi_static")])
+
+
+TABLES = {name[len("table_") :]: function for name, function in list(globals().items()) if name.startswith("table_")}
+
+
+def check_or_update_tables(docs=DOCS, update: bool = False) -> list[str]:
+    """Generated tables that differ from what their result files give; with ``update`` rewritten."""
+    problems = []
+    for doc in docs:
+        text = doc.read_text()
+        pieces, end = [], 0
+        for match in TABLE.finditer(text):
+            where = f"{doc.relative_to(ROOT)}:{text.count(chr(10), 0, match.start()) + 1}"
+            body = match["body"]
+            if match["name"] not in TABLES:
+                problems.append(f"{where}: no table {match['name']!r} (known: {', '.join(TABLES)})")
+            else:
+                try:
+                    body = TABLES[match["name"]]() + "\n"
+                except (KeyError, TypeError, AttributeError) as error:
+                    problems.append(f"{where}: table {match['name']} cannot be made: {error!r}")
+                if body != match["body"]:
+                    problems.append(f"{where}: table {match['name']} differs from its result files")
+            pieces += [text[end : match.start("body")], body]
+            end = match.end("body")
+        new = "".join(pieces) + text[end:]
+        if update and new != text:
+            doc.write_text(new)
+    return problems
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="only list disagreements; exit status 1 if any")
     args = parser.parse_args(argv)
-    problems = check_or_update(update=not args.check)
+    problems = check_or_update_tables(update=not args.check) + check_or_update(update=not args.check)
     for problem in problems:
         print(problem)
     if args.check:
         return 1 if problems else 0
-    unresolved = [p for p in problems if "should read" not in p]
-    print(f"{len(problems) - len(unresolved)} figures rewritten, {len(unresolved)} links unresolved")
+    unresolved = [p for p in problems if "should read" not in p and "differs from" not in p]
+    print(f"{len(problems) - len(unresolved)} figures or tables rewritten, {len(unresolved)} unresolved")
     return 1 if unresolved else 0
 
 
