@@ -161,7 +161,6 @@ def validate_bennett(
     """Build the variant, run every comparison of the module docstring, compute the metrics."""
     import exudyn
 
-    from ffrf.scenes.bennett_run import ideal_coupler_points
     from ffrf.scenes.bennett_scene import assemble, build_bennett
 
     from .bennett_metrics import bennett_metrics
@@ -240,6 +239,6 @@ def validate_bennett(
         dyn["exudyn"] = from_exudyn("exudyn", production, trajectory, setup_bases + trajectory.setup_time)
         progress(f"[{settings.variant}] Exudyn: {n_steps} dynamic steps in {dyn['exudyn'].solve_s:.1f} s")
 
-    ideal = ideal_coupler_points(production, qs["production"].drive_angle)
+    ideal = production.ideal_coupler_points(qs["production"].drive_angle)
     metrics = bennett_metrics(settings, production, equivalent, modes, qs, dyn, ideal, exudyn.__version__)
     return BennettValidation(settings, modes, qs, dyn, ideal, metrics)

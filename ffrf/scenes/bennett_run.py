@@ -1,15 +1,18 @@
-r"""Run the Bennett scene quasi-statically or dynamically, evaluate its sensors, write results.
+r"""Run a linkage scene (the paper's Bennett or any single loop) quasi-statically or dynamically, evaluate
+its sensors, write results.
 
-Sensors (names as in the project's issues): ``drive_angle`` (link 3 about h3 relative to
-the base, rad), ``driving_torque`` (N m, applied to link 3 about the joint axis),
-``coupler_point`` (mean of link 2's two joint points, m), ``joint_angles`` (4 relative
-rotations about the joint axes, rad), ``link{k}_node{j}`` (three tracked surface nodes of
-links 1, 2, 3, m), ``energy_kinetic``, ``energy_strain``, ``energy_potential`` (J) and
-``constraint_residual`` (largest |g|), ``joint_reactions`` (rows x 5 x 6: clamp, joints 0..3;
-force and torque on each joint's side 1 in its joint frame 0, N and N m, :mod:`ffrf.system.reactions`;
-names in the metadata's ``joint_reaction_names``). The ideal coupler point at the same drive angle
-comes from the motion polynomial (:mod:`kinematics`), giving ``coupler_deviation`` (same
-drive angle) and ``coupler_distance_to_path`` (closest point of the ideal curve).
+Sensors (names as in the project's issues): ``drive_angle`` (the driven joint's prescribed angle, rad;
+for the Bennett linkage link 3 about h3 relative to the base), ``driving_torque`` (N m, applied to the
+driven joint's side 1 about its axis), ``coupler_point`` (mean of the tool link's two joint points, m;
+link 2 of the Bennett linkage), ``joint_angles`` (the n relative rotations about the joint axes, rad),
+``link{k}_node{j}`` (three tracked surface nodes of every moving link, m), ``energy_kinetic``,
+``energy_strain``, ``energy_potential`` (J) and ``constraint_residual`` (largest |g|), ``joint_reactions``
+(rows x (n + 1) x 6: clamp, joints 0..n-1; force and torque on each joint's side 1 in its joint frame 0,
+N and N m, :mod:`ffrf.system.reactions`; names in the metadata's ``joint_reaction_names``). The ideal
+coupler point at the same drive angle comes from the scene's rigid nominal loop
+(:meth:`ffrf.scenes.linkage_scene.LinkageScene.ideal_coupler_points`; the motion polynomial for the
+paper's Bennett), giving ``coupler_deviation`` (same drive angle) and ``coupler_distance_to_path``
+(closest point of the ideal curve).
 
 An energy balance closes the books: the drive's work against the changes of kinetic,
 gravity and strain energy plus the damping dissipation (``energy_balance_residual``).
@@ -34,7 +37,7 @@ from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
 from ffrf.output.sensors import scene_sensors
 from ffrf.output.tables import write_results as write_tables
 from ffrf.scenes.assembly import assemble
-from ffrf.scenes.bennett_scene import BennettScene
+from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.solvers.simulate import MODES, simulate
 from ffrf.system.joints import MarkerJoint
 
@@ -42,7 +45,6 @@ __all__ = [
     "BennettResult",
     "run_bennett",
     "evaluate_sensors",
-    "ideal_coupler_points",
     "choose_mode",
     "inertia_number",
     "write_results",
@@ -79,7 +81,7 @@ class BennettResult:
 INERTIA_LIMIT = 0.01
 
 
-def inertia_number(scene: BennettScene) -> float:
+def inertia_number(scene: LinkageScene) -> float:
     """Inertial against gravity forces of the moving links: ``max(omega^2, alpha_ramp) L / g`` with
     the longest link ``L`` (m), the drive's rate ``omega`` and the ramp's peak angular acceleration
     ``alpha_ramp`` (a Froude number; infinite without gravity). Measured on the PLA scene
@@ -88,11 +90,11 @@ def inertia_number(scene: BennettScene) -> float:
     g = float(np.linalg.norm(scene.gravity))
     omega = float(scene.drive.omega)
     alpha = float(np.max(np.abs(scene.drive.acceleration(np.linspace(0.0, scene.drive.ramp_time, 65)))))
-    length = float(max(scene.linkage.a))
+    length = scene.link_length
     return float("inf") if g == 0.0 else max(omega * omega, alpha) * length / g
 
 
-def choose_mode(scene: BennettScene) -> tuple[str, float]:
+def choose_mode(scene: LinkageScene) -> tuple[str, float]:
     """``quasi_static`` when the drive is slow compared with the links' vibrations (the time to
     turn one radian at full speed against the longest fixed-interface period of any link, ratio
     > 100) *and* with gravity (:func:`inertia_number` below :data:`INERTIA_LIMIT`: inertia
@@ -109,15 +111,8 @@ def choose_mode(scene: BennettScene) -> tuple[str, float]:
     return ("quasi_static" if slow else "dynamic"), ratio
 
 
-def _joints(scene: BennettScene) -> list[MarkerJoint]:
+def _joints(scene: LinkageScene) -> list[MarkerJoint]:
     return [c for c in scene.system.constraints if isinstance(c, MarkerJoint) and c.name != "clamp"]
-
-
-def ideal_coupler_points(scene: BennettScene, drive_angles: NDArray) -> NDArray[np.float64]:
-    """Coupler point of the ideal linkage (motion polynomial) at the given drive angles."""
-    linkage = scene.linkage
-    t = linkage.parameter_from_joint(linkage.home_theta[3] - np.asarray(drive_angles), joint=3)
-    return linkage.coupler_pose(t).act(linkage.coupler_point())
 
 
 def _distance_to_polyline(points: NDArray, curve: NDArray) -> NDArray[np.float64]:
@@ -135,7 +130,7 @@ def _distance_to_polyline(points: NDArray, curve: NDArray) -> NDArray[np.float64
 
 
 def evaluate_sensors(
-    scene: BennettScene, time: NDArray, q: NDArray, qd: NDArray | None, multipliers: NDArray
+    scene: LinkageScene, time: NDArray, q: NDArray, qd: NDArray | None, multipliers: NDArray
 ) -> dict[str, NDArray]:
     """All sensors of the module docstring at every output row: the scene sensors of any run
     (:func:`ffrf.output.sensors.scene_sensors`) and the Bennett ones built from them."""
@@ -144,16 +139,16 @@ def evaluate_sensors(
     out["joint_angles"] = np.column_stack([out[f"{j.name}_angle"] for j in joints])
     names = [c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)]
     out["joint_reactions"] = np.stack([out[f"{name}_reaction"] for name in names], axis=1)
-    ideal = ideal_coupler_points(scene, out["drive_angle"])
+    ideal = scene.ideal_coupler_points(out["drive_angle"])
     out["coupler_ideal"] = ideal
     out["coupler_deviation"] = out["coupler_point"] - ideal
-    curve = ideal_coupler_points(scene, scene.start_angle + np.linspace(0.0, 2 * np.pi, 4000, endpoint=False))
+    curve = scene.ideal_coupler_curve()
     out["coupler_distance_to_path"] = _distance_to_polyline(out["coupler_point"], curve)
     return out
 
 
 def run_bennett(
-    scene: BennettScene,
+    scene: LinkageScene,
     mode: str = "auto",
     n_outputs: int = 241,
     step: float = 1e-3,

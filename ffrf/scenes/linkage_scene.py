@@ -1,130 +1,96 @@
-r"""Any single-loop linkage of revolute joints as a scene description, nominal or as built.
+r"""A built single-loop linkage: the scene, its drive and the ideal (rigid) motion it is compared with.
 
-:func:`linkage_description` turns a :class:`kinematics.SingleLoop` (from joint axes, a DH table or a
-Rational Linkages mechanism) into the description that the one scene builder
-(:mod:`ffrf.scenes.builder`) reads, the same format as scene files:
-
-* link ``k`` (link 0 the base, carrying :math:`h_{n-1}` and :math:`h_0`; link ``k`` carrying
-  :math:`h_{k-1}` and :math:`h_k`) is a parametric link (:func:`ffrf.geometry.link_geometry.build_link`)
-  with a housing on each of its axes, meshed in the home pose; the base has a mounting block, clamped;
-* joint ``i`` sits at one joint point on :math:`h_i`, the midpoint of the feet of the common normals
-  to :math:`h_{i-1}` and :math:`h_{i+1}` (the two links' housings are stacked about it, and a link's
-  arm is cranked where a DH offset :math:`d_i` is not zero);
-* joint ``driver`` is driven by the paper's cosine ramp to ``omega``, the others are revolute; every
-  body starts at its pose of the rigid motion at the drive's start angle (Eq. (L1), traced by
-  :func:`kinematics.trace_motion`);
-* as built: a :class:`BoreError` turns or moves one link's bore off the nominal axis; the link is
-  meshed on its own axis, the joint's side on that link takes it, and the run starts from the
-  static assembly that closes the misfit by continuation.
-
-Joint sides: side 0 is link ``i`` and side 1 link ``i + 1``, except at the closing joint ``n - 1``,
-whose side 0 is the base (as the paper's driven joint 3). A driven joint's prescribed angle is the
-rotation of side 1 against side 0 (Eq. (J3)), which is :math:`\varphi_i` of Eq. (L1), or
-:math:`-\varphi_{n-1}` at the closing joint.
+:func:`build_linkage` builds :func:`ffrf.scenes.linkage_description.linkage_description` with the one
+scene builder and keeps what a linkage run needs besides the system: the loop (:class:`kinematics.SingleLoop`,
+the nominal design), the driven joint and its drive, the start, the run's end and the tool link. The ideal
+coupler point at a drive angle is the tool link's point moved by the rigid loop's motion at that angle
+(Eq. (L1), followed by :func:`kinematics.follow_driver`); for the paper's Bennett linkage
+(:class:`ffrf.scenes.bennett_scene.BennettScene`) it comes from the motion polynomial instead, which is
+the same curve (``tests/test_kinematics/test_single_loop.py``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
-from ffrf.fe.materials import PLA, RIGID, Material
+from ffrf.fe.materials import PLA, Material
+from ffrf.scenes.builder import Scene, SceneBody, build_scene
+from ffrf.scenes.linkage_description import BoreError, drive_sign, joint_points, linkage_description, start_pose
 from ffrf.system.drives import CosineRamp, rpm
-from kinematics import Line, SingleLoop, common_normal, trace_motion
-from kinematics.quaternion import matrix_to_quaternion
+from kinematics import SingleLoop, follow_driver, trace_motion
 
-__all__ = ["LINKAGE_VARIANTS", "BoreError", "drive_sign", "joint_points", "linkage_description", "start_pose"]
-
-#: Materials of the built-in linkage variants (as the paper's Bennett variants).
-LINKAGE_VARIANTS: dict[str, Material] = {"rigid": RIGID, "pla": PLA}
-#: Fractions along each moving link, from its first to its second joint point, of its tracked surface nodes.
-TRACKED_FRACTIONS = (0.3, 0.5, 0.7)
-#: Largest driver step (rad) when tracing the rigid motion to the start pose.
-_TRACE_STEP = np.radians(2.0)
+__all__ = ["LinkageScene", "build_linkage"]
 
 
-@dataclass(frozen=True)
-class BoreError:
-    """A bore made off its axis: joint ``joint``'s axis as link ``link`` carries it, turned by ``twist``
-    (rad) about the link's common normal (which changes the link's DH twist by ``twist``) and moved by
-    ``offset`` (m) along that normal, away from the link's other axis (which changes its DH length)."""
+@dataclass(frozen=True, eq=False)
+class LinkageScene(Scene):
+    """A built linkage (as built: every bore error in place) with its nominal ``loop``, the ``driver``
+    joint, its ``drive`` (ramp from ``start_angle``, rad, the driven joint's prescribed angle), the
+    rigid loop's joint rotations ``start_phi`` at the start, the run's end ``t_end`` and the ``tool_link``
+    whose joint points' mean is the coupler point."""
 
-    joint: int
-    link: int
-    twist: float = 0.0
-    offset: float = 0.0
+    loop: SingleLoop
+    driver: int
+    drive: CosineRamp
+    start_angle: float
+    start_phi: NDArray[np.float64]
+    t_end: float
+    tool_link: int
 
+    @property
+    def links(self) -> tuple[SceneBody, ...]:
+        return self.bodies
 
-def _link_joints(k: int, n: int) -> tuple[int, int]:
-    """The joints of link ``k``: its first axis h_{k-1} and its second axis h_k."""
-    return (k - 1) % n, k
+    @property
+    def gravity(self) -> NDArray[np.float64]:
+        return self.system.gravity
 
+    @property
+    def link_length(self) -> float:
+        """Largest distance between the two joint points of one link (m)."""
+        points = joint_points(self.loop)
+        return float(max(np.linalg.norm(points[k] - points[k - 1]) for k in range(self.loop.n)))
 
-def joint_points(loop: SingleLoop) -> NDArray[np.float64]:
-    """One point on each axis, ``(n, 3)``: the midpoint of the feet of the normals to its two neighbours."""
-    n = loop.n
-    points = np.empty((n, 3))
-    for i, axis in enumerate(loop.axes):
-        previous = common_normal(loop.axes[i - 1], axis).foot1
-        following = common_normal(axis, loop.axes[(i + 1) % n]).foot0
-        points[i] = 0.5 * (previous + following)
-    return points
+    @property
+    def tracked_nodes(self) -> dict[int, NDArray[np.int64]]:
+        """Link index -> its tracked surface nodes (sensors ``link{k}_node{j}``)."""
+        nodes: dict[int, list[int]] = {}
+        for name, (body, node) in self.sensors.items():
+            if name.startswith("link") and "_node" in name:
+                nodes.setdefault(body, []).append(node)
+        return {k: np.array(v) for k, v in nodes.items()}
 
+    def drive_angle(self, t: float) -> float:
+        """The driven joint's prescribed angle (rad): start angle plus the ramp."""
+        return self.start_angle + float(self.drive(t))
 
-def _erroneous_axis(axis: Line, point: NDArray, other: Line, error: BoreError) -> tuple[Line, NDArray]:
-    """``axis`` (carried with ``other`` by one link) turned about their common normal and moved along it."""
-    normal = common_normal(other, axis)
-    direction = normal.unit
-    rotation = Rotation.from_rotvec(error.twist * direction).as_matrix()
-    foot = normal.foot1
-    moved_point = foot + rotation @ (point - foot) + error.offset * direction
-    return Line.from_point_direction(moved_point, rotation @ axis.direction), moved_point
+    def with_exact_gravity(self, exact: bool) -> LinkageScene:
+        """The same scene with the exact gravity force or Exudyn's simplified one (Eq. (F10))."""
+        bodies = tuple(replace(b, body=replace(b.body, exact_gravity=exact)) for b in self.bodies)
+        scene = replace(self, bodies=bodies, settings=dict(self.settings, exact_gravity=exact))
+        return replace(scene, system=scene.with_misfit(1.0))
 
+    def home_coupler_point(self) -> NDArray[np.float64]:
+        """The coupler point at home: the mean of the tool link's two nominal joint points."""
+        points = joint_points(self.loop)
+        return 0.5 * (points[self.tool_link - 1] + points[self.tool_link])
 
-def _link_axes(loop: SingleLoop, points: NDArray, errors: tuple[BoreError, ...]) -> list[list[tuple[Line, NDArray]]]:
-    """Per link its two (axis, joint point) pairs as built."""
-    n = loop.n
-    links = []
-    for k in range(n):
-        first, second = _link_joints(k, n)
-        sides = [(loop.axes[first], points[first]), (loop.axes[second], points[second])]
-        for error in errors:
-            if error.link != k:
-                continue
-            if error.joint not in (first, second):
-                raise ValueError(
-                    f"bore error on joint {error.joint} of link {k}: link {k} carries joints {first} and {second}"
-                )
-            side = 0 if error.joint == first else 1
-            sides[side] = _erroneous_axis(*sides[side], other=sides[1 - side][0], error=error)
-        links.append(sides)
-    return links
+    def ideal_coupler_points(self, drive_angles: ArrayLike) -> NDArray[np.float64]:
+        """The coupler point of the rigid nominal loop with the driven joint at ``drive_angles`` (in order)."""
+        phi = drive_sign(self.driver, self.loop.n) * np.asarray(drive_angles, dtype=float)
+        motion = follow_driver(self.loop, self.driver, phi, start=self.start_phi)
+        return motion.path(self.tool_link, self.home_coupler_point())
 
-
-def drive_sign(joint: int, n: int) -> float:
-    """+1 when joint ``joint``'s prescribed angle is its rotation phi of Eq. (L1), -1 at the closing joint."""
-    return -1.0 if joint == n - 1 else 1.0
-
-
-def start_pose(loop: SingleLoop, driver: int, angle: float, origin: ArrayLike | None = None) -> NDArray[np.float64]:
-    """Joint rotations of the rigid loop with the driver at ``angle`` (rad from home, Eq. (L4)), traced
-    from ``origin`` (closing joint rotations; default home, which must then be a regular pose)."""
-    phi = np.zeros(loop.n) if origin is None else loop.close(np.asarray(origin, dtype=float), driver)
-    turn = angle - phi[driver]
-    if turn == 0.0:
-        return phi
-    poses = int(np.ceil(abs(turn) / _TRACE_STEP)) + 1
-    return trace_motion(loop, driver, n_poses=poses, revolution=turn, start=phi, endpoint=True).phi[-1]
+    def ideal_coupler_curve(self, n: int = 720) -> NDArray[np.float64]:
+        """``n`` points of the ideal coupler curve over one revolution of the driver from the start."""
+        motion = trace_motion(self.loop, self.driver, n_poses=n, start=self.start_phi)
+        return motion.path(self.tool_link, self.home_coupler_point())
 
 
-def _vector(x) -> list[float]:
-    return [float(v) for v in x]
-
-
-def linkage_description(
+def build_linkage(
     loop: SingleLoop,
     material: Material = PLA,
     name: str = "linkage",
@@ -141,99 +107,52 @@ def linkage_description(
     gravity=(0.0, 0.0, -9.81),
     bore_errors: tuple[BoreError, ...] = (),
     tool_link: int | None = None,
-    mode: str = "quasi_static",
-    outputs: int = 241,
-) -> dict:
-    """The loop as a scene description (module docstring).
-
-    ``start_angle``: the driver's rotation from home (rad, its phi of Eq. (L1)) where the run starts,
-    reached along the rigid motion from ``origin`` (closing joint rotations; default home: give a regular
-    pose where home is singular, as for a loop folded flat);
-    ``tool_link``: the link whose joint points' mean is the sensor ``coupler_point`` (default ``n // 2``,
-    the coupler of a 4R); ``mode``, ``outputs``: of the run over the ramp and ``revolutions``.
-    """
-    n = loop.n
-    if not 0 <= driver < n:
-        raise ValueError(f"driver must be a joint index 0..{n - 1}, got {driver}")
-    tool = n // 2 if tool_link is None else tool_link
-    if not 0 < tool < n:
-        raise ValueError(f"tool_link must be a moving link 1..{n - 1}, got {tool}")
-    points = joint_points(loop)
-    links = _link_axes(loop, points, tuple(bore_errors))
-    phi = start_pose(loop, driver, start_angle, origin)
-    transforms = loop.link_transforms(phi)
-    bodies, sensors = [], []
-    for k, sides in enumerate(links):
-        first, second = _link_joints(k, n)
-        axes = [
-            {
-                "name": f"joint{j}",
-                "point": _vector(line.point),
-                "direction": _vector(line.direction),
-                "joint_point": _vector(p),
-            }
-            for j, (line, p) in zip((first, second), sides, strict=True)
-        ]
-        interfaces = (["mount"] if k == 0 else []) + [f"joint{first}", f"joint{second}"]
-        bodies.append(
-            {
-                "name": f"link{k}",
-                "parametric": {"axes": axes, "h": h, "mount": k == 0},
-                "material": {"E": material.E, "nu": material.nu, "rho": material.rho, "name": material.name},
-                "order": order,
-                "modes": n_modes,
-                "interfaces": [{"name": i, "group": i} for i in interfaces],
-                "pose": {
-                    "position": _vector(transforms[k][:3, 3]),
-                    "euler_parameters": _vector(matrix_to_quaternion(transforms[k][:3, :3])),
-                },
-            }
-        )
-        if k > 0:
-            a, b = sides[0][1], sides[1][1]
-            sensors += [
-                {"name": f"link{k}_node{j}", "body": f"link{k}", "point": _vector(a + f * (b - a)), "surface": True}
-                for j, f in enumerate(TRACKED_FRACTIONS)
-            ]
-    joints: list[dict] = [
-        {"name": "clamp", "type": "fixed", "body0": "ground", "body1": "link0", "interface1": "mount"}
-    ]
-    for i in range(n):
-        near, far = i, (i + 1) % n  # h_i is the near link's second axis and the far link's first
-        near_side = {"body": f"link{near}", "axis": links[near][1][0].direction, "point": links[near][1][1]}
-        far_side = {"body": f"link{far}", "axis": links[far][0][0].direction, "point": links[far][0][1]}
-        side0, side1 = (far_side, near_side) if i == n - 1 else (near_side, far_side)
-        joint = {
-            "name": f"joint{i} (drive)" if i == driver else f"joint{i}",
-            "type": "driven_revolute" if i == driver else "revolute",
-            "body0": side0["body"],
-            "interface0": f"joint{i}",
-            "axis0": _vector(side0["axis"]),
-            "point0": _vector(side0["point"]),
-            "body1": side1["body"],
-            "interface1": f"joint{i}",
-            "axis1": _vector(side1["axis"]),
-            "point1": _vector(side1["point"]),
-        }
-        if i == driver:
-            joint["drive"] = {
-                "omega": float(omega),
-                "ramp_time": float(ramp_time),
-                "start_angle": float(drive_sign(i, n) * phi[i]),
-            }
-        joints.append(joint)
-    ramp = CosineRamp(omega, ramp_time)
-    t_end = ramp.time_for_angle(float(ramp.angle(ramp_time)) + 2.0 * np.pi * revolutions)
-    sensors.append(
-        {"name": "coupler_point", "body": f"link{tool}", "joints": [f"joint{j}" for j in _link_joints(tool, n)]}
+    exact_gravity: bool = True,
+    joint_offsets: str = "body",
+) -> LinkageScene:
+    """Build the linkage of :func:`~ffrf.scenes.linkage_description.linkage_description` (same arguments)."""
+    description = linkage_description(
+        loop,
+        material=material,
+        name=name,
+        driver=driver,
+        start_angle=start_angle,
+        origin=origin,
+        h=h,
+        order=order,
+        n_modes=n_modes,
+        beta=beta,
+        omega=omega,
+        ramp_time=ramp_time,
+        revolutions=revolutions,
+        gravity=gravity,
+        bore_errors=bore_errors,
+        tool_link=tool_link,
+        exact_gravity=exact_gravity,
+        joint_offsets=joint_offsets,
     )
-    settings = {
-        "name": name,
-        "gravity": _vector(gravity),
-        "beta": float(beta),
-        "static_start": True,
-        "mode": mode,
-        "t_end": float(t_end),
-        "outputs": int(outputs),
-    }
-    return {"scene": settings, "bodies": bodies, "joints": joints, "sensors": sensors}
+    scene = build_scene(description, where=name)
+    angle = next(j.angle for j in scene.joints if j.angle is not None)  # the drive the system runs with
+    settings = dict(
+        scene.settings,
+        driver=driver,
+        h=h,
+        order=order,
+        n_modes=n_modes,
+        omega=omega,
+        ramp_time=ramp_time,
+        revolutions=revolutions,
+        material=material.name,
+        bore_errors=[vars(e) for e in bore_errors],
+    )
+    built = {f.name: getattr(scene, f.name) for f in fields(Scene)}
+    return LinkageScene(
+        **dict(built, settings=settings),
+        loop=loop,
+        driver=driver,
+        drive=angle.ramp,
+        start_angle=angle.start,
+        start_phi=start_pose(loop, driver, start_angle, origin),
+        t_end=float(description["scene"]["t_end"]),
+        tool_link=loop.n // 2 if tool_link is None else tool_link,
+    )

@@ -1,6 +1,6 @@
 """Any single-loop linkage as a scene (ffrf.scenes.linkage_scene) against independent truth.
 
-- the paper's Bennett scenes, nominal and misaligned, which the generic description must reproduce;
+- the paper's Bennett scenes, nominal and misaligned: the paper's axes and its motion polynomial's poses;
 - Rational Linkages' motion polynomial of its collision-free 6R, which a flexible model with stiff
   links must follow when nothing loads it.
 """
@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 
 from ffrf.fe.materials import RIGID
+from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
 from ffrf.output.sensors import scene_sensors
 from ffrf.scenes.assembly import start_state
-from ffrf.scenes.bennett_scene import bennett_description
+from ffrf.scenes.bennett_scene import VARIANTS, bennett_description
 from ffrf.scenes.builder import build_scene
-from ffrf.scenes.linkage_scene import BoreError, drive_sign, joint_points, linkage_description
+from ffrf.scenes.linkage_description import BoreError, drive_sign, joint_points, linkage_description
 from ffrf.solvers.static_solver import quasi_static
 from kinematics import BennettLinkage, SingleLoop
 from kinematics.dual_quaternion import DualQuaternion
@@ -33,22 +34,27 @@ def _numbers(value):
     return [float(value)]
 
 
-@pytest.mark.parametrize(("variant", "twist_deg"), [("pla", 0.0), ("pla1", 1.0), ("pla2", 2.0)])
-def test_bennett_variants_are_generic_linkages_with_a_bore_error(variant, twist_deg):
-    """The paper's misaligned base (alpha_3 = 91, 92 deg) is a bore error of joint 3 on link 0, turned about the
-    base's common normal; every axis, joint point, start pose and drive of the paper's description is reproduced."""
-    paper = bennett_description(variant)
-    errors = (BoreError(joint=3, link=0, twist=np.radians(twist_deg)),) if twist_deg else ()
-    generic = linkage_description(
-        SingleLoop(BennettLinkage.paper().axes), driver=3, start_angle=np.radians(-90.0), bore_errors=errors
-    )
-    for ours, theirs in zip(generic["joints"], paper["joints"], strict=True):
-        assert ours["name"] == theirs["name"] and ours["body0"] == theirs["body0"]
-        assert np.max(np.abs(np.subtract(_numbers(ours), _numbers(theirs))), initial=0.0) < 1e-15
-    for ours, theirs in zip(generic["bodies"], paper["bodies"], strict=True):
-        assert np.max(np.abs(np.subtract(_numbers(ours["pose"]), _numbers(theirs["pose"])))) < 1e-15
-        assert [i["name"] for i in ours["interfaces"]] == [i["name"] for i in theirs["interfaces"]]
-    assert generic["sensors"][-1] == paper["sensors"][-1]  # the coupler point
+@pytest.mark.parametrize("variant", ["pla", "pla1", "pla2"])
+def test_bennett_descriptions_carry_the_papers_axes_and_the_motion_polynomials_poses(variant):
+    """The paper's Bennett scenes are generic linkage descriptions; checked against the paper's own axes
+    h0..h3 (kinematics.bennett, with the base's h3 of alpha_3 = 91, 92 deg: ffrf.geometry.joint_axes) and the
+    link poses of the motion polynomial at the start (link 3 turned by 90 deg about h3)."""
+    _, alpha3 = VARIANTS[variant]
+    description = bennett_description(variant)
+    for k, body in enumerate(description["bodies"]):
+        first, second, names = paper_link_axes(k, bennett_axes(alpha3 if k == 0 else 90.0))
+        axes = body["parametric"]["axes"]
+        assert [a["name"] for a in axes] == list(names)
+        for given, paper in zip(axes, (first, second), strict=True):
+            assert np.max(np.abs(np.array(given["direction"]) - paper.direction)) < 1e-15
+            offset = np.array(given["point"]) - paper.point
+            assert np.linalg.norm(offset - (offset @ paper.direction) * paper.direction) < 1e-15
+    linkage = BennettLinkage.paper()
+    t = linkage.parameter_from_joint(linkage.home_theta[3] - np.radians(90.0), joint=3)
+    for body, pose in zip(description["bodies"], linkage.link_poses(t), strict=True):
+        unit = pose.normalized()
+        assert np.max(np.abs(np.array(body["pose"]["position"]) - unit.translation_vector())) < 1e-14
+        assert np.max(np.abs(np.array(body["pose"]["euler_parameters"]) - unit.primal)) < 1e-14
 
 
 def test_bore_error_changes_the_dh_parameters_it_names():
