@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -110,6 +111,11 @@ def _configure_bennett(parser: argparse.ArgumentParser) -> None:
         default="pla",
         help="paper's variant: rigid, PLA, PLA with alpha_3 = 91 or 92 deg",
     )
+    _configure_linkage_run(parser)
+
+
+def _configure_linkage_run(parser: argparse.ArgumentParser) -> None:
+    """Options of every linkage run: discretisation, mode, outputs, ParaView series, output folder."""
     # Defaults: the cheapest discretisation with the coupler path within 0.01 mm (docs/speed_vs_error.md).
     parser.add_argument("--h", type=float, default=6e-3, help="maximum element edge in metres (paper: 0.002)")
     parser.add_argument("--order", type=int, choices=(1, 2), default=2, help="tetrahedron order (paper: 1)")
@@ -163,22 +169,14 @@ def _progress_printer():
     return show
 
 
-def _run_bennett(args: argparse.Namespace) -> int:
+def _run_and_report(scene, args: argparse.Namespace, label: str, started: float, paper: str = "") -> int:
+    """Run a built linkage scene (:mod:`ffrf.scenes.bennett_run`) and write what ``bennett`` and ``linkage`` write."""
     import time
 
+    from ffrf.output.assembly_stress import write_assembly_vtu
+    from ffrf.output.bennett_figures import plot_coupler_deviation, plot_driving_torque
     from ffrf.scenes.bennett_run import choose_mode, run_bennett, write_results
-    from ffrf.scenes.bennett_scene import PAPER_MAX_COUPLER_DEVIATION_MM, build_bennett
 
-    started = time.perf_counter()
-    _output_folder(args.out)
-    print(
-        f"Building the {args.variant} Bennett scene: 4 links, h = {1e3 * args.h:g} mm, P{args.order}, "
-        f"{args.modes} fixed-interface modes per link ...",
-        file=sys.stderr,
-    )
-    scene = build_bennett(
-        args.variant, h=args.h, order=args.order, n_modes=args.modes, joint_offsets=args.joint_offsets
-    )
     mode, ratio = choose_mode(scene) if args.mode == "auto" else (args.mode, float("nan"))
     print(
         f"Running {mode.replace('_', '-')} over {scene.t_end:.1f} s of drive"
@@ -193,38 +191,123 @@ def _run_bennett(args: argparse.Namespace) -> int:
         pvd = write_time_series(
             args.out,
             [(link.fe, link.reduction.basis) for link in scene.links],
-            [scene.system.block(k) for k in range(4)],
+            [scene.system.block(k) for k in range(len(scene.links))],
             result.time,
             result.q,
             every=args.vtk_every,
-            name="bennett",
+            name=args.command,
         )
         print(f"ParaView series: {pvd}", file=sys.stderr)
-    from ffrf.output.assembly_stress import write_assembly_vtu
-    from ffrf.output.bennett_figures import plot_coupler_deviation, plot_driving_torque
-
     write_assembly_vtu(args.out / "assembly.vtu", scene, result.assembly)
-    plot_coupler_deviation({args.variant: result}, args.out / "coupler_deviation.png")
-    plot_driving_torque({args.variant: result}, args.out / "driving_torque.png")
+    plot_coupler_deviation({label: result}, args.out / "coupler_deviation.png")
+    plot_driving_torque({label: result}, args.out / "driving_torque.png")
     summary = result.summary()
-    paper = PAPER_MAX_COUPLER_DEVIATION_MM[args.variant]
     print(
-        f"{args.variant}: max coupler deviation from the ideal path "
+        f"{label}: max coupler deviation from the ideal path "
         f"{1e3 * summary['max_coupler_deviation_m']:.4f} mm at the same drive angle, "
-        f"{1e3 * summary['max_coupler_distance_to_path_m']:.4f} mm to the closest point "
-        f"(paper: below {paper} mm); max driving torque {1e3 * summary['max_abs_driving_torque_Nm']:.3f} N mm; "
+        f"{1e3 * summary['max_coupler_distance_to_path_m']:.4f} mm to the closest point"
+        + (f" (paper: below {paper} mm)" if paper else "")
+        + f"; max driving torque {1e3 * summary['max_abs_driving_torque_Nm']:.3f} N mm; "
         f"largest constraint residual {summary['max_constraint_residual']:.1e}; energy balance closed to "
         f"{summary['energy_balance_relative']:.1e} of the drive work; wall time "
         f"{time.perf_counter() - started:.1f} s -> {args.out}"
     )
-    print(
-        "assembled state (gravity"
-        + (", misalignment" if scene.settings["alpha3_deg"] != 90.0 else "")
-        + f"; {args.out / 'assembly.vtu'}):"
-    )
+    misfit = scene.misfit_degrees > 0.0
+    print("assembled state (gravity" + (", misfit" if misfit else "") + f"; {args.out / 'assembly.vtu'}):")
     for link in result.assembly.links:
         print("  " + link.line())
     return 0
+
+
+def _run_bennett(args: argparse.Namespace) -> int:
+    import time
+
+    from ffrf.scenes.bennett_scene import build_bennett, paper_max_coupler_deviation
+
+    started = time.perf_counter()
+    _output_folder(args.out)
+    print(
+        f"Building the {args.variant} Bennett scene: 4 links, h = {1e3 * args.h:g} mm, P{args.order}, "
+        f"{args.modes} fixed-interface modes per link ...",
+        file=sys.stderr,
+    )
+    scene = build_bennett(
+        args.variant, h=args.h, order=args.order, n_modes=args.modes, joint_offsets=args.joint_offsets
+    )
+    return _run_and_report(scene, args, args.variant, started, paper_max_coupler_deviation(args.variant))
+
+
+def _bore_error(text: str):
+    """``JOINT:LINK:TWIST_DEG[:OFFSET_MM]`` -> BoreError (SI)."""
+    from ffrf.scenes.linkage_description import BoreError
+
+    parts = text.split(":")
+    try:
+        if len(parts) not in (3, 4):
+            raise ValueError
+        offset = float(parts[3]) * 1e-3 if len(parts) == 4 else 0.0
+        return BoreError(int(parts[0]), int(parts[1]), math.radians(float(parts[2])), offset)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"bore error {text!r}: write JOINT:LINK:TWIST_DEG or JOINT:LINK:TWIST_DEG:OFFSET_MM, e.g. 3:0:1.0"
+        ) from None
+
+
+def _configure_linkage(parser: argparse.ArgumentParser) -> None:
+    from kinematics.rational_mechanism import MODELS
+
+    parser.add_argument("--model", choices=MODELS, required=True, help="a mechanism of rational_linkages.models")
+    parser.add_argument("--variant", choices=("rigid", "pla"), default="pla", help="link material")
+    parser.add_argument("--scale", type=float, default=0.1, help="length scale of the model (its unit -> metres)")
+    parser.add_argument("--driver", type=int, default=0, help="driven joint")
+    parser.add_argument(
+        "--bore-error",
+        type=_bore_error,
+        action="append",
+        default=[],
+        metavar="JOINT:LINK:TWIST_DEG[:OFFSET_MM]",
+        help="as built: joint JOINT's bore on link LINK turned about the link's common normal (repeatable)",
+    )
+    _configure_linkage_run(parser)
+
+
+def _run_linkage(args: argparse.Namespace) -> int:
+    import time
+
+    from ffrf.fe.materials import RIGID
+    from ffrf.scenes.linkage_scene import build_linkage
+    from kinematics.rational_mechanism import factor_joint_angles, load_model, loop_from_mechanism, tool_link
+
+    started = time.perf_counter()
+    _output_folder(args.out)
+    if not (math.isfinite(args.scale) and args.scale > 0.0):
+        raise FEInputError(f"--scale {args.scale}: give a positive length scale, e.g. 0.1 for about 100 mm links")
+    mechanism = load_model(args.model)
+    loop = loop_from_mechanism(mechanism, scale=args.scale)
+    if not 0 <= args.driver < loop.n:
+        raise FEInputError(f"--driver {args.driver}: {args.model} has joints 0 to {loop.n - 1}")
+    # Start where the motion polynomial has t = 0: home (t = infinity) may be a folded, singular pose.
+    origin = factor_joint_angles(mechanism, 0.0)
+    print(
+        f"Building {args.model} ({loop.n}R, {args.variant}, scale {args.scale:g}): h = {1e3 * args.h:g} mm, "
+        f"P{args.order}, {args.modes} fixed-interface modes per link ...",
+        file=sys.stderr,
+    )
+    scene = build_linkage(
+        loop,
+        material=RIGID if args.variant == "rigid" else PLA,
+        name=f"{args.model} {args.variant}",
+        driver=args.driver,
+        start_angle=float(origin[args.driver]),
+        origin=origin,
+        h=args.h,
+        order=args.order,
+        n_modes=args.modes,
+        bore_errors=tuple(args.bore_error),
+        tool_link=tool_link(mechanism),
+        joint_offsets=args.joint_offsets,
+    )
+    return _run_and_report(scene, args, f"{args.model} {args.variant}", started)
 
 
 def _configure_run(parser: argparse.ArgumentParser) -> None:
@@ -254,6 +337,11 @@ SUBCOMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None], Cal
         "simulate the paper's flexible Bennett linkage and write its sensors",
         _configure_bennett,
         _run_bennett,
+    ),
+    "linkage": (
+        "simulate a flexible single-loop linkage of Rational Linkages (4R, 6R) and write its sensors",
+        _configure_linkage,
+        _run_linkage,
     ),
 }
 
