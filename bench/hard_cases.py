@@ -43,9 +43,9 @@ import multiprocessing
 import sys
 import time
 import traceback
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -144,8 +144,8 @@ def make_scene(material=None, alpha3_deg: float = 90.0, **kwargs):
 
     ``build_bennett`` takes both from its ``VARIANTS`` table only, so the pair is registered
     under a temporary name for the call (the scene keeps it in ``settings['variant']``)."""
-    from ffrf.scenes import bennett_scene
     from ffrf.fe.materials import PLA
+    from ffrf.scenes import bennett_scene
 
     material = PLA if material is None else material
     name = f"hard:E={material.E:g}:alpha3={alpha3_deg:g}"

@@ -84,7 +84,7 @@ class TetMesh:
         """Sum of the tetrahedron volumes (m^3)."""
         return float(signed_volumes(self.points, self.tets).sum())
 
-    def scaled(self, factor: float) -> "TetMesh":
+    def scaled(self, factor: float) -> TetMesh:
         """Copy with all coordinates multiplied by ``factor`` (e.g. 1e-3 for mm -> m)."""
         return TetMesh(self.points * factor, self.tets, dict(self.groups), self.name)
 

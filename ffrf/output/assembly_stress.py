@@ -23,9 +23,9 @@ adapts any built scene (:class:`ffrf.scenes.builder.Scene`: ``bodies[k].fe``, ``
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray

@@ -22,8 +22,9 @@ units (e.g. the Exudyn twin's curve: angle from its start in rad, deviation in m
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Mapping, Union
+from typing import Union
 
 import numpy as np
 from matplotlib.figure import Figure

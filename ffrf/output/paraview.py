@@ -10,8 +10,8 @@ frame, turned into world axes) and ``body`` (the body index), as the style guide
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 from xml.sax.saxutils import quoteattr
 
 import numpy as np

@@ -22,8 +22,8 @@ all six with :math:`\varphi(t)`. The constraint force on body ``k`` is :math:`-C
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray

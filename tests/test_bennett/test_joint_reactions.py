@@ -4,7 +4,7 @@ forces are internal). Independent of how the reactions were computed, so it chec
 signs, the lever arms and the torque directions of every joint, misaligned assembly included.
 """
 
-from functools import lru_cache
+from functools import cache, lru_cache
 
 import numpy as np
 import pytest
@@ -16,7 +16,7 @@ from ffrf.solvers.static_solver import quasi_static
 from ffrf.system.reactions import joint_reactions
 
 
-@lru_cache(maxsize=None)
+@cache
 def equilibria(variant: str):
     scene = build_bennett(variant, h=6e-3, order=1, n_modes=2)
     q0 = assemble(scene).q

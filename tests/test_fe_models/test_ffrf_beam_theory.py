@@ -32,7 +32,7 @@ J_TORSION = rectangle_torsion_constant(WIDTH, THICK)
 I_POLAR = (WIDTH * THICK**3 + THICK * WIDTH**3) / 12
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def theory(bc):
     """First frequency (Hz) of each mode family from beam theory."""
     return {
