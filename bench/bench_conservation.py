@@ -47,8 +47,8 @@ def momenta(body, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
 
 
 def measure(system, body, result, wall: float) -> dict:
-    rows = np.array([momenta(body, q, qd) for q, qd in zip(result.q, result.qd)])
-    energy = np.array([sum(system.energies(q, qd).values()) for q, qd in zip(result.q, result.qd)])
+    rows = np.array([momenta(body, q, qd) for q, qd in zip(result.q, result.qd, strict=True)])
+    energy = np.array([sum(system.energies(q, qd).values()) for q, qd in zip(result.q, result.qd, strict=True)])
     error = (energy - energy[0]) / energy[0]
     window = max(1, len(error) // 10)
     linear, angular = rows[:, :3], rows[:, 3:]

@@ -400,7 +400,9 @@ def deformation(scene, out: Outcome) -> dict:
     )
     worst = int(np.argmax(np.asarray(out.sensors["energy_strain"])))
     stress = scene_assembly_stress(scene, out.q[worst])
-    strain = max(l.max_von_mises_pa / l_model.fe.material.E for l, l_model in zip(stress.links, scene.links))
+    strain = max(
+        l.max_von_mises_pa / l_model.fe.material.E for l, l_model in zip(stress.links, scene.links, strict=True)
+    )
     return {
         "max_bore_rotation_rad": theta,
         "max_equivalent_strain": strain,
@@ -760,7 +762,7 @@ def locked_screw_conditioning(n: int = 721) -> tuple[np.ndarray, np.ndarray]:
         poses = linkage.link_poses(linkage.parameter_from_joint(linkage.home_theta[3] - angle, joint=3))
         movers = (poses[0], poses[1], poses[3])  # h0 on the base, h1 moves with link 1, h2 with link 3
         columns = []
-        for pose, axis in zip(movers, linkage.axes[:3]):
+        for pose, axis in zip(movers, linkage.axes[:3], strict=True):
             direction = pose.rotation_matrix() @ axis.direction
             columns.append(np.concatenate([direction, np.cross(pose.act(axis.point), direction)]))
         out[k] = np.linalg.svd(np.array(columns).T, compute_uv=False)[-1]

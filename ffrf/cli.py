@@ -49,7 +49,7 @@ def link_summary(model: FEModel, geometry, interfaces) -> dict:
         "joint_points_m": geometry.joint_points.tolist(),
         "axes": {
             name: {"point_m": axis.point.tolist(), "direction": axis.direction.tolist()}
-            for name, axis in zip(geometry.interface_names, geometry.axes)
+            for name, axis in zip(geometry.interface_names, geometry.axes, strict=True)
         },
         "interfaces": {
             i.name: {

@@ -102,7 +102,7 @@ def _orient(axes: list[Line], nominal_alpha: NDArray, keep: int) -> tuple[list[L
     others = [i for i in range(len(axes)) if i != keep]
     for signs in itertools.product((1, -1), repeat=len(others)):
         oriented = list(axes)
-        for i, sign in zip(others, signs):
+        for i, sign in zip(others, signs, strict=True):
             oriented[i] = axes[i] if sign > 0 else axes[i].reversed()
         dh = dh_from_axes(oriented)
         cost = float(np.sum(wrap_angle(dh.alpha - nominal_alpha) ** 2))

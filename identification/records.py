@@ -10,6 +10,7 @@ into contiguous segments at every dropped frame or time gap, so the moving-avera
 from __future__ import annotations
 
 import csv
+import itertools
 import logging
 import re
 import warnings
@@ -188,7 +189,7 @@ def clean_record(record: LinkRecord, gap_factor: float = 1.5) -> LinkRecord:
     typical = np.median(steps) if steps.size else 0.0
     breaks = (np.diff(kept_index) > 1) | (steps > gap_factor * typical)
     edges = np.r_[0, np.flatnonzero(breaks) + 1, cleaned.n_frames]
-    segments = tuple((int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]))
+    segments = tuple((int(a), int(b)) for a, b in itertools.pairwise(edges))
     return replace(cleaned, segments=segments)
 
 

@@ -334,7 +334,7 @@ def _groups_from_meshio(raw) -> dict[str, NDArray[np.int64]]:
     groups: dict[str, list[NDArray]] = {}
     if key is None:
         return {}
-    for block, tags in zip(raw.cells, raw.cell_data[key]):
+    for block, tags in zip(raw.cells, raw.cell_data[key], strict=True):
         if block.type not in ("triangle", "triangle6"):
             continue
         for tag in np.unique(tags):

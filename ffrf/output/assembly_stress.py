@@ -160,7 +160,7 @@ def joint_reactions(
     """
     lam = np.asarray(multipliers, dtype=float)
     out, row = {}, 0
-    for name, size, is_driven in zip(names, sizes, driven):
+    for name, size, is_driven in zip(names, sizes, driven, strict=True):
         rows = lam[row : row + size]
         rotation = rows[3:-1] if is_driven else rows[3:]
         out[name] = {"force_n": float(np.linalg.norm(rows[:3])), "moment_nm": float(np.linalg.norm(rotation))}

@@ -50,12 +50,12 @@ def write_time_series(
     directory = Path(directory)
     (directory / "vtk").mkdir(parents=True, exist_ok=True)
     offsets = np.cumsum([0] + [len(fe.mesh.points) for fe, _ in bodies])
-    tets = np.vstack([fe.mesh.tets + offset for (fe, _), offset in zip(bodies, offsets)])
+    tets = np.vstack([fe.mesh.tets + offset for (fe, _), offset in zip(bodies, offsets[:-1], strict=True)])
     reference = np.vstack([fe.nodes[: len(fe.mesh.points)] for fe, _ in bodies])
     body_id = np.concatenate([np.full(len(fe.mesh.points), k, dtype=float) for k, (fe, _) in enumerate(bodies)])
     entries = []
     for row in range(0, len(time), max(1, every)):
-        parts = [_frame_points(fe, basis, q[row, block]) for (fe, basis), block in zip(bodies, blocks)]
+        parts = [_frame_points(fe, basis, q[row, block]) for (fe, basis), block in zip(bodies, blocks, strict=True)]
         points = np.vstack([p for p, _ in parts])
         elastic = np.vstack([e for _, e in parts])
         file = directory / "vtk" / f"{name}_{row:05d}.vtu"

@@ -148,7 +148,7 @@ def load_reduced_body(path: str | Path, expected_fingerprint: str | None = None)
         bounds = np.cumsum(np.concatenate([[0], data["interface_sizes"]]))
         interfaces = tuple(
             RigidInterface(data["interface_nodes"][a:b], data["interface_weights"][a:b], center)
-            for a, b, center in zip(bounds[:-1], bounds[1:], data["interface_centers"])
+            for a, b, center in zip(bounds[:-1], bounds[1:], data["interface_centers"], strict=True)
         )
         reduction = CraigBamptonBasis(
             data["basis"],

@@ -87,7 +87,7 @@ class MultibodySystem:
         out = np.zeros((self.n_constraints, self.n_coordinates))
         for k, c in enumerate(self.all_constraints):
             rows = slice(int(self.rows[k]), int(self.rows[k + 1]))
-            for i, block in zip(c.bodies, c.jacobian([q[self.block(i)] for i in c.bodies], t)):
+            for i, block in zip(c.bodies, c.jacobian([q[self.block(i)] for i in c.bodies], t), strict=True):
                 out[rows, self.block(i)] += block
         return out
 

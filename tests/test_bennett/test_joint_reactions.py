@@ -58,7 +58,7 @@ MOMENT_TOLERANCE = {"rigid": 2e-6, "pla": 1e-10, "pla2": 1e-10}
 @pytest.mark.parametrize("variant", ["rigid", "pla", "pla2"])
 def test_every_link_is_in_equilibrium(variant):
     scene, times, solution = equilibria(variant)
-    for q, lam, t in zip(solution.q, solution.multipliers, times):
+    for q, lam, t in zip(solution.q, solution.multipliers, times, strict=True):
         force, moment, scale = wrench_sums(scene, q, lam, t)
         assert np.abs(force).max() < 1e-12 * scale
         assert np.abs(moment).max() < MOMENT_TOLERANCE[variant] * scale

@@ -213,7 +213,7 @@ def rigid_interface_transformation(model: SmallFEModel, rigid_sets, weights, cla
     special = np.concatenate([np.asarray(s) for s in rigid_sets] + [np.asarray(clamped, dtype=int)])
     free = np.setdiff1d(np.arange(n_dofs), (3 * special[:, None] + np.arange(3)).reshape(-1))
     rows, cols, vals = list(free), list(range(len(free))), [1.0] * len(free)
-    for k, (node_set, w) in enumerate(zip(rigid_sets, weights)):
+    for k, (node_set, w) in enumerate(zip(rigid_sets, weights, strict=True)):
         center = np.asarray(w) @ model.nodes[node_set]
         base = len(free) + 6 * k
         for node in node_set:
