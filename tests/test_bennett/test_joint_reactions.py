@@ -4,7 +4,7 @@ forces are internal). Independent of how the reactions were computed, so it chec
 signs, the lever arms and the torque directions of every joint, misaligned assembly included.
 """
 
-from functools import cache, lru_cache
+from functools import cache
 
 import numpy as np
 import pytest

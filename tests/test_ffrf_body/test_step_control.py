@@ -2,7 +2,7 @@
 pendulum (E = 1e6 Pa so that its first modes are resolved; rho_inf = 0.8), against a fixed-step
 reference with h = 2.5e-5 s. The run starts with a step of 1e-2 s, far too large."""
 
-from functools import cache, lru_cache
+from functools import cache
 
 import numpy as np
 import pytest

@@ -10,7 +10,7 @@ the state of :mod:`ffrf.fe.fe_model`. The models are duck-typed like
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache, lru_cache
+from functools import cache
 
 import numpy as np
 import scipy.sparse as sp

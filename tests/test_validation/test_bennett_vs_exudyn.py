@@ -22,7 +22,7 @@ meet the issue's targets), and the marker-frame offsets (the convention shows; m
 
 from __future__ import annotations
 
-from functools import cache, lru_cache
+from functools import cache
 
 import numpy as np
 

@@ -11,7 +11,7 @@ equal to 4e-13, MAC 1 - 2e-15. The tests hold their own thresholds; they never r
 from __future__ import annotations
 
 import json
-from functools import cache, lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
