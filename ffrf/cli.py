@@ -261,7 +261,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m ffrf", description="In-house flexible multibody solver (FFRF)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress")
     sub = parser.add_subparsers(dest="command", required=True)
-    for name, (help_text, configure, run) in SUBCOMMANDS.items():
+    for name, (help_text, configure, _run) in SUBCOMMANDS.items():
         configure(sub.add_parser(name, help=help_text))
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING)

@@ -59,7 +59,7 @@ class IdentifiedLoop:
             "theta": self.dh.theta.tolist(),
             "bennett_ratios": self.ratios,
             "axis3_twist_deviation": self.axis3_twist_deviation,
-            "axes": [{"direction": l.direction.tolist(), "moment": l.moment.tolist()} for l in self.axes],
+            "axes": [{"direction": line.direction.tolist(), "moment": line.moment.tolist()} for line in self.axes],
         }
 
 

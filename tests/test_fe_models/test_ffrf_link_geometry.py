@@ -40,7 +40,7 @@ def axial_and_radial(points, axis: Axis, origin):
 
 
 def test_meshes_are_sound_and_named(links):
-    for i, (mesh, geometry) in links.items():
+    for i, (mesh, _geometry) in links.items():
         check_mesh(mesh)
         expected = {f"joint{(i - 1) % 4}", f"joint{i}"} | ({"mount"} if i == 0 else set())
         assert set(mesh.groups) == expected
