@@ -130,10 +130,11 @@ def main() -> None:
                 f"({np.mean(iterations):.2f} per pose)"
             )
         ref, fast = solutions["reference"], solutions["fast"]
+        torque_difference = np.abs(fast.multipliers[:, -1] - ref.multipliers[:, -1]).max()
         print(
             f"  speed-up {seconds['reference'] / seconds['fast']:.1f}x; max |q_fast - q_ref| = "
             f"{np.abs(fast.q - ref.q).max():.1e}, driving torque relative "
-            f"{np.abs(fast.multipliers[:, -1] - ref.multipliers[:, -1]).max() / np.abs(ref.multipliers[:, -1]).max():.1e}"
+            f"{torque_difference / np.abs(ref.multipliers[:, -1]).max():.1e}"
         )
     if args.cold:
         print(

@@ -150,7 +150,8 @@ def main(argv=None) -> dict:
     )
     print(
         f"driving torque: max difference {1e3 * report['max_torque_difference_Nm']:.4f} N mm = "
-        f"{report['max_torque_difference_relative']:.2e} of max |torque| {1e3 * report['max_abs_driving_torque_Nm']:.3f} N mm"
+        f"{report['max_torque_difference_relative']:.2e} of max |torque| "
+        f"{1e3 * report['max_abs_driving_torque_Nm']:.3f} N mm"
     )
     print(
         f"end of ramp (t in {tr['window_s']} s): coupler {tr['max_coupler_difference_m']:.3e} m, torque "

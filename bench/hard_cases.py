@@ -659,7 +659,8 @@ def case_long_run(ctx: Context) -> None:
         text.append(
             f"{out.row.run}: |g| first/last revolution {out.row.extra['constraint_residual_per_rev'][0]:.1e}/"
             f"{out.row.extra['constraint_residual_per_rev'][-1]:.1e}, energy balance error per revolution "
-            f"{e[0]:.1e}/{e[-1]:.1e} of the work exchanged in it ({out.row.extra['drive_work_peak_to_peak_per_rev_J'][-1]:.3g} J "
+            f"{e[0]:.1e}/{e[-1]:.1e} of the work exchanged in it "
+            f"({out.row.extra['drive_work_peak_to_peak_per_rev_J'][-1]:.3g} J "
             f"peak to peak; net {out.row.extra['drive_work_per_rev_J'][-1]:.2g} J), "
             f"coupler repeats to {max(period[-3:]) if period else float('nan'):.1e} m and torque to "
             f"{max(out.row.extra['torque_change_per_rev_Nm'][-3:]) if period else float('nan'):.1e} N m "

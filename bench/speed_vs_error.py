@@ -323,7 +323,8 @@ def cheapest_table(points: list[dict], sweep: str) -> str:
 def same_point_table(points: list[dict], sweep: str) -> str:
     """Markdown: every point both solvers ran, side by side (integration only and total)."""
     lines = [
-        "| setting | coupler error ours / Exudyn (m) | run ours / Exudyn (s) | ratio | total ours / Exudyn (s) | ratio |",
+        "| setting | coupler error ours / Exudyn (m) | run ours / Exudyn (s) | ratio "
+        "| total ours / Exudyn (s) | ratio |",
         "|---|---|---|---|---|---|",
     ]
     # a pair is ours and Exudyn's run of one point, back to back in the list (same load)
@@ -415,7 +416,8 @@ def _log(p: dict) -> None:
     extra = f", vs quasi-static ref {p['coupler_error_qs_m']:.2e} m" if "coupler_error_qs_m" in p else ""
     print(
         f"{p['solver']:7s} {_setting(p)}: set-up {p['setup_s']:6.2f} s, run {p['integration_s']:7.2f} s, "
-        f"+{p['peak_mem_mb']:6.0f} MiB, coupler {p['coupler_error_m']:.3e} m, torque {p['torque_error_rel']:.2e}{extra}",
+        f"+{p['peak_mem_mb']:6.0f} MiB, coupler {p['coupler_error_m']:.3e} m, "
+        f"torque {p['torque_error_rel']:.2e}{extra}",
         flush=True,
     )
 
@@ -557,7 +559,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
             qs_ref = extrapolate(qs_ref, fine)
         cache.clear()
         print(
-            f"reference's own error: {json.dumps({k: v for k, v in checks.items() if k.startswith('reference_error')})}",
+            "reference's own error: "
+            + json.dumps({k: v for k, v in checks.items() if k.startswith("reference_error")}),
             flush=True,
         )
     save()

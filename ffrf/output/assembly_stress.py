@@ -86,7 +86,10 @@ class LinkStress:
         )
         if self.reactions:
             d = self.as_dict()
-            text += f"; largest joint reaction {d['max_reaction_force_n']:.3g} N, {1e3 * d['max_reaction_moment_nm']:.3g} N mm"
+            text += (
+                f"; largest joint reaction {d['max_reaction_force_n']:.3g} N, "
+                f"{1e3 * d['max_reaction_moment_nm']:.3g} N mm"
+            )
         return text
 
 

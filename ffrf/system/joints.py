@@ -47,7 +47,8 @@ __all__ = [
 
 
 def exp_so3_tangent(theta: NDArray) -> NDArray:
-    r"""Right Jacobian :math:`T(\theta)` of the exponential map, :math:`d\exp(\tilde\theta) = \exp(\tilde\theta)\,(T\,d\theta)^\sim`:
+    r"""Right Jacobian :math:`T(\theta)` of the exponential map,
+    :math:`d\exp(\tilde\theta) = \exp(\tilde\theta)\,(T\,d\theta)^\sim`:
     :math:`T = I - \frac{1-\cos\phi}{\phi^2}\tilde\theta + \frac{\phi - \sin\phi}{\phi^3}\tilde\theta^2`."""
     theta = np.asarray(theta)
     return exp_so3_tangent_kernel(theta.astype(np.result_type(theta, float)))

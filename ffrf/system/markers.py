@@ -48,7 +48,8 @@ def _skew(v: NDArray) -> NDArray:
 
 def exp_so3(theta: NDArray) -> NDArray:
     r"""Rodrigues' formula :math:`\exp(\tilde\theta) = I + \frac{\sin\phi}{\phi}\tilde\theta +
-    \frac{1-\cos\phi}{\phi^2}\tilde\theta^2`, :math:`\phi^2 = \theta\cdot\theta` (analytic, also for complex ``theta``)."""
+    \frac{1-\cos\phi}{\phi^2}\tilde\theta^2`, :math:`\phi^2 = \theta\cdot\theta`
+    (analytic, also for complex ``theta``)."""
     theta = np.asarray(theta)
     return exp_so3_kernel(theta.astype(np.result_type(theta, float)))
 

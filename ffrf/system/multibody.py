@@ -159,7 +159,8 @@ class MultibodySystem:
     def initial_state(
         self, positions: ArrayLike | None = None, rotations: ArrayLike | None = None
     ) -> NDArray[np.float64]:
-        """Coordinates with bodies at ``positions`` (n x 3), Euler parameters ``rotations`` (n x 4, default identity), zeta = 0."""
+        """Coordinates with bodies at ``positions`` (n x 3), Euler parameters ``rotations``
+        (n x 4, default identity), zeta = 0."""
         q = np.zeros(self.n_coordinates)
         for i in range(len(self.bodies)):
             s = self.block(i)

@@ -143,7 +143,8 @@ def _ragged(arrays, dtype=np.float64) -> tuple[NDArray, NDArray[np.int64]]:
 
 
 def _pack_bodies(bodies: tuple[FlexibleBody, ...], offsets: NDArray) -> tuple:
-    """``(offsets, mass, exact_gravity, real, complex, starts)`` (module docstring of :mod:`ffrf.system.system_kernels`)."""
+    """``(offsets, mass, exact_gravity, real, complex, starts)``
+    (module docstring of :mod:`ffrf.system.system_kernels`)."""
     columns = [_ragged([body._packed[k] for body in bodies]) for k in range(8)]
     real = tuple(flat for flat, _ in columns)
     starts = np.array([st for _, st in columns], dtype=np.int64)
