@@ -202,7 +202,9 @@ def _run_bennett(args: argparse.Namespace) -> int:
     from ffrf.output.assembly_stress import write_assembly_vtu
     from ffrf.output.bennett_figures import plot_coupler_deviation, plot_driving_torque
 
-    write_assembly_vtu(args.out / "assembly.vtu", scene, result.assembly)
+    assembly = result.assembly
+    assert assembly is not None  # run_bennett always records the assembled state
+    write_assembly_vtu(args.out / "assembly.vtu", scene, assembly)
     plot_coupler_deviation({args.variant: result}, args.out / "coupler_deviation.png")
     plot_driving_torque({args.variant: result}, args.out / "driving_torque.png")
     summary = result.summary()
@@ -221,7 +223,7 @@ def _run_bennett(args: argparse.Namespace) -> int:
         + (", misalignment" if scene.settings["alpha3_deg"] != 90.0 else "")
         + f"; {args.out / 'assembly.vtu'}):"
     )
-    for link in result.assembly.links:
+    for link in assembly.links:
         print("  " + link.line())
     return 0
 

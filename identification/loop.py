@@ -20,6 +20,7 @@ angle of joint 3 is the base's rotation relative to link 3).
 from __future__ import annotations
 
 import itertools
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -74,7 +75,7 @@ def bennett_ratios(dh: DHParameters) -> dict[str, float]:
     }
 
 
-def _link_points(trajectories: dict, link: int) -> NDArray[np.float64]:
+def _link_points(trajectories: Mapping[int, ArrayLike], link: int) -> NDArray[np.float64]:
     if link not in trajectories:
         raise IdentificationError(
             f"no trajectory for link {link}: links 1, 2 and 3 must be tracked (link 0 is the fixed base)"
@@ -87,7 +88,7 @@ def _link_points(trajectories: dict, link: int) -> NDArray[np.float64]:
     return points
 
 
-def identify_axes(trajectories: dict[int, ArrayLike]) -> tuple[list[Line], dict[str, LinkAxisFit]]:
+def identify_axes(trajectories: Mapping[int, ArrayLike]) -> tuple[list[Line], dict[str, LinkAxisFit]]:
     """The unoriented axes ``[h0, h1, h2, h3]`` and the link fits, from links 1, 2, 3."""
     link1, link2, link3 = (_link_points(trajectories, k) for k in (1, 2, 3))
     fit1, fit21 = identify_branch([link1, link2], ["link 1 (about h0)", "link 2 seen from link 1 (about h1)"])
@@ -98,7 +99,7 @@ def identify_axes(trajectories: dict[int, ArrayLike]) -> tuple[list[Line], dict[
 
 def _orient(axes: list[Line], nominal_alpha: NDArray, keep: int) -> tuple[list[Line], DHParameters]:
     """Flip axes other than ``axes[keep]`` so that the twists come closest to ``nominal_alpha``."""
-    best = None
+    best: tuple[float, list[Line], DHParameters] | None = None
     others = [i for i in range(len(axes)) if i != keep]
     for signs in itertools.product((1, -1), repeat=len(others)):
         oriented = list(axes)
@@ -108,10 +109,11 @@ def _orient(axes: list[Line], nominal_alpha: NDArray, keep: int) -> tuple[list[L
         cost = float(np.sum(wrap_angle(dh.alpha - nominal_alpha) ** 2))
         if best is None or cost < best[0]:
             best = (cost, oriented, dh)
+    assert best is not None  # product() yields at least one sign pattern
     return best[1], best[2]
 
 
-def identify_dh(trajectories: dict[int, ArrayLike], nominal_alpha: ArrayLike = PAPER_ALPHA) -> IdentifiedLoop:
+def identify_dh(trajectories: Mapping[int, ArrayLike], nominal_alpha: ArrayLike = PAPER_ALPHA) -> IdentifiedLoop:
     """DH parameters of the loop from tracked positions of links 1, 2 and 3.
 
     ``trajectories`` maps the link index to ``(frames, 3)`` (one tracked point) or
@@ -124,4 +126,5 @@ def identify_dh(trajectories: dict[int, ArrayLike], nominal_alpha: ArrayLike = P
     if turn > 0:
         axes[3] = axes[3].reversed()
     oriented, dh = _orient(axes, nominal_alpha, keep=3)
-    return IdentifiedLoop(tuple(oriented), dh, bennett_ratios(dh), nominal_alpha, fits)
+    h0, h1, h2, h3 = oriented
+    return IdentifiedLoop((h0, h1, h2, h3), dh, bennett_ratios(dh), nominal_alpha, fits)

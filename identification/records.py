@@ -208,7 +208,9 @@ def moving_average(record: LinkRecord, window: int = 10) -> LinkRecord:
     if window == 1:
         return record
     left, right = window // 2, window - 1 - window // 2
-    keep, segments, smoothed = [], [], {link: [] for link in record.points}
+    keep: list[NDArray[np.int64]] = []
+    segments: list[tuple[int, int]] = []
+    smoothed: dict[int, list[NDArray]] = {link: [] for link in record.points}
     for start, stop in record.segments:
         if stop - start < window:
             warnings.warn(
@@ -224,6 +226,6 @@ def moving_average(record: LinkRecord, window: int = 10) -> LinkRecord:
         keep.append(np.arange(start + left, stop - right))
     if not keep:
         raise IdentificationError(f"{record.source}: no segment is longer than the {window}-frame filter window")
-    keep = np.concatenate(keep)
+    kept = np.concatenate(keep)
     points = {link: np.concatenate(parts) for link, parts in smoothed.items()}
-    return LinkRecord(record.time[keep], points, record.source, tuple(segments))
+    return LinkRecord(record.time[kept], points, record.source, tuple(segments))

@@ -81,7 +81,8 @@ class FEModel:
         name: str = "link",
     ) -> FEModel:
         """Assemble the model from points (n x 3, metres) and linear tetrahedra (k x 4)."""
-        mesh = TetMesh(np.asarray(points, dtype=float), np.asarray(tetrahedra), dict(groups or {}), name)
+        named = {key: np.asarray(value) for key, value in (groups or {}).items()}  # TetMesh makes them int64
+        mesh = TetMesh(np.asarray(points, dtype=float), np.asarray(tetrahedra), named, name)
         return cls.from_tet_mesh(mesh, Material(float(E), float(nu), float(rho), name=f"{name} material"), order)
 
     @classmethod

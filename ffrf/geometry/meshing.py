@@ -13,6 +13,7 @@ import logging
 import math
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -28,7 +29,7 @@ _GMSH_TRIANGLE3 = 2
 
 
 @contextlib.contextmanager
-def gmsh_session(model_name: str = "ffrf") -> Iterator[object]:
+def gmsh_session(model_name: str = "ffrf") -> Iterator[Any]:
     """Headless, single-threaded (hence deterministic) gmsh session; always finalised.
 
     Yields the ``gmsh`` module with a fresh model named ``model_name``.

@@ -133,7 +133,7 @@ def nearest_feature(point: ArrayLike, features: Mapping[str, ArrayLike]) -> tupl
         name: float(np.min(np.linalg.norm(np.asarray(xyz, dtype=float) - point, axis=1)))
         for name, xyz in features.items()
     }
-    name = min(distances, key=distances.get)
+    name = min(distances, key=distances.__getitem__)
     return name, distances[name]
 
 

@@ -12,12 +12,16 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.body.euler_parameters import rotation_matrix
+
+if TYPE_CHECKING:
+    from ffrf.fe.fe_model import FEModel
 
 __all__ = ["write_time_series"]
 
@@ -33,7 +37,7 @@ def _frame_points(fe, basis: NDArray, block: NDArray) -> tuple[NDArray, NDArray]
 
 def write_time_series(
     directory: str | Path,
-    bodies: Sequence[tuple[object, NDArray]],
+    bodies: Sequence[tuple[FEModel, NDArray]],
     blocks: Sequence[slice],
     time: NDArray,
     q: NDArray,
@@ -52,7 +56,7 @@ def write_time_series(
     offsets = np.cumsum([0] + [len(fe.mesh.points) for fe, _ in bodies])
     tets = np.vstack([fe.mesh.tets + offset for (fe, _), offset in zip(bodies, offsets[:-1], strict=True)])
     reference = np.vstack([fe.nodes[: len(fe.mesh.points)] for fe, _ in bodies])
-    body_id = np.concatenate([np.full(len(fe.mesh.points), k, dtype=float) for k, (fe, _) in enumerate(bodies)])
+    body_id = np.concatenate([np.full(len(fe.mesh.points), k, dtype=np.float64) for k, (fe, _) in enumerate(bodies)])
     entries = []
     for row in range(0, len(time), max(1, every)):
         parts = [_frame_points(fe, basis, q[row, block]) for (fe, basis), block in zip(bodies, blocks, strict=True)]

@@ -286,7 +286,9 @@ def quasi_static(
     times = np.asarray(times, dtype=float)
     q = np.array(q0, dtype=float)
     lam = np.zeros(system.n_constraints)
-    qs, lams, counts = [], [], []
+    qs: list[NDArray] = []
+    lams: list[NDArray] = []
+    counts: list[int] = []
     tangent = None
     model = newton_model(system, fast_path)
     t_done = float(times[0])

@@ -200,7 +200,7 @@ def variational_midpoint(
         raise ValueError("initial state contains NaN or inf; start from a finite state")
     qdd, lam = consistent_accelerations(system, q, qd0, 0.0)
     p = momenta_from_velocities(system, q, qd0)
-    history = {"time": [], "q": [], "qd": [], "qdd": [], "lam": []}
+    history: dict[str, list] = {"time": [], "q": [], "qd": [], "qdd": [], "lam": []}
     iterations: list[int] = []
     started = wallclock.perf_counter()
 

@@ -57,8 +57,8 @@ def exp_so3_tangent(theta: NDArray) -> NDArray:
 def frame_from_axis(z: ArrayLike, reference_x: ArrayLike | None = None) -> NDArray[np.float64]:
     """Orthonormal joint frame (columns x, y, z) with the given z; x is ``reference_x`` (default the
     world x axis) made normal to z, or the world y axis when ``reference_x`` is along z."""
-    z = np.asarray(z, float) / np.linalg.norm(z)
-    x = np.array([1.0, 0.0, 0.0]) if reference_x is None else np.asarray(reference_x, float)
+    z = np.asarray(z, np.float64) / np.linalg.norm(z)
+    x = np.array([1.0, 0.0, 0.0]) if reference_x is None else np.asarray(reference_x, np.float64)
     x = x - (x @ z) * z
     if np.linalg.norm(x) < 1e-8:
         x = np.array([0.0, 1.0, 0.0]) - z[1] * z

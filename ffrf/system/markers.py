@@ -89,7 +89,9 @@ class BodyMarker:
         return rotation_matrix(q[3:7]) @ exp_so3(self.rotation_vector(q))
 
 
-def _checked_nodes(nodes: NDArray, indices: ArrayLike, weights: ArrayLike | None, name: str):
+def _checked_nodes(
+    nodes: NDArray, indices: ArrayLike, weights: ArrayLike | None, name: str
+) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     indices = np.asarray(indices, dtype=np.int64)
     if indices.size == 0:
         raise ValueError(f"marker {name!r}: the interface has no nodes; check the node selection")
