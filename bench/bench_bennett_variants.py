@@ -11,7 +11,8 @@ overlays ``DIR/coupler_deviation.png`` and ``DIR/driving_torque.png``.
 Usage::
 
     PYTHONPATH=. .venv/bin/python bench/bench_bennett_variants.py --json out/variants_default.json
-    PYTHONPATH=. .venv/bin/python bench/bench_bennett_variants.py --order 1 --h 0.002 --modes 32 --json out/variants_paper.json
+    PYTHONPATH=. .venv/bin/python bench/bench_bennett_variants.py --order 1 --h 0.002 --modes 32 \
+        --json out/variants_paper.json
 """
 
 from __future__ import annotations

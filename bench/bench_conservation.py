@@ -22,6 +22,7 @@ Run: .venv/bin/python bench/bench_conservation.py [--steps 10000] [--sizes 1e-4 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
 import time
@@ -47,8 +48,8 @@ def momenta(body, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
 
 
 def measure(system, body, result, wall: float) -> dict:
-    rows = np.array([momenta(body, q, qd) for q, qd in zip(result.q, result.qd)])
-    energy = np.array([sum(system.energies(q, qd).values()) for q, qd in zip(result.q, result.qd)])
+    rows = np.array([momenta(body, q, qd) for q, qd in zip(result.q, result.qd, strict=True)])
+    energy = np.array([sum(system.energies(q, qd).values()) for q, qd in zip(result.q, result.qd, strict=True)])
     error = (energy - energy[0]) / energy[0]
     window = max(1, len(error) // 10)
     linear, angular = rows[:, :3], rows[:, 3:]
@@ -106,13 +107,15 @@ def run(sizes: list[float], steps: int) -> list[dict]:
         system, q0, qd0 = ffrf_system(scene)
         every = max(1, steps // 500)
         runs = {
-            "generalized-alpha rho_inf=1": lambda: generalized_alpha(
-                system, q0, qd0, scene.t_end, h, rho_inf=1.0, output_every=every
+            "generalized-alpha rho_inf=1": functools.partial(
+                generalized_alpha, system, q0, qd0, scene.t_end, h, rho_inf=1.0, output_every=every
             ),
-            "generalized-alpha rho_inf=0.8": lambda: generalized_alpha(
-                system, q0, qd0, scene.t_end, h, rho_inf=0.8, output_every=every
+            "generalized-alpha rho_inf=0.8": functools.partial(
+                generalized_alpha, system, q0, qd0, scene.t_end, h, rho_inf=0.8, output_every=every
             ),
-            "variational midpoint": lambda: variational_midpoint(system, q0, qd0, scene.t_end, h, output_every=every),
+            "variational midpoint": functools.partial(
+                variational_midpoint, system, q0, qd0, scene.t_end, h, output_every=every
+            ),
         }
         for name, call in runs.items():
             started = time.perf_counter()

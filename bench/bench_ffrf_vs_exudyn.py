@@ -5,8 +5,9 @@ PLA-like bar 0.2 x 0.02 x 0.01 m hinged at one end, released from horizontal, rh
 beta = 1e-3 s, HCB with 6 + ``--modes`` modes, area weights. Two mesh sizes with the same m;
 the bore node count grows with the mesh, which is what Exudyn's marker cost depends on.
 
-For ours (default Newton of ``ffrf.solvers.generalized_alpha``, and full Newton), "cold" is the first run in a fresh interpreter (numba loads its on-disk cache or
-compiles, first calls of scipy/LAPACK), "warm" the best of ``--repeat`` runs afterwards.
+For ours (default Newton of ``ffrf.solvers.generalized_alpha``, and full Newton), "cold" is the
+first run in a fresh interpreter (numba loads its on-disk cache or compiles, first calls of
+scipy/LAPACK), "warm" the best of ``--repeat`` runs afterwards.
 Exudyn is always warm (best of ``--repeat``). Both use full Newton; Exudyn is also timed with
 its default modified Newton. Also printed: the largest tip difference between the solvers
 and, with ``--convergence``, the tip difference at h, h/2, h/4 (both solvers) and the

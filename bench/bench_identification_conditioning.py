@@ -43,7 +43,7 @@ def main(n_angles: int = 24, noise: float = 1e-4, seed: int = 1) -> None:
         f"naive fit: {fit.nfev} model evaluations, {time.perf_counter() - start:.1f} s, "
         f"rms residual {1e3 * np.sqrt(np.mean(fit.fun**2)):.4f} mm"
     )
-    for name, value, true in zip(PARAMETER_NAMES, fit.x, truth):
+    for name, value, true in zip(PARAMETER_NAMES, fit.x, truth, strict=True):
         unit, scale = ("deg", np.degrees(1)) if name.startswith("alpha") else ("mm", 1e3)
         print(
             f"  {name:7s} {scale * value:10.3f} {unit}  (true {scale * true:9.3f}, error {scale * (value - true):+.3f})"

@@ -17,7 +17,7 @@ the quasi-static run solves at exactly those times), and it reports
 Usage::
 
     PYTHONPATH=. .venv/bin/python bench/bench_quasi_static_vs_dynamic.py --json out/qs_vs_dyn.json --out out/qs_vs_dyn
-    PYTHONPATH=. .venv/bin/python bench/bench_quasi_static_vs_dynamic.py --h 6e-3 --modes 4 --step 2e-3
+    PYTHONPATH=. .venv/bin/python bench/bench_quasi_static_vs_dynamic.py --order 1 --h 4e-3 --modes 8 --step 2e-3
 """
 
 from __future__ import annotations
@@ -83,8 +83,9 @@ def compare(quasi_static, dynamic, ramp_time: float) -> dict:
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--variant", default="pla", choices=("rigid", "pla", "pla1", "pla2"))
-    parser.add_argument("--h", type=float, default=4e-3, help="maximum tetrahedron edge (m)")
-    parser.add_argument("--modes", type=int, default=8, help="fixed-interface modes per link")
+    parser.add_argument("--order", type=int, choices=(1, 2), default=2, help="tetrahedron order (the scene's default)")
+    parser.add_argument("--h", type=float, default=6e-3, help="maximum tetrahedron edge (m)")
+    parser.add_argument("--modes", type=int, default=4, help="fixed-interface modes per link")
     parser.add_argument("--step", type=float, default=1e-3, help="generalized-alpha time step (s)")
     parser.add_argument("--rho-inf", type=float, default=0.9, help="generalized-alpha spectral radius at infinity")
     parser.add_argument("--outputs", type=int, default=611, help="output times (611: every 0.1 s of 61 s)")
@@ -102,7 +103,7 @@ def main(argv=None) -> dict:
     from ffrf.scenes.bennett_scene import build_bennett
 
     started = time.perf_counter()
-    scene = build_bennett(args.variant, h=args.h, order=1, n_modes=args.modes)
+    scene = build_bennett(args.variant, h=args.h, order=args.order, n_modes=args.modes)
     built = time.perf_counter()
     t_end = scene.t_end if args.t_end is None else args.t_end
     # Output every `every` steps; the quasi-static run then solves at the same times.
@@ -110,7 +111,7 @@ def main(argv=None) -> dict:
     outputs = int(round(t_end / args.step)) // every + 1
     t_end = (outputs - 1) * every * args.step
     print(
-        f"{args.variant}: h = {1e3 * args.h:g} mm, {args.modes} modes, t_end = {t_end:g} s, "
+        f"{args.variant}: P{args.order}, h = {1e3 * args.h:g} mm, {args.modes} modes, t_end = {t_end:g} s, "
         f"{outputs} outputs, scene built in {built - started:.1f} s",
         flush=True,
     )
@@ -125,6 +126,7 @@ def main(argv=None) -> dict:
 
     report = dict(
         variant=args.variant,
+        order=args.order,
         h=args.h,
         modes=args.modes,
         step=args.step,
@@ -150,7 +152,8 @@ def main(argv=None) -> dict:
     )
     print(
         f"driving torque: max difference {1e3 * report['max_torque_difference_Nm']:.4f} N mm = "
-        f"{report['max_torque_difference_relative']:.2e} of max |torque| {1e3 * report['max_abs_driving_torque_Nm']:.3f} N mm"
+        f"{report['max_torque_difference_relative']:.2e} of max |torque| "
+        f"{1e3 * report['max_abs_driving_torque_Nm']:.3f} N mm"
     )
     print(
         f"end of ramp (t in {tr['window_s']} s): coupler {tr['max_coupler_difference_m']:.3e} m, torque "

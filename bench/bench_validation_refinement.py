@@ -76,7 +76,8 @@ def main(argv=None) -> dict:
         f"{args.variant}, h = {args.h} m, {args.modes} modes, {args.t_end} s, exudyn_jacobian = {args.exudyn_jacobian}"
     )
     print(
-        f"{'step':>8} {'ours: h vs h/2':>15} {'Exudyn: h vs h/2':>17} {'ours vs Exudyn':>15} {'ours s':>7} {'Exudyn s':>9}"
+        f"{'step':>8} {'ours: h vs h/2':>15} {'Exudyn: h vs h/2':>17} {'ours vs Exudyn':>15} "
+        f"{'ours s':>7} {'Exudyn s':>9}"
     )
     for h in steps:
         row = {

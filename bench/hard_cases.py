@@ -43,9 +43,9 @@ import multiprocessing
 import sys
 import time
 import traceback
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -349,7 +349,7 @@ def exudyn_dynamic(scene, t_end: float, step: float, rho_inf: float = 0.9) -> st
     q0 = assemble(twin_scene).q
     try:
         theirs = run_exudyn_bennett(twin_scene, q0, t_end, step, rho_inf)
-    except Exception as error:  # noqa: BLE001
+    except Exception as error:  # noqa: BLE001 - a failure of the reference is reported, not raised
         return f"Exudyn failed: {type(error).__name__}: {str(error)[:160]}"
     ours = run_ffrf_bennett(twin_scene, twin_scene.system, q0, t_end, step, rho_inf, tolerance=1e-10)
     d = compare(ours, theirs)
@@ -401,7 +401,10 @@ def deformation(scene, out: Outcome) -> dict:
     )
     worst = int(np.argmax(np.asarray(out.sensors["energy_strain"])))
     stress = scene_assembly_stress(scene, out.q[worst])
-    strain = max(l.max_von_mises_pa / l_model.fe.material.E for l, l_model in zip(stress.links, scene.links))
+    strain = max(
+        link_stress.max_von_mises_pa / link.fe.material.E
+        for link_stress, link in zip(stress.links, scene.links, strict=True)
+    )
     return {
         "max_bore_rotation_rad": theta,
         "max_equivalent_strain": strain,
@@ -533,11 +536,11 @@ def exudyn_assembly(scene, ours) -> str:
     twin_scene = scene.with_exact_gravity(False)
     try:
         q_e, torque_e, coupler_e, _, _ = assemble_exudyn_bennett(twin_scene)
-    except Exception as error:  # noqa: BLE001
+    except Exception as error:  # noqa: BLE001 - a failure of the reference is reported, not raised
         return f"Exudyn assembly failed too: {type(error).__name__}: {str(error)[:160]}"
     try:
         mine = assemble(twin_scene)
-    except Exception as error:  # noqa: BLE001
+    except Exception as error:  # noqa: BLE001 - our failure where Exudyn succeeded is the finding
         return f"Exudyn assembled (torque {torque_e:.4g} N m) where we failed: {type(error).__name__}"
     coupler = system_points(twin_scene, twin_scene.system, mine.q[None])[0][0]
     return (
@@ -658,7 +661,8 @@ def case_long_run(ctx: Context) -> None:
         text.append(
             f"{out.row.run}: |g| first/last revolution {out.row.extra['constraint_residual_per_rev'][0]:.1e}/"
             f"{out.row.extra['constraint_residual_per_rev'][-1]:.1e}, energy balance error per revolution "
-            f"{e[0]:.1e}/{e[-1]:.1e} of the work exchanged in it ({out.row.extra['drive_work_peak_to_peak_per_rev_J'][-1]:.3g} J "
+            f"{e[0]:.1e}/{e[-1]:.1e} of the work exchanged in it "
+            f"({out.row.extra['drive_work_peak_to_peak_per_rev_J'][-1]:.3g} J "
             f"peak to peak; net {out.row.extra['drive_work_per_rev_J'][-1]:.2g} J), "
             f"coupler repeats to {max(period[-3:]) if period else float('nan'):.1e} m and torque to "
             f"{max(out.row.extra['torque_change_per_rev_Nm'][-3:]) if period else float('nan'):.1e} N m "
@@ -716,7 +720,7 @@ def case_modes_mesh(ctx: Context) -> None:
         label = f"h = {1e3 * h:g} mm, {modes} modes"
         try:
             scene = make_scene(None, h=h, order=1, n_modes=modes)
-        except Exception as error:  # noqa: BLE001
+        except Exception as error:  # noqa: BLE001 - a mesh that fails becomes a row
             ctx.add(
                 Row(
                     ctx.case,
@@ -730,11 +734,11 @@ def case_modes_mesh(ctx: Context) -> None:
         build = time.perf_counter() - started
         qs = simulate(ctx, scene, label + " quasi-static", "quasi_static", scene.t_end, n_outputs=73, add=False)
         dyn = simulate(ctx, scene, label + " dynamic 0.05 s", "dynamic", 0.05, step=1e-3, n_outputs=11, add=False)
-        freq = min(float(l.reduction.fixed_interface_frequencies_hz[-1]) for l in scene.links)
+        freq = min(float(link.reduction.fixed_interface_frequencies_hz[-1]) for link in scene.links)
         for out in (qs, dyn):
             out.row.extra.update(
                 build_s=build,
-                nodes_per_link=[int(l.fe.nodes.shape[0]) for l in scene.links],
+                nodes_per_link=[int(link.fe.nodes.shape[0]) for link in scene.links],
                 n_coordinates=scene.system.n_coordinates,
                 highest_mode_hz_min_over_links=freq,
             )
@@ -762,7 +766,7 @@ def locked_screw_conditioning(n: int = 721) -> tuple[np.ndarray, np.ndarray]:
         poses = linkage.link_poses(linkage.parameter_from_joint(linkage.home_theta[3] - angle, joint=3))
         movers = (poses[0], poses[1], poses[3])  # h0 on the base, h1 moves with link 1, h2 with link 3
         columns = []
-        for pose, axis in zip(movers, linkage.axes[:3]):
+        for pose, axis in zip(movers, linkage.axes[:3], strict=True):
             direction = pose.rotation_matrix() @ axis.direction
             columns.append(np.concatenate([direction, np.cross(pose.act(axis.point), direction)]))
         out[k] = np.linalg.svd(np.array(columns).T, compute_uv=False)[-1]

@@ -56,11 +56,12 @@ from __future__ import annotations
 
 import argparse
 import ctypes
+import itertools
 import json
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -322,11 +323,12 @@ def cheapest_table(points: list[dict], sweep: str) -> str:
 def same_point_table(points: list[dict], sweep: str) -> str:
     """Markdown: every point both solvers ran, side by side (integration only and total)."""
     lines = [
-        "| setting | coupler error ours / Exudyn (m) | run ours / Exudyn (s) | ratio | total ours / Exudyn (s) | ratio |",
+        "| setting | coupler error ours / Exudyn (m) | run ours / Exudyn (s) | ratio "
+        "| total ours / Exudyn (s) | ratio |",
         "|---|---|---|---|---|---|",
     ]
     # a pair is ours and Exudyn's run of one point, back to back in the list (same load)
-    for p, e in zip(points[:-1], points[1:]):
+    for p, e in itertools.pairwise(points):
         if (
             p["sweep"] != sweep
             or p["solver"] != "ffrf"
@@ -414,7 +416,8 @@ def _log(p: dict) -> None:
     extra = f", vs quasi-static ref {p['coupler_error_qs_m']:.2e} m" if "coupler_error_qs_m" in p else ""
     print(
         f"{p['solver']:7s} {_setting(p)}: set-up {p['setup_s']:6.2f} s, run {p['integration_s']:7.2f} s, "
-        f"+{p['peak_mem_mb']:6.0f} MiB, coupler {p['coupler_error_m']:.3e} m, torque {p['torque_error_rel']:.2e}{extra}",
+        f"+{p['peak_mem_mb']:6.0f} MiB, coupler {p['coupler_error_m']:.3e} m, "
+        f"torque {p['torque_error_rel']:.2e}{extra}",
         flush=True,
     )
 
@@ -483,7 +486,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
     ref_spec = _parse(args.reference)[0]
     points: list[dict] = []
     checks: dict = {
-        "reference": dict(zip(("order", "h", "modes"), ref_spec)),
+        "reference": dict(zip(("order", "h", "modes"), ref_spec, strict=True)),
         "ref_step": args.ref_step,
         "ref_rho": args.ref_rho,
         "window_s": args.window,
@@ -538,25 +541,26 @@ def main(argv: list[str] | None = None) -> list[dict]:
             flush=True,
         )
         extrapolate = _richardson(ref_spec[1], fine_spec[1], args.richardson_order)
-        checks["fine_reference"] = dict(zip(("order", "h", "modes"), fine_spec))
+        checks["fine_reference"] = dict(zip(("order", "h", "modes"), fine_spec, strict=True))
         checks["richardson_order"] = args.richardson_order
         if args.qs_points:
             fine = run_quasi_static(*fine_spec, qs_times, False, cache)["ffrf"]
             coarse, reference = reference, extrapolate(reference, fine)
             checks["reference_error_quasi_static"] = dict(
-                zip(("coarse_coupler_m", "coarse_torque_rel"), _errors(coarse, reference))
+                zip(("coarse_coupler_m", "coarse_torque_rel"), _errors(coarse, reference), strict=True)
             )
         if args.dyn_points or args.dyn_qs_points:
             fine = run_dynamic(*fine_spec, args.ref_step, args.ref_rho, args.window, False, cache)["ffrf"]
             coarse, dyn_ref = dyn_ref, extrapolate(dyn_ref, fine)
             checks["reference_error_dynamic"] = dict(
-                zip(("coarse_coupler_m", "coarse_torque_rel"), _errors(coarse, dyn_ref))
+                zip(("coarse_coupler_m", "coarse_torque_rel"), _errors(coarse, dyn_ref), strict=True)
             )
             fine = run_quasi_static(*fine_spec, qs_window, False, cache)["ffrf"]
             qs_ref = extrapolate(qs_ref, fine)
         cache.clear()
         print(
-            f"reference's own error: {json.dumps({k: v for k, v in checks.items() if k.startswith('reference_error')})}",
+            "reference's own error: "
+            + json.dumps({k: v for k, v in checks.items() if k.startswith("reference_error")}),
             flush=True,
         )
     save()

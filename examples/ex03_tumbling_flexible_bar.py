@@ -52,7 +52,9 @@ def main(t_end: float = 0.05, step: float = 5e-5) -> float:
         ("generalized-alpha, rho_inf = 0.8", lambda *a: generalized_alpha(*a, rho_inf=0.8)),
     ):
         result = run(system, q0, qd0, t_end, step)
-        momentum = np.array([angular_momentum(model, reduction.basis, q, qd) for q, qd in zip(result.q, result.qd)])
+        momentum = np.array(
+            [angular_momentum(model, reduction.basis, q, qd) for q, qd in zip(result.q, result.qd, strict=True)]
+        )
         changes[name] = np.abs(momentum - momentum[0]).max() / np.linalg.norm(momentum[0])
         print(f"{name:34s} largest change of the angular momentum: {changes[name]:.1e} (relative)")
     return changes["variational midpoint"]

@@ -51,7 +51,7 @@ def link_summary(model: FEModel, geometry, interfaces) -> dict:
         "joint_points_m": geometry.joint_points.tolist(),
         "axes": {
             name: {"point_m": axis.point.tolist(), "direction": axis.direction.tolist()}
-            for name, axis in zip(geometry.interface_names, geometry.axes)
+            for name, axis in zip(geometry.interface_names, geometry.axes, strict=True)
         },
         "interfaces": {
             i.name: {
@@ -198,7 +198,9 @@ def _run_and_report(scene, args: argparse.Namespace, label: str, started: float,
             name=args.command,
         )
         print(f"ParaView series: {pvd}", file=sys.stderr)
-    write_assembly_vtu(args.out / "assembly.vtu", scene, result.assembly)
+    assembly = result.assembly
+    assert assembly is not None  # run_bennett always records the assembled state
+    write_assembly_vtu(args.out / "assembly.vtu", scene, assembly)
     plot_coupler_deviation({label: result}, args.out / "coupler_deviation.png")
     plot_driving_torque({label: result}, args.out / "driving_torque.png")
     summary = result.summary()
@@ -214,7 +216,7 @@ def _run_and_report(scene, args: argparse.Namespace, label: str, started: float,
     )
     misfit = scene.misfit_degrees > 0.0
     print("assembled state (gravity" + (", misfit" if misfit else "") + f"; {args.out / 'assembly.vtu'}):")
-    for link in result.assembly.links:
+    for link in assembly.links:
         print("  " + link.line())
     return 0
 
@@ -350,7 +352,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m ffrf", description="In-house flexible multibody solver (FFRF)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress")
     sub = parser.add_subparsers(dest="command", required=True)
-    for name, (help_text, configure, run) in SUBCOMMANDS.items():
+    for name, (help_text, configure, _run) in SUBCOMMANDS.items():
         configure(sub.add_parser(name, help=help_text))
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING)

@@ -127,7 +127,7 @@ def identify_branch(link_points: list[NDArray], names: list[str]) -> list[LinkAx
     positions ``(frames, k, 3)`` of the ``i``-th link after the base."""
     if len(link_points) != len(names):
         raise ValueError("one name per link is needed")
-    remaining = [_as_frames_points(p, n) for p, n in zip(link_points, names)]
+    remaining = [_as_frames_points(p, n) for p, n in zip(link_points, names, strict=True)]
     frames = {p.shape[0] for p in remaining}
     if len(frames) != 1:
         raise IdentificationError(f"all links must have the same number of frames, got {sorted(frames)}")

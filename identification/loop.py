@@ -20,6 +20,7 @@ angle of joint 3 is the base's rotation relative to link 3).
 from __future__ import annotations
 
 import itertools
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,7 +60,7 @@ class IdentifiedLoop:
             "theta": self.dh.theta.tolist(),
             "bennett_ratios": self.ratios,
             "axis3_twist_deviation": self.axis3_twist_deviation,
-            "axes": [{"direction": l.direction.tolist(), "moment": l.moment.tolist()} for l in self.axes],
+            "axes": [{"direction": line.direction.tolist(), "moment": line.moment.tolist()} for line in self.axes],
         }
 
 
@@ -74,7 +75,7 @@ def bennett_ratios(dh: DHParameters) -> dict[str, float]:
     }
 
 
-def _link_points(trajectories: dict, link: int, n: int) -> NDArray[np.float64]:
+def _link_points(trajectories: Mapping[int, ArrayLike], link: int, n: int) -> NDArray[np.float64]:
     if link not in trajectories:
         raise IdentificationError(
             f"no trajectory for link {link}: links 1 to {n - 1} must be tracked (link 0 is the fixed base)"
@@ -88,7 +89,7 @@ def _link_points(trajectories: dict, link: int, n: int) -> NDArray[np.float64]:
 
 
 def identify_loop_axes(
-    trajectories: dict[int, ArrayLike], n: int, tool_link: int
+    trajectories: Mapping[int, ArrayLike], n: int, tool_link: int
 ) -> tuple[list[Line], dict[str, LinkAxisFit]]:
     r"""The unoriented axes ``[h0 .. h_{n-1}]`` of an nR loop and their fits, from links 1 .. n-1.
 
@@ -119,28 +120,29 @@ def identify_loop_axes(
     return [fits[f"h{i}"].axis for i in range(n)], fits
 
 
-def identify_axes(trajectories: dict[int, ArrayLike]) -> tuple[list[Line], dict[str, LinkAxisFit]]:
+def identify_axes(trajectories: Mapping[int, ArrayLike]) -> tuple[list[Line], dict[str, LinkAxisFit]]:
     """The unoriented axes ``[h0, h1, h2, h3]`` and the link fits of the Bennett loop, from links 1, 2, 3."""
     return identify_loop_axes(trajectories, 4, 2)
 
 
 def _orient(axes: list[Line], nominal_alpha: NDArray, keep: int) -> tuple[list[Line], DHParameters]:
     """Flip axes other than ``axes[keep]`` so that the twists come closest to ``nominal_alpha``."""
-    best = None
+    best: tuple[float, list[Line], DHParameters] | None = None
     others = [i for i in range(len(axes)) if i != keep]
     for signs in itertools.product((1, -1), repeat=len(others)):
         oriented = list(axes)
-        for i, sign in zip(others, signs):
+        for i, sign in zip(others, signs, strict=True):
             oriented[i] = axes[i] if sign > 0 else axes[i].reversed()
         dh = dh_from_axes(oriented)
         cost = float(np.sum(wrap_angle(dh.alpha - nominal_alpha) ** 2))
         if best is None or cost < best[0]:
             best = (cost, oriented, dh)
+    assert best is not None  # product() yields at least one sign pattern
     return best[1], best[2]
 
 
 def identify_loop(
-    trajectories: dict[int, ArrayLike], nominal_alpha: ArrayLike, tool_link: int | None = None
+    trajectories: Mapping[int, ArrayLike], nominal_alpha: ArrayLike, tool_link: int | None = None
 ) -> IdentifiedLoop:
     """DH parameters of an nR loop (n = ``len(nominal_alpha)``) from tracked positions of links 1 .. n-1.
 
@@ -161,7 +163,7 @@ def identify_loop(
     return IdentifiedLoop(tuple(oriented), dh, ratios, nominal_alpha, fits)
 
 
-def identify_dh(trajectories: dict[int, ArrayLike], nominal_alpha: ArrayLike = PAPER_ALPHA) -> IdentifiedLoop:
+def identify_dh(trajectories: Mapping[int, ArrayLike], nominal_alpha: ArrayLike = PAPER_ALPHA) -> IdentifiedLoop:
     """DH parameters of the Bennett loop from tracked positions of links 1, 2 and 3 (:func:`identify_loop`).
 
     ``trajectories`` maps the link index to ``(frames, 3)`` (one tracked point) or

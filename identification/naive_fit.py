@@ -60,7 +60,7 @@ class NaiveJacobian:
 
     def describe(self, count: int = 3) -> list[str]:
         lines = []
-        for s, v in zip(self.singular_values[::-1][:count], self.weakest_directions[:count]):
+        for s, v in zip(self.singular_values[::-1][:count], self.weakest_directions[:count], strict=True):
             parts = ", ".join(f"{v[i]:+.2f} {PARAMETER_NAMES[i]}" for i in np.argsort(-np.abs(v))[:4])
             lines.append(f"singular value {s:.2e}: {parts}")
         return lines

@@ -10,6 +10,7 @@ into contiguous segments at every dropped frame or time gap, so the moving-avera
 from __future__ import annotations
 
 import csv
+import itertools
 import logging
 import re
 import warnings
@@ -188,7 +189,7 @@ def clean_record(record: LinkRecord, gap_factor: float = 1.5) -> LinkRecord:
     typical = np.median(steps) if steps.size else 0.0
     breaks = (np.diff(kept_index) > 1) | (steps > gap_factor * typical)
     edges = np.r_[0, np.flatnonzero(breaks) + 1, cleaned.n_frames]
-    segments = tuple((int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]))
+    segments = tuple((int(a), int(b)) for a, b in itertools.pairwise(edges))
     return replace(cleaned, segments=segments)
 
 
@@ -207,7 +208,9 @@ def moving_average(record: LinkRecord, window: int = 10) -> LinkRecord:
     if window == 1:
         return record
     left, right = window // 2, window - 1 - window // 2
-    keep, segments, smoothed = [], [], {link: [] for link in record.points}
+    keep: list[NDArray[np.int64]] = []
+    segments: list[tuple[int, int]] = []
+    smoothed: dict[int, list[NDArray]] = {link: [] for link in record.points}
     for start, stop in record.segments:
         if stop - start < window:
             warnings.warn(
@@ -223,6 +226,6 @@ def moving_average(record: LinkRecord, window: int = 10) -> LinkRecord:
         keep.append(np.arange(start + left, stop - right))
     if not keep:
         raise IdentificationError(f"{record.source}: no segment is longer than the {window}-frame filter window")
-    keep = np.concatenate(keep)
+    kept = np.concatenate(keep)
     points = {link: np.concatenate(parts) for link, parts in smoothed.items()}
-    return LinkRecord(record.time[keep], points, record.source, tuple(segments))
+    return LinkRecord(record.time[kept], points, record.source, tuple(segments))

@@ -55,11 +55,11 @@ def run_statistics(loops: list[IdentifiedLoop]) -> RunStatistics:
     if not loops:
         raise ValueError("no identified runs to summarise")
     values = {
-        "a": np.array([l.dh.a for l in loops]),
-        "alpha": np.array([l.dh.alpha for l in loops]),
-        "d": np.array([l.dh.d for l in loops]),
-        "ratios": np.array([list(l.ratios.values()) for l in loops]),
-        "axis3_twist_deviation": np.array([[l.axis3_twist_deviation] for l in loops]),
+        "a": np.array([loop.dh.a for loop in loops]),
+        "alpha": np.array([loop.dh.alpha for loop in loops]),
+        "d": np.array([loop.dh.d for loop in loops]),
+        "ratios": np.array([list(loop.ratios.values()) for loop in loops]),
+        "axis3_twist_deviation": np.array([[loop.axis3_twist_deviation] for loop in loops]),
     }
     ddof = 1 if len(loops) > 1 else 0
     return RunStatistics(

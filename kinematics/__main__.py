@@ -22,7 +22,7 @@ from .mobility import rigid_mobility
 
 def _quaternion_text(q: np.ndarray) -> str:
     terms = []
-    for value, unit in zip(q, ("", "i", "j", "k")):
+    for value, unit in zip(q, ("", "i", "j", "k"), strict=True):
         if abs(value) > 1e-12:
             terms.append(f"{value:+.6g}{unit}")
     return " ".join(terms) if terms else "0"
@@ -40,7 +40,7 @@ def _print_bennett(linkage: BennettLinkage, out: Path, n: int) -> None:
     k = linkage.coefficients
     print("Configuration curve: (t0, t1, t2, t3) = (" + ", ".join(f"{c:.6g} t" for c in k) + ")")
     print("Motion polynomial of the coupler (link 2) relative to the base, C(t) = (t - h0)(k1 t - h1):")
-    for power, c in zip((2, 1, 0), linkage.motion_polynomial().coefficients):
+    for power, c in zip((2, 1, 0), linkage.motion_polynomial().coefficients, strict=True):
         print(f"  t^{power}: {_dual_quaternion_text(c)}")
     path = linkage.coupler_path(n=n)
     residual = linkage.closure_residual(linkage.parameter_from_joint(np.linspace(0, 2 * np.pi, n), joint=3))

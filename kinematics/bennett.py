@@ -265,7 +265,7 @@ def _configuration_coefficients(axes: tuple[Line, ...]) -> NDArray[np.float64]:
         )
     k = np.concatenate([[1.0], 1.0 / c])
     closure = np.array([[1.0, 0, 0, 0, 0, 0, 0, 0]])
-    for k_i, axis in zip(k, axes):
+    for k_i, axis in zip(k, axes, strict=True):
         closure = _polynomial_product(closure, _linear_polynomial(k_i, axis))
     imaginary = closure[:, 1:]
     if np.max(np.abs(imaginary)) > 1e-9 * scale * np.max(np.abs(closure)):

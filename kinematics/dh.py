@@ -79,7 +79,7 @@ def wrap_angle(angle: ArrayLike) -> NDArray[np.float64]:
     return np.where(wrapped == -np.pi, np.pi, wrapped)
 
 
-def _params(a, alpha, d, theta):
+def _params(a: ArrayLike, alpha: ArrayLike, d: ArrayLike, theta: ArrayLike) -> tuple[NDArray, ...]:
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (a, alpha, d, theta)))
     return arrays
 
@@ -107,7 +107,9 @@ def dh_matrix(a: ArrayLike, alpha: ArrayLike, d: ArrayLike, theta: ArrayLike) ->
     return m
 
 
-def _loop_arrays(a, alpha, d):
+def _loop_arrays(
+    a: ArrayLike, alpha: ArrayLike, d: ArrayLike | None
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     a = np.atleast_1d(np.asarray(a, dtype=float))
     alpha = np.atleast_1d(np.asarray(alpha, dtype=float))
     n = a.shape[0]
@@ -251,18 +253,23 @@ def dh_from_axes(lines: list[Line], tol: float = 1e-12) -> DHParameters:
     n = len(lines)
     if n < 3:
         raise ValueError(f"a closed loop needs at least 3 axes, got {n}")
-    feet_on_next, feet_on_self, units = [None] * n, [None] * n, [None] * n
+    # Per pair (h_i, h_{i+1}), keyed by i: the normal's feet on h_{i+1} and on h_i, and its unit vector.
+    feet_on_next: dict[int, NDArray[np.float64]] = {}
+    feet_on_self: dict[int, NDArray[np.float64]] = {}
+    units: dict[int, NDArray[np.float64]] = {}
     # Start with the pair (h_{n-1}, h_0) so that a parallel pair (h_0, h_1) can reuse its foot.
     for i in [n - 1] + list(range(n - 1)):
-        previous_foot = feet_on_next[i - 1] if feet_on_next[i - 1] is not None else None
+        previous_foot = feet_on_next.get((i - 1) % n)
         normal = common_normal(lines[i], lines[(i + 1) % n], reference=previous_foot, tol=tol)
-        if normal.kind == "coincident":
+        if normal.kind == "coincident" or normal.unit is None:  # unit is None exactly for coincident axes
             raise ValueError(f"axes h_{i} and h_{(i + 1) % n} coincide: the DH parameters are undefined")
         feet_on_self[i], feet_on_next[i] = normal.foot0, normal.foot1
         units[i] = normal.unit
     a = np.array([np.linalg.norm(feet_on_next[i] - feet_on_self[i]) for i in range(n)])
     z = [line.direction for line in lines]
     alpha = np.array([np.arctan2(np.cross(z[i], z[(i + 1) % n]) @ units[i], z[i] @ z[(i + 1) % n]) for i in range(n)])
-    d = np.array([(feet_on_self[i] - feet_on_next[i - 1]) @ z[i] for i in range(n)])
-    theta = np.array([np.arctan2(np.cross(units[i - 1], units[i]) @ z[i], units[i - 1] @ units[i]) for i in range(n)])
+    d = np.array([(feet_on_self[i] - feet_on_next[(i - 1) % n]) @ z[i] for i in range(n)])
+    theta = np.array(
+        [np.arctan2(np.cross(units[(i - 1) % n], units[i]) @ z[i], units[(i - 1) % n] @ units[i]) for i in range(n)]
+    )
     return DHParameters(a=a, alpha=alpha, d=d, theta=theta)

@@ -133,9 +133,9 @@ class Line:
         )
 
     def __repr__(self) -> str:
-        l = ", ".join(f"{c:.6g}" for c in self.direction)
-        m = ", ".join(f"{c:.6g}" for c in self.moment)
-        return f"Line(direction=[{l}], moment=[{m}])"
+        direction = ", ".join(f"{c:.6g}" for c in self.direction)
+        moment = ", ".join(f"{c:.6g}" for c in self.moment)
+        return f"Line(direction=[{direction}], moment=[{moment}])"
 
 
 class CommonNormal(NamedTuple):

@@ -49,7 +49,8 @@ def _levi_civita(a: int, b: int, c: int) -> float:
 
 @njit(cache=True)
 def second_moment(zeta: np.ndarray, x2: np.ndarray, c: np.ndarray, d: np.ndarray) -> np.ndarray:
-    r"""Eq. (F5): :math:`U_{ab} = \sum_{ij} m_{ij} u^a_i u^b_j = X_{ab} + \zeta\cdot(C_{ab} + C_{ba}) + \zeta^T D_{ab}\zeta`."""
+    r"""Eq. (F5): :math:`U_{ab} = \sum_{ij} m_{ij} u^a_i u^b_j
+    = X_{ab} + \zeta\cdot(C_{ab} + C_{ba}) + \zeta^T D_{ab}\zeta`."""
     return _second_moment(zeta, x2, c, modal_products(d, zeta))
 
 

@@ -68,7 +68,8 @@ def rotation_derivative(p: np.ndarray, u: np.ndarray) -> np.ndarray:
     r"""Exact Jacobian :math:`\partial(A(p)u)/\partial p` (3x4) of the quadratic form Eq. (R1), Eq. (R3):
 
     .. math:: \frac{\partial (Au)}{\partial p_0} = 2p_0u + 2\mathbf p\times u,\quad
-              \frac{\partial (Au)}{\partial\mathbf p} = 2(\mathbf p^Tu)I + 2\mathbf p u^T - 2u\mathbf p^T - 2p_0\tilde u.
+              \frac{\partial (Au)}{\partial\mathbf p}
+              = 2(\mathbf p^Tu)I + 2\mathbf p u^T - 2u\mathbf p^T - 2p_0\tilde u.
 
     For unit ``p`` and tangent variations it equals :math:`-A\tilde u\bar G`.
     """

@@ -45,6 +45,11 @@ __all__ = [
 _COMPLEX_STEP = 1e-30  # any tiny step: complex-step derivatives have no cancellation error
 
 
+#: The body's constant arrays, in the order the kernels take them:
+#: (s0, s1, x2, c, d, reduced mass, reduced stiffness, reduced damping).
+_Packed = tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]
+
+
 @dataclass(frozen=True, eq=False)
 class FlexibleBody:
     """Constant data of one reduced FFRF body (SI units).
@@ -59,8 +64,8 @@ class FlexibleBody:
     stiffness: NDArray[np.float64]
     damping: NDArray[np.float64]
     exact_gravity: bool = True
-    _packed: tuple = field(init=False, repr=False)
-    _packed_complex: tuple = field(init=False, repr=False)
+    _packed: _Packed = field(init=False, repr=False)
+    _packed_complex: _Packed = field(init=False, repr=False)
 
     def __post_init__(self):
         m = self.moments.n_modes

@@ -79,13 +79,14 @@ class FEModel:
         *,
         groups: dict[str, ArrayLike] | None = None,
         name: str = "link",
-    ) -> "FEModel":
+    ) -> FEModel:
         """Assemble the model from points (n x 3, metres) and linear tetrahedra (k x 4)."""
-        mesh = TetMesh(np.asarray(points, dtype=float), np.asarray(tetrahedra), dict(groups or {}), name)
+        named = {key: np.asarray(value) for key, value in (groups or {}).items()}  # TetMesh makes them int64
+        mesh = TetMesh(np.asarray(points, dtype=float), np.asarray(tetrahedra), named, name)
         return cls.from_tet_mesh(mesh, Material(float(E), float(nu), float(rho), name=f"{name} material"), order)
 
     @classmethod
-    def from_tet_mesh(cls, mesh: TetMesh, material: Material, order: int = 1) -> "FEModel":
+    def from_tet_mesh(cls, mesh: TetMesh, material: Material, order: int = 1) -> FEModel:
         """Assemble the model of a checked :class:`TetMesh` (see :func:`ffrf.mesh.tet_mesh.check_mesh`); a mesh in the
         opposite node order is reoriented with a warning (:func:`ffrf.mesh.tet_mesh.oriented`)."""
         if order not in (1, 2):

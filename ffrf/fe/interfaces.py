@@ -307,9 +307,10 @@ def interface_in_cylinder(
     :func:`triangles_in_cylinder` for the selection rule."""
     tris = triangles_in_cylinder(model.mesh, point, direction, radius, axial_extent, tol)
     if len(tris) == 0:
+        shown = np.round(np.asarray(point, dtype=float), 6).tolist()
         raise InterfaceError(
             f"interface {name!r} of {model.mesh.name}: no boundary triangle lies on the cylinder "
-            f"(point {np.round(point, 6).tolist()}, radius {radius!r} m, extent {axial_extent!r} m, "
+            f"(point {shown}, radius {radius!r} m, extent {axial_extent!r} m, "
             f"tol {tol!r} m); check the axis, the radius and the units (metres)"
         )
     return interface_from_triangles(model, name, tris)
@@ -334,8 +335,9 @@ def interface_around_axis(
     r = np.linalg.norm(rel - np.outer(t, d), axis=1)
     radius = float(r.min())
     if radius <= tol:
+        shown = np.round(np.asarray(point, dtype=float), 6).tolist()
         raise InterfaceError(
-            f"interface {name!r} of {mesh.name}: the axis through {np.round(point, 6).tolist()} touches the body's "
+            f"interface {name!r} of {mesh.name}: the axis through {shown} touches the body's "
             f"surface ({radius:.3g} m away); a bore around it has a radius > 0: check the axis and the units"
         )
     on_bore = np.abs(r - radius) <= tol

@@ -13,6 +13,7 @@ import logging
 import math
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -28,7 +29,7 @@ _GMSH_TRIANGLE3 = 2
 
 
 @contextlib.contextmanager
-def gmsh_session(model_name: str = "ffrf") -> Iterator[object]:
+def gmsh_session(model_name: str = "ffrf") -> Iterator[Any]:
     """Headless, single-threaded (hence deterministic) gmsh session; always finalised.
 
     Yields the ``gmsh`` module with a fresh model named ``model_name``.
@@ -97,7 +98,7 @@ def mesh_current_model(name: str = "mesh", *, length_scale: float = 1.0) -> TetM
         tris = []
         for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, ptag):
             types, _, nodes = gmsh.model.mesh.getElements(dim, int(entity))
-            for etype, enodes in zip(types, nodes):
+            for etype, enodes in zip(types, nodes, strict=True):
                 if etype == _GMSH_TRIANGLE3:
                     tris.append(index[enodes.astype(np.int64)].reshape(-1, 3))
         groups[group_name] = np.concatenate(tris) if tris else np.zeros((0, 3), dtype=np.int64)

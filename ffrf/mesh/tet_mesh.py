@@ -84,7 +84,7 @@ class TetMesh:
         """Sum of the tetrahedron volumes (m^3)."""
         return float(signed_volumes(self.points, self.tets).sum())
 
-    def scaled(self, factor: float) -> "TetMesh":
+    def scaled(self, factor: float) -> TetMesh:
         """Copy with all coordinates multiplied by ``factor`` (e.g. 1e-3 for mm -> m)."""
         return TetMesh(self.points * factor, self.tets, dict(self.groups), self.name)
 
@@ -334,7 +334,7 @@ def _groups_from_meshio(raw) -> dict[str, NDArray[np.int64]]:
     groups: dict[str, list[NDArray]] = {}
     if key is None:
         return {}
-    for block, tags in zip(raw.cells, raw.cell_data[key]):
+    for block, tags in zip(raw.cells, raw.cell_data[key], strict=True):
         if block.type not in ("triangle", "triangle6"):
             continue
         for tag in np.unique(tags):

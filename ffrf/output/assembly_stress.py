@@ -23,9 +23,9 @@ adapts any built scene (:class:`ffrf.scenes.builder.Scene`: ``bodies[k].fe``, ``
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -86,7 +86,10 @@ class LinkStress:
         )
         if self.reactions:
             d = self.as_dict()
-            text += f"; largest joint reaction {d['max_reaction_force_n']:.3g} N, {1e3 * d['max_reaction_moment_nm']:.3g} N mm"
+            text += (
+                f"; largest joint reaction {d['max_reaction_force_n']:.3g} N, "
+                f"{1e3 * d['max_reaction_moment_nm']:.3g} N mm"
+            )
         return text
 
 
@@ -130,7 +133,7 @@ def nearest_feature(point: ArrayLike, features: Mapping[str, ArrayLike]) -> tupl
         name: float(np.min(np.linalg.norm(np.asarray(xyz, dtype=float) - point, axis=1)))
         for name, xyz in features.items()
     }
-    name = min(distances, key=distances.get)
+    name = min(distances, key=distances.__getitem__)
     return name, distances[name]
 
 
@@ -160,7 +163,7 @@ def joint_reactions(
     """
     lam = np.asarray(multipliers, dtype=float)
     out, row = {}, 0
-    for name, size, is_driven in zip(names, sizes, driven):
+    for name, size, is_driven in zip(names, sizes, driven, strict=True):
         rows = lam[row : row + size]
         rotation = rows[3:-1] if is_driven else rows[3:]
         out[name] = {"force_n": float(np.linalg.norm(rows[:3])), "moment_nm": float(np.linalg.norm(rotation))}

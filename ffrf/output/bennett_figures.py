@@ -22,8 +22,10 @@ units (e.g. the Exudyn twin's curve: angle from its start in rad, deviation in m
 
 from __future__ import annotations
 
+import os
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Mapping, Union
+from typing import Protocol
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -43,8 +45,17 @@ __all__ = [
 
 #: One curve: drive angle since the start (rad) and values in display units.
 Series = tuple[ArrayLike, ArrayLike]
+
+
+class HasSensors(Protocol):
+    """Anything with sensors by name, e.g. a :class:`ffrf.scenes.bennett_run.BennettResult`."""
+
+    @property
+    def sensors(self) -> Mapping[str, NDArray]: ...
+
+
 #: A run: a BennettResult, a results.npz file, or a directory holding results.npz.
-Run = Union[object, str, Path]
+Run = HasSensors | str | os.PathLike[str]
 
 #: The paper's colours (orange: stiff, blue: PLA) and two more for the misaligned variants.
 PAPER_COLORS = {"rigid": "tab:orange", "pla": "tab:blue", "pla1": "tab:green", "pla2": "tab:red"}
@@ -52,7 +63,7 @@ PAPER_COLORS = {"rigid": "tab:orange", "pla": "tab:blue", "pla1": "tab:green", "
 
 def run_sensors(run: Run) -> Mapping[str, NDArray]:
     """Sensors of a run (``drive_angle``, ``coupler_deviation``, ``driving_torque``, ...), SI units."""
-    if hasattr(run, "sensors"):
+    if not isinstance(run, (str, os.PathLike)):
         return run.sensors
     path = Path(run)
     if path.is_dir():

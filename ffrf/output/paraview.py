@@ -10,14 +10,18 @@ frame, turned into world axes) and ``body`` (the body index), as the style guide
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.body.euler_parameters import rotation_matrix
+
+if TYPE_CHECKING:
+    from ffrf.fe.fe_model import FEModel
 
 __all__ = ["write_time_series"]
 
@@ -33,7 +37,7 @@ def _frame_points(fe, basis: NDArray, block: NDArray) -> tuple[NDArray, NDArray]
 
 def write_time_series(
     directory: str | Path,
-    bodies: Sequence[tuple[object, NDArray]],
+    bodies: Sequence[tuple[FEModel, NDArray]],
     blocks: Sequence[slice],
     time: NDArray,
     q: NDArray,
@@ -50,12 +54,12 @@ def write_time_series(
     directory = Path(directory)
     (directory / "vtk").mkdir(parents=True, exist_ok=True)
     offsets = np.cumsum([0] + [len(fe.mesh.points) for fe, _ in bodies])
-    tets = np.vstack([fe.mesh.tets + offset for (fe, _), offset in zip(bodies, offsets)])
+    tets = np.vstack([fe.mesh.tets + offset for (fe, _), offset in zip(bodies, offsets[:-1], strict=True)])
     reference = np.vstack([fe.nodes[: len(fe.mesh.points)] for fe, _ in bodies])
-    body_id = np.concatenate([np.full(len(fe.mesh.points), k, dtype=float) for k, (fe, _) in enumerate(bodies)])
+    body_id = np.concatenate([np.full(len(fe.mesh.points), k, dtype=np.float64) for k, (fe, _) in enumerate(bodies)])
     entries = []
     for row in range(0, len(time), max(1, every)):
-        parts = [_frame_points(fe, basis, q[row, block]) for (fe, basis), block in zip(bodies, blocks)]
+        parts = [_frame_points(fe, basis, q[row, block]) for (fe, basis), block in zip(bodies, blocks, strict=True)]
         points = np.vstack([p for p, _ in parts])
         elastic = np.vstack([e for _, e in parts])
         file = directory / "vtk" / f"{name}_{row:05d}.vtu"

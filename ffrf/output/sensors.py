@@ -91,10 +91,10 @@ def scene_sensors(
     out = {**node_sensors(scene, q), **joint_rows(system, time, q, multipliers, qd)}
     for name, parts in scene.joint_sensors.items():  # the mean of joint points on one body
         out[name] = np.mean([out[f"{joint}_point{side}"] for joint, side in parts], axis=0)
-    driven = [j for _, j in _marker_joints(system) if j.angle is not None]
+    driven = [(j, j.angle) for _, j in _marker_joints(system) if j.angle is not None]
     if len(driven) == 1:
-        joint = driven[0]
-        out["drive_angle"] = np.array([joint.angle(float(t)) for t in time])
+        joint, angle = driven[0]
+        out["drive_angle"] = np.array([angle(float(t)) for t in time])
         out["driving_torque"] = out[f"{joint.name}_torque"]
         out.update(energy_balance(system, time, out, qd))
     return out

@@ -63,7 +63,7 @@ def write_results(
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     extra = {} if coordinates is None else {"q": coordinates}
-    np.savez(directory / "results.npz", **arrays, **extra)
+    np.savez(directory / "results.npz", allow_pickle=True, **arrays, **extra)
     write_csv(directory / "results.csv", arrays)
     (directory / "metadata.json").write_text(json.dumps(metadata, indent=2, default=_json_value))
     return directory

@@ -15,9 +15,10 @@ import json
 import logging
 import os
 import tempfile
+from collections.abc import Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -62,7 +63,7 @@ class SavedReducedBody:
     fingerprint: str
 
 
-def _update_with_array(digest: "hashlib._Hash", name: str, array: Any, dtype: str) -> None:
+def _update_with_array(digest: hashlib._Hash, name: str, array: Any, dtype: str) -> None:
     array = np.ascontiguousarray(array, dtype=dtype)
     digest.update(f"{name}:{array.shape}:{dtype};".encode())
     digest.update(array.tobytes())
@@ -147,7 +148,7 @@ def load_reduced_body(path: str | Path, expected_fingerprint: str | None = None)
         bounds = np.cumsum(np.concatenate([[0], data["interface_sizes"]]))
         interfaces = tuple(
             RigidInterface(data["interface_nodes"][a:b], data["interface_weights"][a:b], center)
-            for a, b, center in zip(bounds[:-1], bounds[1:], data["interface_centers"])
+            for a, b, center in zip(bounds[:-1], bounds[1:], data["interface_centers"], strict=True)
         )
         reduction = CraigBamptonBasis(
             data["basis"],

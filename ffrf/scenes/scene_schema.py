@@ -14,6 +14,7 @@ import difflib
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from ffrf.errors import SceneError
 from ffrf.system.markers import JOINT_OFFSETS
@@ -62,7 +63,7 @@ def _one_of(choices: tuple) -> Callable[[object], str | None]:
     return lambda value: None if value in choices else f"must be one of {list(choices)}, got {value!r}"
 
 
-def _at_least(bound: int) -> Callable[[object], str | None]:
+def _at_least(bound: int) -> Callable[[Any], str | None]:
     return lambda value: None if value >= bound else f"must be >= {bound}, got {value!r}"
 
 
@@ -259,7 +260,7 @@ def _label(entry: dict) -> str:
 
 
 def _unique(entries: list[dict], what: str, where: str) -> None:
-    seen: set[str] = set()
+    seen: set[str | None] = set()
     for entry in entries:
         name = entry.get("name")
         if name in seen:
@@ -315,15 +316,15 @@ def _check_joint(joint: dict, interfaces: Mapping[str, set[str]], where: str) ->
     sides = [joint["body0"], joint["body1"]]
     if sides == ["ground", "ground"]:
         raise SceneError(f"{where}: at least one side must be a body, both are 'ground'")
-    for side, body in enumerate(sides):
+    for index, body in enumerate(sides):
         if body == "ground":
             continue
         if body not in interfaces:
-            raise SceneError(f"{where}: unknown body {body!r} in body{side}; bodies are {sorted(interfaces)}")
-        interface = joint.get(f"interface{side}")
+            raise SceneError(f"{where}: unknown body {body!r} in body{index}; bodies are {sorted(interfaces)}")
+        interface = joint.get(f"interface{index}")
         if interface is None:
             raise SceneError(
-                f"{where}: missing required key 'interface{side}' (an interface of body {body!r}: "
+                f"{where}: missing required key 'interface{index}' (an interface of body {body!r}: "
                 f"{sorted(interfaces[body])})"
             )
         if interface not in interfaces[body]:

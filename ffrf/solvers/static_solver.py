@@ -105,7 +105,8 @@ def _not_converged(increments: list[float], gap: float, tolerance: float, advice
     if rate < 0.7 and last < increments[-2]:
         more = int(np.ceil(np.log(tolerance / last) / np.log(rate))) if last > tolerance else 1
         return StaticDivergence(
-            f"static Newton was converging but ran out of iterations: the increment fell from {first:.3e} to {last:.3e} "
+            "static Newton was converging but ran out of iterations: "
+            f"the increment fell from {first:.3e} to {last:.3e} "
             f"in {n} iterations (x{rate:.2f} per iteration; tolerance {tolerance:.1e}, constraint residual {gap:.3e}); "
             f"raise max_iterations (about {more} more at this rate), or loosen the tolerance if the increments stall "
             "at round-off"
@@ -285,7 +286,9 @@ def quasi_static(
     times = np.asarray(times, dtype=float)
     q = np.array(q0, dtype=float)
     lam = np.zeros(system.n_constraints)
-    qs, lams, counts = [], [], []
+    qs: list[NDArray] = []
+    lams: list[NDArray] = []
+    counts: list[int] = []
     tangent = None
     model = newton_model(system, fast_path)
     t_done = float(times[0])

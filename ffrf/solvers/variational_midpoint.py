@@ -86,9 +86,10 @@ def _midpoint_forces(system: MultibodySystem, q: NDArray, v: NDArray) -> NDArray
 
 
 def _newton_matrix(system: MultibodySystem, q_mid: NDArray, v: NDArray, h: float, cq_start: NDArray, cq_end: NDArray):
-    r"""Eq. (V5), factored by the rank rule (R1) (redundant constraints give minimum-norm steps): :math:`[[M + \tfrac h2 (D_t - \dot M) + \tfrac{h^2}4 K_t, C_q(q_k)^T],
-    [C_q(q_{k+1}), 0]]` from the body tangents of generalized-alpha (:math:`K_t, D_t` at zero
-    acceleration). It leaves out :math:`\tfrac{h^2}4\partial(\dot M\dot q)/\partial q`, which is
+    r"""Eq. (V5), factored by the rank rule (R1) (redundant constraints give minimum-norm steps):
+    :math:`[[M + \tfrac h2 (D_t - \dot M) + \tfrac{h^2}4 K_t, C_q(q_k)^T], [C_q(q_{k+1}), 0]]`
+    from the body tangents of generalized-alpha (:math:`K_t, D_t` at zero acceleration).
+    It leaves out :math:`\tfrac{h^2}4\partial(\dot M\dot q)/\partial q`, which is
     :math:`O(h^2|\dot q|^2)` against ``M``, so modified Newton contracts by about that factor."""
     n = system.n_coordinates
     jq, jqd = system.body_tangents(q_mid, v, np.zeros(n))
@@ -199,7 +200,7 @@ def variational_midpoint(
         raise ValueError("initial state contains NaN or inf; start from a finite state")
     qdd, lam = consistent_accelerations(system, q, qd0, 0.0)
     p = momenta_from_velocities(system, q, qd0)
-    history = {"time": [], "q": [], "qd": [], "qdd": [], "lam": []}
+    history: dict[str, list] = {"time": [], "q": [], "qd": [], "qdd": [], "lam": []}
     iterations: list[int] = []
     started = wallclock.perf_counter()
 

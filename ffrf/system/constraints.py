@@ -149,6 +149,6 @@ def constraint_velocity_derivative(
 ) -> NDArray:
     r""":math:`(\partial(C_q\dot q)/\partial q)\,\dot q`, the quadratic term of the acceleration-level
     constraint :math:`C_q\ddot q + (C_q\dot q)_q\dot q = 0`, as one complex-step directional derivative."""
-    shifted = [b.astype(np.complex128) + 1j * _STEP * v for b, v in zip(blocks, velocities)]
+    shifted = [b.astype(np.complex128) + 1j * _STEP * v for b, v in zip(blocks, velocities, strict=True)]
     rows = constraint.jacobian(shifted, t)
-    return sum(r @ v for r, v in zip(rows, velocities)).imag / _STEP
+    return sum(r @ v for r, v in zip(rows, velocities, strict=True)).imag / _STEP

@@ -22,8 +22,8 @@ all six with :math:`\varphi(t)`. The constraint force on body ``k`` is :math:`-C
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -47,7 +47,8 @@ __all__ = [
 
 
 def exp_so3_tangent(theta: NDArray) -> NDArray:
-    r"""Right Jacobian :math:`T(\theta)` of the exponential map, :math:`d\exp(\tilde\theta) = \exp(\tilde\theta)\,(T\,d\theta)^\sim`:
+    r"""Right Jacobian :math:`T(\theta)` of the exponential map,
+    :math:`d\exp(\tilde\theta) = \exp(\tilde\theta)\,(T\,d\theta)^\sim`:
     :math:`T = I - \frac{1-\cos\phi}{\phi^2}\tilde\theta + \frac{\phi - \sin\phi}{\phi^3}\tilde\theta^2`."""
     theta = np.asarray(theta)
     return exp_so3_tangent_kernel(theta.astype(np.result_type(theta, float)))
@@ -56,8 +57,8 @@ def exp_so3_tangent(theta: NDArray) -> NDArray:
 def frame_from_axis(z: ArrayLike, reference_x: ArrayLike | None = None) -> NDArray[np.float64]:
     """Orthonormal joint frame (columns x, y, z) with the given z; x is ``reference_x`` (default the
     world x axis) made normal to z, or the world y axis when ``reference_x`` is along z."""
-    z = np.asarray(z, float) / np.linalg.norm(z)
-    x = np.array([1.0, 0.0, 0.0]) if reference_x is None else np.asarray(reference_x, float)
+    z = np.asarray(z, np.float64) / np.linalg.norm(z)
+    x = np.array([1.0, 0.0, 0.0]) if reference_x is None else np.asarray(reference_x, np.float64)
     x = x - (x @ z) * z
     if np.linalg.norm(x) < 1e-8:
         x = np.array([0.0, 1.0, 0.0]) - z[1] * z

@@ -48,7 +48,8 @@ def _skew(v: NDArray) -> NDArray:
 
 def exp_so3(theta: NDArray) -> NDArray:
     r"""Rodrigues' formula :math:`\exp(\tilde\theta) = I + \frac{\sin\phi}{\phi}\tilde\theta +
-    \frac{1-\cos\phi}{\phi^2}\tilde\theta^2`, :math:`\phi^2 = \theta\cdot\theta` (analytic, also for complex ``theta``)."""
+    \frac{1-\cos\phi}{\phi^2}\tilde\theta^2`, :math:`\phi^2 = \theta\cdot\theta`
+    (analytic, also for complex ``theta``)."""
     theta = np.asarray(theta)
     return exp_so3_kernel(theta.astype(np.result_type(theta, float)))
 
@@ -88,7 +89,9 @@ class BodyMarker:
         return rotation_matrix(q[3:7]) @ exp_so3(self.rotation_vector(q))
 
 
-def _checked_nodes(nodes: NDArray, indices: ArrayLike, weights: ArrayLike | None, name: str):
+def _checked_nodes(
+    nodes: NDArray, indices: ArrayLike, weights: ArrayLike | None, name: str
+) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     indices = np.asarray(indices, dtype=np.int64)
     if indices.size == 0:
         raise ValueError(f"marker {name!r}: the interface has no nodes; check the node selection")

@@ -87,7 +87,7 @@ class MultibodySystem:
         out = np.zeros((self.n_constraints, self.n_coordinates))
         for k, c in enumerate(self.all_constraints):
             rows = slice(int(self.rows[k]), int(self.rows[k + 1]))
-            for i, block in zip(c.bodies, c.jacobian([q[self.block(i)] for i in c.bodies], t)):
+            for i, block in zip(c.bodies, c.jacobian([q[self.block(i)] for i in c.bodies], t), strict=True):
                 out[rows, self.block(i)] += block
         return out
 
@@ -159,7 +159,8 @@ class MultibodySystem:
     def initial_state(
         self, positions: ArrayLike | None = None, rotations: ArrayLike | None = None
     ) -> NDArray[np.float64]:
-        """Coordinates with bodies at ``positions`` (n x 3), Euler parameters ``rotations`` (n x 4, default identity), zeta = 0."""
+        """Coordinates with bodies at ``positions`` (n x 3), Euler parameters ``rotations``
+        (n x 4, default identity), zeta = 0."""
         q = np.zeros(self.n_coordinates)
         for i in range(len(self.bodies)):
             s = self.block(i)

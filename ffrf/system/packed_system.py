@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import logging
 import weakref
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -128,7 +128,8 @@ def _ragged(arrays, dtype=np.float64) -> tuple[NDArray, NDArray[np.int64]]:
 
 
 def _pack_bodies(bodies: tuple[FlexibleBody, ...], offsets: NDArray) -> tuple:
-    """``(offsets, mass, exact_gravity, real, complex, starts)`` (module docstring of :mod:`ffrf.system.system_kernels`)."""
+    """``(offsets, mass, exact_gravity, real, complex, starts)``
+    (module docstring of :mod:`ffrf.system.system_kernels`)."""
     columns = [_ragged([body._packed[k] for body in bodies]) for k in range(8)]
     real = tuple(flat for flat, _ in columns)
     starts = np.array([st for _, st in columns], dtype=np.int64)
@@ -189,20 +190,25 @@ def _pack_side(sides: list[tuple]) -> tuple:
 
 
 def _pack_joints(system: MultibodySystem) -> tuple[tuple, tuple]:
-    kinds, sides, locked, angles = [], [], [], []
+    kinds: list[int] = []
+    sides: list[tuple] = []
+    locked: list[tuple[int, ...]] = []
+    angles: list[Callable[[float], float] | None] = []
     for c in system.all_constraints:
         if type(c) is EulerNormalization:
             kinds.append(EULER)
             sides.append((_PLACEHOLDER_SIDE, (c.bodies[0],) + _PLACEHOLDER_SIDE[1:]))
             locked.append((0,) * 6)
             angles.append(None)
-        else:
+        elif type(c) is MarkerJoint:
             kinds.append(MARKER_JOINT)
             sides.append(
                 (_side_arrays(c.marker0, c.rotation0, c.offset0), _side_arrays(c.marker1, c.rotation1, c.offset1))
             )
             locked.append(tuple(int(bool(x)) for x in c.locked))
             angles.append(c.angle)
+        else:  # _unsupported(system) turns such a system away before packing
+            raise TypeError(f"constraint {c.name!r} is a {type(c).__name__}: the packed system takes none")
     joints = (
         np.array(kinds, dtype=np.int64),
         np.array([s[0][0] for s in sides], dtype=np.int64),

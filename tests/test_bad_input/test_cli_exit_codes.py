@@ -27,7 +27,8 @@ def test_ffrf_run_refuses_a_bad_scene_with_exit_2(tmp_path, capsys):
     "content, words",
     [
         (
-            "Segments\n100\n,,Bennett:Link1\nFrame,Sub Frame,RX,RY,RZ,TX,TY,TZ\n,,deg,deg,deg,mm,mm,mm\n1,0,0,0,0,a,2,3\n",
+            "Segments\n100\n,,Bennett:Link1\nFrame,Sub Frame,RX,RY,RZ,TX,TY,TZ\n,,deg,deg,deg,mm,mm,mm\n"
+            "1,0,0,0,0,a,2,3\n",
             "line 6: could not convert string to float: 'a'",
         ),
         ("Segments\n100\n,,Bennett:Link1\nFrame,Sub Frame,RX,RY,RZ,TX,TY,TZ\n,,deg,deg,deg,mm,mm,mm\n", "no data rows"),

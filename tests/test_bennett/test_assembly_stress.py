@@ -56,7 +56,7 @@ def stress_errors(variant: str, gravity) -> list[float]:
     solution = assemble(scene)
     stress = scene_assembly_stress(scene, solution.q, solution.multipliers)
     errors = []
-    for link, reduced in zip(scene.links, stress.links):
+    for link, reduced in zip(scene.links, stress.links, strict=True):
         full = full_static_displacement(link, solution.q[scene.system.block(link.index)], np.asarray(gravity, float))
         truth = element_von_mises(link.fe.nodes, link.fe.mesh.tets, full, link.fe.material.E, link.fe.material.nu)
         errors.append(float(np.abs(reduced.element_von_mises - truth).max() / truth.max()))
@@ -87,7 +87,7 @@ def assembled_pla1():
 
 def test_strain_energy_and_clamp_reaction(assembled_pla1):
     scene, solution, stress = assembled_pla1
-    for link, result in zip(scene.links, stress.links):
+    for link, result in zip(scene.links, stress.links, strict=True):
         zeta = solution.q[scene.system.block(link.index)][7:]
         # Element sum of eps:sigma V / 2 against zeta^T K_red zeta / 2 (P1: the same quadratic form).
         assert result.strain_energy_j == pytest.approx(0.5 * zeta @ link.reduction.reduced_stiffness @ zeta, rel=1e-9)

@@ -75,7 +75,7 @@ def test_paraview_series(runs, tmp_path):
     result = runs["pla"]
     pvd = write_time_series(
         tmp_path,
-        [(l.fe, l.reduction.basis) for l in scene.links],
+        [(link.fe, link.reduction.basis) for link in scene.links],
         [scene.system.block(k) for k in range(4)],
         result.time,
         result.q,
@@ -87,7 +87,7 @@ def test_paraview_series(runs, tmp_path):
     import meshio
 
     frame = meshio.read(tmp_path / "vtk" / "b_00004.vtu")
-    assert frame.points.shape[0] == sum(len(l.fe.mesh.points) for l in scene.links)
+    assert frame.points.shape[0] == sum(len(link.fe.mesh.points) for link in scene.links)
     # The base is clamped: it only deflects elastically (tens of micrometres); the coupler moves by centimetres.
     body = frame.point_data["body"]
     assert np.abs(frame.point_data["displacement"][body == 0]).max() < 1e-3

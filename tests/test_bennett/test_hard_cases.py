@@ -8,22 +8,16 @@ and quasi-static motion, never values stored from an earlier run of our own solv
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
+import hard_cases  # bench/hard_cases.py, on sys.path through this folder's conftest.py
 import numpy as np
 import pytest
 
-BENCH = Path(__file__).resolve().parents[2] / "bench"
-if str(BENCH) not in sys.path:
-    sys.path.insert(0, str(BENCH))
-
-import hard_cases  # noqa: E402  (bench/ is not a package)
-
-from ffrf.fe.materials import PLA, RIGID, Material  # noqa: E402
-from ffrf.scenes.bennett_run import choose_mode  # noqa: E402
-from ffrf.solvers.static_solver import StaticDivergence  # noqa: E402
-from ffrf.system.drives import rpm  # noqa: E402
+from ffrf.fe.materials import PLA, RIGID, Material
+from ffrf.scenes.bennett_run import choose_mode
+from ffrf.solvers.static_solver import StaticDivergence
+from ffrf.system.drives import rpm
 
 COARSE = dict(h=8e-3, order=1, n_modes=2)
 

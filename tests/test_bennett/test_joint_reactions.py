@@ -4,7 +4,7 @@ forces are internal). Independent of how the reactions were computed, so it chec
 signs, the lever arms and the torque directions of every joint, misaligned assembly included.
 """
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
@@ -16,7 +16,7 @@ from ffrf.solvers.static_solver import quasi_static
 from ffrf.system.reactions import joint_reactions
 
 
-@lru_cache(maxsize=None)
+@cache
 def equilibria(variant: str):
     scene = build_bennett(variant, h=6e-3, order=1, n_modes=2)
     q0 = assemble(scene).q
@@ -58,7 +58,7 @@ MOMENT_TOLERANCE = {"rigid": 2e-6, "pla": 1e-10, "pla2": 1e-10}
 @pytest.mark.parametrize("variant", ["rigid", "pla", "pla2"])
 def test_every_link_is_in_equilibrium(variant):
     scene, times, solution = equilibria(variant)
-    for q, lam, t in zip(solution.q, solution.multipliers, times):
+    for q, lam, t in zip(solution.q, solution.multipliers, times, strict=True):
         force, moment, scale = wrench_sums(scene, q, lam, t)
         assert np.abs(force).max() < 1e-12 * scale
         assert np.abs(moment).max() < MOMENT_TOLERANCE[variant] * scale

@@ -81,7 +81,10 @@ def timoshenko_bending_frequencies(E, nu, rho, A, I, L, bc, n=2, kappa=None, rot
     kappa = cowper_shear_coefficient(nu) if kappa is None else kappa
     if not shear:
         kappa = 1e8
-    f = lambda om: _timoshenko_determinant(om, E, G, kappa, rho, A, I, L, bc, rotary)
+
+    def f(om):
+        return _timoshenko_determinant(om, E, G, kappa, rho, A, I, L, bc, rotary)
+
     eb1 = (1.8751 if bc == "clamped-free" else 4.7300) ** 2 * np.sqrt(E * I / (rho * A)) / L**2
     grid = np.linspace(0.05 * eb1, 40 * eb1, 2000)
     values = np.array([f(om) for om in grid])

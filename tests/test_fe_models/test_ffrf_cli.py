@@ -72,6 +72,6 @@ def test_paper_axes_agree_with_kinematics_dh():
     """The hard-coded home-configuration axes against the kinematics package's DH chain."""
     from ffrf.geometry.joint_axes import PAPER_AXES, bennett_axes
 
-    for ours, theirs in zip(PAPER_AXES, bennett_axes(90.0)):
+    for ours, theirs in zip(PAPER_AXES, bennett_axes(90.0), strict=True):
         np.testing.assert_allclose(theirs.point, ours.point, atol=1e-12)
         np.testing.assert_allclose(theirs.direction, ours.direction, atol=1e-12)

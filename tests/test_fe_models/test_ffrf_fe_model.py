@@ -66,7 +66,7 @@ def test_vertex_strains_of_an_interpolated_field_are_exact(cylinder_10mm, order)
     strains = model.vertex_strains(u)
     assert strains.shape == (len(cylinder_10mm.tets), 4, 3, 3)
     # the quadrature points are the reference corners; their order within an element is scikit-fem's
-    for tet_strains, tet_expected in zip(strains[:50], expected[:50]):
+    for tet_strains, tet_expected in zip(strains[:50], expected[:50], strict=True):
         for corner in tet_expected:
             assert np.min(np.abs(tet_strains - corner).max(axis=(1, 2))) < 1e-12 * np.abs(expected).max()
 

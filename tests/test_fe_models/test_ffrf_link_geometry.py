@@ -40,7 +40,7 @@ def axial_and_radial(points, axis: Axis, origin):
 
 
 def test_meshes_are_sound_and_named(links):
-    for i, (mesh, geometry) in links.items():
+    for i, (mesh, _geometry) in links.items():
         check_mesh(mesh)
         expected = {f"joint{(i - 1) % 4}", f"joint{i}"} | ({"mount"} if i == 0 else set())
         assert set(mesh.groups) == expected
@@ -53,7 +53,7 @@ def test_bores_lie_on_their_axes_with_recorded_offsets(links):
     s = DESIGN.housing_offset
     assert s >= DESIGN.housing_length / 2
     for mesh, geometry in links.values():
-        for k, (axis, name) in enumerate(zip(geometry.axes, geometry.interface_names)):
+        for k, (axis, name) in enumerate(zip(geometry.axes, geometry.interface_names, strict=True)):
             foot = geometry.joint_points[k]
             t, r = axial_and_radial(mesh.points[mesh.group_nodes(name)], axis, foot)
             np.testing.assert_allclose(r, DESIGN.bore_radius, atol=1e-7)  # OCC tolerance
@@ -89,7 +89,7 @@ def test_base_link_mount_face(links):
     area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
     assert area == pytest.approx(DESIGN.mount_length * DESIGN.mount_width, rel=1e-9)
     # away from the bores: the whole face is farther than a housing radius from both axes
-    for axis, foot in zip(geometry.axes, geometry.joint_points):
+    for axis, foot in zip(geometry.axes, geometry.joint_points, strict=True):
         assert axial_and_radial(p, axis, foot)[1].min() > DESIGN.housing_outer_radius
 
 

@@ -42,7 +42,7 @@ def test_six_rigid_modes_span_the_rigid_motions(link_model):
 
 def test_flexible_eigenpairs_satisfy_the_eigenproblem(link_model):
     modes = free_free_modes(link_model, n_modes=3)
-    for f, phi in zip(modes.frequencies, modes.shapes.T):
+    for f, phi in zip(modes.frequencies, modes.shapes.T, strict=True):
         omega_sq = (2 * np.pi * f) ** 2
         residual = link_model.stiffness @ phi - omega_sq * (link_model.mass @ phi)
         assert np.linalg.norm(residual) < 1e-8 * np.linalg.norm(link_model.stiffness @ phi)

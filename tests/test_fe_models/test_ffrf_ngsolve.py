@@ -58,7 +58,10 @@ def _ngsolve_matrices(mesh, order, material):
     u, v = fes.TnT()
     E, nu, rho = material.E, material.nu, material.rho
     mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
-    eps = lambda w: ng.Sym(ng.Grad(w))  # noqa: E731
+
+    def eps(w):
+        return ng.Sym(ng.Grad(w))
+
     k = ng.BilinearForm(fes)
     k += (2 * mu * ng.InnerProduct(eps(u), eps(v)) + lam * ng.Trace(eps(u)) * ng.Trace(eps(v))) * ng.dx
     m = ng.BilinearForm(fes)

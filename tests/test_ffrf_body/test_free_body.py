@@ -27,8 +27,10 @@ def test_momentum_and_energy_drift_are_second_order():
     drifts = []
     for step in (2e-5, 1e-5):
         result = generalized_alpha(system, q0, qd0, 0.01, step, rho_inf=1.0)
-        linear, angular = zip(*(_momenta(model, psi, q, qd) for q, qd in zip(result.q, result.qd)))
-        energy = np.array([sum(system.energies(q, qd).values()) for q, qd in zip(result.q, result.qd)])
+        linear, angular = zip(
+            *(_momenta(model, psi, q, qd) for q, qd in zip(result.q, result.qd, strict=True)), strict=True
+        )
+        energy = np.array([sum(system.energies(q, qd).values()) for q, qd in zip(result.q, result.qd, strict=True)])
         drifts.append(
             [
                 np.abs(np.array(linear) - linear[0]).max() / np.linalg.norm(linear[0]),

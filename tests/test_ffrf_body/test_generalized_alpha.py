@@ -67,7 +67,7 @@ def test_flexible_pendulum_is_second_order_and_keeps_its_constraints():
     assert np.all(slopes > 1.7), slopes
     # Index 3: positions satisfy the hinge and the Euler normalisation at every step.
     result = results[1e-3]
-    worst = max(np.abs(system.constraint_values(q, t)).max() for q, t in zip(result.q, result.time))
+    worst = max(np.abs(system.constraint_values(q, t)).max() for q, t in zip(result.q, result.time, strict=True))
     assert worst < 1e-10
     # Full Newton with the exact iteration matrix converges quadratically; modified Newton (the
     # default) reuses the matrix and reaches the same solution.

@@ -18,8 +18,8 @@ def _exp_action_mp(theta, v, z):
     phi = mpmath.sqrt(c)
     a, b = mpmath.sin(phi) / phi, (1 - mpmath.cos(phi)) / c
     cross = [theta[1] * v[2] - theta[2] * v[1], theta[2] * v[0] - theta[0] * v[2], theta[0] * v[1] - theta[1] * v[0]]
-    tv = sum(t * x for t, x in zip(theta, v))
-    return sum(zi * (vi + a * ci + b * (tv * ti - c * vi)) for zi, vi, ci, ti in zip(z, v, cross, theta))
+    tv = sum(t * x for t, x in zip(theta, v, strict=True))
+    return sum(zi * (vi + a * ci + b * (tv * ti - c * vi)) for zi, vi, ci, ti in zip(z, v, cross, theta, strict=True))
 
 
 @pytest.mark.parametrize("scale", [1e-5, 3e-3, 0.2, 0.55, 0.6, 1.7])

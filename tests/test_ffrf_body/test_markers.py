@@ -93,7 +93,7 @@ def test_marker_history_and_body_frame_offsets(bar, rng):
     marker = rigid_interface_marker(0, model.nodes, basis, end)
     rows = np.array([np.r_[s[0], s[1], s[2]] for s in (random_state(rng, 4) for _ in range(3))])
     positions, orientations = marker_history(marker, rows)
-    for q, p, a in zip(rows, positions, orientations):
+    for q, p, a in zip(rows, positions, orientations, strict=True):
         np.testing.assert_allclose(p, marker.position(q), atol=1e-15)
         np.testing.assert_allclose(a, marker.orientation(q), atol=1e-15)
     point = marker.point + np.array([0.0, 0.0, 0.0085])

@@ -51,7 +51,7 @@ def test_jitted_iterations_equal_the_python_loop(bennett, modified):
     newtons = [_Newton(model, par, 1e-10, 12, modified) for model in (packed, _Unpacked(packed))]
     h = 2e-3
     for k in range(1, 16):
-        results = [_step(newton, state, k * h, h) for newton, state in zip(newtons, states)]
+        results = [_step(newton, state, k * h, h) for newton, state in zip(newtons, states, strict=True)]
         (fast, fast_count, _), (slow, slow_count, _) = results
         assert fast_count == slow_count
         for name, tolerance in (("q", 1e-14), ("qd", 1e-11), ("qdd", 1e-7), ("lam", 1e-9)):

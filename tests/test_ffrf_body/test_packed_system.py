@@ -48,7 +48,7 @@ def _compare(system, q, qd, qdd, lam, t, hessian_rtol=1e-12):
     assert _relative(fast_gap, gap) < 1e-12
     assert _relative(fast.constraint_jacobian(q, t), system.constraint_jacobian(q, t)) < 1e-12
     assert _relative(fast.mass_matrix(q), system.mass_matrix(q)) < 1e-12
-    for ours, ref in zip(fast.body_tangents(q, qd, qdd), system.body_tangents(q, qd, qdd)):
+    for ours, ref in zip(fast.body_tangents(q, qd, qdd), system.body_tangents(q, qd, qdd), strict=True):
         assert _relative(ours, ref) < 1e-12
     assert _relative(fast.constraint_hessian(q, lam, t), system.constraint_hessian(q, lam, t)) < hessian_rtol
     for factors in ((1.0, 1e-6, 2e-3), (0.0, 1.0, 0.0)):

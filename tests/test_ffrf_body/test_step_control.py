@@ -2,7 +2,7 @@
 pendulum (E = 1e6 Pa so that its first modes are resolved; rho_inf = 0.8), against a fixed-step
 reference with h = 2.5e-5 s. The run starts with a step of 1e-2 s, far too large."""
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
@@ -15,7 +15,7 @@ from ffrf.solvers.step_control import StepControl
 T_END, RHO = 0.2, 0.8
 
 
-@lru_cache(maxsize=None)
+@cache
 def setup():
     system, model, psi, _ = pendulum(n_modes=3, E=1e6)
     q0 = system.initial_state()

@@ -29,7 +29,7 @@ def _momenta(model, psi, q, qd):
 
 def _system_momenta(system, model, psi, result):
     rows = []
-    for q, qd in zip(result.q, result.qd):
+    for q, qd in zip(result.q, result.qd, strict=True):
         parts = [_momenta(model, psi, q[system.block(i)], qd[system.block(i)]) for i in range(len(system.bodies))]
         rows.append(np.concatenate([sum(p[0] for p in parts), sum(p[1] for p in parts)]))
     return np.array(rows)
@@ -45,7 +45,7 @@ def _relative_drift(rows):
 
 
 def _energy(system, result):
-    return np.array([sum(system.energies(q, qd).values()) for q, qd in zip(result.q, result.qd)])
+    return np.array([sum(system.energies(q, qd).values()) for q, qd in zip(result.q, result.qd, strict=True)])
 
 
 def test_kinetic_energy_and_its_gradient_match_the_mass_matrix_and_complex_step():
@@ -143,7 +143,7 @@ def test_hinged_pendulum_energy_has_no_drift():
     q0, qd0 = system.initial_state(), np.zeros(system.n_coordinates)
     result = variational_midpoint(system, q0, qd0, 0.5, 2e-4, output_every=5)
     energy = _energy(system, result)
-    potential = np.array([system.energies(q, qd)["potential"] for q, qd in zip(result.q, result.qd)])
+    potential = np.array([system.energies(q, qd)["potential"] for q, qd in zip(result.q, result.qd, strict=True)])
     error = (energy - energy[0]) / (potential[0] - potential.min())  # of the energy set in motion
     window = len(error) // 10
     assert abs(error[-window:].mean() - error[:window].mean()) < 1e-6

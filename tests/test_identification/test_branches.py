@@ -23,6 +23,6 @@ def test_three_joint_serial_branch(rng):
     third = second * _rotation(axes[2], angles[2])
     points = [np.stack([pose.act(p) for p in 0.1 * rng.normal(size=(2, 3))], axis=1) for pose in (first, second, third)]
     fits = identify_branch(points, ["a", "b", "c"])
-    for fit, axis, pose in zip(fits, axes, (None, first[0], second[0])):
+    for fit, axis, pose in zip(fits, axes, (None, first[0], second[0]), strict=True):
         expected = axis if pose is None else axis.transformed(pose)
         assert fit.axis.is_close(expected, 1e-8) or fit.axis.is_close(expected.reversed(), 1e-8)

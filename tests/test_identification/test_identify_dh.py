@@ -52,7 +52,7 @@ def test_noise_bounds_and_standard_deviation_against_monte_carlo(rng):
         return identify_record(LinkRecord(np.arange(frames) / 100.0, noisy, "noisy"), window=1).loop
 
     loops = [run() for _ in range(200)]
-    monte_carlo_std = np.array([l.dh.a for l in loops]).std(axis=0, ddof=1)
+    monte_carlo_std = np.array([loop.dh.a for loop in loops]).std(axis=0, ddof=1)
     groups = [run_statistics(loops[i : i + 5]) for i in range(0, 200, 5)]
     for stats in groups[:3]:
         assert np.all(np.abs(stats.mean["a"] - linkage.a) < 5e-5)

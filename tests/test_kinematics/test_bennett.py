@@ -51,6 +51,11 @@ def test_configuration_ratio_matches_bennetts_relation(rng):
         np.testing.assert_allclose(bennett.coefficients[2:], [-1.0, -expected], rtol=1e-9)
 
 
+def _coupler_frame(a, alpha, theta):
+    """Frame of the coupler (link 2) in frame 3: the DH steps of joints 0 and 1."""
+    return dh_step(a[3], alpha[3], 0.0, theta[0]) @ dh_step(a[0], alpha[0], 0.0, theta[1])
+
+
 def test_coupler_pose_equals_matrix_dh_chain(rng):
     """C(t) against a plain 4x4 DH chain (Lynch and Park) driven through the joint angles.
 
@@ -61,14 +66,10 @@ def test_coupler_pose_equals_matrix_dh_chain(rng):
         a, alpha = random_bennett(rng)
         bennett = BennettLinkage(a, alpha)
         home = bennett.home_theta
-
-        def coupler_frame(theta):
-            return dh_step(a[3], alpha[3], 0.0, theta[0]) @ dh_step(a[0], alpha[0], 0.0, theta[1])
-
-        home_inverse = np.linalg.inv(coupler_frame(home))
+        home_inverse = np.linalg.inv(_coupler_frame(a, alpha, home))
         for t in rng.normal(size=10) * 3:
             theta = bennett.joint_angles(t)
-            expected = coupler_frame(theta) @ home_inverse  # in frame-3 coordinates
+            expected = _coupler_frame(a, alpha, theta) @ home_inverse  # in frame-3 coordinates
             base = dh_step(a[3], alpha[3], 0.0, home[0])  # frame 0 seen from frame 3
             world = base @ np.diag([-1.0, -1.0, 1.0, 1.0])  # paper's world frame seen from frame 3
             expected_world = np.linalg.inv(world) @ expected @ world

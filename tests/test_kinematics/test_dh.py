@@ -49,7 +49,7 @@ def test_dh_transform_broadcasts_over_theta():
 def test_paper_axes_reproduced():
     """dh_axes on the paper's Table gives exactly the paper's h_0..h_3 (to 1e-12)."""
     axes = dh_axes(PAPER_A, PAPER_ALPHA)
-    for ours, theirs in zip(axes, PAPER_AXES):
+    for ours, theirs in zip(axes, PAPER_AXES, strict=True):
         np.testing.assert_allclose(ours.to_dual_quaternion().coeffs, theirs, atol=1e-12)
 
 
@@ -114,7 +114,7 @@ def test_non_closing_chain_is_refused_and_misfit_reported():
     axes, closing = open_loop_axes(PAPER_A, alpha)
     # Links 0..2 are nominal; the base link's own h_3' is tilted by the 1 deg misalignment.
     nominal = dh_axes(PAPER_A, PAPER_ALPHA)
-    for ours, theirs in zip(axes, nominal):
+    for ours, theirs in zip(axes, nominal, strict=True):
         assert ours.is_close(theirs, tol=1e-12)
     tilt = np.arccos(np.clip(closing.direction @ axes[3].direction, -1, 1))
     assert np.degrees(tilt) == pytest.approx(1.0, abs=1e-9)

@@ -18,13 +18,19 @@ def test_point_direction_moment_convention():
     assert line.is_close(shifted)
 
 
+def _squared_distance(s, l0, l1):
+    """Squared distance between the point at parameter s[0] on l0 and at s[1] on l1."""
+    return np.sum((l0.point_at(s[0]) - l1.point_at(s[1])) ** 2)
+
+
 def test_skew_common_normal_against_brute_force(rng):
     for _ in range(10):
         l0 = Line.from_point_direction(rng.normal(size=3), rng.normal(size=3))
         l1 = Line.from_point_direction(rng.normal(size=3), rng.normal(size=3))
         result = minimize(
-            lambda s: np.sum((l0.point_at(s[0]) - l1.point_at(s[1])) ** 2),
+            _squared_distance,
             [0.0, 0.0],
+            args=(l0, l1),
             method="BFGS",
             options={"gtol": 1e-12},
         )

@@ -10,7 +10,7 @@ the state of :mod:`ffrf.fe.fe_model`. The models are duck-typed like
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import scipy.sparse as sp
@@ -49,7 +49,7 @@ def assemble(
     return SmallFEModel(mesh.p.T.copy(), sp.csr_matrix(mass), sp.csr_matrix(stiffness), mesh.t.T.copy())
 
 
-@lru_cache(maxsize=None)
+@cache
 def bar_model(
     length: float = 0.16, width: float = 0.02, height: float = 0.012, divisions: tuple[int, int, int] = (16, 3, 2)
 ) -> SmallFEModel:
@@ -87,7 +87,7 @@ def surface_area_weights(model: SmallFEModel, node_set: np.ndarray) -> np.ndarra
     return weights[node_set] / weights[node_set].sum()
 
 
-@lru_cache(maxsize=None)
+@cache
 def plate_with_bores(h: float = 4e-3) -> tuple[SmallFEModel, tuple[np.ndarray, ...]]:
     """Plate 120 x 40 x 10 mm with two 12 mm bores (axes along z at x = 20 and 100 mm); gmsh P1.
 
@@ -213,7 +213,7 @@ def rigid_interface_transformation(model: SmallFEModel, rigid_sets, weights, cla
     special = np.concatenate([np.asarray(s) for s in rigid_sets] + [np.asarray(clamped, dtype=int)])
     free = np.setdiff1d(np.arange(n_dofs), (3 * special[:, None] + np.arange(3)).reshape(-1))
     rows, cols, vals = list(free), list(range(len(free))), [1.0] * len(free)
-    for k, (node_set, w) in enumerate(zip(rigid_sets, weights)):
+    for k, (node_set, w) in enumerate(zip(rigid_sets, weights, strict=True)):
         center = np.asarray(w) @ model.nodes[node_set]
         base = len(free) + 6 * k
         for node in node_set:
@@ -238,7 +238,7 @@ def rigid_interface_free_free_frequencies_hz(model: SmallFEModel, rigid_sets, we
     return np.sqrt(np.clip(np.sort(values)[6:], 0.0, None)) / (2 * np.pi)
 
 
-@lru_cache(maxsize=None)
+@cache
 def symmetric_bar_model(n_length: int = 8, n_side: int = 2, cube: float = 0.01) -> SmallFEModel:
     """Square bar along x made of cubes split into 24 tetrahedra each (corners, face centres, cube centre).
 

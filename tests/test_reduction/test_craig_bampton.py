@@ -27,8 +27,8 @@ from scipy.linalg import eigh
 from scipy.sparse.linalg import splu, spsolve
 
 from ffrf.errors import FEInputError, InterfaceError, ReductionError
-from ffrf.reduction.component_modes_post import free_free_frequencies_hz
 from ffrf.numerics.eigen import count_eigenvalues_below, lowest_eigenpairs
+from ffrf.reduction.component_modes_post import free_free_frequencies_hz
 from ffrf.reduction.craig_bampton import craig_bampton
 from ffrf.reduction.invariants import inertia_invariants
 

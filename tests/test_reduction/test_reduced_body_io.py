@@ -39,7 +39,7 @@ def test_round_trip_is_exact(bar, tmp_path):
         red.reference,
         red.orthonormalized,
     )
-    for a, b in zip(back.interfaces, red.interfaces):
+    for a, b in zip(back.interfaces, red.interfaces, strict=True):
         assert np.array_equal(a.nodes, b.nodes) and np.array_equal(a.weights, b.weights)
         assert np.array_equal(a.center, b.center)
     assert saved.invariants.mass == inv.mass and np.array_equal(saved.invariants.m_psi_tilde_psi, inv.m_psi_tilde_psi)

@@ -22,7 +22,7 @@ meet the issue's targets), and the marker-frame offsets (the convention shows; m
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -36,12 +36,12 @@ STEP, T_END, RHO_INF = 1e-3, 0.2, 0.9
 TORQUE_TARGET, TRAJECTORY_TARGET = 1e-4, 1e-3
 
 
-@lru_cache(maxsize=None)
+@cache
 def scene(joint_offsets: str = "body"):
     return build_bennett("pla", h=6e-3, order=1, n_modes=2, exact_gravity=False, joint_offsets=joint_offsets)
 
 
-@lru_cache(maxsize=None)
+@cache
 def system(kind: str):
     """``production`` (body-frame offsets, exact Jacobian), ``exudyn`` (Exudyn's Jacobian), ``marker``."""
     if kind == "marker":
@@ -49,22 +49,22 @@ def system(kind: str):
     return exudyn_convention_system(scene().system, exudyn_jacobian=(kind == "exudyn"))
 
 
-@lru_cache(maxsize=None)
+@cache
 def exudyn_run():
     return run_exudyn_bennett(scene(), scene().q_start, T_END, STEP, RHO_INF, tolerance=1e-14)
 
 
-@lru_cache(maxsize=None)
+@cache
 def ffrf_run(kind: str):
     return run_ffrf_bennett(scene(), system(kind), scene().q_start, T_END, STEP, RHO_INF, label=kind)
 
 
-@lru_cache(maxsize=None)
+@cache
 def differences(kind: str) -> dict:
     return compare(ffrf_run(kind), exudyn_run())
 
 
-@lru_cache(maxsize=None)
+@cache
 def exudyn_static():
     return static_exudyn_bennett(scene(), scene().q_start, 0.0, load_steps=2, tolerance=1e-12)[:4]
 

@@ -11,7 +11,7 @@ equal to 4e-13, MAC 1 - 2e-15. The tests hold their own thresholds; they never r
 from __future__ import annotations
 
 import json
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
@@ -34,7 +34,7 @@ REQUIRED_KEYS = (
 )
 
 
-@lru_cache(maxsize=None)
+@cache
 def summary_folder():
     import tempfile
     from pathlib import Path

@@ -7,7 +7,7 @@ never our solver's output.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,28 +30,28 @@ PENDULUM_BETA = 1e-3
 N_FIXED_INTERFACE_MODES = 4
 
 
-@lru_cache(maxsize=None)
+@cache
 def bar() -> ReducedBody:
     """0.2 x 0.02 x 0.01 m PLA-like bar, 8 x 2 x 2 boxes (81 nodes), HCB with 6 + 4 modes, area weights."""
     return bar_body(divisions=(8, 2, 2), n_modes=N_FIXED_INTERFACE_MODES, weights="area")
 
 
-@lru_cache(maxsize=None)
+@cache
 def pendulum(step: float = 1e-3, t_end: float = 1.0) -> Scene:
     return pendulum_scene(bar(), step=step, t_end=t_end, beta=PENDULUM_BETA, rho_inf=0.8)
 
 
-@lru_cache(maxsize=None)
+@cache
 def free_body(tilted: bool = False, step: float = 1e-3, t_end: float = 0.2) -> Scene:
     return free_body_scene(bar(), step=step, t_end=t_end, rho_inf=0.8, tilted=tilted)
 
 
-@lru_cache(maxsize=None)
+@cache
 def exudyn_run(scene: Scene) -> TrajectoryResult:
     return run_exudyn(scene)
 
 
-@lru_cache(maxsize=None)
+@cache
 def ffrf_run(scene: Scene) -> TrajectoryResult:
     return run_ffrf(scene)
 
