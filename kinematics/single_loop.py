@@ -198,7 +198,7 @@ class SingleLoop:
         """Singular values of the closure Jacobian, lengths scaled by :attr:`scale` (dimensionless)."""
         jacobian = self.jacobian(phi)
         jacobian[:3] /= self.scale
-        return np.linalg.svd(jacobian, compute_uv=False)
+        return np.asarray(np.linalg.svd(jacobian, compute_uv=False), dtype=np.float64)
 
     def mobility(self, phi: ArrayLike | None = None, rtol: float = 1e-8) -> int:
         """First-order degrees of freedom ``n - rank`` at ``phi`` (default home).

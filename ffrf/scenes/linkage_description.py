@@ -86,6 +86,8 @@ def _erroneous_axis(axis: Line, point: NDArray, other: Line, error: BoreError) -
     """``axis`` (carried with ``other`` by one link) turned about their common normal and moved along it."""
     normal = common_normal(other, axis)
     direction = normal.unit
+    if direction is None:
+        raise ValueError(f"bore error on joint {error.joint} of link {error.link}: the link's two axes coincide")
     rotation = Rotation.from_rotvec(error.twist * direction).as_matrix()
     foot = normal.foot1
     moved_point = foot + rotation @ (point - foot) + error.offset * direction
