@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -169,40 +168,45 @@ def _progress_printer():
     return show
 
 
-def _run_and_report(scene, args: argparse.Namespace, label: str, started: float, paper: str = "") -> int:
-    """Run a built linkage scene (:mod:`ffrf.scenes.bennett_run`) and write what ``bennett`` and ``linkage`` write."""
+def _run_and_report(scene, out: Path, label: str, started: float, options: dict, paper: str = "") -> int:
+    """Run a built linkage scene (:mod:`ffrf.scenes.bennett_run`) and write what ``bennett`` and ``linkage`` write.
+
+    ``options``: ``mode`` (``auto``, ``quasi_static``, ``dynamic``), ``outputs``, ``step`` (s), ``vtk_every``."""
     import time
 
     from ffrf.output.assembly_stress import write_assembly_vtu
     from ffrf.output.bennett_figures import plot_coupler_deviation, plot_driving_torque
     from ffrf.scenes.bennett_run import choose_mode, run_bennett, write_results
 
-    mode, ratio = choose_mode(scene) if args.mode == "auto" else (args.mode, float("nan"))
+    auto = options["mode"] == "auto"
+    mode, ratio = choose_mode(scene) if auto else (options["mode"], float("nan"))
     print(
         f"Running {mode.replace('_', '-')} over {scene.t_end:.1f} s of drive"
-        + (f" (drive time scale / longest link period = {ratio:.0f})" if args.mode == "auto" else ""),
+        + (f" (drive time scale / longest link period = {ratio:.0f})" if auto else ""),
         file=sys.stderr,
     )
-    result = run_bennett(scene, mode=mode, n_outputs=args.outputs, step=args.dt, progress=_progress_printer())
-    write_results(result, args.out)
-    if args.vtk_every > 0:
+    result = run_bennett(
+        scene, mode=mode, n_outputs=options["outputs"], step=options["step"], progress=_progress_printer()
+    )
+    write_results(result, out)
+    if options["vtk_every"] > 0:
         from ffrf.output.paraview import write_time_series
 
         pvd = write_time_series(
-            args.out,
+            out,
             [(link.fe, link.reduction.basis) for link in scene.links],
             [scene.system.block(k) for k in range(len(scene.links))],
             result.time,
             result.q,
-            every=args.vtk_every,
-            name=args.command,
+            every=options["vtk_every"],
+            name="linkage",
         )
         print(f"ParaView series: {pvd}", file=sys.stderr)
     assembly = result.assembly
     assert assembly is not None  # run_bennett always records the assembled state
-    write_assembly_vtu(args.out / "assembly.vtu", scene, assembly)
-    plot_coupler_deviation({label: result}, args.out / "coupler_deviation.png")
-    plot_driving_torque({label: result}, args.out / "driving_torque.png")
+    write_assembly_vtu(out / "assembly.vtu", scene, assembly)
+    plot_coupler_deviation({label: result}, out / "coupler_deviation.png")
+    plot_driving_torque({label: result}, out / "driving_torque.png")
     summary = result.summary()
     print(
         f"{label}: max coupler deviation from the ideal path "
@@ -212,10 +216,10 @@ def _run_and_report(scene, args: argparse.Namespace, label: str, started: float,
         + f"; max driving torque {1e3 * summary['max_abs_driving_torque_Nm']:.3f} N mm; "
         f"largest constraint residual {summary['max_constraint_residual']:.1e}; energy balance closed to "
         f"{summary['energy_balance_relative']:.1e} of the drive work; wall time "
-        f"{time.perf_counter() - started:.1f} s -> {args.out}"
+        f"{time.perf_counter() - started:.1f} s -> {out}"
     )
     misfit = scene.misfit_degrees > 0.0
-    print("assembled state (gravity" + (", misfit" if misfit else "") + f"; {args.out / 'assembly.vtu'}):")
+    print("assembled state (gravity" + (", misfit" if misfit else "") + f"; {out / 'assembly.vtu'}):")
     for link in assembly.links:
         print("  " + link.line())
     return 0
@@ -236,19 +240,23 @@ def _run_bennett(args: argparse.Namespace) -> int:
     scene = build_bennett(
         args.variant, h=args.h, order=args.order, n_modes=args.modes, joint_offsets=args.joint_offsets
     )
-    return _run_and_report(scene, args, args.variant, started, paper_max_coupler_deviation(args.variant))
+    return _run_and_report(
+        scene, args.out, args.variant, started, _options(args), paper_max_coupler_deviation(args.variant)
+    )
 
 
-def _bore_error(text: str):
-    """``JOINT:LINK:TWIST_DEG[:OFFSET_MM]`` -> BoreError (SI)."""
-    from ffrf.scenes.linkage_description import BoreError
+def _options(args: argparse.Namespace) -> dict:
+    return {"mode": args.mode, "outputs": args.outputs, "step": args.dt, "vtk_every": args.vtk_every}
 
+
+def _bore_error(text: str) -> dict:
+    """``JOINT:LINK:TWIST_DEG[:OFFSET_MM]`` -> a linkage file's bore error (offset in m)."""
     parts = text.split(":")
     try:
         if len(parts) not in (3, 4):
             raise ValueError
-        offset = float(parts[3]) * 1e-3 if len(parts) == 4 else 0.0
-        return BoreError(int(parts[0]), int(parts[1]), math.radians(float(parts[2])), offset)
+        error = {"joint": int(parts[0]), "link": int(parts[1]), "twist_deg": float(parts[2])}
+        return error | ({"offset": float(parts[3]) * 1e-3} if len(parts) == 4 else {})
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"bore error {text!r}: write JOINT:LINK:TWIST_DEG or JOINT:LINK:TWIST_DEG:OFFSET_MM, e.g. 3:0:1.0"
@@ -277,39 +285,33 @@ def _run_linkage(args: argparse.Namespace) -> int:
     import time
 
     from ffrf.fe.materials import RIGID
-    from ffrf.scenes.linkage_scene import build_linkage
-    from kinematics.rational_mechanism import factor_joint_angles, load_model, loop_from_mechanism, tool_link
+    from ffrf.scenes.linkage_file import load_linkage
 
     started = time.perf_counter()
     _output_folder(args.out)
-    if not (math.isfinite(args.scale) and args.scale > 0.0):
-        raise FEInputError(f"--scale {args.scale}: give a positive length scale, e.g. 0.1 for about 100 mm links")
-    mechanism = load_model(args.model)
-    loop = loop_from_mechanism(mechanism, scale=args.scale)
-    if not 0 <= args.driver < loop.n:
-        raise FEInputError(f"--driver {args.driver}: {args.model} has joints 0 to {loop.n - 1}")
-    # Start where the motion polynomial has t = 0: home (t = infinity) may be a folded, singular pose.
-    origin = factor_joint_angles(mechanism, 0.0)
+    material = RIGID if args.variant == "rigid" else PLA
+    document = {  # the linkage file these options stand for (ffrf.scenes.linkage_file)
+        "linkage": {
+            "name": f"{args.model} {args.variant}",
+            "model": args.model,
+            "scale": args.scale,
+            "driver": args.driver,
+            "material": {"E": material.E, "nu": material.nu, "rho": material.rho, "name": material.name},
+            "h": args.h,
+            "order": args.order,
+            "modes": args.modes,
+            "bore_errors": args.bore_error,
+        },
+        "scene": {"joint_offsets": args.joint_offsets},
+    }
     print(
-        f"Building {args.model} ({loop.n}R, {args.variant}, scale {args.scale:g}): h = {1e3 * args.h:g} mm, "
-        f"P{args.order}, {args.modes} fixed-interface modes per link ...",
+        f"Building {args.model} ({args.variant}, scale {args.scale:g}): h = {1e3 * args.h:g} mm, P{args.order}, "
+        f"{args.modes} fixed-interface modes per link ...",
         file=sys.stderr,
     )
-    scene = build_linkage(
-        loop,
-        material=RIGID if args.variant == "rigid" else PLA,
-        name=f"{args.model} {args.variant}",
-        driver=args.driver,
-        start_angle=float(origin[args.driver]),
-        origin=origin,
-        h=args.h,
-        order=args.order,
-        n_modes=args.modes,
-        bore_errors=tuple(args.bore_error),
-        tool_link=tool_link(mechanism),
-        joint_offsets=args.joint_offsets,
-    )
-    return _run_and_report(scene, args, f"{args.model} {args.variant}", started)
+    scene = load_linkage(document, where="python -m ffrf linkage")
+    (args.out / "linkage.json").write_text(json.dumps(document, indent=2))
+    return _run_and_report(scene, args.out, f"{args.model} {args.variant}", started, _options(args))
 
 
 def _configure_run(parser: argparse.ArgumentParser) -> None:
@@ -318,10 +320,23 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
 
 
 def _run_scene_file(args: argparse.Namespace) -> int:
+    import time
+
+    from ffrf.scenes.linkage_scene import LinkageScene
     from ffrf.scenes.scene_file import load_scene, run_scene
 
+    started = time.perf_counter()
     scene = load_scene(args.scene)
     out = _output_folder(args.out)  # after the scene's checks: a refused scene leaves no folder behind
+    if isinstance(scene, LinkageScene):  # a linkage file: reported as the built-in linkages are
+        s = scene.settings
+        options = {
+            "mode": s.get("mode", "auto"),
+            "outputs": s.get("outputs", 241),
+            "step": s.get("step", 4e-3),
+            "vtk_every": 0,
+        }
+        return _run_and_report(scene, out, scene.name, started, options)
     print(
         f"Scene {scene.name!r}: {len(scene.bodies)} bodies, {len(scene.system.constraints)} joints, "
         f"{scene.system.n_coordinates} coordinates",

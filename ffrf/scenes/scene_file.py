@@ -1,5 +1,9 @@
 """Scenes as TOML files: run a linkage built from your own meshes without writing Python.
 
+A file with a ``[linkage]`` table instead describes a whole single-loop linkage by its DH table, joint
+axes or a Rational Linkages model (:mod:`ffrf.scenes.linkage_file`); the rest of this docstring is about
+scenes of bodies and joints.
+
 A scene lists bodies (a mesh file or one of the paper's parametric links), their material,
 element order, number of modes and interfaces; joints between interfaces (or the ground);
 an optional drive; gravity, damping, solver settings and sensors. All lengths are metres
@@ -88,6 +92,7 @@ from ffrf.output.sensors import node_sensors, scene_sensors
 from ffrf.output.tables import write_results
 from ffrf.scenes.assembly import assemble, start_state, starts_static
 from ffrf.scenes.builder import Scene, build_scene
+from ffrf.scenes.linkage_file import load_linkage
 from ffrf.solvers.simulate import Run, simulate
 
 __all__ = ["SceneError", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
@@ -102,6 +107,9 @@ def load_scene(path: str | Path) -> Scene:
         data = tomllib.loads(path.read_text())
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         raise SceneError(f"{path}: cannot read the scene ({error})") from error
+    if "linkage" in data:  # a linkage file: the links, joints and sensors are generated
+        linkage = load_linkage(data, path.parent, path.name)
+        return linkage if "name" in data["linkage"] else _renamed(linkage, path.stem)
     scene = build_scene(data, path.parent, path.name)
     return scene if "name" in scene.settings else _renamed(scene, path.stem)
 

@@ -19,7 +19,7 @@ from typing import Any
 from ffrf.errors import SceneError
 from ffrf.system.markers import JOINT_OFFSETS
 
-__all__ = ["Key", "SCHEMA", "check_scene"]
+__all__ = ["Key", "MATERIAL", "SCHEMA", "SETTINGS", "check_scene", "check_table"]
 
 JOINT_TYPES = ("revolute", "fixed", "driven_revolute")
 #: Runs beyond these sizes are typing mistakes, not studies: they would not finish (or not fit in memory).
@@ -32,9 +32,9 @@ MODES = ("dynamic", "quasi_static")
 
 @dataclass(frozen=True)
 class Key:
-    """One key: its kind (``number``, ``integer``, ``string``, ``boolean``, ``vector3``, ``pair``,
-    ``table`` or ``tables``), whether it is required, a check of its value returning the problem (or
-    ``None``), and, for ``table``/``tables``, the keys inside."""
+    """One key: its kind (``number``, ``integer``, ``string``, ``boolean``, ``vector3``, ``vector4``,
+    ``pair``, ``numbers``, ``strings``, ``table`` or ``tables``), whether it is required, a check of its
+    value returning the problem (or ``None``), and, for ``table``/``tables``, the keys inside."""
 
     kind: str
     required: bool = False
@@ -201,6 +201,7 @@ _KIND_NAMES = {
     "table": "a table {...}",
     "tables": "a list of tables ([[...]] or [{...}, ...])",
     "strings": "a list of strings",
+    "numbers": "a list of numbers",
 }
 
 
@@ -219,6 +220,10 @@ def _type_problem(kind: str, value) -> str | None:
         if not isinstance(value, list) or len(value) != size or not all(_is_number(v) for v in value):
             return f"must be {_KIND_NAMES[kind]}, got {value!r}"
         return None if all(math.isfinite(v) for v in value) else f"must be finite, got {value!r}"
+    if kind == "numbers":
+        if not isinstance(value, list) or not value or not all(_is_number(v) for v in value):
+            return f"must be {_KIND_NAMES[kind]} (at least one), got {value!r}"
+        return None if all(math.isfinite(v) for v in value) else f"must be finite, got {value!r}"
     if kind == "strings":
         ok = isinstance(value, list) and value and all(isinstance(v, str) for v in value)
         return None if ok else f"must be {_KIND_NAMES[kind]} (at least one), got {value!r}"
@@ -230,7 +235,8 @@ def _type_problem(kind: str, value) -> str | None:
     return None
 
 
-def _check_table(table: dict, keys: Mapping[str, Key], where: str) -> None:
+def check_table(table: dict, keys: Mapping[str, Key], where: str) -> None:
+    """Raise :class:`SceneError` for the first key of ``table`` (and of the tables inside) that ``keys`` refuses."""
     for name in table:
         if name not in keys:
             close = difflib.get_close_matches(name, keys, n=1)
@@ -248,10 +254,10 @@ def _check_table(table: dict, keys: Mapping[str, Key], where: str) -> None:
         if problem is not None:
             raise SceneError(f"{where}: {name!r} {problem}")
         if key.kind == "table":
-            _check_table(value, key.keys or {}, f"{where}, {name}")
+            check_table(value, key.keys or {}, f"{where}, {name}")
         elif key.kind == "tables":
             for k, entry in enumerate(value):
-                _check_table(entry, key.keys or {}, f"{where}, {name}[{k}]{_label(entry)}")
+                check_table(entry, key.keys or {}, f"{where}, {name}[{k}]{_label(entry)}")
 
 
 def _label(entry: dict) -> str:
@@ -344,7 +350,7 @@ def _check_run_size(settings: dict, where: str) -> None:
 
 def check_scene(document: dict, where: str = "scene") -> None:
     """Raise :class:`SceneError` for the first thing in a parsed scene file that is not allowed."""
-    _check_table(document, SCHEMA, where)
+    check_table(document, SCHEMA, where)
     _check_run_size(document.get("scene", {}), f"{where}, scene")
     bodies, joints, sensors = document["bodies"], document.get("joints", []), document.get("sensors", [])
     if not bodies:

@@ -1,0 +1,246 @@
+r"""Linkage files: a single-loop linkage from its DH table, its joint axes or a Rational Linkages model.
+
+A scene file with a ``[linkage]`` table describes a whole linkage in a few lines; the links, joints,
+drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_description`), and
+``python -m ffrf run FILE.toml --out DIR`` runs it as ``python -m ffrf bennett`` runs the paper's::
+
+    [linkage]
+    name = "my 6R"
+    model = "collisions_free_6r"       # one source: a model of rational_linkages.models ...
+    scale = 0.1                        #   its lengths times scale (the models are of unit size)
+    # dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90], d = [0, 0, 0, 0],
+    #       theta_deg = [0, 180, 0, 180]}                   # ... or a closed DH table (paper's convention)
+    # axes = [{point = [0, 0, 0], direction = [0, 0, 1]}, ...]   # ... or the joint axes at home
+    unit = "mm"                        # lengths of dh, axes and bore offsets (default m)
+    driver = 0                         # the driven joint
+    tool_link = 3                      # the coupler: its joint points' mean is the coupler point
+    start_angle_deg = 0.0              # driver rotation from home at the start (default: a model's t = 0)
+    material = {E = 1.2e9, nu = 0.33, rho = 450.0, name = "PLA"}   # default PLA
+    h = 0.006                          # tetrahedron edge (m), order = 2, modes = 4
+    drive = {rpm = 1.0, ramp_time = 1.0}
+    revolutions = 1.0
+    bore_errors = [{joint = 5, link = 0, twist_deg = 1.0, offset = 0.2}]   # as built (offset in unit)
+
+    [scene]                            # gravity, beta, mode, outputs, step, rho_inf, joint_offsets, ...
+
+A DH table must close at its ``theta_deg`` (default the folded home pose 0, 180, 0, 180 of a 4R with
+``d = 0``) and every source must give a *mobile* loop: one that does not move is refused with
+:func:`kinematics.explain_mobility`'s reason (which condition fails, by how much). A model of Rational
+Linkages starts at its motion polynomial's ``t = 0`` unless ``start_angle_deg`` is given, since its
+home pose ``t = infinity`` may be folded flat (singular).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ffrf.errors import SceneError
+from ffrf.fe.materials import PLA, Material
+from ffrf.scenes.linkage_description import BoreError
+from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
+from ffrf.scenes.scene_schema import MATERIAL, PARAMETRIC_H_RANGE, SETTINGS, Key, check_table
+from ffrf.system.drives import rpm
+from kinematics import LoopClosureError, LoopFoldError, SingleLoop, explain_mobility
+from kinematics.rational_mechanism import MODELS, factor_joint_angles, load_model, loop_from_mechanism, tool_link
+
+__all__ = ["LINKAGE", "LINKAGE_SCHEMA", "load_linkage"]
+
+
+def _positive(value: Any) -> str | None:
+    return None if value > 0 else f"must be > 0, got {value!r}"
+
+
+def _non_negative(value: Any) -> str | None:
+    return None if value >= 0 else f"must be >= 0, got {value!r}"
+
+
+def _nonzero(value: Any) -> str | None:
+    return None if value != 0 else "must not be 0"
+
+
+def _nonzero_vector(value: Any) -> str | None:
+    return None if math.hypot(*value) > 0 else "has zero length; give a direction such as [0, 0, 1]"
+
+
+def _moving_link(value: Any) -> str | None:
+    return None if value >= 1 else f"must be a moving link >= 1, got {value!r}"
+
+
+def _element_size(value: Any) -> str | None:
+    low, high = PARAMETRIC_H_RANGE
+    return None if low <= value <= high else f"must lie in [{low:g}, {high:g}] m, got {value!r}"
+
+
+def _model(value: Any) -> str | None:
+    return None if value in MODELS else f"must be one of {list(MODELS)}, got {value!r}"
+
+
+def _unit(value: Any) -> str | None:
+    return None if value in ("m", "mm") else f"must be one of ['m', 'mm'], got {value!r}"
+
+
+def _order(value: Any) -> str | None:
+    return None if value in (1, 2) else f"must be 1 or 2, got {value!r}"
+
+
+DH = {
+    "a": Key("numbers", True),
+    "alpha_deg": Key("numbers", True),
+    "d": Key("numbers"),
+    "theta_deg": Key("numbers"),
+}
+AXIS = {
+    "point": Key("vector3", True),
+    "direction": Key("vector3", True, _nonzero_vector),
+}
+BORE_ERROR = {
+    "joint": Key("integer", True, _non_negative),
+    "link": Key("integer", True, _non_negative),
+    "twist_deg": Key("number"),
+    "offset": Key("number"),
+}
+DRIVE = {
+    "rpm": Key("number", False, _nonzero),
+    "omega": Key("number", False, _nonzero),
+    "ramp_time": Key("number", False, _positive),
+}
+LINKAGE = {
+    "name": Key("string"),
+    "model": Key("string", False, _model),
+    "scale": Key("number", False, _positive),
+    "dh": Key("table", keys=DH),
+    "axes": Key("tables", keys=AXIS),
+    "unit": Key("string", False, _unit),
+    "driver": Key("integer", False, _non_negative),
+    "tool_link": Key("integer", False, _moving_link),
+    "start_angle_deg": Key("number"),
+    "material": Key("table", keys=MATERIAL),
+    "h": Key("number", False, _element_size),
+    "order": Key("integer", False, _order),
+    "modes": Key("integer", False, _non_negative),
+    "drive": Key("table", keys=DRIVE),
+    "revolutions": Key("number", False, _positive),
+    "bore_errors": Key("tables", keys=BORE_ERROR),
+}
+#: A linkage file: ``[linkage]`` and optional ``[scene]`` settings (no bodies, joints or sensors of its own).
+LINKAGE_SCHEMA = {"linkage": Key("table", True, keys=LINKAGE), "scene": Key("table", keys=SETTINGS)}
+
+
+def _loop(spec: dict, where: str) -> tuple[SingleLoop, np.ndarray | None, int | None]:
+    """The loop of the one source, the start pose to trace from (models) and the tool link (models)."""
+    sources = [key for key in ("model", "dh", "axes") if key in spec]
+    if len(sources) != 1:
+        raise SceneError(
+            f'{where}: give exactly one source: model = "name", dh = {{a, alpha_deg, ...}} or axes = [...], '
+            f"got {sources or 'none'}"
+        )
+    if "scale" in spec and "model" not in spec:
+        raise SceneError(f"{where}: 'scale' scales a model; give dh or axes lengths in 'unit' instead")
+    if "unit" in spec and "model" in spec:
+        raise SceneError(f"{where}: 'unit' is for dh and axes; a model is scaled by 'scale'")
+    length = 1e-3 if spec.get("unit") == "mm" else 1.0
+    if "model" in spec:
+        mechanism = load_model(spec["model"])
+        return (
+            loop_from_mechanism(mechanism, scale=spec.get("scale", 0.1)),
+            factor_joint_angles(mechanism, 0.0),
+            tool_link(mechanism),
+        )
+    if "axes" in spec:
+        axes = spec["axes"]
+        return (
+            SingleLoop.from_points_directions(
+                [length * np.asarray(a["point"]) for a in axes], [a["direction"] for a in axes]
+            ),
+            None,
+            None,
+        )
+    dh = spec["dh"]
+    n = len(dh["a"])
+    for key in ("alpha_deg", "d", "theta_deg"):
+        if key in dh and len(dh[key]) != n:
+            raise SceneError(f"{where}, dh: {key!r} has {len(dh[key])} entries but a has {n}; give one per joint")
+    theta = np.radians(dh["theta_deg"]) if "theta_deg" in dh else None
+    d = length * np.asarray(dh["d"], dtype=float) if "d" in dh else None
+    try:
+        loop = SingleLoop.from_dh(length * np.asarray(dh["a"], dtype=float), np.radians(dh["alpha_deg"]), d, theta)
+    except LoopClosureError as error:
+        raise SceneError(
+            f"{where}, dh: {error}; for an as-built loop that cannot close, give the nominal table and bore_errors"
+        ) from error
+    return loop, None, None
+
+
+def load_linkage(document: dict, base: Path | None = None, where: str = "linkage") -> LinkageScene:
+    """Check a linkage file (already parsed) and build its linkage (module docstring)."""
+    del base  # a linkage file refers to no other file
+    check_table(document, LINKAGE_SCHEMA, where)
+    spec = document["linkage"]
+    label = f"{where}, linkage"
+    try:
+        loop, origin, model_tool = _loop(spec, label)
+    except ValueError as error:  # SingleLoop's own checks (fewer than 4 axes, coinciding neighbours)
+        if isinstance(error, SceneError):
+            raise
+        raise SceneError(f"{label}: {error}") from error
+    n = loop.n
+    driver = spec.get("driver", 0)
+    if driver >= n:
+        raise SceneError(f"{label}: driver {driver} does not exist; the loop has joints 0 to {n - 1}")
+    mobility = explain_mobility(loop, driver)
+    if not mobility.mobile:
+        raise SceneError(f"{label}: {mobility.summary()}; check the source (dh, axes) or its units")
+    tool = spec.get("tool_link", model_tool)
+    if tool is not None and tool >= n:
+        raise SceneError(f"{label}: tool_link {tool} does not exist; the moving links are 1 to {n - 1}")
+    length = 1e-3 if spec.get("unit") == "mm" else 1.0
+    errors = tuple(
+        BoreError(e["joint"], e["link"], math.radians(e.get("twist_deg", 0.0)), length * e.get("offset", 0.0))
+        for e in spec.get("bore_errors", [])
+    )
+    for k, bore in enumerate(errors):
+        carried = ((bore.link - 1) % n, bore.link)
+        if bore.link >= n or bore.joint not in carried:
+            raise SceneError(
+                f"{label}, bore_errors[{k}]: link {bore.link} does not carry joint {bore.joint}; link k carries "
+                f"joints k-1 and k (link 0 the joints {n - 1} and 0)"
+            )
+    drive = spec.get("drive", {})
+    if ("rpm" in drive) and ("omega" in drive):
+        raise SceneError(f"{label}, drive: give rpm (rev/min) or omega (rad/s), not both")
+    omega = float(drive["omega"]) if "omega" in drive else rpm(float(drive.get("rpm", 1.0)))
+    start = math.radians(spec["start_angle_deg"]) if "start_angle_deg" in spec else None
+    if start is None:
+        start = float(origin[driver]) if origin is not None else 0.0
+    settings = document.get("scene", {})
+    material = Material(**spec["material"]) if "material" in spec else PLA
+    try:
+        scene = build_linkage(
+            loop,
+            material=material,
+            name=spec.get("name", settings.get("name", "linkage")),
+            driver=driver,
+            start_angle=start,
+            origin=origin,
+            h=spec.get("h", 6e-3),
+            order=spec.get("order", 2),
+            n_modes=spec.get("modes", 4),
+            beta=settings.get("beta", 0.005),
+            omega=omega,
+            ramp_time=drive.get("ramp_time", 1.0),
+            revolutions=spec.get("revolutions", 1.0),
+            gravity=tuple(settings.get("gravity", (0.0, 0.0, -9.81))),
+            bore_errors=errors,
+            tool_link=tool,
+            exact_gravity=settings.get("exact_gravity", True),
+            joint_offsets=settings.get("joint_offsets", "body"),
+        )
+    except LoopFoldError as error:
+        raise SceneError(f"{label}: the start pose cannot be reached: {error}") from error
+    run = {key: settings[key] for key in ("mode", "outputs", "step", "rho_inf") if key in settings}
+    return replace(scene, settings=dict({k: v for k, v in scene.settings.items() if k != "mode"}, **run))

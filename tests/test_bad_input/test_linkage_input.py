@@ -1,0 +1,78 @@
+"""Bad linkage files (ffrf.scenes.linkage_file) are refused with one line naming the key and the fix."""
+
+from __future__ import annotations
+
+import pytest
+
+from ffrf.errors import SceneError
+from ffrf.scenes.scene_file import load_scene
+
+GOOD = """[linkage]
+dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90]}
+unit = "mm"
+driver = 3
+tool_link = 2
+"""
+
+#: Four lines in general position: they close at home, but no joint can turn.
+RIGID_AXES = (
+    "axes = [{point = [0, 0, 0], direction = [0, 0, 1]}, {point = [100, 0, 0], direction = [0, 1, 0]}, "
+    "{point = [100, 80, 30], direction = [1, 0, 1]}, {point = [-20, 90, 40], direction = [1, 1, 0]}]"
+)
+#: case -> (text replaced, replacement, words the one-line error must contain)
+LINKAGE_CASES = {
+    "two sources": (
+        'unit = "mm"',
+        'unit = "mm"\naxes = [{point = [0, 0, 0], direction = [0, 0, 1]}]',
+        ["exactly one source", "['dh', 'axes']"],
+    ),
+    "no source": (
+        "dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90]}",
+        "",
+        ["exactly one source", "none"],
+    ),
+    "unknown model": (
+        'dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90]}\nunit = "mm"',
+        'model = "bennet"',
+        ["'model' must be one of", "bennett_ark24"],
+    ),
+    "misspelt linkage key": ("driver = 3", "drver = 3", ["unknown key 'drver'", "did you mean 'driver'"]),
+    "bodies beside a linkage": ("tool_link = 2", 'tool_link = 2\n[[bodies]]\nname = "x"', ["unknown key 'bodies'"]),
+    "DH lists of different lengths": (
+        "alpha_deg = [150, 90, 150, 90]",
+        "alpha_deg = [150, 90, 150]",
+        ["'alpha_deg' has 3 entries but a has 4"],
+    ),
+    "DH table that does not close": (
+        "alpha_deg = [150, 90, 150, 90]",
+        "alpha_deg = [150, 90, 150, 91]",
+        ["does not close", "give joint angles that close the loop"],
+    ),
+    "rigid loop": (
+        "dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90]}",
+        RIGID_AXES,
+        ["NOT mobile, rigid", "closure gap"],
+    ),
+    "driver out of range": ("driver = 3", "driver = 4", ["driver 4 does not exist", "joints 0 to 3"]),
+    "tool link out of range": ("tool_link = 2", "tool_link = 4", ["tool_link 4 does not exist"]),
+    "bore error on a joint the link does not carry": (
+        "tool_link = 2",
+        "tool_link = 2\nbore_errors = [{joint = 2, link = 0, twist_deg = 1.0}]",
+        ["link 0 does not carry joint 2", "link k carries joints k-1 and k"],
+    ),
+    "scale for a DH table": ("driver = 3", "driver = 3\nscale = 0.1", ["'scale' scales a model"]),
+    "nan in a DH table": ("a = [110, 220, 110, 220]", "a = [110, nan, 110, 220]", ["'a' must be finite"]),
+}
+
+
+@pytest.mark.parametrize("case", LINKAGE_CASES)
+def test_bad_linkage_file_is_refused_with_a_clear_message(tmp_path, case):
+    old, new, words = LINKAGE_CASES[case]
+    assert old in GOOD, case
+    (tmp_path / "linkage.toml").write_text(GOOD.replace(old, new, 1))
+    with pytest.raises(SceneError) as raised:
+        load_scene(tmp_path / "linkage.toml")
+    message = str(raised.value)
+    assert "\n" not in message and "linkage.toml" in message
+    for word in words:
+        assert word in message, (case, message)
