@@ -86,6 +86,9 @@ def _torque_keys(scene) -> dict[str, str]:
 def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> tuple[dict, float, float]:
     """Exudyn's run of ``scene`` at our output ``times``: sensor arrays named as ours
     (positions, ``<joint>_torque`` with our sign), set-up and solution wall times."""
+    from ffrf.scenes.assembly import quasi_static_step
+    from ffrf.solvers.static_solver import refined_times
+
     from .exudyn_solvers import dynamic_settings, solve_dynamic, solve_static, static_settings, sweep_settings
     from .exudyn_twin import add_node_sensor, build_twin, read_twin
     from .twin_bases import to_twin_layout
@@ -95,7 +98,7 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
     beta = float(s.get("beta", 0.0))
     bodies = scene_bodies(scene)
     started = time.perf_counter()
-    q0 = to_twin_layout(scene.system, scene.system.initial_state(), bases)
+    q0 = to_twin_layout(scene.system, scene.q_initial, bases)  # the bodies' start poses, as our runs
     start_torques = {name: 0.0 for name in scene.driven}
     if s.get("static_start", mode != "dynamic"):
         twin = build_twin(bodies, scene.system, q0, beta, symbolic=False, frozen_drive_time=0.0, bases=bases)
@@ -116,8 +119,8 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
         step = float(s.get("step", 1e-3))
         settings = dynamic_settings(t_end, step, float(s.get("rho_inf", 0.9)), tolerance, tolerance)
         solve_dynamic(twin.mbs, settings, "the scene")
-    else:
-        solve_static(twin.mbs, sweep_settings(times, tolerance))
+    else:  # the same intermediate equilibria as ours (ffrf.scenes.assembly.quasi_static_step)
+        solve_static(twin.mbs, sweep_settings(refined_times(times, quasi_static_step(scene))[0], tolerance))
     solve = time.perf_counter() - started
     data = read_twin(twin, scene.system, q0)
     rows = np.array([int(np.argmin(np.abs(data["time"] - t))) for t in times])

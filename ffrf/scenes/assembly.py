@@ -1,4 +1,4 @@
-r"""The static assembly of a scene and the state its run starts from.
+r"""The static assembly of a scene, the state its run starts from, and how far its quasi-static steps go.
 
 :func:`assemble` closes the joints of a built scene (:mod:`ffrf.scenes.builder`) by
 continuation: gravity in two load steps on the closable system (every joint's side 0 takes side
@@ -20,10 +20,20 @@ from ffrf.scenes.builder import Scene
 from ffrf.solvers.static_solver import StaticSolution, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["assemble", "start_state", "starts_static", "STEPS_PER_DEGREE"]
+__all__ = ["assemble", "quasi_static_step", "start_state", "starts_static", "MAX_DRIVE_STEP", "STEPS_PER_DEGREE"]
 
 #: Continuation steps of :func:`assemble` per degree of the largest axis misfit.
 STEPS_PER_DEGREE = 4
+#: Largest turn of a drive (rad) between two equilibria of a quasi-static run. Longer steps let Newton land on
+#: another assembly branch: the PLA collisions_free_6r (P1, 12 mm) fails at 15 deg and passes at 7.5 deg.
+MAX_DRIVE_STEP = math.radians(3.0)
+
+
+def quasi_static_step(scene: Scene) -> float | None:
+    """Time (s) in which the fastest drive of ``scene`` turns :data:`MAX_DRIVE_STEP` at full speed; ``None``
+    without a drive. Quasi-static runs insert equilibria so that no step is longer."""
+    speeds = [abs(j.angle.ramp.omega) for j in scene.joints if j.angle is not None]
+    return MAX_DRIVE_STEP / max(speeds) if speeds else None
 
 
 def assemble(

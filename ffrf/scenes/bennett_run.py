@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
 from ffrf.output.sensors import scene_sensors
 from ffrf.output.tables import write_results as write_tables
-from ffrf.scenes.assembly import assemble
+from ffrf.scenes.assembly import assemble, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.solvers.simulate import MODES, simulate
 from ffrf.system.joints import MarkerJoint
@@ -169,7 +169,17 @@ def run_bennett(
     stress = scene_assembly_stress(scene, assembly.q, assembly.multipliers)
     assembled = wallclock.perf_counter()
     t_end = scene.t_end if t_end is None else float(t_end)
-    run = simulate(scene.system, assembly.q, mode, t_end, n_outputs, step=step, rho_inf=rho_inf, progress=progress)
+    run = simulate(
+        scene.system,
+        assembly.q,
+        mode,
+        t_end,
+        n_outputs,
+        step=step,
+        rho_inf=rho_inf,
+        progress=progress,
+        max_static_step=quasi_static_step(scene),
+    )
     times, q, qd, lam = run.time, run.q, run.qd, run.multipliers
     solved = wallclock.perf_counter()
     sensors = evaluate_sensors(scene, times, q, qd, lam)

@@ -90,7 +90,7 @@ from ffrf.errors import SceneError
 from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
 from ffrf.output.sensors import node_sensors, scene_sensors
 from ffrf.output.tables import write_results
-from ffrf.scenes.assembly import assemble, start_state, starts_static
+from ffrf.scenes.assembly import assemble, quasi_static_step, start_state, starts_static
 from ffrf.scenes.builder import Scene, build_scene
 from ffrf.scenes.linkage_file import load_linkage
 from ffrf.solvers.simulate import Run, simulate
@@ -144,6 +144,7 @@ def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> Ru
         step=float(s.get("step", 1e-3)),
         rho_inf=float(s.get("rho_inf", 0.9)),
         progress=progress,
+        max_static_step=quasi_static_step(scene),
     )
 
 

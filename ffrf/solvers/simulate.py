@@ -43,12 +43,14 @@ def simulate(
     step: float = 1e-3,
     rho_inf: float = 0.9,
     progress: Callable[[float, float], None] | None = None,
+    max_static_step: float | None = None,
 ) -> Run:
-    """``quasi_static``: equilibria at ``outputs`` equally spaced times; ``dynamic``: generalized-alpha
-    from ``q0`` at rest with time step ``step`` and spectral radius ``rho_inf``."""
+    """``quasi_static``: equilibria at ``outputs`` equally spaced times, followed through intermediate
+    ones at most ``max_static_step`` (s) apart; ``dynamic``: generalized-alpha from ``q0`` at rest with
+    time step ``step`` and spectral radius ``rho_inf``."""
     if mode == "quasi_static":
         times = np.linspace(0.0, t_end, outputs)
-        solution = quasi_static(system, q0, times, progress=progress)
+        solution = quasi_static(system, q0, times, progress=progress, max_step=max_static_step)
         return Run(times, solution.q, None, solution.multipliers)
     if mode == "dynamic":
         result = generalized_alpha(

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import itertools
 import logging
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -31,7 +32,7 @@ from ffrf.solvers.common import extrapolation_weights
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import PackedSystem, newton_model
 
-__all__ = ["StaticDivergence", "StaticSolution", "quasi_static", "static_equilibrium"]
+__all__ = ["StaticDivergence", "StaticSolution", "quasi_static", "refined_times", "static_equilibrium"]
 
 log = logging.getLogger(__name__)
 
@@ -272,9 +273,12 @@ def quasi_static(
     fast_path: bool = True,
     predictor_order: int = 2,
     secant: bool = False,
+    max_step: float | None = None,
 ) -> StaticSolution:
     """A sequence of static equilibria at ``times`` (prescribed motions follow their time laws;
     no inertia). Returns ``q`` and ``multipliers`` with one row per time (``iterations`` per time).
+    With ``max_step`` (s) the path is followed through intermediate equilibria at most that far apart
+    (not returned): long steps can let Newton reach an equilibrium of another assembly branch.
     ``fast_path`` as in :func:`static_equilibrium`. Newton starts from the polynomial of degree
     ``predictor_order`` through the last equilibria (Eq. (S2); 0: the previous equilibrium) and,
     with ``secant``, Broyden-updates the kept tangent (Eq. (S3)). ``secant`` is off by default:
@@ -283,7 +287,8 @@ def quasi_static(
     modified Newton does not reach; on fine steps it saves about a fifth of the time."""
     if predictor_order < 0:
         raise ValueError(f"predictor_order must be >= 0, got {predictor_order}")
-    times = np.asarray(times, dtype=float)
+    outputs = np.asarray(times, dtype=float)
+    times, returned = refined_times(outputs, max_step)
     q = np.array(q0, dtype=float)
     lam = np.zeros(system.n_constraints)
     qs: list[NDArray] = []
@@ -310,4 +315,20 @@ def quasi_static(
         counts.append(iterations)
         if progress is not None:
             progress(float(t), float(times[-1]))
-    return StaticSolution(np.array(qs), np.array(lams), tuple(counts))
+    keep = np.flatnonzero(returned)
+    return StaticSolution(np.array(qs)[keep], np.array(lams)[keep], tuple(counts[k] for k in keep))
+
+
+def refined_times(times: NDArray, max_step: float | None) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """``times`` with intermediate times so that no interval exceeds ``max_step`` (each interval cut into
+    equal pieces, so equally spaced times stay equally spaced), and a mask of the given ones."""
+    if max_step is None or times.size < 2:
+        return times, np.ones(times.size, dtype=bool)
+    if not max_step > 0.0:
+        raise ValueError(f"max_step must be > 0 s, got {max_step}")
+    refined, returned = [times[:1]], [np.array([True])]
+    for start, end in itertools.pairwise(times):
+        pieces = max(1, math.ceil(abs(end - start) / max_step - 1e-9))
+        refined.append(np.append(start + (end - start) * np.arange(1, pieces) / pieces, end))
+        returned.append(np.arange(1, pieces + 1) == pieces)
+    return np.concatenate(refined), np.concatenate(returned)

@@ -116,6 +116,24 @@ def test_quasi_static_drive_follows_the_prescribed_angle():
     solution = quasi_static(driven, driven.initial_state(), times)
     mass = 450.0 * 0.2 * 0.02 * 0.01
     np.testing.assert_allclose(solution.multipliers[:, -1], -mass * 9.81 * 0.1 * np.cos(times), atol=1e-12)
+    # Intermediate equilibria (at most 0.1 rad of drive apart) are solved but not returned: the same rows.
+    finer = quasi_static(driven, driven.initial_state(), times, max_step=0.1)
+    assert finer.q.shape == solution.q.shape and len(finer.iterations) == len(times)
+    np.testing.assert_allclose(finer.multipliers[:, -1], -mass * 9.81 * 0.1 * np.cos(times), atol=1e-12)
+
+
+def test_refined_times_keep_the_given_ones_and_split_long_intervals_equally():
+    from ffrf.solvers.static_solver import refined_times
+
+    times = np.array([0.0, 1.0, 1.05, 3.0])
+    refined, given = refined_times(times, 0.4)
+    np.testing.assert_array_equal(refined[given], times)  # exactly, not to round-off
+    assert np.max(np.diff(refined)) <= 0.4 + 1e-15
+    np.testing.assert_allclose(np.diff(refined[:4]), 1.0 / 3.0)  # [0, 1] in three equal pieces
+    assert len(refined) == 1 + 3 + 1 + 5
+    np.testing.assert_array_equal(refined_times(times, None)[0], times)
+    with pytest.raises(ValueError, match="max_step must be > 0"):
+        refined_times(times, 0.0)
 
 
 def test_extrapolation_weights_reproduce_a_quadratic():

@@ -49,3 +49,28 @@ def test_quasi_static_driven_link_scene(tmp_path):
     assert far_bore["travel_m"] > 0.01
     assert far_bore["max_abs_diff_m"] < 3e-9 * far_bore["travel_m"]  # measured 4.2e-11 of the travel
     assert np.isfinite(m["exact_gravity_effect"]["far_bore"])
+
+
+SIX_R = """[linkage]
+model = "collisions_free_6r"
+scale = 0.1
+h = 0.012
+order = 1
+modes = 2
+
+[scene]
+mode = "quasi_static"
+outputs = 13
+"""
+
+
+def test_flexible_6r_linkage_file_against_its_exudyn_twin(tmp_path):
+    """A PLA collisions_free_6r of Rational Linkages (linkage file, started at its motion polynomial's t = 0, away
+    from home): the twin reduces its six links itself and follows the same quasi-static revolution."""
+    m = report(tmp_path, SIX_R)
+    for link in m["modes"].values():
+        assert link["max_rel_freq_diff"] < 1e-12  # measured 1.0e-14 at most
+    worst = max(s["max_abs_diff_m"] / s["travel_m"] for s in m["sensors"].values())
+    assert len(m["sensors"]) == 15 and min(s["travel_m"] for s in m["sensors"].values()) > 0.03
+    assert worst < 2e-5  # measured 2.0e-7 of the travel (33 nm)
+    assert m["torques"]["joint0 (drive)"]["max_rel_diff"] < 1e-5  # measured 8.9e-8
