@@ -6,9 +6,9 @@ A measured figure in the docs is a Markdown link into a result file, the fragmen
 
 The path is relative to the Markdown file. The unit written in the link's text decides the display
 scale (m, mm, um, nm; s, ms, us; N m, N mm; Pa, MPa; J, mJ; deg, rad; %, x for ratios; nothing for
-plain numbers). The value in the file is in SI units unless the pointer names its unit as a suffix
-of a key (``..._mm``, ``..._Nmm``, ``..._MPa``, ``wall_time_s/build``): the last key with a unit
-suffix decides. The number keeps the form its author wrote: as many decimals, or the same number
+plain numbers; Hz). The value in the file is in SI units unless the pointer names its unit as a suffix
+of a key (``..._mm``, ``..._Nmm``, ``..._MPa``, ``wall_time_s/build``, ``ms_per_step``): the last key
+with a unit decides. The number keeps the form its author wrote: as many decimals, or the same number
 of mantissa decimals in scientific notation (``4.5e-10``).
 
     .venv/bin/python scripts/update_docs.py           # rewrite every figure from its file
@@ -54,6 +54,7 @@ UNITS: dict[str, tuple[str, float]] = {
     "": ("ratio", 1.0),
     "x": ("ratio", 1.0),
     "%": ("ratio", 1e-2),
+    "Hz": ("frequency", 1.0),
 }
 #: Unit suffix of a key in a result file -> unit.
 KEY_SUFFIXES = {
@@ -74,6 +75,8 @@ KEY_SUFFIXES = {
     "_mJ": "mJ",
     "_rad": "rad",
     "_deg": "deg",
+    "_percent": "%",
+    "_hz": "Hz",
 }
 LINK = re.compile(r"\[(?P<text>[^\[\]]+)\]\((?P<path>[^()\s#]*results/[^()\s#]+\.json)#(?P<pointer>/[^()\s]*)\)")
 NUMBER = re.compile(r"^(?P<number>[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?)\s?(?P<unit>.*)$")
@@ -91,7 +94,11 @@ class Figure:
     span: tuple[int, int]
 
     def where(self) -> str:
-        return f"{self.doc.relative_to(ROOT)}:{self.line}"
+        return f"{_shown(self.doc)}:{self.line}"
+
+
+def _shown(doc: Path) -> str:
+    return str(doc.relative_to(ROOT)) if doc.is_relative_to(ROOT) else str(doc)
 
 
 def resolve(document, pointer: str):
@@ -116,7 +123,7 @@ def stored_unit(pointer: str) -> str | None:
     """The unit a result file stores the value in, from the last key of ``pointer`` with a unit suffix."""
     for token in reversed(pointer.lstrip("/").split("/")):
         for suffix, unit in sorted(KEY_SUFFIXES.items(), key=lambda kv: -len(kv[0])):
-            if token.endswith(suffix):
+            if token.endswith(suffix) or token.startswith(suffix[1:] + "_per_"):  # ..._ms, ms_per_step
                 return unit
     return None
 
@@ -369,7 +376,7 @@ def table_conservation() -> str:
                         "",
                         "",
                         "",
-                        f"{p['wall_s']:.0f}",
+                        f"{p['wall_s']:.1f}",
                         "yes" if p["complete"] else "no",
                     ]
                 )
@@ -385,7 +392,7 @@ def table_conservation() -> str:
                     _e(p["energy_error_rel"]),
                     _e(p["energy_drift_rel"]),
                     f"{p['newton_per_step']:.1f}",
-                    f"{p['wall_s']:.0f}",
+                    f"{p['wall_s']:.1f}",
                     "yes" if p["complete"] else "no",
                 ]
             )
@@ -425,6 +432,187 @@ def table_speed_vs_error_quasi_static() -> str:
     return "\n".join(lines + ["", _source("speed_vs_error_quasi_static")])
 
 
+def table_hard_cases() -> str:
+    """One row per run of the recorded hard cases (``bench/hard_cases.py --cases ...``)."""
+    lines = _header(
+        "case",
+        "run",
+        "mode",
+        "converged",
+        "steps",
+        "Newton it.",
+        "worst abs(g)",
+        "energy balance",
+        "time (s)",
+        "vs Exudyn",
+        "note",
+    )
+    for case in _results("hard_cases")["cases"]:
+        for r in case["rows"]:
+            residual, balance = r["max_constraint_residual"], r["energy_balance_relative"]
+            lines.append(
+                _row(
+                    [
+                        r["case"],
+                        r["run"],
+                        r["mode"],
+                        "yes" if r["converged"] else "**no**",
+                        r["steps"],
+                        r["newton_iterations"],
+                        _e(residual) if residual is not None else "-",
+                        _e(balance) if balance is not None else "-",
+                        f"{r['wall_s']:.1f}",
+                        r["exudyn"] or "-",
+                        r["error"][:200].replace("|", "/"),
+                    ]
+                )
+            )
+    return "\n".join(lines + ["", _source("hard_cases")])
+
+
+def table_fe_beam_convergence() -> str:
+    """Relative frequency errors of P1 and P2 prisms against beam theory (``bench/bench_fe_beam_convergence.py``)."""
+    lines = _header("order", "h (mm)", "boundary", "bending thin (z)", "bending wide (y)", "torsion")
+    for r in _results("fe_beam_convergence"):
+        errors = r["errors_percent"]
+        lines.append(
+            _row(
+                [
+                    f"P{r['order']}",
+                    f"{1e3 * r['h_m']:g}",
+                    r["bc"],
+                    *(f"{errors[k]:+.3f}" for k in ("bend_z", "bend_y", "torsion")),
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("fe_beam_convergence")])
+
+
+def table_fe_link() -> str:
+    """Mesh, assembly and modal-analysis cost of the coupler link (``bench/bench_fe_link.py``)."""
+    lines = _header(
+        "order",
+        "h (mm)",
+        "tetrahedra",
+        "DOFs",
+        "min quality",
+        "mesh (s)",
+        "assembly (s)",
+        "modal (s)",
+        "peak RSS (MiB)",
+        "first flexible mode (Hz)",
+    )
+    names = [n for n in ("fe_link_p1", "fe_link_p2") if _results(n) is not None]
+    for name in names:
+        for r in _results(name):
+            lines.append(
+                _row(
+                    [
+                        f"P{r['order']}",
+                        f"{1e3 * r['h_m']:g}",
+                        r["n_tets"],
+                        r["n_dofs"],
+                        f"{r['min_quality']:.3f}",
+                        f"{r['mesh_s']:.1f}",
+                        f"{r['assembly_s']:.1f}",
+                        f"{r['modal_s']:.1f}",
+                        f"{r['peak_after_modal_MiB']:.0f}",
+                        f"{r['first_frequencies_hz'][0]:.1f}",
+                    ]
+                )
+            )
+    return "\n".join(lines + ["", _source(*names)])
+
+
+def _hard_case(name: str) -> list[dict]:
+    return next(case["rows"] for case in _results("hard_cases")["cases"] if case["case"] == name)
+
+
+def _g(x, spec: str) -> str:
+    return "-" if x is None else format(x, spec)
+
+
+def table_hard_cases_near_rigid() -> str:
+    """Near-rigid links: conditioning and torque error against the finest step (``--cases near_rigid``)."""
+    lines = _header(
+        "step (s)",
+        "iteration matrix condition",
+        "Newton iterations per step (max)",
+        "torque error vs the 1e-5 s run (of its peak)",
+        "kinetic energy at the end (J)",
+    )
+    for r in _hard_case("near_rigid"):
+        x = r["extra"]
+        lines.append(
+            _row(
+                [
+                    r["run"].split("step ")[-1].removesuffix(" s"),
+                    _e(x.get("iteration_matrix_cond")) if "iteration_matrix_cond" in x else "-",
+                    x.get("max_newton_per_step", "-"),
+                    _e(x["torque_error_vs_finest_rel"]) if "torque_error_vs_finest_rel" in x else "(reference)",
+                    _g(x.get("kinetic_energy_end_J"), ".4f"),
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("hard_cases")])
+
+
+def table_hard_cases_misalignment() -> str:
+    """Misalignment sweep: torque, strain and bore rotation per twist (``--cases misalignment``)."""
+    lines = _header(
+        "alpha_3 (deg)",
+        "max abs torque (N mm)",
+        "largest equivalent strain (%)",
+        "largest bore rotation (rad)",
+        "small deformation",
+    )
+    for r in _hard_case("misalignment"):
+        x = r["extra"]
+        torque = x.get("max_abs_driving_torque_Nm")
+        strain = x.get("max_equivalent_strain")
+        lines.append(
+            _row(
+                [
+                    r["run"].split("= ")[1].removesuffix(" deg"),
+                    _g(None if torque is None else 1e3 * torque, ".1f"),
+                    _g(None if strain is None else 100 * strain, ".2g"),
+                    _g(x.get("max_bore_rotation_rad"), ".2g"),
+                    "yes" if x.get("small_deformation_valid") else "**no**",
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("hard_cases")])
+
+
+def table_hard_cases_soft() -> str:
+    """Very soft links: deformation against the small-deformation limits (``--cases soft``)."""
+    lines = _header(
+        "E (Pa)",
+        "largest bore rotation (rad)",
+        "largest equivalent strain (%)",
+        "coupler deviation (mm)",
+        "deviation x E (rel. to PLA)",
+        "small deformation",
+    )
+    for r in _hard_case("soft"):
+        x = r["extra"]
+        strain, deviation = x.get("max_equivalent_strain"), x.get("max_coupler_deviation_m")
+        valid = "yes" if x.get("small_deformation_valid") else "**no**"
+        lines.append(
+            _row(
+                [
+                    r["run"].split("= ")[1].removesuffix(" Pa"),
+                    _g(x.get("max_bore_rotation_rad"), ".2g"),
+                    _g(None if strain is None else 100 * strain, ".2g"),
+                    _g(None if deviation is None else 1e3 * deviation, ".3g"),
+                    _g(x.get("deviation_times_E_rel"), ".3g"),
+                    valid + ("" if r["converged"] else " (fails)"),
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("hard_cases")])
+
+
 TABLES = {name[len("table_") :]: function for name, function in list(globals().items()) if name.startswith("table_")}
 
 
@@ -435,7 +623,7 @@ def check_or_update_tables(docs=DOCS, update: bool = False) -> list[str]:
         text = doc.read_text()
         pieces, end = [], 0
         for match in TABLE.finditer(text):
-            where = f"{doc.relative_to(ROOT)}:{text.count(chr(10), 0, match.start()) + 1}"
+            where = f"{_shown(doc)}:{text.count(chr(10), 0, match.start()) + 1}"
             body = match["body"]
             if match["name"] not in TABLES:
                 problems.append(f"{where}: no table {match['name']!r} (known: {', '.join(TABLES)})")

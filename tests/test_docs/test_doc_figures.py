@@ -22,8 +22,16 @@ def _update_docs():
 
 
 def test_every_figure_agrees_with_its_result_file():
-    problems = _update_docs().check_or_update()
+    update_docs = _update_docs()
+    problems = update_docs.check_or_update_tables() + update_docs.check_or_update()
     assert not problems, "run scripts/update_docs.py, or re-measure:\n" + "\n".join(problems)
+
+
+def test_the_docs_cite_result_files():
+    update_docs = _update_docs()
+    cited = {(f.doc.parent / f.path).resolve() for doc in update_docs.DOCS for f in update_docs.figures(doc)}
+    assert len(cited) >= 3
+    assert all(path.parent == ROOT / "docs" / "results" for path in cited)
 
 
 @pytest.mark.parametrize("path", RESULTS, ids=[p.stem for p in RESULTS])
@@ -46,3 +54,16 @@ def test_figure_formats():
     assert update_docs.stored_unit("/results/variants/pla/max_abs_driving_torque_Nmm") == "N mm"
     assert update_docs.stored_unit("/results/variants/pla/wall_time_s/build") == "s"
     assert update_docs.stored_unit("/results/pla/torque/max_rel_diff") is None
+
+
+def test_a_wrong_figure_is_listed_and_rewritten(tmp_path):
+    update_docs = _update_docs()
+    result = ROOT / "docs" / "results" / "validation_summary.json"
+    pointer = "/results/pla/metrics/coupler_deviation_from_ideal_m/inhouse"
+    value = json.loads(result.read_text())["results"]["pla"]["metrics"]["coupler_deviation_from_ideal_m"]["inhouse"]
+    doc = tmp_path / "doc.md"
+    doc.write_text(f"deviation [9.99 mm]({result}#{pointer}), missing [1 m]({result}#/results/nowhere)\n")
+    problems = update_docs.check_or_update([doc])
+    assert len(problems) == 2 and "should read" in problems[0] and "no key 'nowhere'" in problems[1]
+    update_docs.check_or_update([doc], update=True)
+    assert f"[{1e3 * value:.2f} mm]" in doc.read_text()
