@@ -20,7 +20,7 @@ from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
 from ffrf.geometry.link_geometry import LinkDesign, mesh_link
 from ffrf.mesh.tet_mesh import quality_summary, write_vtu
 
-from .errors import FEInputError
+from .errors import FEInputError, NewtonDivergence, StaticDivergence
 
 __all__ = ["main", "SUBCOMMANDS", "bennett_axes", "link_summary"]
 
@@ -376,3 +376,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except FEInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except (StaticDivergence, NewtonDivergence) as exc:  # not bad input: the model's path ends (a fold, a snap)
+        print(f"error: the run stopped: {exc}", file=sys.stderr)
+        return 1

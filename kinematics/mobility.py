@@ -131,7 +131,7 @@ def rigid_mobility(
 class LoopMobility:
     """Why a loop of revolute joints moves or not (:func:`explain_mobility`).
 
-    ``first_order``: ``n - rank`` of the closure Jacobian at home (Eq. (L3));
+    ``first_order``: ``n - rank`` of the closure Jacobian at the start (Eq. (L3));
     ``singular_values``: the Jacobian's, lengths scaled by the loop's size; ``turn``: the driver's
     trial rotation (rad); ``gap_translation`` (m) and ``gap_rotation`` (rad): the closest rigid closure
     with the driver turned by ``turn`` (zero for a mobile loop); ``conditions``: for a 4R with
@@ -192,28 +192,33 @@ def _bennett_violations(loop: SingleLoop, rtol: float = 1e-9) -> tuple[str, ...]
     return tuple(violations)
 
 
-def explain_mobility(loop: SingleLoop, driver: int = 0, turn: float = np.radians(1.0)) -> LoopMobility:
-    """Does the loop move when joint ``driver`` turns by ``turn`` from home, and if not, by how much does it
-    miss? The closest rigid closure with the driver held (least squares over the other joints, translation
-    scaled by the loop's size) measures the gap; for a 4R the violated Bennett conditions are named."""
+def explain_mobility(
+    loop: SingleLoop, driver: int = 0, turn: float = np.radians(1.0), start: ArrayLike | None = None
+) -> LoopMobility:
+    """Does the loop move when joint ``driver`` turns by ``turn`` from ``start`` (closing joint rotations,
+    default home), and if not, by how much does it miss? The closest rigid closure with the driver held (least
+    squares over the other joints from ``start``, translation scaled by the loop's size) measures the gap; for
+    a 4R the violated Bennett conditions are named. Give a regular ``start`` where home is singular (a loop
+    folded flat): there the least squares may stop at a spurious local minimum."""
     if not 0 <= driver < loop.n:
         raise ValueError(f"driver must be a joint index 0..{loop.n - 1}, got {driver}")
+    origin = np.zeros(loop.n) if start is None else np.asarray(start, dtype=float)
     free = [i for i in range(loop.n) if i != driver]
     weights = np.array([1.0 / loop.scale] * 3 + [1.0] * 3)
 
     def residual(x: NDArray) -> NDArray:
-        phi = np.zeros(loop.n)
+        phi = origin.copy()
         phi[free] = x
-        phi[driver] = turn
+        phi[driver] = origin[driver] + turn
         return weights * loop.closure_residual(phi)
 
-    fit = least_squares(residual, np.zeros(loop.n - 1), xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    fit = least_squares(residual, origin[free], xtol=1e-15, ftol=1e-15, gtol=1e-15)
     gap = fit.fun / weights
     return LoopMobility(
         n=loop.n,
         driver=driver,
-        first_order=loop.mobility(),
-        singular_values=loop.singular_values(np.zeros(loop.n)),
+        first_order=loop.mobility(origin),
+        singular_values=loop.singular_values(origin),
         turn=float(turn),
         gap_translation=float(np.linalg.norm(gap[:3])),
         gap_rotation=float(np.linalg.norm(gap[3:])),

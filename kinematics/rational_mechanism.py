@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from .pluecker import Line
 from .single_loop import SingleLoop
 
-__all__ = ["MODELS", "factor_joint_angles", "load_model", "loop_from_mechanism", "tool_link"]
+__all__ = ["MODELS", "factor_joint_angles", "load_model", "loop_from_mechanism", "regular_start", "tool_link"]
 
 #: The 4R and 6R mechanisms that ``rational_linkages.models`` ships.
 MODELS = ("bennett_ark24", "collisions_free_6r", "plane_fold_6r", "interp_4poses_6r")
@@ -76,3 +76,18 @@ def factor_joint_angles(mechanism: Any, t: float) -> NDArray[np.float64]:
     """Joint rotations from home of the loop :func:`loop_from_mechanism` at curve parameter ``t``."""
     first, second = mechanism.factorizations
     return np.concatenate([_factor_angles(first, t), -_factor_angles(second, t)[::-1]])
+
+
+#: Curve parameters tried, in order, for a regular start pose (:func:`regular_start`).
+START_PARAMETERS = (0.0, 1.0, -1.0, 0.5, -0.5, 2.0, -2.0)
+
+
+def regular_start(mechanism: Any, loop: SingleLoop) -> NDArray[np.float64]:
+    """Joint rotations at the first curve parameter of :data:`START_PARAMETERS` where ``loop`` (the mechanism's,
+    :func:`loop_from_mechanism`) is regular, first-order mobility 1: home (``t`` infinite) and some poses of a
+    mechanism that folds flat are singular, and a motion traced from a singular pose may switch branches."""
+    for t in START_PARAMETERS:
+        phi = factor_joint_angles(mechanism, t)
+        if loop.mobility(phi) == 1:
+            return phi
+    raise ValueError(f"no regular pose of the mechanism at t in {START_PARAMETERS}; give the start pose yourself")

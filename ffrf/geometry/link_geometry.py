@@ -22,6 +22,7 @@ bearings plus shoulders), arm 16 x 12 mm, 1 mm axial gap between housings.
 
 from __future__ import annotations
 
+import itertools
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -116,6 +117,42 @@ def _frame_along(start: NDArray, end: NDArray, hint: NDArray) -> NDArray[np.floa
         e2 = np.cross(e1, [1.0, 0.0, 0.0] if abs(e1[0]) < 0.9 else [0.0, 1.0, 0.0])
     e2 /= np.linalg.norm(e2)
     return np.column_stack([e1, e2, np.cross(e1, e2)])
+
+
+#: A straight arm that leaves a housing within this angle of its axis gets a radial stub out of the housing first.
+STUB_ANGLE = np.radians(45.0)
+
+
+def _arm_path(centers: NDArray, axes, design: LinkDesign) -> list[NDArray[np.float64]]:
+    """Waypoints of the arm from housing centre 0 to housing centre 1.
+
+    The straight line between the centres, unless it leaves a housing within :data:`STUB_ANGLE` of the
+    housing's axis (intersecting or nearly parallel axes with DH offsets: the arm would run along the axis,
+    through the neighbour's housing). Then it leaves both housings radially, by a stub of the housing's
+    outer radius plus the axial gap plus half the arm's cross-section, and the arm joins the stub ends.
+    """
+    chord = centers[1] - centers[0]
+    unit = chord / np.linalg.norm(chord)
+    if all(np.arccos(min(1.0, abs(float(unit @ a.direction)))) >= STUB_ANGLE for a in axes):
+        return [centers[0], centers[1]]
+    reach = design.housing_outer_radius + design.axial_gap + 0.5 * np.hypot(design.arm_width, design.arm_thickness)
+    ends = []
+    for center, axis, toward in ((centers[0], axes[0], chord), (centers[1], axes[1], -chord)):
+        radial = toward - (toward @ axis.direction) * axis.direction
+        if np.linalg.norm(radial) < 1e-9 * np.linalg.norm(toward):  # the arm would run along the axis
+            radial = np.cross(axis.direction, [1.0, 0.0, 0.0] if abs(axis.direction[0]) < 0.9 else [0.0, 1.0, 0.0])
+        ends.append(center + reach * radial / np.linalg.norm(radial))
+    return [centers[0], ends[0], ends[1], centers[1]]
+
+
+def arm_waypoints(joint_points: ArrayLike, axes, design: LinkDesign = LinkDesign()) -> NDArray[np.float64]:
+    """The arm's course from joint point 0 to joint point 1 (``(k, 3)``): the two points, with the ends of the
+    radial stubs between them where the arm leaves its housings radially (:func:`_arm_path`)."""
+    points = np.asarray(joint_points, dtype=float)
+    lines = (Axis.of(axes[0]), Axis.of(axes[1]))
+    s = design.housing_offset
+    centers = np.stack([points[0] + s * lines[0].direction, points[1] - s * lines[1].direction])
+    return np.array([points[0], *_arm_path(centers, lines, design)[1:-1], points[1]])
 
 
 def _placed_box(occ, lower: ArrayLike, size: ArrayLike, frame: NDArray, origin: NDArray) -> int:
@@ -232,24 +269,40 @@ def build_link(
     for axis, center in zip(axes, centers, strict=True):
         base = center - 0.5 * design.housing_length * axis.direction
         housings.append(occ.addCylinder(*base, *(design.housing_length * axis.direction), design.housing_outer_radius))
-    frame = _frame_along(centers[0], centers[1], axes[0].direction)
     half_w, half_t = 0.5 * design.arm_width, 0.5 * design.arm_thickness
-    parts = [
-        _placed_box(occ, (0.0, -half_w, -half_t), (span, design.arm_width, design.arm_thickness), frame, centers[0])
-    ]
+    path = _arm_path(centers, axes, design)
+    parts = []
+    for start, end in itertools.pairwise(path):
+        # Segments after a stub overlap their neighbours by half an arm width, so the corners are filled.
+        extra = 0.0 if len(path) == 2 else half_w
+        frame_k = _frame_along(start, end, axes[0].direction)
+        length = float(np.linalg.norm(end - start))
+        parts.append(
+            _placed_box(
+                occ,
+                (-extra, -half_w, -half_t),
+                (length + 2 * extra, design.arm_width, design.arm_thickness),
+                frame_k,
+                start,
+            )
+        )
+    middle = len(path) // 2 - 1 if len(path) == 4 else 0  # the segment between the stubs (or the whole arm)
+    origin = path[middle]
+    frame = _frame_along(origin, path[middle + 1], axes[0].direction)
+    middle_length = float(np.linalg.norm(path[middle + 1] - origin))
     mount_plane = None
     if mount:
-        x0 = 0.5 * (span - design.mount_length)
+        x0 = 0.5 * (middle_length - design.mount_length)
         parts.append(
             _placed_box(
                 occ,
                 (x0, -0.5 * design.mount_width, -half_t - design.mount_height),
                 (design.mount_length, design.mount_width, design.mount_height + half_t),
                 frame,
-                centers[0],
+                origin,
             )
         )
-        mount_center = centers[0] + frame @ np.array([0.5 * span, 0.0, -half_t - design.mount_height])
+        mount_center = origin + frame @ np.array([0.5 * middle_length, 0.0, -half_t - design.mount_height])
         mount_plane = (mount_center, -frame[:, 2])
     parts = _trim_to_housing_slabs(occ, parts, axes, centers, design)
     solid, _ = occ.fuse([(3, housings[0])], [(3, housings[1])] + parts)

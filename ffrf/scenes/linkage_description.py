@@ -32,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ffrf.fe.materials import PLA, RIGID, Material
+from ffrf.geometry.link_geometry import arm_waypoints
 from ffrf.system.drives import CosineRamp, rpm
 from kinematics import Line, SingleLoop, common_normal, trace_motion
 from kinematics.quaternion import matrix_to_quaternion
@@ -112,6 +113,16 @@ def _link_axes(loop: SingleLoop, points: NDArray, errors: tuple[BoreError, ...])
             sides[side] = _erroneous_axis(*sides[side], other=sides[1 - side][0], error=error)
         links.append(sides)
     return links
+
+
+def _along(course: NDArray, fraction: float) -> NDArray[np.float64]:
+    """The point ``fraction`` of the way along the polyline ``course`` (by length)."""
+    lengths = np.linalg.norm(np.diff(course, axis=0), axis=1)
+    target = fraction * float(lengths.sum())
+    k = int(np.searchsorted(np.cumsum(lengths), target))
+    k = min(k, len(lengths) - 1)
+    before = float(np.sum(lengths[:k]))
+    return course[k] + (target - before) / lengths[k] * (course[k + 1] - course[k])
 
 
 def drive_sign(joint: int, n: int) -> float:
@@ -203,9 +214,9 @@ def linkage_description(
             }
         )
         if k > 0:
-            a, b = sides[0][1], sides[1][1]
+            course = arm_waypoints([sides[0][1], sides[1][1]], [sides[0][0], sides[1][0]])
             sensors += [
-                {"name": f"link{k}_node{j}", "body": f"link{k}", "point": _vector(a + f * (b - a)), "surface": True}
+                {"name": f"link{k}_node{j}", "body": f"link{k}", "point": _vector(_along(course, f)), "surface": True}
                 for j, f in enumerate(TRACKED_FRACTIONS)
             ]
     joints: list[dict] = [

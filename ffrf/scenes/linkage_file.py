@@ -14,7 +14,7 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
     unit = "mm"                        # lengths of dh, axes and bore offsets (default m)
     driver = 0                         # the driven joint
     tool_link = 3                      # the coupler: its joint points' mean is the coupler point
-    start_angle_deg = 0.0              # driver rotation from home at the start (default: a model's t = 0)
+    start_angle_deg = 0.0              # driver rotation from home at the start (default: a regular pose)
     material = {E = 1.2e9, nu = 0.33, rho = 450.0, name = "PLA"}   # default PLA
     h = 0.006                          # tetrahedron edge (m), order = 2, modes = 4
     drive = {rpm = 1.0, ramp_time = 1.0}
@@ -26,8 +26,9 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
 A DH table must close at its ``theta_deg`` (default the folded home pose 0, 180, 0, 180 of a 4R with
 ``d = 0``) and every source must give a *mobile* loop: one that does not move is refused with
 :func:`kinematics.explain_mobility`'s reason (which condition fails, by how much). A model of Rational
-Linkages starts at its motion polynomial's ``t = 0`` unless ``start_angle_deg`` is given, since its
-home pose ``t = infinity`` may be folded flat (singular).
+Linkages starts at a regular pose of its motion polynomial (``t = 0``, else 1, -1, ...:
+:func:`kinematics.rational_mechanism.regular_start`) unless ``start_angle_deg`` is given, since its home
+pose ``t = infinity`` may be folded flat (singular).
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_schema import MATERIAL, PARAMETRIC_H_RANGE, SETTINGS, Key, check_table
 from ffrf.system.drives import rpm
 from kinematics import LoopClosureError, LoopFoldError, SingleLoop, explain_mobility
-from kinematics.rational_mechanism import MODELS, factor_joint_angles, load_model, loop_from_mechanism, tool_link
+from kinematics.rational_mechanism import MODELS, load_model, loop_from_mechanism, regular_start, tool_link
 
 __all__ = ["LINKAGE", "LINKAGE_SCHEMA", "load_linkage"]
 
@@ -146,11 +147,8 @@ def _loop(spec: dict, where: str) -> tuple[SingleLoop, np.ndarray | None, int | 
     length = 1e-3 if spec.get("unit") == "mm" else 1.0
     if "model" in spec:
         mechanism = load_model(spec["model"])
-        return (
-            loop_from_mechanism(mechanism, scale=spec.get("scale", 0.1)),
-            factor_joint_angles(mechanism, 0.0),
-            tool_link(mechanism),
-        )
+        loop = loop_from_mechanism(mechanism, scale=spec.get("scale", 0.1))
+        return loop, regular_start(mechanism, loop), tool_link(mechanism)
     if "axes" in spec:
         axes = spec["axes"]
         return (
@@ -192,7 +190,7 @@ def load_linkage(document: dict, base: Path | None = None, where: str = "linkage
     driver = spec.get("driver", 0)
     if driver >= n:
         raise SceneError(f"{label}: driver {driver} does not exist; the loop has joints 0 to {n - 1}")
-    mobility = explain_mobility(loop, driver)
+    mobility = explain_mobility(loop, driver, start=origin)
     if not mobility.mobile:
         raise SceneError(f"{label}: {mobility.summary()}; check the source (dh, axes) or its units")
     tool = spec.get("tool_link", model_tool)

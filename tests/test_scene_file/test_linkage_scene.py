@@ -104,3 +104,19 @@ def test_stiff_6r_follows_the_motion_polynomial_of_rational_linkages():
         pose = DualQuaternion(np.asarray(mechanism.evaluate(parameter), dtype=float)).normalized()
         worst = max(worst, float(np.linalg.norm(ours - pose.act(home_point / 0.1) * 0.1)))
     assert worst < 1e-12
+
+
+def test_links_on_intersecting_axes_leave_their_housings_radially():
+    """plane_fold_6r has all DH lengths a = 0 (intersecting axes, offsets d only): a straight arm would run along
+    the axes through the neighbours' housings, so it leaves each housing by a radial stub. Every link meshes as
+    one solid, and the tracked points lie on it (the builder refuses points farther than 10 % of the body)."""
+    from kinematics.rational_mechanism import regular_start
+
+    mechanism = load_model("plane_fold_6r")
+    loop = loop_from_mechanism(mechanism, scale=0.1)
+    assert np.max(loop.dh().a) < 1e-12
+    origin = regular_start(mechanism, loop)
+    description = linkage_description(loop, h=12e-3, order=1, n_modes=2, start_angle=float(origin[0]), origin=origin)
+    scene = build_scene(description, where="plane_fold_6r")
+    assert len(scene.bodies) == 6 and len(scene.sensors) == 15
+    assert np.abs(scene.system.constraint_values(scene.q_initial, 0.0)).max() < 1e-12  # assembled at the start
