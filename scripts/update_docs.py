@@ -228,6 +228,11 @@ def _header(*cells: str) -> list[str]:
     return [_row(cells), _row(["---"] * len(cells))]
 
 
+def _g2(x: float) -> str:
+    """Two significant digits, without an exponent up to 1e5."""
+    return f"{x:.0f}" if abs(x) >= 100 else f"{x:.2g}"
+
+
 def _e(x: float, digits: int = 1) -> str:
     return format_like(f"1.{'0' * digits}e0" if digits else "1e0", x)
 
@@ -525,7 +530,10 @@ def table_fe_link() -> str:
 
 
 def _hard_case(name: str) -> list[dict]:
-    return next(case["rows"] for case in _results("hard_cases")["cases"] if case["case"] == name)
+    for case in _results("hard_cases")["cases"]:
+        if case["case"] == name:
+            return case["rows"]
+    raise KeyError(f"hard_cases.json has no case {name!r}")
 
 
 def _g(x, spec: str) -> str:
@@ -611,6 +619,102 @@ def table_hard_cases_soft() -> str:
             )
         )
     return "\n".join(lines + ["", _source("hard_cases")])
+
+
+def table_hard_cases_speed() -> str:
+    """Drive speed: dynamic against quasi-static per speed (``--cases speed``)."""
+    lines = _header(
+        "rpm",
+        "vibration ratio",
+        "inertia number",
+        "auto mode",
+        "torque: dynamic - quasi-static (of its peak)",
+        "after the ramp",
+        "coupler difference (m)",
+        "of the elastic deviation",
+    )
+    for r in _hard_case("speed"):
+        x = r["extra"]
+        if "torque_diff_to_quasi_static_rel" not in x:
+            continue
+        lines.append(
+            _row(
+                [
+                    r["run"].split(" rpm")[0],
+                    f"{x['quasi_static_ratio']:.0f}",
+                    f"{x['inertia_number']:.2g}",
+                    x["auto_choice"],
+                    f"{_g2(100 * x['torque_diff_to_quasi_static_rel'])} %",
+                    f"{_g2(100 * x['torque_diff_after_ramp_rel'])} %",
+                    _e(x["coupler_diff_to_quasi_static_m"]),
+                    f"{_g2(100 * x['coupler_diff_rel_to_deviation'])} %",
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("hard_cases")])
+
+
+def table_hard_cases_long_run() -> str:
+    """Ten revolutions at 60 rpm: first and last revolution (``--cases long_run``)."""
+    lines = _header(
+        "run",
+        "worst abs(g) first / last revolution",
+        "energy balance error per revolution, first / last",
+        "drive work exchanged per revolution (J)",
+        "net drive work per revolution (J)",
+        "coupler / torque change from one revolution to the next (last three)",
+    )
+    for r in _hard_case("long_run"):
+        x = r["extra"]
+        if "constraint_residual_per_rev" not in x:
+            continue
+        g, e = x["constraint_residual_per_rev"], x["energy_balance_per_rev_rel"]
+        lines.append(
+            _row(
+                [
+                    r["run"],
+                    f"{_e(g[0])} / {_e(g[-1])}",
+                    f"{_e(e[0])} / {_e(e[-1])}",
+                    f"{x['drive_work_peak_to_peak_per_rev_J'][-1]:.3g}",
+                    _e(x["drive_work_per_rev_J"][-1]),
+                    f"{_e(max(x['coupler_change_per_rev_m'][-3:]))} m / "
+                    f"{_e(max(x['torque_change_per_rev_Nm'][-3:]))} N m",
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("hard_cases")])
+
+
+def table_speed_vs_error_dynamic() -> str:
+    """Both solvers on the same points of the dynamic window (``bench/speed_vs_error.py --dyn-points ...``)."""
+    points = _results("speed_vs_error_dynamic")["results"]
+    lines = _header(
+        "setting",
+        "coupler error ours / Exudyn (m)",
+        "torque error ours / Exudyn",
+        "run ours / Exudyn (s)",
+        "run: Exudyn / ours",
+    )
+    settings = {}
+    for p in points:
+        key = (p["order"], p["h"], p["modes"], p["mode"], p["step"], p["rho_inf"])
+        settings.setdefault(key, {})[p["solver"]] = p
+    for (order, h, modes, mode, step, rho), pair in settings.items():
+        ours, theirs = pair["ffrf"], pair.get("exudyn")
+        both = [ours] + ([theirs] if theirs else [])
+        how = f"dt {1e3 * step:g} ms, rho_inf {rho:g}" if mode == "dynamic" else "quasi-static"
+        lines.append(
+            _row(
+                [
+                    f"P{order}, {1e3 * h:g} mm, {modes} modes, {how}",
+                    " / ".join(_e(q["coupler_error_m"], 2) for q in both),
+                    " / ".join(_e(q["torque_error_rel"]) for q in both),
+                    " / ".join(f"{q['integration_s']:.2f}" for q in both),
+                    f"{theirs['integration_s'] / ours['integration_s']:.0f}" if theirs else "",
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("speed_vs_error_dynamic")])
 
 
 TABLES = {name[len("table_") :]: function for name, function in list(globals().items()) if name.startswith("table_")}
