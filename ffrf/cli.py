@@ -188,6 +188,14 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
     result = run_bennett(
         scene, mode=mode, n_outputs=options["outputs"], step=options["step"], progress=_progress_printer()
     )
+    clearance = scene.clearance()
+    result.metadata["clearance"] = {
+        "summary": clearance.summary(),
+        "collisions": [
+            {"links": [a, b], "clearance_m": d, "drive_angle_rad": angle} for a, b, d, angle in clearance.collisions
+        ],
+        "contact_m": clearance.contact,
+    }
     write_results(result, out)
     if options["vtk_every"] > 0:
         from ffrf.output.paraview import write_time_series
@@ -218,6 +226,7 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
         f"{summary['energy_balance_relative']:.1e} of the drive work; wall time "
         f"{time.perf_counter() - started:.1f} s -> {out}"
     )
+    print(f"clearance of the links along the rigid motion: {clearance.summary()}")
     misfit = scene.misfit_degrees > 0.0
     print("assembled state (gravity" + (", misfit" if misfit else "") + f"; {out / 'assembly.vtu'}):")
     for link in assembly.links:

@@ -16,7 +16,10 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ffrf.fe.interfaces import boundary_triangles
 from ffrf.fe.materials import PLA, Material
+from ffrf.geometry.link_geometry import LinkDesign
+from ffrf.output.clearance import Clearance, link_clearance
 from ffrf.scenes.builder import Scene, SceneBody, build_scene
 from ffrf.scenes.linkage_description import BoreError, drive_sign, joint_points, linkage_description, start_pose
 from ffrf.system.drives import CosineRamp, rpm
@@ -84,9 +87,26 @@ class LinkageScene(Scene):
         motion = follow_driver(self.loop, self.driver, phi, start=self.start_phi)
         return motion.path(self.tool_link, self.home_coupler_point())
 
+    def clearance(self, n_poses: int = 72, contact: float = 1e-3) -> Clearance:
+        """Clearance of every pair of links along one revolution of the rigid nominal motion from the start,
+        at ``n_poses`` poses (:func:`ffrf.output.clearance.link_clearance`; collisions below ``contact`` m)."""
+        sign = drive_sign(self.driver, self.loop.n)  # turn the way the drive turns
+        motion = trace_motion(
+            self.loop, self.driver, n_poses=n_poses, revolution=sign * 2 * np.pi, start=self.start_phi
+        )
+        surfaces = [body.fe.mesh.points[np.unique(boundary_triangles(body.fe.mesh))] for body in self.bodies]
+        points = joint_points(self.loop)
+        n = self.loop.n
+        shared = {(min(k, (k + 1) % n), max(k, (k + 1) % n)): points[k] for k in range(n)}
+        design = LinkDesign()
+        radius = design.housing_length + design.axial_gap + design.housing_outer_radius
+        angles = sign * motion.driver_angles
+        return link_clearance(surfaces, motion.link_transforms(), angles, shared, radius, contact)
+
     def ideal_coupler_curve(self, n: int = 720) -> NDArray[np.float64]:
         """``n`` points of the ideal coupler curve over one revolution of the driver from the start."""
-        motion = trace_motion(self.loop, self.driver, n_poses=n, start=self.start_phi)
+        sign = drive_sign(self.driver, self.loop.n)
+        motion = trace_motion(self.loop, self.driver, n_poses=n, revolution=sign * 2 * np.pi, start=self.start_phi)
         return motion.path(self.tool_link, self.home_coupler_point())
 
 
