@@ -14,7 +14,7 @@ A coarse mesh (linear tetrahedra at 12 mm, 2 modes) keeps the example fast.
 import numpy as np
 
 from ffrf.scenes.bennett_run import run_bennett
-from ffrf.scenes.linkage_description import BoreError
+from ffrf.scenes.linkage_description import BoreError, LinkageOptions
 from ffrf.scenes.linkage_scene import build_linkage
 from kinematics import explain_mobility
 from kinematics.rational_mechanism import load_model, loop_from_mechanism, regular_start, tool_link
@@ -27,15 +27,17 @@ def main() -> dict:
     start = regular_start(mechanism, loop)
     scene = build_linkage(
         loop,
-        name="collisions_free_6r, bore 5 on the base 0.5 deg off",
-        driver=0,
-        start_angle=float(start[0]),
-        origin=start,
-        h=12e-3,
-        order=1,
-        n_modes=2,
-        bore_errors=(BoreError(joint=5, link=0, twist=np.radians(0.5)),),
-        tool_link=tool_link(mechanism),
+        LinkageOptions(
+            name="collisions_free_6r, bore 5 on the base 0.5 deg off",
+            driver=0,
+            start_angle=float(start[0]),
+            origin=start,
+            h=12e-3,
+            order=1,
+            n_modes=2,
+            bore_errors=(BoreError(joint=5, link=0, twist=np.radians(0.5)),),
+            tool_link=tool_link(mechanism),
+        ),
     )
     result = run_bennett(scene, mode="quasi_static", n_outputs=245)  # every 0.25 s: the ramp ends on a row
     s = result.sensors

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ffrf.fe.materials import PLA, RIGID, Material
 from ffrf.scenes.assembly import assemble
-from ffrf.scenes.linkage_description import BoreError, linkage_description
+from ffrf.scenes.linkage_description import BoreError, LinkageOptions, linkage_description
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.system.drives import rpm
 from ffrf.system.markers import JOINT_OFFSETS
@@ -52,6 +52,7 @@ __all__ = [
     "paper_max_coupler_deviation",
     "BennettScene",
     "bennett_description",
+    "bennett_options",
     "build_bennett",
     "assemble",
 ]
@@ -113,15 +114,7 @@ def _bore_errors(variant: str) -> tuple[BoreError, ...]:
     return (BoreError(joint=3, link=0, twist=np.radians(alpha3 - 90.0)),) if alpha3 != 90.0 else ()
 
 
-def _arguments(variant: str, joint_offsets: str) -> tuple[SingleLoop, Material]:
-    if variant not in VARIANTS:
-        raise ValueError(f"unknown variant {variant!r}; choose one of {sorted(VARIANTS)}")
-    if joint_offsets not in JOINT_OFFSETS:
-        raise ValueError(f"joint_offsets must be one of {JOINT_OFFSETS}, got {joint_offsets!r}")
-    return SingleLoop(BennettLinkage(PAPER_A, PAPER_ALPHA).axes), VARIANTS[variant][0]
-
-
-def bennett_description(
+def bennett_options(
     variant: str = "pla",
     h: float = 6e-3,
     order: int = 2,
@@ -130,20 +123,28 @@ def bennett_description(
     omega: float = rpm(1.0),
     ramp_time: float = 1.0,
     start_angle: float = np.radians(90.0),
+    revolutions: float = 1.0,
     gravity=(0.0, 0.0, -9.81),
     exact_gravity: bool = True,
     joint_offsets: str = "body",
-    revolutions: float = 1.0,
-) -> dict:
-    """The paper's scene ``variant`` as a scene description (the format of scene files): four
-    parametric links, the base clamped at its mounting face, revolute joints 0..2 and joint 3 driven
-    by the cosine ramp (side 0 the base, side 1 link 3), each joint side on its own link's axis (the
-    base's h3 misaligned by alpha_3 - 90 deg), link poses of the ideal linkage at ``start_angle``
-    (link 3's rotation about h3 from home), three tracked nodes per moving link and the coupler point."""
-    loop, material = _arguments(variant, joint_offsets)
-    return linkage_description(
-        loop,
-        material=material,
+) -> LinkageOptions:
+    """The paper's scene ``variant`` (``rigid``, ``pla``, ``pla1``, ``pla2``) as linkage options: joint 3
+    driven (side 0 the base, side 1 link 3), the coupler link 2, the base's h3 misaligned by alpha_3 - 90 deg.
+
+    ``h``: maximum tetrahedron edge (m; paper 2 mm); ``order``: 1 (linear, the paper's) or 2
+    (quadratic) tetrahedra; ``n_modes``: fixed-interface modes per link (paper 32). The defaults
+    are the cheapest discretisation that puts the coupler path within 0.01 mm of the converged one
+    (the rule and its measurements: ``docs/speed_vs_error.md``); ``start_angle``: link 3's
+    rotation about h3 from the folded home pose at t = 0 (the folded pose itself has overlapping
+    arms); ``revolutions`` after the ramp; ``joint_offsets``: ``"body"`` (paper, Exudyn) or
+    ``"marker"`` (module docstring).
+    """
+    if variant not in VARIANTS:
+        raise ValueError(f"unknown variant {variant!r}; choose one of {sorted(VARIANTS)}")
+    if joint_offsets not in JOINT_OFFSETS:
+        raise ValueError(f"joint_offsets must be one of {JOINT_OFFSETS}, got {joint_offsets!r}")
+    return LinkageOptions(
+        material=VARIANTS[variant][0],
         name=f"Bennett {variant}",
         driver=3,
         start_angle=-start_angle,  # the drive turns link 3 against the base: phi_3 = -angle (Eq. (L1))
@@ -154,7 +155,7 @@ def bennett_description(
         omega=omega,
         ramp_time=ramp_time,
         revolutions=revolutions,
-        gravity=gravity,
+        gravity=(float(gravity[0]), float(gravity[1]), float(gravity[2])),
         bore_errors=_bore_errors(variant),
         tool_link=2,
         exact_gravity=exact_gravity,
@@ -162,60 +163,32 @@ def bennett_description(
     )
 
 
-def build_bennett(
-    variant: str = "pla",
-    h: float = 6e-3,
-    order: int = 2,
-    n_modes: int = 4,
-    beta: float = 0.005,
-    omega: float = rpm(1.0),
-    ramp_time: float = 1.0,
-    start_angle: float = np.radians(90.0),
-    revolutions: float = 1.0,
-    gravity=(0.0, 0.0, -9.81),
-    exact_gravity: bool = True,
-    joint_offsets: str = "body",
-) -> BennettScene:
-    """Build the paper's scene ``variant`` (``rigid``, ``pla``, ``pla1``, ``pla2``) of
-    :func:`bennett_description` with the one scene builder.
+def _paper_loop() -> SingleLoop:
+    return SingleLoop(BennettLinkage(PAPER_A, PAPER_ALPHA).axes)
 
-    ``h``: maximum tetrahedron edge (m; paper 2 mm); ``order``: 1 (linear, the paper's) or 2
-    (quadratic) tetrahedra; ``n_modes``: fixed-interface modes per link (paper 32). The defaults
-    are the cheapest discretisation that puts the coupler path within 0.01 mm of the converged one
-    (the rule and its measurements: ``docs/speed_vs_error.md``); ``start_angle``: link 3's
-    rotation about h3 from the folded home pose at t = 0 (the folded pose itself has overlapping
-    arms); ``revolutions`` after the ramp; ``joint_offsets``: ``"body"`` (paper, Exudyn) or
-    ``"marker"`` (module docstring).
-    """
-    loop, material = _arguments(variant, joint_offsets)
-    scene = build_linkage(
-        loop,
-        material=material,
-        name=f"Bennett {variant}",
-        driver=3,
-        start_angle=-start_angle,
-        h=h,
-        order=order,
-        n_modes=n_modes,
-        beta=beta,
-        omega=omega,
-        ramp_time=ramp_time,
-        revolutions=revolutions,
-        gravity=gravity,
-        bore_errors=_bore_errors(variant),
-        tool_link=2,
-        exact_gravity=exact_gravity,
-        joint_offsets=joint_offsets,
-    )
+
+def bennett_description(variant: str = "pla", **options) -> dict:
+    """The paper's scene ``variant`` as a scene description (the format of scene files): four parametric
+    links, the base clamped at its mounting face, revolute joints 0..2 and joint 3 driven by the cosine
+    ramp, each joint side on its own link's axis, link poses of the ideal linkage at the start, three
+    tracked nodes per moving link and the coupler point. ``options``: those of :func:`bennett_options`."""
+    return linkage_description(_paper_loop(), bennett_options(variant, **options))
+
+
+def build_bennett(variant: str = "pla", **options) -> BennettScene:
+    """Build the paper's scene ``variant`` with the one scene builder; ``options``: those of
+    :func:`bennett_options` (discretisation, drive, start, gravity, joint offsets)."""
+    linkage_options = bennett_options(variant, **options)
+    scene = build_linkage(_paper_loop(), linkage_options)
     settings = dict(
         scene.settings,
         variant=variant,
-        beta=beta,
-        start_angle=start_angle,
-        gravity=[float(g) for g in gravity],
-        exact_gravity=exact_gravity,
+        beta=linkage_options.beta,
+        start_angle=-linkage_options.start_angle,
+        gravity=list(linkage_options.gravity),
+        exact_gravity=linkage_options.exact_gravity,
         alpha3_deg=VARIANTS[variant][1],
-        joint_offsets=joint_offsets,
+        joint_offsets=linkage_options.joint_offsets,
     )
     built = {f.name: getattr(scene, f.name) for f in fields(LinkageScene)}
     return BennettScene(**dict(built, settings=settings), variant=variant, linkage=BennettLinkage(PAPER_A, PAPER_ALPHA))

@@ -41,6 +41,7 @@ __all__ = [
     "LINKAGE_VARIANTS",
     "TRACKED_FRACTIONS",
     "BoreError",
+    "LinkageOptions",
     "drive_sign",
     "joint_points",
     "linkage_description",
@@ -145,46 +146,53 @@ def _vector(x) -> list[float]:
     return [float(v) for v in x]
 
 
-def linkage_description(
-    loop: SingleLoop,
-    material: Material = PLA,
-    name: str = "linkage",
-    driver: int = 0,
-    start_angle: float = 0.0,
-    origin: ArrayLike | None = None,
-    h: float = 6e-3,
-    order: int = 2,
-    n_modes: int = 4,
-    beta: float = 0.005,
-    omega: float = rpm(1.0),
-    ramp_time: float = 1.0,
-    revolutions: float = 1.0,
-    gravity=(0.0, 0.0, -9.81),
-    bore_errors: tuple[BoreError, ...] = (),
-    tool_link: int | None = None,
-    mode: str = "quasi_static",
-    outputs: int = 241,
-    exact_gravity: bool = True,
-    joint_offsets: str = "body",
-) -> dict:
-    """The loop as a scene description (module docstring).
+@dataclass(frozen=True)
+class LinkageOptions:
+    """How a loop becomes a flexible linkage and how it runs (SI units, angles in rad).
 
-    ``start_angle``: the driver's rotation from home (rad, its phi of Eq. (L1)) where the run starts,
-    reached along the rigid motion from ``origin`` (closing joint rotations; default home: give a regular
-    pose where home is singular, as for a loop folded flat);
-    ``tool_link``: the link whose joint points' mean is the sensor ``coupler_point`` (default ``n // 2``,
-    the coupler of a 4R); ``mode``, ``outputs``: of the run over the ramp and ``revolutions``;
-    ``exact_gravity``, ``joint_offsets``: the scene-file settings of the same names.
+    ``driver``: the driven joint; ``start_angle``: its rotation from home (phi of Eq. (L1)) where the run
+    starts, reached along the rigid motion from ``origin`` (closing joint rotations; default home: give a
+    regular pose where home is singular, as for a loop folded flat); ``h``, ``order``, ``n_modes``: the
+    links' tetrahedron edge (m), element order and fixed-interface modes; ``beta``: stiffness-proportional
+    damping; ``omega``, ``ramp_time``, ``revolutions``: the cosine ramp to ``omega`` (rad/s) and the turns
+    after it; ``bore_errors``: the as-built misfits; ``tool_link``: the link whose joint points' mean is
+    the sensor ``coupler_point`` (default ``n // 2``, the coupler of a 4R); ``mode``, ``outputs``: of a
+    scene-file run; ``exact_gravity``, ``joint_offsets``: the scene-file settings of the same names.
     """
+
+    material: Material = PLA
+    name: str = "linkage"
+    driver: int = 0
+    start_angle: float = 0.0
+    origin: ArrayLike | None = None
+    h: float = 6e-3
+    order: int = 2
+    n_modes: int = 4
+    beta: float = 0.005
+    omega: float = rpm(1.0)
+    ramp_time: float = 1.0
+    revolutions: float = 1.0
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
+    bore_errors: tuple[BoreError, ...] = ()
+    tool_link: int | None = None
+    mode: str = "quasi_static"
+    outputs: int = 241
+    exact_gravity: bool = True
+    joint_offsets: str = "body"
+
+
+def linkage_description(loop: SingleLoop, options: LinkageOptions | None = None) -> dict:
+    """The loop as a scene description (module docstring), built as ``options`` say."""
+    o = LinkageOptions() if options is None else options
     n = loop.n
-    if not 0 <= driver < n:
-        raise ValueError(f"driver must be a joint index 0..{n - 1}, got {driver}")
-    tool = n // 2 if tool_link is None else tool_link
+    if not 0 <= o.driver < n:
+        raise ValueError(f"driver must be a joint index 0..{n - 1}, got {o.driver}")
+    tool = n // 2 if o.tool_link is None else o.tool_link
     if not 0 < tool < n:
         raise ValueError(f"tool_link must be a moving link 1..{n - 1}, got {tool}")
     points = joint_points(loop)
-    links = _link_axes(loop, points, tuple(bore_errors))
-    phi = start_pose(loop, driver, start_angle, origin)
+    links = _link_axes(loop, points, tuple(o.bore_errors))
+    phi = start_pose(loop, o.driver, o.start_angle, o.origin)
     transforms = loop.link_transforms(phi)
     bodies, sensors = [], []
     for k, sides in enumerate(links):
@@ -202,10 +210,10 @@ def linkage_description(
         bodies.append(
             {
                 "name": f"link{k}",
-                "parametric": {"axes": axes, "h": h, "mount": k == 0},
-                "material": {"E": material.E, "nu": material.nu, "rho": material.rho, "name": material.name},
-                "order": order,
-                "modes": n_modes,
+                "parametric": {"axes": axes, "h": o.h, "mount": k == 0},
+                "material": {"E": o.material.E, "nu": o.material.nu, "rho": o.material.rho, "name": o.material.name},
+                "order": o.order,
+                "modes": o.n_modes,
                 "interfaces": [{"name": i, "group": i} for i in interfaces],
                 "pose": {
                     "position": _vector(transforms[k][:3, 3]),
@@ -228,8 +236,8 @@ def linkage_description(
         far_side = {"body": f"link{far}", "axis": links[far][0][0].direction, "point": links[far][0][1]}
         side0, side1 = (far_side, near_side) if i == n - 1 else (near_side, far_side)
         joint = {
-            "name": f"joint{i} (drive)" if i == driver else f"joint{i}",
-            "type": "driven_revolute" if i == driver else "revolute",
+            "name": f"joint{i} (drive)" if i == o.driver else f"joint{i}",
+            "type": "driven_revolute" if i == o.driver else "revolute",
             "body0": side0["body"],
             "interface0": f"joint{i}",
             "axis0": _vector(side0["axis"]),
@@ -239,27 +247,27 @@ def linkage_description(
             "axis1": _vector(side1["axis"]),
             "point1": _vector(side1["point"]),
         }
-        if i == driver:
+        if i == o.driver:
             joint["drive"] = {
-                "omega": float(omega),
-                "ramp_time": float(ramp_time),
+                "omega": float(o.omega),
+                "ramp_time": float(o.ramp_time),
                 "start_angle": float(drive_sign(i, n) * phi[i]),
             }
         joints.append(joint)
-    ramp = CosineRamp(omega, ramp_time)
-    t_end = ramp.time_for_angle(float(ramp.angle(ramp_time)) + 2.0 * np.pi * revolutions)
+    ramp = CosineRamp(o.omega, o.ramp_time)
+    t_end = ramp.time_for_angle(float(ramp.angle(o.ramp_time)) + 2.0 * np.pi * o.revolutions)
     sensors.append(
         {"name": "coupler_point", "body": f"link{tool}", "joints": [f"joint{j}" for j in _link_joints(tool, n)]}
     )
     settings = {
-        "name": name,
-        "gravity": _vector(gravity),
-        "beta": float(beta),
+        "name": o.name,
+        "gravity": _vector(o.gravity),
+        "beta": float(o.beta),
         "static_start": True,
-        "exact_gravity": bool(exact_gravity),
-        "joint_offsets": joint_offsets,
-        "mode": mode,
+        "exact_gravity": bool(o.exact_gravity),
+        "joint_offsets": o.joint_offsets,
+        "mode": o.mode,
         "t_end": float(t_end),
-        "outputs": int(outputs),
+        "outputs": int(o.outputs),
     }
     return {"scene": settings, "bodies": bodies, "joints": joints, "sensors": sensors}

@@ -42,7 +42,7 @@ import numpy as np
 
 from ffrf.errors import SceneError
 from ffrf.fe.materials import PLA, Material
-from ffrf.scenes.linkage_description import BoreError
+from ffrf.scenes.linkage_description import BoreError, LinkageOptions
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_schema import MATERIAL, PARAMETRIC_H_RANGE, SETTINGS, Key, check_table
 from ffrf.system.drives import rpm
@@ -220,23 +220,25 @@ def load_linkage(document: dict, base: Path | None = None, where: str = "linkage
     try:
         scene = build_linkage(
             loop,
-            material=material,
-            name=spec.get("name", settings.get("name", "linkage")),
-            driver=driver,
-            start_angle=start,
-            origin=origin,
-            h=spec.get("h", 6e-3),
-            order=spec.get("order", 2),
-            n_modes=spec.get("modes", 4),
-            beta=settings.get("beta", 0.005),
-            omega=omega,
-            ramp_time=drive.get("ramp_time", 1.0),
-            revolutions=spec.get("revolutions", 1.0),
-            gravity=tuple(settings.get("gravity", (0.0, 0.0, -9.81))),
-            bore_errors=errors,
-            tool_link=tool,
-            exact_gravity=settings.get("exact_gravity", True),
-            joint_offsets=settings.get("joint_offsets", "body"),
+            LinkageOptions(
+                material=material,
+                name=spec.get("name", settings.get("name", "linkage")),
+                driver=driver,
+                start_angle=start,
+                origin=origin,
+                h=spec.get("h", 6e-3),
+                order=spec.get("order", 2),
+                n_modes=spec.get("modes", 4),
+                beta=settings.get("beta", 0.005),
+                omega=omega,
+                ramp_time=drive.get("ramp_time", 1.0),
+                revolutions=spec.get("revolutions", 1.0),
+                gravity=tuple(settings.get("gravity", (0.0, 0.0, -9.81))),
+                bore_errors=errors,
+                tool_link=tool,
+                exact_gravity=settings.get("exact_gravity", True),
+                joint_offsets=settings.get("joint_offsets", "body"),
+            ),
         )
     except LoopFoldError as error:
         raise SceneError(f"{label}: the start pose cannot be reached: {error}") from error

@@ -17,12 +17,17 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ffrf.fe.interfaces import boundary_triangles
-from ffrf.fe.materials import PLA, Material
 from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.output.clearance import Clearance, link_clearance
 from ffrf.scenes.builder import Scene, SceneBody, build_scene
-from ffrf.scenes.linkage_description import BoreError, drive_sign, joint_points, linkage_description, start_pose
-from ffrf.system.drives import CosineRamp, rpm
+from ffrf.scenes.linkage_description import (
+    LinkageOptions,
+    drive_sign,
+    joint_points,
+    linkage_description,
+    start_pose,
+)
+from ffrf.system.drives import CosineRamp
 from kinematics import SingleLoop, follow_driver, trace_motion
 
 __all__ = ["LinkageScene", "build_linkage"]
@@ -110,69 +115,32 @@ class LinkageScene(Scene):
         return motion.path(self.tool_link, self.home_coupler_point())
 
 
-def build_linkage(
-    loop: SingleLoop,
-    material: Material = PLA,
-    name: str = "linkage",
-    driver: int = 0,
-    start_angle: float = 0.0,
-    origin: ArrayLike | None = None,
-    h: float = 6e-3,
-    order: int = 2,
-    n_modes: int = 4,
-    beta: float = 0.005,
-    omega: float = rpm(1.0),
-    ramp_time: float = 1.0,
-    revolutions: float = 1.0,
-    gravity=(0.0, 0.0, -9.81),
-    bore_errors: tuple[BoreError, ...] = (),
-    tool_link: int | None = None,
-    exact_gravity: bool = True,
-    joint_offsets: str = "body",
-) -> LinkageScene:
-    """Build the linkage of :func:`~ffrf.scenes.linkage_description.linkage_description` (same arguments)."""
-    description = linkage_description(
-        loop,
-        material=material,
-        name=name,
-        driver=driver,
-        start_angle=start_angle,
-        origin=origin,
-        h=h,
-        order=order,
-        n_modes=n_modes,
-        beta=beta,
-        omega=omega,
-        ramp_time=ramp_time,
-        revolutions=revolutions,
-        gravity=gravity,
-        bore_errors=bore_errors,
-        tool_link=tool_link,
-        exact_gravity=exact_gravity,
-        joint_offsets=joint_offsets,
-    )
-    scene = build_scene(description, where=name)
+def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None) -> LinkageScene:
+    """Build :func:`~ffrf.scenes.linkage_description.linkage_description` of ``loop`` with the one scene builder."""
+    options = LinkageOptions() if options is None else options
+    description = linkage_description(loop, options)
+    scene = build_scene(description, where=options.name)
     angle = next(j.angle for j in scene.joints if j.angle is not None)  # the drive the system runs with
     settings = dict(
         scene.settings,
-        driver=driver,
-        h=h,
-        order=order,
-        n_modes=n_modes,
-        omega=omega,
-        ramp_time=ramp_time,
-        revolutions=revolutions,
-        material=material.name,
-        bore_errors=[vars(e) for e in bore_errors],
+        driver=options.driver,
+        h=options.h,
+        order=options.order,
+        n_modes=options.n_modes,
+        omega=options.omega,
+        ramp_time=options.ramp_time,
+        revolutions=options.revolutions,
+        material=options.material.name,
+        bore_errors=[vars(e) for e in options.bore_errors],
     )
     built = {f.name: getattr(scene, f.name) for f in fields(Scene)}
     return LinkageScene(
         **dict(built, settings=settings),
         loop=loop,
-        driver=driver,
+        driver=options.driver,
         drive=angle.ramp,
         start_angle=angle.start,
-        start_phi=start_pose(loop, driver, start_angle, origin),
+        start_phi=start_pose(loop, options.driver, options.start_angle, options.origin),
         t_end=float(description["scene"]["t_end"]),
-        tool_link=loop.n // 2 if tool_link is None else tool_link,
+        tool_link=loop.n // 2 if options.tool_link is None else options.tool_link,
     )

@@ -16,7 +16,7 @@ from ffrf.output.sensors import scene_sensors
 from ffrf.scenes.assembly import start_state
 from ffrf.scenes.bennett_scene import VARIANTS, bennett_description
 from ffrf.scenes.builder import build_scene
-from ffrf.scenes.linkage_description import BoreError, drive_sign, joint_points, linkage_description
+from ffrf.scenes.linkage_description import BoreError, LinkageOptions, drive_sign, joint_points, linkage_description
 from ffrf.solvers.static_solver import quasi_static
 from kinematics import BennettLinkage, SingleLoop
 from kinematics.dual_quaternion import DualQuaternion
@@ -61,7 +61,7 @@ def test_bore_error_changes_the_dh_parameters_it_names():
     """A twist error of joint 1 on link 1 changes that link's DH twist alpha_0 by the error, an offset its length."""
     loop = loop_from_mechanism(load_model("collisions_free_6r"), scale=0.1)
     error = BoreError(joint=1, link=1, twist=np.radians(0.5), offset=2e-4)
-    link1 = linkage_description(loop, bore_errors=(error,))["bodies"][1]["parametric"]["axes"]
+    link1 = linkage_description(loop, LinkageOptions(bore_errors=(error,)))["bodies"][1]["parametric"]["axes"]
     built = SingleLoop.from_points_directions(
         [a["point"] for a in link1] + [p.point for p in loop.axes[2:]],
         [a["direction"] for a in link1] + [p.direction for p in loop.axes[2:]],
@@ -70,7 +70,7 @@ def test_bore_error_changes_the_dh_parameters_it_names():
     assert abs(built.alpha[0] - nominal.alpha[0] - np.radians(0.5)) < 1e-12
     assert abs(built.a[0] - nominal.a[0] - 2e-4) < 1e-12
     with pytest.raises(ValueError, match="link 1 carries joints 0 and 1"):
-        linkage_description(loop, bore_errors=(BoreError(joint=3, link=1, twist=0.01),))
+        linkage_description(loop, LinkageOptions(bore_errors=(BoreError(joint=3, link=1, twist=0.01),)))
 
 
 def test_joint_points_lie_on_their_axes_between_the_feet_of_the_normals():
@@ -87,7 +87,9 @@ def test_stiff_6r_follows_the_motion_polynomial_of_rational_linkages():
     3.3e-9 m)."""
     mechanism = load_model("collisions_free_6r")
     loop = loop_from_mechanism(mechanism, scale=0.1)
-    description = linkage_description(loop, material=RIGID, h=12e-3, order=1, n_modes=2, gravity=(0.0, 0.0, 0.0))
+    description = linkage_description(
+        loop, LinkageOptions(material=RIGID, h=12e-3, order=1, n_modes=2, gravity=(0.0, 0.0, 0.0))
+    )
     scene = build_scene(description, where="collisions_free_6r")
     times = np.linspace(0.0, float(scene.settings["t_end"]), 25)
     solution = quasi_static(scene.system, start_state(scene), times)
@@ -116,7 +118,9 @@ def test_links_on_intersecting_axes_leave_their_housings_radially():
     loop = loop_from_mechanism(mechanism, scale=0.1)
     assert np.max(loop.dh().a) < 1e-12
     origin = regular_start(mechanism, loop)
-    description = linkage_description(loop, h=12e-3, order=1, n_modes=2, start_angle=float(origin[0]), origin=origin)
+    description = linkage_description(
+        loop, LinkageOptions(h=12e-3, order=1, n_modes=2, start_angle=float(origin[0]), origin=origin)
+    )
     scene = build_scene(description, where="plane_fold_6r")
     assert len(scene.bodies) == 6 and len(scene.sensors) == 15
     assert np.abs(scene.system.constraint_values(scene.q_initial, 0.0)).max() < 1e-12  # assembled at the start
