@@ -71,7 +71,8 @@ def table(rows: list[dict]) -> str:
     for r in rows:
         lines.append(
             f"| {r['variant']} | {r['max_coupler_deviation_mm']:.4g} | {r['max_distance_to_path_mm']:.4g} "
-            f"| {paper_max_coupler_deviation(r['variant'])} | {r['max_abs_driving_torque_Nmm']:.4g} | {r['assembly_max_von_mises_MPa']:.3g} "
+            f"| {paper_max_coupler_deviation(r['variant'])} | {r['max_abs_driving_torque_Nmm']:.4g} "
+            f"| {r['assembly_max_von_mises_MPa']:.3g} "
             f"| {r['wall_time_s']['build']:.1f} | {r['wall_time_s']['run']:.1f} |"
         )
     return "\n".join(lines)

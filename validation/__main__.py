@@ -89,7 +89,9 @@ def main(argv: list[str] | None = None) -> int:
                 f"{m['torque']['max_rel_diff']:.2e}; report: {path}",
                 flush=True,
             )
-    except Exception as error:  # every failure ends with the reason, and the reports written so far stay
+    # A command-line boundary: every failure ends with its reason and exit code 2, and the reports
+    # written so far stay (the summary of the variants done is still written).
+    except Exception as error:  # noqa: BLE001 - reported, see above
         print(f"validation failed: {type(error).__name__}: {error}", file=sys.stderr)
         if len(validations) > 1 and args.command == "summary":
             write_summary(validations, args.out)
@@ -104,7 +106,7 @@ def _scene_report(scene: Path, basis: str, out: Path) -> int:
 
     try:
         validation = validate_scene(scene, basis)
-    except Exception as error:
+    except Exception as error:  # noqa: BLE001 - command-line boundary: any failure is reported, exit code 2
         print(f"validation failed: {type(error).__name__}: {error}", file=sys.stderr)
         return 2
     path = write_scene_report(validation, out)

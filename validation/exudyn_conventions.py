@@ -27,6 +27,7 @@ systems both conventions. ``exudyn`` is imported lazily.
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 
@@ -107,7 +108,7 @@ def exudyn_convention_system(system, exudyn_jacobian: bool = True):
     constraints = []
     for c in system.constraints:
         if isinstance(c, MarkerJoint):
-            changes = {}
+            changes: dict[str, Any] = {}  # replace()'s keyword arguments: markers and offsets
             for side in (0, 1):
                 marker, offset = getattr(c, f"marker{side}"), getattr(c, f"offset{side}")
                 if isinstance(marker, GroundFrame):

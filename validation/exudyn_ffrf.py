@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -43,7 +44,10 @@ from .exudyn_items import (
     add_mesh_node_sensor,
 )
 from .exudyn_solvers import check_output_times, dynamic_settings, solve_dynamic
-from .single_body_scenes import Scene
+from .single_body_scenes import Hinge, Scene
+
+if TYPE_CHECKING:
+    from ffrf.system.constraints import Constraint
 
 __all__ = ["TrajectoryResult", "run_exudyn", "run_ffrf", "ffrf_system"]
 
@@ -85,10 +89,11 @@ class TrajectoryResult:
 # --------------------------------------------------------------------------------------------
 
 
-def _add_exudyn_hinge(mbs, scene: Scene, body_object: int) -> None:
-    """Interface marker on bore 0 (our weights) + ground marker + GenericJoint (free rz)."""
+def _add_exudyn_hinge(mbs, scene: Scene, hinge: Hinge, body_object: int) -> None:
+    """Interface marker on bore 0 (our weights) + ground marker + GenericJoint (free rz) for
+    ``hinge``, the hinge of ``scene``."""
     body = scene.body
-    frame = scene.hinge.frame()  # world = body axes at t = 0 (identity reference rotation)
+    frame = hinge.frame()  # world = body axes at t = 0 (identity reference rotation)
     centre_world = np.asarray(scene.position, dtype=float) + body.frame_center
     m_ground = add_ground_marker(mbs, add_ground(mbs), frame, centre_world)
     m_body = add_interface_marker(mbs, body_object, body.frame_nodes, body.frame_weights, frame)
@@ -126,7 +131,7 @@ def run_exudyn(
         angular_velocity=rotation_ref @ np.asarray(scene.omega_bar, dtype=float),  # Exudyn expects the global omega
     )
     if scene.hinge is not None:
-        _add_exudyn_hinge(mbs, scene, items.body)
+        _add_exudyn_hinge(mbs, scene, scene.hinge, items.body)
     rigid_sensor = add_coordinates_sensor(mbs, items.rigid_node)
     modal_sensor = add_coordinates_sensor(mbs, items.modal_node)
     node_sensors = [add_mesh_node_sensor(mbs, items.body, node) for node in scene.tracked_nodes]
@@ -184,7 +189,7 @@ def ffrf_system(scene: Scene, exact_gravity: bool = False):
         damping=scene.beta * body.reduced_stiffness,
         exact_gravity=exact_gravity,
     )
-    constraints = ()
+    constraints: tuple[Constraint, ...] = ()
     if scene.hinge is not None:
         frame = scene.hinge.frame()
         centre = body.frame_center
@@ -217,7 +222,7 @@ def run_ffrf(
     started = time.perf_counter()
     system, q0, qd0 = ffrf_system(scene, exact_gravity)
     setup = time.perf_counter() - started
-    options = {} if modified_newton is None else {"modified_newton": modified_newton}
+    options: dict[str, Any] = {} if modified_newton is None else {"modified_newton": modified_newton}
     result = generalized_alpha(
         system, q0, qd0, scene.t_end, scene.step, rho_inf=scene.rho_inf, tolerance=tolerance, **options
     )

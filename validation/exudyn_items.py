@@ -139,8 +139,8 @@ def add_interface_marker(
     return mbs.AddMarker(
         eii.MarkerSuperElementRigid(
             bodyNumber=body,
-            meshNodeNumbers=[int(i) for i in nodes],
-            weightingFactors=[float(w) for w in weights],
+            meshNodeNumbers=[int(i) for i in np.asarray(nodes)],
+            weightingFactors=[float(w) for w in np.asarray(weights)],
             useAlternativeApproach=True,
             rotationsExponentialMap=2,
             localHT=_ht(np.eye(3) if rotation is None else rotation, translation),
@@ -155,7 +155,9 @@ def add_generic_joint(mbs, marker0: int, marker1: int, locked: ArrayLike, name: 
     import exudyn.itemInterface as eii
 
     return mbs.AddObject(
-        eii.GenericJoint(markerNumbers=[marker0, marker1], constrainedAxes=[int(v) for v in locked], name=name)
+        eii.GenericJoint(
+            markerNumbers=[marker0, marker1], constrainedAxes=[int(v) for v in np.asarray(locked)], name=name
+        )
     )
 
 

@@ -28,6 +28,7 @@ Sensors: the rigid and modal nodes of every body, the ``TorqueLocal`` of every d
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -46,6 +47,12 @@ from .exudyn_items import (
     add_torque_sensor,
 )
 from .twin_bases import TwinBasis
+
+if TYPE_CHECKING:
+    import exudyn as exu
+
+    from ffrf.fe.fe_model import FEModel
+    from ffrf.reduction.craig_bampton import CraigBamptonBasis
 
 __all__ = [
     "TwinBody",
@@ -66,18 +73,18 @@ class TwinBody:
     :class:`ffrf.reduction.craig_bampton.CraigBamptonBasis`, interfaces in its order."""
 
     name: str
-    fe: object  # .nodes (N, 3), .mass, .stiffness
+    fe: FEModel  # .nodes (N, 3), .mass, .stiffness
     interfaces: dict
     markers: dict
-    reduction: object
+    reduction: CraigBamptonBasis
 
 
 @dataclass
 class ExudynTwin:
     """An assembled Exudyn system and the item numbers needed to read it back."""
 
-    sc: object
-    mbs: object
+    sc: exu.SystemContainer
+    mbs: exu.MainSystem
     objects: list
     rigid_nodes: list
     modal_nodes: list
@@ -111,12 +118,12 @@ def _drive_function(angle, frozen_time: float | None, symbolic: bool):
     esym = exu.symbolic
     start, w, tr = float(angle.start), float(angle.ramp.omega), float(angle.ramp.ramp_time)
 
-    def offset(mbs, t, itemNumber, args):
+    def symbolic_offset(mbs, t, itemNumber, args):
         during = 0.5 * w * (t - tr / np.pi * esym.sin(np.pi / tr * t))
         after = 0.5 * w * tr + w * (t - tr)
         return [0.0, 0.0, 0.0, 0.0, 0.0, start + esym.IfThenElse(t < tr, during, after)]
 
-    return offset
+    return symbolic_offset
 
 
 def _interface_name(body: TwinBody, marker) -> str:
@@ -212,7 +219,9 @@ def build_twin(
                     mbs, _drive_function(c.angle, None, True), "offsetUserFunction", joint
                 )
                 used_symbolic = True
-            except Exception as error:  # pragma: no cover - reported to the caller
+            # Any failure of Exudyn's symbolic translation (its own exception types are not
+            # documented) falls back to the Python function and is reported in twin.notes.
+            except Exception as error:  # noqa: BLE001  # pragma: no cover - reported to the caller
                 notes.append(f"{key}: symbolic user function failed ({error!r}); Python function used")
         if function is None:
             function = _drive_function(c.angle, frozen_drive_time, False)

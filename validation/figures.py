@@ -117,7 +117,7 @@ def mac_figure(modes: dict, path: Path) -> Path:
     plt = _pyplot()
     n = len(modes)
     fig, axes = plt.subplots(1, n, figsize=(3.0 * n + 1.0, 3.4), squeeze=False, constrained_layout=True)
-    for k, (ax, (name, comparison)) in enumerate(zip(axes[0], modes.items())):
+    for k, (ax, (name, comparison)) in enumerate(zip(axes[0], modes.items(), strict=True)):
         image = ax.imshow(comparison.mac, vmin=0.0, vmax=1.0, cmap="viridis")
         ticks = np.arange(comparison.mac.shape[0])
         ax.set_xticks(ticks)

@@ -94,7 +94,8 @@ def frequency_clusters(frequencies: NDArray, rel_gap: float = 1e-6) -> list[NDAr
 def compare_modes(
     model, reduction, exudyn_basis: NDArray, exudyn_frequencies_hz: NDArray, setup_s: float = float("nan")
 ) -> ModeComparison:
-    """Compare ``reduction`` (:class:`ffrf.reduction.craig_bampton.CraigBamptonBasis` of ``model``) with Exudyn's basis."""
+    """Compare ``reduction`` (:class:`ffrf.reduction.craig_bampton.CraigBamptonBasis` of ``model``) with
+    Exudyn's basis."""
     s = reduction.n_static_modes
     ours = reduction.fixed_interface_frequencies_hz
     order = np.argsort(exudyn_frequencies_hz)

@@ -154,4 +154,4 @@ def static_deflection(body: ReducedBody, tip_force: ArrayLike) -> NDArray[np.flo
     f = np.zeros(3 * len(body.nodes))
     for i, w in zip(body.tip_nodes, body.tip_weights, strict=True):
         f[3 * i : 3 * i + 3] = w * np.asarray(tip_force, dtype=float)
-    return np.linalg.solve(body.reduced_stiffness, body.basis.T @ f)
+    return np.asarray(np.linalg.solve(body.reduced_stiffness, body.basis.T @ f), dtype=np.float64)

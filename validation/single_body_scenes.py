@@ -137,7 +137,8 @@ def free_body_scene(
     euler0 = (1.0, 0.0, 0.0, 0.0)
     if tilted:
         half, axis = np.radians(40.0) / 2.0, np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
-        euler0 = tuple(float(v) for v in np.r_[np.cos(half), np.sin(half) * axis])
+        p = np.r_[np.cos(half), np.sin(half) * axis]
+        euler0 = (float(p[0]), float(p[1]), float(p[2]), float(p[3]))
     corner = int(np.argmax(body.nodes @ np.array([1.0, 1e-3, 1e-6])))
     return Scene(
         body,

@@ -133,9 +133,12 @@ class FlexibleBody:
         return -float(np.asarray(gravity, float) @ (mm.mass * q[:3] + rotation_matrix(q[3:7]) @ s))
 
 
-def _floats(*arrays: ArrayLike) -> tuple[NDArray[np.float64], ...]:
-    """Each argument as a float64 array, the dtype the body kernels are compiled for."""
-    return tuple(np.asarray(a, float) for a in arrays)
+def _floats(
+    q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, gravity: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The state and gravity as float64 arrays, the dtype the body kernels are compiled for (a
+    fixed-length tuple: type checkers match a star-unpacked tuple against the kernel's parameters)."""
+    return np.asarray(q, float), np.asarray(qd, float), np.asarray(qdd, float), np.asarray(gravity, float)
 
 
 def node_positions(q: ArrayLike, nodes: ArrayLike, basis: ArrayLike, indices: ArrayLike) -> NDArray[np.float64]:

@@ -9,23 +9,24 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ffrf.errors import GeometryError
 
 __all__ = ["Axis", "PAPER_AXES", "bennett_axes", "paper_link_axes", "common_normal_feet"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Axis:
-    """A line in space: a point on it and a unit direction (metres, world frame)."""
+    """A line in space: a point on it and a unit direction (metres, world frame). Built from any
+    array-likes; the direction is normalised."""
 
     point: NDArray[np.float64]
     direction: NDArray[np.float64]
 
-    def __post_init__(self) -> None:
-        p = np.asarray(self.point, dtype=float).reshape(3)
-        d = np.asarray(self.direction, dtype=float).reshape(3)
+    def __init__(self, point: ArrayLike, direction: ArrayLike) -> None:
+        p = np.asarray(point, dtype=float).reshape(3)
+        d = np.asarray(direction, dtype=float).reshape(3)
         n = np.linalg.norm(d)
         if not n > 0.0:
             raise GeometryError(f"Axis through {p.tolist()}: direction {d.tolist()} has zero length")
@@ -71,7 +72,7 @@ def bennett_axes(alpha3_deg: float = 90.0) -> tuple[Axis, Axis, Axis, Axis]:
     alpha = np.array(PAPER_ALPHA)
     alpha[3] = np.radians(alpha3_deg)
     axes, closing_axis = open_loop_axes(PAPER_A, alpha)
-    return tuple(Axis.of(a) for a in axes[:3]) + (Axis.of(closing_axis),)
+    return Axis.of(axes[0]), Axis.of(axes[1]), Axis.of(axes[2]), Axis.of(closing_axis)
 
 
 def paper_link_axes(link: int, axes=PAPER_AXES) -> tuple[Axis, Axis, tuple[str, str]]:

@@ -155,7 +155,9 @@ def arm_waypoints(joint_points: ArrayLike, axes, design: LinkDesign = LinkDesign
     return np.array([points[0], *_arm_path(centers, lines, design)[1:-1], points[1]])
 
 
-def _placed_box(occ, lower: ArrayLike, size: ArrayLike, frame: NDArray, origin: NDArray) -> int:
+def _placed_box(
+    occ, lower: tuple[float, float, float], size: tuple[float, float, float], frame: NDArray, origin: NDArray
+) -> int:
     """Box given in the local frame (x along e1), moved to world coordinates by a rigid motion.
 
     A rotation + translation keeps the faces exact planes; gmsh's general
@@ -304,8 +306,8 @@ def build_link(
         )
         mount_center = origin + frame @ np.array([0.5 * middle_length, 0.0, -half_t - design.mount_height])
         mount_plane = (mount_center, -frame[:, 2])
-    parts = _trim_to_housing_slabs(occ, parts, axes, centers, design)
-    solid, _ = occ.fuse([(3, housings[0])], [(3, housings[1])] + parts)
+    trimmed = _trim_to_housing_slabs(occ, parts, axes, centers, design)
+    solid, _ = occ.fuse([(3, housings[0])], [(3, housings[1])] + trimmed)
     bores = []
     for axis, center in zip(axes, centers, strict=True):
         length = _bore_cut_length(design)

@@ -82,7 +82,7 @@ def provenance(
     """
     if command is None:
         command = [Path(sys.executable).name, *sys.argv]
-    meta = {
+    meta: dict[str, object] = {
         "command": command if isinstance(command, str) else " ".join(command),
         "date": datetime.now(UTC).isoformat(timespec="seconds"),
         "machine": {

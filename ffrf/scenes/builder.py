@@ -89,13 +89,14 @@ class SceneBody:
 
 @dataclass(frozen=True)
 class JointGeometry:
-    """A joint as described: type, sides (body index or ``None`` for the ground, interface), each
-    side's axis and point (mesh coordinates) and the prescribed angle of a driven joint."""
+    """A joint as described: type, sides (body index and interface; side 0 may be the ground,
+    ``(None, None)``, side 1 is always a body), each side's axis and point (mesh coordinates) and
+    the prescribed angle of a driven joint."""
 
     name: str
     kind: str
-    bodies: tuple[int | None, int | None]
-    interfaces: tuple[str | None, str | None]
+    bodies: tuple[int | None, int]
+    interfaces: tuple[str | None, str]
     axes: tuple[NDArray[np.float64], NDArray[np.float64]]
     points: tuple[NDArray[np.float64], NDArray[np.float64]]
     angle: RampedAngle | None = None
@@ -293,16 +294,18 @@ def _joint_geometry(spec: dict, index: dict[str, int], bodies: tuple[SceneBody, 
         sides, keys = sides[::-1], keys[::-1]
     axis = spec.get("axis", [0.0, 0.0, 1.0])
     body1, interface1 = sides[1]
+    if body1 is None or interface1 is None:  # check_scene rejects it first
+        raise SceneError(f"joint {spec.get('name', 'joint')!r}: at least one side must be a body, both are 'ground'")
     point = spec.get("point", bodies[body1].markers[interface1].point)
-    axes = tuple(np.asarray(spec.get(f"axis{s}", axis), dtype=float) for s in keys)
-    points = tuple(np.asarray(spec.get(f"point{s}", point), dtype=float) for s in keys)
+    axis0, axis1 = (np.asarray(spec.get(f"axis{s}", axis), dtype=np.float64) for s in keys)
+    point0, point1 = (np.asarray(spec.get(f"point{s}", point), dtype=np.float64) for s in keys)
     return JointGeometry(
         spec.get("name", "joint"),
         spec.get("type", "revolute"),
         (sides[0][0], body1),
         (sides[0][1], interface1),
-        axes,
-        points,
+        (axis0, axis1),
+        (point0, point1),
         _drive(spec["drive"]) if "drive" in spec else None,
     )
 
@@ -321,14 +324,20 @@ def _constraint(
         frame0, point0 = frame1, joint.points[0]
     body1, interface1 = joint.bodies[1], joint.interfaces[1]
     side1, offset1 = attach_joint_point(bodies[body1].markers[interface1], point1, joint_offsets)
-    if joint.bodies[0] is None:
+    body0, interface0 = joint.bodies[0], joint.interfaces[0]
+    side0: GroundFrame | BodyMarker
+    if body0 is None:
         side0, offset0 = GroundFrame(point0, np.eye(3)), np.zeros(3)
+    elif interface0 is None:
+        raise SceneError(f"joint {joint.name!r}: side 0 is body {body0} but names no interface")
     else:
-        side0, offset0 = attach_joint_point(bodies[joint.bodies[0]].markers[joint.interfaces[0]], point0, joint_offsets)
+        side0, offset0 = attach_joint_point(bodies[body0].markers[interface0], point0, joint_offsets)
     if joint.kind == "revolute":
         return revolute_joint(side0, side1, frame0, frame1, offset0, offset1, name=joint.name)
     if joint.kind == "fixed":
         return fixed_joint(side0, side1, frame0, frame1, offset0, offset1, name=joint.name)
+    if joint.angle is None:  # check_scene rejects it first
+        raise SceneError(f"joint {joint.name!r}: a {joint.kind} joint needs a drive (its prescribed angle)")
     return driven_revolute_joint(side0, side1, joint.angle, frame0, frame1, offset0, offset1, name=joint.name)
 
 

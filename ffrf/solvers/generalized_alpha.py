@@ -121,7 +121,7 @@ class _State:
 class _Newton:
     """Newton settings and the factorised iteration matrix kept between steps (modified Newton)."""
 
-    model: object
+    model: PackedSystem | MultibodySystem
     par: AlphaParameters
     tolerance: float
     max_iterations: int
@@ -158,33 +158,30 @@ def _fast_iterations(
             newton.factored_step = h
         limit = 1 if refactor_each else newton.max_iterations - used
         lu, pivots = newton.factors
-        status, count, increment, gap_max = (
-            int(x) if k < 2 else float(x)
-            for k, x in enumerate(
-                alpha_iterations(
-                    model.bodies,
-                    model.joints,
-                    model.gravity,
-                    model.phi(t),
-                    lu,
-                    pivots,
-                    contiguous(q_base),
-                    contiguous(qd_base),
-                    contiguous(accel_base),
-                    float(to_accel),
-                    h * h * par.beta,
-                    h * par.gamma,
-                    float(beta_p),
-                    float(gamma_p),
-                    qdd,
-                    lam,
-                    float(newton.tolerance),
-                    int(limit),
-                    float(previous),
-                    int(used),
-                )
-            )
+        outcome = alpha_iterations(
+            model.bodies,
+            model.joints,
+            model.gravity,
+            model.phi(t),
+            lu,
+            pivots,
+            contiguous(q_base),
+            contiguous(qd_base),
+            contiguous(accel_base),
+            float(to_accel),
+            h * h * par.beta,
+            h * par.gamma,
+            float(beta_p),
+            float(gamma_p),
+            qdd,
+            lam,
+            float(newton.tolerance),
+            int(limit),
+            float(previous),
+            int(used),
         )
+        status, count = int(outcome[0]), int(outcome[1])
+        increment, gap_max = float(outcome[2]), float(outcome[3])
         used += count
         if status in (CONVERGED, NOT_FINITE):
             return status, used, increment, gap_max
@@ -312,7 +309,8 @@ def generalized_alpha(
     ``modified_newton`` the factorised iteration matrix is kept across iterations and steps
     and rebuilt when :func:`ffrf.solvers.newton_kernels.should_refactor` asks for it (Eq. (G3) in
     ``docs/formulation.md``) or a step fails, which is then retried with a fresh matrix; each step
-    starts from the prediction (G6). The converged solution is the same, only the work differs. Raises :class:`NewtonDivergence` with the partial results.
+    starts from the prediction (G6). The converged solution is the same, only the work differs.
+    Raises :class:`NewtonDivergence` with the partial results.
     ``fast_path`` evaluates Newton's residual and matrix with the whole-system kernels of
     :mod:`ffrf.system.packed_system` when the system is supported (else, and with ``False``, with the
     reference Python implementation of :class:`MultibodySystem`; both agree to round-off).
@@ -333,13 +331,21 @@ def generalized_alpha(
     qdd, lam = consistent_accelerations(system, q, qd, 0.0)
     state = _State(q, qd, qdd, qdd.copy(), lam)
     before = None  # (qdd, lambda, h) of the accepted step before ``state``, for Newton's start (G6)
-    history = {"time": [0.0], "q": [q.copy()], "qd": [qd.copy()], "qdd": [qdd.copy()], "lam": [lam.copy()]}
-    iterations, step_sizes = [], []
+    history: dict[str, list] = {
+        "time": [0.0],
+        "q": [q.copy()],
+        "qd": [qd.copy()],
+        "qdd": [qdd.copy()],
+        "lam": [lam.copy()],
+    }
+    iterations: list[int] = []
+    step_sizes: list[float] = []
     started = wallclock.perf_counter()
 
     def record(t: float, s: _State) -> None:
-        for key, value in (("time", t), ("q", s.q), ("qd", s.qd), ("qdd", s.qdd), ("lam", s.lam)):
-            history[key].append(value.copy() if key != "time" else value)
+        history["time"].append(t)
+        for key, value in (("q", s.q), ("qd", s.qd), ("qdd", s.qdd), ("lam", s.lam)):
+            history[key].append(value.copy())
 
     def result(complete: bool) -> IntegrationResult:
         return IntegrationResult(

@@ -45,6 +45,18 @@ __all__ = ["PackedSystem", "contiguous", "pack_system", "newton_model"]
 
 log = logging.getLogger(__name__)
 
+# (bodies, joints, q, qd, qdd, lambda, gravity, phi): see PackedSystem._kernel_arguments
+_KernelArguments = tuple[
+    tuple,
+    tuple,
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+]
+
 
 @dataclass(frozen=True, eq=False)
 class PackedSystem:
@@ -66,9 +78,10 @@ class PackedSystem:
             self._last_angles[:] = [t, values]
         return self._last_angles[1]
 
-    def _kernel_arguments(self, q, qd, qdd, lam, t: float) -> tuple:
+    def _kernel_arguments(self, q, qd, qdd, lam, t: float) -> _KernelArguments:
         """The arguments every system kernel starts with: packed bodies and joints, the state as
-        contiguous arrays, gravity and the prescribed angles at ``t``."""
+        contiguous arrays, gravity and the prescribed angles at ``t`` (a fixed-length tuple: type
+        checkers match a star-unpacked tuple against the kernel's parameters)."""
         return (
             self.bodies,
             self.joints,

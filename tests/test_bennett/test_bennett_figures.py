@@ -92,4 +92,4 @@ def test_bennett_command_writes_figures_and_assembly(tmp_path, monkeypatch, caps
     for name in ("results.npz", "metadata.json", "assembly.vtu", "coupler_deviation.png", "driving_torque.png"):
         assert (tmp_path / name).exists(), name
     out = capsys.readouterr().out
-    assert "misalignment" in out and sum(line.strip().startswith("link ") for line in out.splitlines()) == 4
+    assert "misfit" in out and sum(line.strip().startswith("link ") for line in out.splitlines()) == 4
