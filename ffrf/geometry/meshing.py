@@ -153,9 +153,17 @@ def mesh_stl(
             gmsh.merge(str(path))
         except Exception as exc:
             raise MeshError(f"{path}: gmsh cannot read it as STL ({exc})") from exc
-        angle = math.radians(feature_angle_deg)
-        gmsh.model.mesh.classifySurfaces(angle, True, remesh_surface, math.pi)
-        gmsh.model.mesh.createGeometry()
+        gmsh.model.mesh.classifySurfaces(math.radians(feature_angle_deg), True, remesh_surface, math.pi)
+        try:
+            gmsh.model.mesh.createGeometry()
+        except Exception as exc:  # gmsh raises a bare Exception
+            if remesh_surface:
+                raise MeshError(f"{path}: gmsh cannot rebuild the surface's geometry ({exc})") from exc
+            # A patch with holes (a link's bores) has no parametrisation: keep the STL's own triangles as
+            # discrete surfaces; the inside is then sized from them.
+            logger.info("%s: surface kept as one discrete patch (%s)", path.name, exc)
+            gmsh.clear()
+            gmsh.merge(str(path))
         surfaces = [tag for _, tag in gmsh.model.getEntities(2)]
         loop = gmsh.model.geo.addSurfaceLoop(surfaces)
         gmsh.model.geo.addVolume([loop])

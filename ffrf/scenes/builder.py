@@ -47,6 +47,7 @@ from ffrf.fe.interfaces import (
 from ffrf.fe.materials import Material
 from ffrf.geometry.joint_axes import Axis, bennett_axes, common_normal_feet, paper_link_axes
 from ffrf.geometry.link_geometry import LinkGeometry, mesh_link
+from ffrf.geometry.meshing import mesh_stl
 from ffrf.mesh.tet_mesh import TetMesh, read_mesh
 from ffrf.reduction.craig_bampton import CraigBamptonBasis, craig_bampton
 from ffrf.reduction.reduced_io import reduction_fingerprint
@@ -199,6 +200,8 @@ def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | 
         path = base / entry["mesh"]
         if not path.is_file():
             raise SceneError(f"{where}: mesh file {path} not found; give a path relative to the scene file")
+        if path.suffix.lower() == ".stl":  # a closed surface (a scan, a CAD export): filled with tetrahedra
+            return mesh_stl(path, h=entry.get("h"), unit=entry.get("unit")), None
         return read_mesh(path, unit=entry.get("unit")), None
     spec = entry["parametric"]
     h = float(spec.get("h", 6e-3))

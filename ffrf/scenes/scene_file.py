@@ -25,7 +25,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
 
     [[bodies]]
     name = "link"
-    mesh = "link.msh"                 # any meshio volume mesh; or: parametric = {link = 1, alpha3_deg = 90, h = 0.006}
+    mesh = "link.msh"                 # any meshio volume mesh, or a closed STL surface filled with tetrahedra of
+                                      # edge h = 0.006 (m; a scan or CAD export); or: parametric = {link = 1, ...}
                                       # or a link on any two skew axes (housings at the joint points,
                                       # default the feet of their common normal; cranked arm otherwise):
                                       # parametric = {axes = [{name = "a", point = [...], direction = [...],

@@ -132,6 +132,7 @@ BODY = {
     "name": Key("string", True),
     "mesh": Key("string"),
     "unit": Key("string", False, _one_of(MESH_UNITS)),
+    "h": Key("number", False, _between(*PARAMETRIC_H_RANGE, closed=True)),
     "parametric": Key("table", keys=PARAMETRIC),
     "material": Key("table", True, keys=MATERIAL),
     "order": Key("integer", False, _one_of((1, 2))),
@@ -290,6 +291,11 @@ def _check_body(body: dict, where: str) -> None:
         raise SceneError(f"{where}, parametric: a link has exactly two axes, got {len(spec['axes'])}")
     if spec is not None and "axes" in spec and "alpha3_deg" in spec:
         raise SceneError(f"{where}, parametric: alpha3_deg belongs to the paper's links (link = ...), not to axes")
+    if "h" in body and not str(body.get("mesh", "")).lower().endswith(".stl"):
+        raise SceneError(
+            f"{where}: 'h' sizes the tetrahedra that fill an STL surface (mesh = \"part.stl\"); a volume mesh keeps "
+            "its elements and a parametric link takes parametric = {h = ...}"
+        )
     if "unit" in body and "mesh" not in body:
         raise SceneError(f"{where}: 'unit' scales a mesh file; a parametric link is in metres, remove 'unit'")
     if not body["interfaces"]:

@@ -13,6 +13,11 @@ from ffrf.scenes.scene_file import load_scene
 
 CASES = {
     # class: (replace this, by this, expected words in the message)
+    "element size for a volume mesh": (
+        'mesh = "bar.vtu"',
+        'mesh = "bar.vtu"\nh = 0.01',
+        ["'h' sizes the tetrahedra that fill an STL surface"],
+    ),
     "unknown table": ("[[sensors]]", "[[sensor]]", ["unknown key 'sensor'", "did you mean 'sensors'"]),
     "misspelt setting": ("gravity =", "gravty =", ["scene.toml, scene", "'gravty'", "did you mean 'gravity'"]),
     "misspelt drive key": (

@@ -238,3 +238,31 @@ def test_a_bore_found_from_its_axis_is_the_meshed_bore():
     np.testing.assert_array_equal(np.sort(found.nodes), np.sort(named.nodes))
     order_found, order_named = np.argsort(found.nodes), np.argsort(named.nodes)
     np.testing.assert_allclose(found.weights[order_found], named.weights[order_named], rtol=1e-12, atol=0)
+
+
+def test_an_stl_surface_in_millimetres_is_filled_and_its_bores_found_from_the_axes(tmp_path):
+    """A scanned or exported part: the paper's link 1 as a bare STL surface in mm (no groups). The scene fills it
+    with tetrahedra (mesh = "link1.stl", h) and finds each bore from its joint axis alone: the volume and the
+    bore areas equal those of the mesh the surface came from (the same triangles; measured 0 and 1.1e-16)."""
+    import meshio
+
+    from ffrf.fe.interfaces import boundary_triangles
+    from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
+    from ffrf.geometry.link_geometry import mesh_link
+
+    first, second, names = paper_link_axes(1, bennett_axes(90.0))
+    source, _ = mesh_link(first, second, h=0.012, names=names)
+    surface = boundary_triangles(source)
+    meshio.write(tmp_path / "link1.stl", meshio.Mesh(1e3 * source.points, [("triangle", surface)]), file_format="stl")
+    axes = [{"name": n, "axis": {"point": a.point.tolist(), "direction": a.direction.tolist()}} for a, n in
+            zip((first, second), names, strict=True)]  # fmt: skip
+    body = {"name": "scan", "mesh": "link1.stl", "unit": "mm", "h": 0.012, "material": {"E": 1.2e9, "nu": 0.33,
+            "rho": 450.0}, "order": 1, "modes": 2, "interfaces": axes}  # fmt: skip
+    scene = build_scene({"bodies": [body]}, tmp_path, "scan")
+    built = scene.bodies[0]
+    assert abs(built.fe.mesh.volume - source.volume) < 1e-12 * source.volume
+    reference = build_scene({"bodies": [_axes_link(first, second, names)]}).bodies[0]
+    for name in names:
+        assert (
+            abs(built.interfaces[name].area - reference.interfaces[name].area) < 1e-6 * reference.interfaces[name].area
+        )
