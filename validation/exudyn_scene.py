@@ -142,6 +142,7 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
 
     from ffrf.scenes.scene_file import load_scene, sensor_arrays, simulate_scene
 
+    from .exudyn_conventions import exudyn_convention_system
     from .twin_bases import twin_bases
 
     started = time.perf_counter()
@@ -159,6 +160,11 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
     times, q, lam = run.time, run.q, run.multipliers
     solve_ours = time.perf_counter() - started
     ours = sensor_arrays(equivalent, q, lam)
+    # Exudyn's marker rotation Jacobian copied into ours (validation.exudyn_conventions): what remains is the
+    # solvers' own difference; the production difference above adds Exudyn's approximation.
+    convention = replace(equivalent, system=exudyn_convention_system(equivalent.system))
+    run_convention = simulate_scene(convention)
+    convention_arrays = sensor_arrays(convention, run_convention.q, run_convention.multipliers)
     run_exact = simulate_scene(exact)
     q_exact, lam_exact = run_exact.q, run_exact.multipliers
     exact_arrays = sensor_arrays(exact, q_exact, lam_exact)
@@ -175,10 +181,13 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
     for name in scene.sensors:
         distance = np.linalg.norm(ours[name] - theirs[name], axis=1)
         travel = max(float(np.linalg.norm(theirs[name] - theirs[name][0], axis=1).max()), 1e-300)
+        same_jacobian = float(np.linalg.norm(convention_arrays[name] - theirs[name], axis=1).max())
         metrics["sensors"][name] = {
             "max_abs_diff_m": float(distance.max()),
             "travel_m": travel,
             "relative_to_travel": float(distance.max()) / travel,
+            "with_exudyn_jacobian_max_abs_diff_m": same_jacobian,
+            "with_exudyn_jacobian_relative_to_travel": same_jacobian / travel,
         }
         metrics["exact_gravity_effect"][name] = float(np.linalg.norm(exact_arrays[name] - ours[name], axis=1).max())
     for name in scene.driven:
@@ -204,7 +213,13 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
         checks.append((f"{body}: frequencies, max relative difference", c["max_rel_freq_diff"], SCENE_TARGETS["freq"]))
         checks.append((f"{body}: 1 - min diagonal MAC", 1.0 - c["min_mac_diag"], SCENE_TARGETS["mac"]))
     for name, v in metrics["sensors"].items():
-        checks.append((f"sensor {name}: max difference / travel", v["relative_to_travel"], SCENE_TARGETS["sensor"]))
+        checks.append(
+            (
+                f"sensor {name}, Exudyn's marker Jacobian in both: max difference / travel",
+                v["with_exudyn_jacobian_relative_to_travel"],
+                SCENE_TARGETS["sensor"],
+            )
+        )
     for name, v in metrics["torques"].items():
         checks.append((f"{name}: driving torque, max difference / max", v["max_rel_diff"], SCENE_TARGETS["torque"]))
     metrics["checks"] = [{"name": n, "value": float(v), "target": t, "passed": bool(v <= t)} for n, v, t in checks]
@@ -243,14 +258,19 @@ def write_scene_report(v: SceneValidation, directory: str | Path) -> Path:
         "",
         "## Sensors",
         "",
+        "Exudyn's joints use an approximate marker rotation Jacobian (`docs/validation.md`); its effect grows with "
+        "the bores' elastic rotation. The targets hold the solvers' own difference, measured with that Jacobian "
+        "copied into ours; the production difference is shown beside it.",
+        "",
         markdown_table(
-            ["sensor", "max abs diff", "travel", "relative", "exact gravity moves it by"],
+            ["sensor", "max abs diff", "travel", "relative", "with Exudyn's Jacobian", "exact gravity moves it by"],
             [
                 [
                     n,
                     format_length(s["max_abs_diff_m"]),
                     format_length(s["travel_m"]),
                     format_sci(s["relative_to_travel"]),
+                    format_length(s["with_exudyn_jacobian_max_abs_diff_m"]),
                     format_length(m["exact_gravity_effect"][n]),
                 ]
                 for n, s in m["sensors"].items()
