@@ -33,7 +33,8 @@ def test_bennett_motion_equals_the_closed_form_configuration_curve():
 @pytest.mark.parametrize("name", RATIONAL_MODELS)
 def test_motion_equals_rational_linkages_motion_polynomial(name):
     """A whole revolution of joint 0: every joint angle equals the factorisations' (L5) and the tool link's
-    pose equals Rational Linkages' C(t) at the parameter its own joint-angle map gives (to 1e-9)."""
+    pose equals Rational Linkages' C(t) at the parameter its own joint-angle map gives (measured: angles 9.1e-14 rad,
+    points 1.2e-14 m at most, plane_fold_6r; 1e-9 in the issue)."""
     mechanism = load_model(name)
     loop = loop_from_mechanism(mechanism, scale=0.1)
     # plane_fold_6r's home pose is singular (it lies folded in a plane): start on the curve instead.
@@ -50,8 +51,8 @@ def test_motion_equals_rational_linkages_motion_polynomial(name):
         ours = points @ tool[:3, :3].T + tool[:3, 3]
         theirs = pose.act(points / 0.1) * 0.1
         worst_point = max(worst_point, float(np.max(np.abs(ours - theirs))))
-    assert worst_angle < 1e-9
-    assert worst_point < 1e-9
+    assert worst_angle < 1e-11
+    assert worst_point < 1e-12
     assert np.max(motion.residual) < 1e-12
 
 
