@@ -2,7 +2,7 @@
 
 The paper (Sect. "Simulation Setup") integrates its Exudyn model dynamically (generalized-alpha);
 our default run is quasi-static because the drive is slow against the links' vibrations
-(:func:`ffrf.scenes.bennett_run.choose_mode`). This bench measures what that choice costs: both runs
+(:func:`ffrf.scenes.linkage_run.choose_mode`). This bench measures what that choice costs: both runs
 start from the same static assembly (:func:`ffrf.scenes.bennett_scene.assemble`) and share their
 output times (the dynamic run writes every ``round(t_end / step / (outputs - 1))``-th step;
 the quasi-static run solves at exactly those times), and it reports
@@ -11,7 +11,7 @@ the quasi-static run solves at exactly those times), and it reports
   the largest elastic deviation of the quasi-static coupler from the motion polynomial),
 * the largest difference of the driving torque relative to its largest magnitude,
 * the transient at the end of the ramp (t in [ramp, ramp + 5 s]) against the rest,
-* the energy balance of both runs (:meth:`ffrf.scenes.bennett_run.BennettResult.summary`),
+* the energy balance of both runs (:meth:`ffrf.scenes.linkage_run.LinkageResult.summary`),
 * wall times.
 
 Usage::
@@ -39,7 +39,7 @@ TRANSIENT_WINDOW = 5.0
 
 
 def compare(quasi_static, dynamic, ramp_time: float) -> dict:
-    """Differences of two :class:`~ffrf.scenes.bennett_run.BennettResult` with the same output times."""
+    """Differences of two :class:`~ffrf.scenes.linkage_run.LinkageResult` with the same output times."""
     if quasi_static.time.shape != dynamic.time.shape or np.abs(quasi_static.time - dynamic.time).max() > 1e-9:
         raise ValueError("the runs must share their output times; use the same t_end and outputs")
     qs, dyn = quasi_static.sensors, dynamic.sensors
@@ -99,8 +99,8 @@ def main(argv=None) -> dict:
     )
     args = parser.parse_args(argv)
 
-    from ffrf.scenes.bennett_run import run_bennett
     from ffrf.scenes.bennett_scene import build_bennett
+    from ffrf.scenes.linkage_run import run_linkage
 
     started = time.perf_counter()
     scene = build_bennett(args.variant, h=args.h, order=args.order, n_modes=args.modes)
@@ -116,11 +116,11 @@ def main(argv=None) -> dict:
         flush=True,
     )
     clock = time.perf_counter()
-    quasi_static = run_bennett(scene, mode="quasi_static", n_outputs=outputs, t_end=t_end)
+    quasi_static = run_linkage(scene, mode="quasi_static", n_outputs=outputs, t_end=t_end)
     qs_wall = time.perf_counter() - clock
     print(f"quasi-static: {qs_wall:.1f} s", flush=True)
     clock = time.perf_counter()
-    dynamic = run_bennett(scene, mode="dynamic", n_outputs=outputs, step=args.step, rho_inf=args.rho_inf, t_end=t_end)
+    dynamic = run_linkage(scene, mode="dynamic", n_outputs=outputs, step=args.step, rho_inf=args.rho_inf, t_end=t_end)
     dyn_wall = time.perf_counter() - clock
     print(f"dynamic: {dyn_wall:.1f} s ({int(round(t_end / args.step))} steps)", flush=True)
 
@@ -173,7 +173,7 @@ def main(argv=None) -> dict:
 def write_outputs(directory: Path, quasi_static, dynamic) -> None:
     """Both runs' results and the differences over the drive angle (um and N mm)."""
     from ffrf.output.bennett_figures import plot_over_drive_angle
-    from ffrf.scenes.bennett_run import write_results
+    from ffrf.scenes.linkage_run import write_results
 
     write_results(quasi_static, directory / "quasi_static")
     write_results(dynamic, directory / "dynamic")

@@ -8,7 +8,7 @@ Cases (``--cases`` picks a subset, comma separated):
   quasi-static revolution: driving torque and assembly stress; a failed assembly is recorded
   with its error message);
 * ``speed``: drive at 1, 10, 60, 300 rpm, quasi-static and dynamic over the same window: where
-  inertia makes quasi-static wrong, and what :func:`ffrf.scenes.bennett_run.choose_mode` decides;
+  inertia makes quasi-static wrong, and what :func:`ffrf.scenes.linkage_run.choose_mode` decides;
 * ``long_run``: 10 revolutions at 60 rpm, dynamic and quasi-static: drift of the constraints,
   of the energy balance and of the periodic motion;
 * ``soft``: E from 1.2e9 down to 3e6 Pa (quasi-static revolution): bore rotations and strains
@@ -200,8 +200,8 @@ def simulate(
     Quasi-static runs go in ``chunks`` so that a failure keeps the equilibria before it;
     dynamic runs keep the partial result of :class:`ffrf.solvers.generalized_alpha.NewtonDivergence`."""
     from ffrf.errors import NewtonDivergence, StaticDivergence
-    from ffrf.scenes.bennett_run import evaluate_sensors
     from ffrf.scenes.bennett_scene import assemble
+    from ffrf.scenes.linkage_run import evaluate_sensors
     from ffrf.solvers.generalized_alpha import generalized_alpha
     from ffrf.solvers.static_solver import quasi_static
 
@@ -550,7 +550,7 @@ def exudyn_assembly(scene, ours) -> str:
 
 
 def case_speed(ctx: Context) -> None:
-    from ffrf.scenes.bennett_run import choose_mode, inertia_number
+    from ffrf.scenes.linkage_run import choose_mode, inertia_number
     from ffrf.system.drives import rpm
 
     speeds = (10.0, 300.0) if ctx.quick else (1.0, 10.0, 60.0, 300.0)

@@ -165,12 +165,12 @@ def run_quasi_static(
     order: int, h: float, modes: int, times: np.ndarray, exudyn: bool, scene_cache: dict | None = None
 ) -> dict:
     """Both solvers' quasi-static runs at ``times`` on one discretisation."""
-    from ffrf.scenes.bennett_run import run_bennett
+    from ffrf.scenes.linkage_run import run_linkage
 
     out = {}
     mem = _memory_start()
     scene, setup = _scene(order, h, modes, scene_cache)
-    result = run_bennett(scene, mode="quasi_static", n_outputs=len(times), t_end=float(times[-1]))
+    result = run_linkage(scene, mode="quasi_static", n_outputs=len(times), t_end=float(times[-1]))
     timings = result.metadata["timings_s"]
     out["ffrf"] = {
         "setup_s": setup,
@@ -424,12 +424,12 @@ def _log(p: dict) -> None:
 
 def _warm_up() -> None:
     """Load (or compile) the numba kernels once, so that no point's time includes it."""
-    from ffrf.scenes.bennett_run import run_bennett
     from ffrf.scenes.bennett_scene import assemble
+    from ffrf.scenes.linkage_run import run_linkage
     from validation.bennett_validation import dynamic_solve
 
     scene, _ = _build(1, 0.008, 2)
-    run_bennett(scene, mode="quasi_static", n_outputs=3, t_end=0.1)
+    run_linkage(scene, mode="quasi_static", n_outputs=3, t_end=0.1)
     q0 = assemble(scene).q
     dynamic_solve(0.004, 0.9)(scene.system, q0, np.array([0.0, 0.008]))
 

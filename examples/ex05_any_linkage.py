@@ -13,8 +13,8 @@ A coarse mesh (linear tetrahedra at 12 mm, 2 modes) keeps the example fast.
 
 import numpy as np
 
-from ffrf.scenes.bennett_run import run_bennett
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions
+from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import build_linkage
 from kinematics import explain_mobility
 from kinematics.rational_mechanism import load_model, loop_from_mechanism, regular_start, tool_link
@@ -39,7 +39,7 @@ def main() -> dict:
             tool_link=tool_link(mechanism),
         ),
     )
-    result = run_bennett(scene, mode="quasi_static", n_outputs=245)  # every 0.25 s: the ramp ends on a row
+    result = run_linkage(scene, mode="quasi_static", n_outputs=245)  # every 0.25 s: the ramp ends on a row
     s = result.sensors
 
     weight = 9.81 * sum(link.fe.total_mass for link in scene.links)

@@ -9,7 +9,7 @@ Data flow: geometry (:mod:`ffrf.geometry.link_geometry`, gmsh OCC) -> linear tet
 (:mod:`ffrf.solvers.generalized_alpha`, :mod:`ffrf.solvers.variational_midpoint`, :mod:`ffrf.solvers.static_solver`)
 -> scenes: one builder from a description (:mod:`ffrf.scenes.builder`) for scene files
 (:mod:`ffrf.scenes.scene_file`) and the paper's Bennett scenes (:mod:`ffrf.scenes.bennett_scene`,
-runs and sensors in :mod:`ffrf.scenes.bennett_run`). Layers and where to change what:
+runs and sensors in :mod:`ffrf.scenes.linkage_run`). Layers and where to change what:
 ``docs/architecture.md``.
 The equations are derived in ``docs/formulation.md``.
 This package never imports Exudyn.

@@ -169,14 +169,14 @@ def _progress_printer():
 
 
 def _run_and_report(scene, out: Path, label: str, started: float, options: dict, paper: str = "") -> int:
-    """Run a built linkage scene (:mod:`ffrf.scenes.bennett_run`) and write what ``bennett`` and ``linkage`` write.
+    """Run a built linkage scene (:mod:`ffrf.scenes.linkage_run`) and write what ``bennett`` and ``linkage`` write.
 
     ``options``: ``mode`` (``auto``, ``quasi_static``, ``dynamic``), ``outputs``, ``step`` (s), ``vtk_every``."""
     import time
 
     from ffrf.output.assembly_stress import write_assembly_vtu
     from ffrf.output.bennett_figures import plot_coupler_deviation, plot_driving_torque
-    from ffrf.scenes.bennett_run import choose_mode, run_bennett, write_results
+    from ffrf.scenes.linkage_run import choose_mode, run_linkage, write_results
 
     auto = options["mode"] == "auto"
     mode, ratio = choose_mode(scene) if auto else (options["mode"], float("nan"))
@@ -185,7 +185,7 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
         + (f" (drive time scale / longest link period = {ratio:.0f})" if auto else ""),
         file=sys.stderr,
     )
-    result = run_bennett(
+    result = run_linkage(
         scene, mode=mode, n_outputs=options["outputs"], step=options["step"], progress=_progress_printer()
     )
     clearance = scene.clearance()
@@ -211,7 +211,7 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
         )
         print(f"ParaView series: {pvd}", file=sys.stderr)
     assembly = result.assembly
-    assert assembly is not None  # run_bennett always records the assembled state
+    assert assembly is not None  # run_linkage always records the assembled state
     write_assembly_vtu(out / "assembly.vtu", scene, assembly)
     plot_coupler_deviation({label: result}, out / "coupler_deviation.png")
     plot_driving_torque({label: result}, out / "driving_torque.png")

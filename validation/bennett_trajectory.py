@@ -51,7 +51,7 @@ def _joints(system):
 
 
 def system_points(scene, system, q: NDArray) -> tuple[NDArray, NDArray]:
-    """Coupler point (mean of link 2's joint points, as :func:`ffrf.scenes.bennett_run.evaluate_sensors`)
+    """Coupler point (mean of link 2's joint points, as :func:`ffrf.scenes.linkage_run.evaluate_sensors`)
     and the tracked nodes of links 1..3 for coordinate rows ``q``, using ``system``'s joints."""
     from ffrf.body.flexible_body import node_positions
     from ffrf.system.joints import joint_pose

@@ -6,7 +6,7 @@ weights, joints, drive, gravity, damping, solver settings):
 1. **Modes** per link: our fixed-interface frequencies and mode shapes against Exudyn's own
    Craig-Bampton reduction (:mod:`validation.modes`). The twin's bodies use Exudyn's basis.
 2. **Quasi-static revolution** (the paper's 1 rpm drive is quasi-static, see
-   :func:`ffrf.scenes.bennett_run.choose_mode`): our static equilibria along the drive against one
+   :func:`ffrf.scenes.linkage_run.choose_mode`): our static equilibria along the drive against one
    Exudyn ``SolveStatic`` whose load steps turn the drive; each solver assembles itself
    (misalignment continuation in both).
 3. **Dynamic window**: generalized-alpha in both (same step and spectral radius) from each

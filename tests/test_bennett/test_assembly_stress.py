@@ -20,8 +20,8 @@ from ffrf.output.assembly_stress import (
     scene_assembly_stress,
     write_assembly_vtu,
 )
-from ffrf.scenes.bennett_run import run_bennett
 from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.scenes.linkage_run import run_linkage
 
 COARSE = dict(h=6e-3, order=1, n_modes=2)
 
@@ -128,8 +128,8 @@ def test_pure_helpers():
     }
 
 
-def test_run_bennett_reports_the_assembly():
-    result = run_bennett(build_bennett("pla", **COARSE), mode="quasi_static", n_outputs=3, t_end=0.5)
+def test_run_linkage_reports_the_assembly():
+    result = run_linkage(build_bennett("pla", **COARSE), mode="quasi_static", n_outputs=3, t_end=0.5)
     report = json.loads(json.dumps(result.metadata["assembly"]))
     assert [link["link"] for link in report["links"]] == [0, 1, 2, 3]
     assert report["max_von_mises_pa"] == max(link["max_von_mises_pa"] for link in report["links"]) > 0

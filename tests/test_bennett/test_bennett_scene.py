@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from ffrf.scenes.bennett_run import run_bennett, write_results
 from ffrf.scenes.bennett_scene import PAPER_MAX_COUPLER_DEVIATION_MM, build_bennett, paper_max_coupler_deviation
+from ffrf.scenes.linkage_run import run_linkage, write_results
 
 COARSE = dict(h=6e-3, order=1, n_modes=2)
 
@@ -16,7 +16,7 @@ COARSE = dict(h=6e-3, order=1, n_modes=2)
 @pytest.fixture(scope="module")
 def runs():
     return {
-        variant: run_bennett(build_bennett(variant, **COARSE), mode="quasi_static", n_outputs=13)
+        variant: run_linkage(build_bennett(variant, **COARSE), mode="quasi_static", n_outputs=13)
         for variant in ("rigid", "pla", "pla2")
     }
 
@@ -63,7 +63,7 @@ def test_energy_balance_closes_quasi_statically():
     """Drive work = change of gravity + strain energy (no inertia, no damping) over the revolution.
     The work is a Simpson integral over the outputs (fourth order): measured 2.4e-6 with 241
     outputs, 1.2e-7 with 481."""
-    result = run_bennett(build_bennett("pla", **COARSE), mode="quasi_static", n_outputs=481)
+    result = run_linkage(build_bennett("pla", **COARSE), mode="quasi_static", n_outputs=481)
     assert result.summary()["energy_balance_relative"] < 1e-6
     assert result.summary()["max_constraint_residual"] < 1e-10
 

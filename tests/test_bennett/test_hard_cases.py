@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from ffrf.fe.materials import PLA, RIGID, Material
-from ffrf.scenes.bennett_run import choose_mode
+from ffrf.scenes.linkage_run import choose_mode
 from ffrf.solvers.static_solver import StaticDivergence
 from ffrf.system.drives import rpm
 

@@ -92,13 +92,13 @@ def test_reactions_are_not_trivially_zero():
     assert clamp.force[2] == pytest.approx(total_weight, rel=1e-9)
 
 
-def test_run_bennett_writes_reactions_in_joint_frames():
+def test_run_linkage_writes_reactions_in_joint_frames():
     """The ``joint_reactions`` sensor: the drive's torque about its axis is the driving torque,
     and the clamp carries the linkage's weight (vertical in the clamp's frame, the world's)."""
-    from ffrf.scenes.bennett_run import run_bennett
+    from ffrf.scenes.linkage_run import run_linkage
 
     scene = build_bennett("pla", h=6e-3, order=1, n_modes=2)
-    result = run_bennett(scene, mode="quasi_static", n_outputs=5)
+    result = run_linkage(scene, mode="quasi_static", n_outputs=5)
     reactions = result.sensors["joint_reactions"]
     names = result.metadata["joint_reaction_names"]
     assert reactions.shape == (5, 5, 6) and names[0] == "clamp" and names[-1] == "joint3 (drive)"

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from ffrf.cli import main
-from ffrf.scenes.bennett_run import run_bennett
 from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.scene_file import load_scene
 from kinematics import BennettLinkage
 
@@ -45,7 +45,7 @@ def _axes_file() -> str:
 @pytest.fixture(scope="module")
 def paper_pla1():
     scene = build_bennett("pla1", h=0.012, order=1, n_modes=2)
-    return run_bennett(scene, mode="quasi_static", n_outputs=9)
+    return run_linkage(scene, mode="quasi_static", n_outputs=9)
 
 
 @pytest.mark.parametrize("source", ["dh", "axes"])
@@ -54,7 +54,7 @@ def test_the_papers_misaligned_bennett_from_a_linkage_file_runs_as_the_built_in_
     and driving torque as build_bennett('pla1') (measured 0 m: the same description)."""
     path = tmp_path / "bennett.toml"
     path.write_text(DH_FILE if source == "dh" else _axes_file())
-    ours = run_bennett(load_scene(path), mode="quasi_static", n_outputs=9)
+    ours = run_linkage(load_scene(path), mode="quasi_static", n_outputs=9)
     assert np.max(np.abs(ours.sensors["coupler_point"] - paper_pla1.sensors["coupler_point"])) < 1e-10
     assert np.max(np.abs(ours.sensors["driving_torque"] - paper_pla1.sensors["driving_torque"])) < 1e-10
     assert ours.summary()["max_coupler_deviation_m"] > 5e-4  # a real misfit, not a closable loop

@@ -42,8 +42,8 @@ from ffrf.solvers.simulate import MODES, simulate
 from ffrf.system.joints import MarkerJoint
 
 __all__ = [
-    "BennettResult",
-    "run_bennett",
+    "LinkageResult",
+    "run_linkage",
     "evaluate_sensors",
     "choose_mode",
     "inertia_number",
@@ -54,7 +54,7 @@ log = logging.getLogger(__name__)
 
 
 @dataclass
-class BennettResult:
+class LinkageResult:
     """Output times, sensors (name -> array), the coordinates ``q`` (rows = times), metadata and
     the stress state of the static assembly the run started from."""
 
@@ -147,7 +147,7 @@ def evaluate_sensors(
     return out
 
 
-def run_bennett(
+def run_linkage(
     scene: LinkageScene,
     mode: str = "auto",
     n_outputs: int = 241,
@@ -155,7 +155,7 @@ def run_bennett(
     rho_inf: float = 0.9,
     progress: Callable[[float, float], None] | None = None,
     t_end: float | None = None,
-) -> BennettResult:
+) -> LinkageResult:
     """Assemble (static, with misalignment continuation), then run over the drive's ramp and
     revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
     generalized-alpha with ``step`` (s) starting from the assembled state at rest. ``t_end``
@@ -205,12 +205,12 @@ def run_bennett(
         modes_per_link=[link.reduction.n_modes for link in scene.links],
         assembly=stress.as_dict(),
     )
-    out = BennettResult(times, sensors, q, metadata, stress)
+    out = LinkageResult(times, sensors, q, metadata, stress)
     out.metadata["summary"] = out.summary()
     return out
 
 
-def write_results(result: BennettResult, directory: str | Path) -> Path:
+def write_results(result: LinkageResult, directory: str | Path) -> Path:
     """``DIR/results.npz`` (time, sensors and the coordinates ``q``), the sensors as ``DIR/results.csv``
     and ``DIR/metadata.json`` (:func:`ffrf.output.tables.write_results`)."""
     return write_tables(directory, {"time": result.time, **result.sensors}, result.metadata, coordinates=result.q)
