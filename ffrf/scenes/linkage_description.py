@@ -60,12 +60,15 @@ _TRACE_STEP = np.radians(2.0)
 class BoreError:
     """A bore made off its axis: joint ``joint``'s axis as link ``link`` carries it, turned by ``twist``
     (rad) about the link's common normal (which changes the link's DH twist by ``twist``) and moved by
-    ``offset`` (m) along that normal, away from the link's other axis (which changes its DH length)."""
+    ``offset`` (m) along that normal, away from the link's other axis (which changes its DH length); or,
+    with ``axis``, the bore on that line (as measured on a part), its joint point the nearest point of
+    ``axis`` to the nominal one."""
 
     joint: int
     link: int
     twist: float = 0.0
     offset: float = 0.0
+    axis: Line | None = None
 
 
 def _link_joints(k: int, n: int) -> tuple[int, int]:
@@ -111,7 +114,10 @@ def _link_axes(loop: SingleLoop, points: NDArray, errors: tuple[BoreError, ...])
                     f"bore error on joint {error.joint} of link {k}: link {k} carries joints {first} and {second}"
                 )
             side = 0 if error.joint == first else 1
-            sides[side] = _erroneous_axis(*sides[side], other=sides[1 - side][0], error=error)
+            if error.axis is not None:
+                sides[side] = (error.axis, error.axis.project(sides[side][1]))
+            else:
+                sides[side] = _erroneous_axis(*sides[side], other=sides[1 - side][0], error=error)
         links.append(sides)
     return links
 

@@ -19,7 +19,8 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
     h = 0.006                          # tetrahedron edge (m), order = 2, modes = 4
     drive = {rpm = 1.0, ramp_time = 1.0}
     revolutions = 1.0
-    bore_errors = [{joint = 5, link = 0, twist_deg = 1.0, offset = 0.2}]   # as built (offset in unit)
+    bore_errors = [{joint = 5, link = 0, twist_deg = 1.0, offset = 0.2}]   # as built (offset in unit), or
+                                       # the measured bore: {joint, link, point = [...], direction = [...]}
 
     [scene]                            # gravity, beta, mode, outputs, step, rho_inf, joint_offsets, ...
 
@@ -46,7 +47,7 @@ from ffrf.scenes.linkage_description import BoreError, LinkageOptions
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_schema import MATERIAL, PARAMETRIC_H_RANGE, SETTINGS, Key, check_table
 from ffrf.system.drives import rpm
-from kinematics import LoopClosureError, LoopFoldError, SingleLoop, explain_mobility
+from kinematics import Line, LoopClosureError, LoopFoldError, SingleLoop, explain_mobility
 from kinematics.rational_mechanism import MODELS, load_model, loop_from_mechanism, regular_start, tool_link
 
 __all__ = ["LINKAGE", "LINKAGE_SCHEMA", "load_linkage"]
@@ -104,6 +105,8 @@ BORE_ERROR = {
     "link": Key("integer", True, _non_negative),
     "twist_deg": Key("number"),
     "offset": Key("number"),
+    "point": Key("vector3"),
+    "direction": Key("vector3", False, _nonzero_vector),
 }
 DRIVE = {
     "rpm": Key("number", False, _nonzero),
@@ -174,6 +177,18 @@ def _loop(spec: dict, where: str) -> tuple[SingleLoop, np.ndarray | None, int | 
     return loop, None, None
 
 
+def _bore_error(entry: dict, length: float, where: str) -> BoreError:
+    """A bore error of a linkage file: a twist and offset, or the line the bore is on (point, direction)."""
+    measured = "point" in entry or "direction" in entry
+    if measured and ("point" not in entry or "direction" not in entry):
+        raise SceneError(f"{where}: give both point and direction of the bore's axis")
+    if measured and ("twist_deg" in entry or "offset" in entry):
+        raise SceneError(f"{where}: give either twist_deg/offset or the bore's axis (point, direction), not both")
+    axis = Line.from_point_direction(length * np.asarray(entry["point"]), entry["direction"]) if measured else None
+    twist, offset = math.radians(entry.get("twist_deg", 0.0)), length * entry.get("offset", 0.0)
+    return BoreError(entry["joint"], entry["link"], twist, offset, axis)
+
+
 def load_linkage(document: dict, base: Path | None = None, where: str = "linkage") -> LinkageScene:
     """Check a linkage file (already parsed) and build its linkage (module docstring)."""
     del base  # a linkage file refers to no other file
@@ -198,8 +213,7 @@ def load_linkage(document: dict, base: Path | None = None, where: str = "linkage
         raise SceneError(f"{label}: tool_link {tool} does not exist; the moving links are 1 to {n - 1}")
     length = 1e-3 if spec.get("unit") == "mm" else 1.0
     errors = tuple(
-        BoreError(e["joint"], e["link"], math.radians(e.get("twist_deg", 0.0)), length * e.get("offset", 0.0))
-        for e in spec.get("bore_errors", [])
+        _bore_error(e, length, f"{label}, bore_errors[{k}]") for k, e in enumerate(spec.get("bore_errors", []))
     )
     for k, bore in enumerate(errors):
         carried = ((bore.link - 1) % n, bore.link)

@@ -21,6 +21,7 @@ from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.output.clearance import Clearance, link_clearance
 from ffrf.scenes.builder import Scene, SceneBody, build_scene
 from ffrf.scenes.linkage_description import (
+    BoreError,
     LinkageOptions,
     drive_sign,
     joint_points,
@@ -115,6 +116,14 @@ class LinkageScene(Scene):
         return motion.path(self.tool_link, self.home_coupler_point())
 
 
+def _plain(error: BoreError) -> dict:
+    """A bore error as plain data for the metadata (SI units)."""
+    axis = (
+        None if error.axis is None else {"point": error.axis.point.tolist(), "direction": error.axis.direction.tolist()}
+    )
+    return {"joint": error.joint, "link": error.link, "twist": error.twist, "offset": error.offset, "axis": axis}
+
+
 def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None) -> LinkageScene:
     """Build :func:`~ffrf.scenes.linkage_description.linkage_description` of ``loop`` with the one scene builder."""
     options = LinkageOptions() if options is None else options
@@ -131,7 +140,7 @@ def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None) -> Li
         ramp_time=options.ramp_time,
         revolutions=options.revolutions,
         material=options.material.name,
-        bore_errors=[vars(e) for e in options.bore_errors],
+        bore_errors=[_plain(e) for e in options.bore_errors],
     )
     built = {f.name: getattr(scene, f.name) for f in fields(Scene)}
     return LinkageScene(

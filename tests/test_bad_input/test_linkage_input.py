@@ -60,6 +60,17 @@ LINKAGE_CASES = {
         "tool_link = 2\nbore_errors = [{joint = 2, link = 0, twist_deg = 1.0}]",
         ["link 0 does not carry joint 2", "link k carries joints k-1 and k"],
     ),
+    "bore axis without direction": (
+        "tool_link = 2",
+        "tool_link = 2\nbore_errors = [{joint = 3, link = 0, point = [0, 0, 0]}]",
+        ["give both point and direction of the bore's axis"],
+    ),
+    "bore axis and twist together": (
+        "tool_link = 2",
+        "tool_link = 2\nbore_errors = [{joint = 3, link = 0, twist_deg = 1.0, point = [0, 0, 0], "
+        "direction = [0, 0, 1]}]",
+        ["give either twist_deg/offset or the bore's axis"],
+    ),
     "scale for a DH table": ("driver = 3", "driver = 3\nscale = 0.1", ["'scale' scales a model"]),
     "nan in a DH table": ("a = [110, 220, 110, 220]", "a = [110, nan, 110, 220]", ["'a' must be finite"]),
 }

@@ -74,3 +74,24 @@ def test_a_stiff_rational_linkages_4r_from_the_command_line_follows_its_ideal_mo
     for name in ("results.npz", "results.csv", "assembly.vtu", "coupler_deviation.png", "driving_torque.png"):
         assert (tmp_path / name).is_file()
     assert "max coupler deviation" in capsys.readouterr().out
+
+
+def test_a_measured_bore_axis_is_the_same_as_built_as_its_twist(tmp_path):
+    """The base's joint-3 bore given as the line it is on (the paper's alpha_3 = 91 deg axis h3, in mm) builds the
+    same description as the 1 deg twist error: the bores, joints and start poses agree to round-off (measured 1.1e-16)."""
+    from ffrf.geometry.joint_axes import bennett_axes
+
+    h3 = bennett_axes(91.0)[3]
+    point = ", ".join(f"{1e3 * x:.17g}" for x in h3.point)
+    direction = ", ".join(f"{x:.17g}" for x in h3.direction)
+    measured = DH_FILE.replace(
+        "bore_errors = [{joint = 3, link = 0, twist_deg = 1.0}]",
+        f"bore_errors = [{{joint = 3, link = 0, point = [{point}], direction = [{direction}]}}]",
+    )
+    (tmp_path / "twist.toml").write_text(DH_FILE)
+    (tmp_path / "measured.toml").write_text(measured)
+    twist, axis = load_scene(tmp_path / "twist.toml"), load_scene(tmp_path / "measured.toml")
+    for a, b in zip(twist.joints, axis.joints, strict=True):
+        assert np.max(np.abs(np.subtract(a.axes, b.axes))) < 1e-12
+        assert np.max(np.abs(np.subtract(a.points, b.points))) < 1e-12
+    np.testing.assert_allclose(axis.q_initial, twist.q_initial, atol=1e-12)
