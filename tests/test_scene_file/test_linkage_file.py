@@ -78,7 +78,7 @@ def test_a_stiff_rational_linkages_4r_from_the_command_line_follows_its_ideal_mo
 
 def test_a_measured_bore_axis_is_the_same_as_built_as_its_twist(tmp_path):
     """The base's joint-3 bore given as the line it is on (the paper's alpha_3 = 91 deg axis h3, in mm) builds the
-    same description as the 1 deg twist error: the bores, joints and start poses agree to round-off (measured 1.1e-16)."""
+    same description as the 1 deg twist error: bores, joints and start poses agree to round-off (measured 1.1e-16)."""
     from ffrf.geometry.joint_axes import bennett_axes
 
     h3 = bennett_axes(91.0)[3]
