@@ -280,6 +280,11 @@ def _configure_linkage(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scale", type=float, default=0.1, help="length scale of the model (its unit -> metres)")
     parser.add_argument("--driver", type=int, default=0, help="driven joint")
     parser.add_argument(
+        "--design-points",
+        action="store_true",
+        help="attach the links where the model's design attaches them (its collision-free connection points)",
+    )
+    parser.add_argument(
         "--bore-error",
         type=_bore_error,
         action="append",
@@ -310,6 +315,7 @@ def _run_linkage(args: argparse.Namespace) -> int:
             "order": args.order,
             "modes": args.modes,
             "bore_errors": args.bore_error,
+            "design_points": args.design_points,
         },
         "scene": {"joint_offsets": args.joint_offsets},
     }

@@ -27,7 +27,15 @@ from numpy.typing import NDArray
 from .pluecker import Line
 from .single_loop import SingleLoop
 
-__all__ = ["MODELS", "factor_joint_angles", "load_model", "loop_from_mechanism", "regular_start", "tool_link"]
+__all__ = [
+    "MODELS",
+    "attach_points",
+    "factor_joint_angles",
+    "load_model",
+    "loop_from_mechanism",
+    "regular_start",
+    "tool_link",
+]
 
 #: The 4R and 6R mechanisms that ``rational_linkages.models`` ships.
 MODELS = ("bennett_ark24", "collisions_free_6r", "plane_fold_6r", "interp_4poses_6r")
@@ -91,3 +99,23 @@ def regular_start(mechanism: Any, loop: SingleLoop) -> NDArray[np.float64]:
         if loop.mobility(phi) == 1:
             return phi
     raise ValueError(f"no regular pose of the mechanism at t in {START_PARAMETERS}; give the start pose yourself")
+
+
+def attach_points(mechanism: Any, scale: float = 1.0) -> NDArray[np.float64]:
+    """Where the mechanism's design attaches its links to each joint axis, ``(n, 2, 3)`` (times ``scale``).
+
+    Row ``i`` holds the points of link ``i`` and link ``i + 1`` on joint ``i`` of :func:`loop_from_mechanism`:
+    Rational Linkages gives every joint two connection points, ``points[0]`` and ``points[1]``, a link of a
+    factorisation running from ``points[1]`` of one joint to ``points[0]`` of the next (``MotionFactorization.link``)
+    and the base joining the two factorisations' first ``points[0]``; the second factorisation is read reversed.
+    Its collision-free designs (``collisions_free_6r``) choose these points to keep the links apart.
+    """
+    first, second = mechanism.factorizations
+    m, n = len(first.linkage), len(first.linkage) + len(second.linkage)
+
+    def point(joint: Any, k: int) -> NDArray[np.float64]:
+        return scale * np.asarray(joint.points[k].normalized_in_3d(), dtype=float)
+
+    rows = [[point(first.linkage[i], 0), point(first.linkage[i], 1)] for i in range(m)]
+    rows += [[point(second.linkage[n - 1 - i], 1), point(second.linkage[n - 1 - i], 0)] for i in range(m, n)]
+    return np.array(rows)

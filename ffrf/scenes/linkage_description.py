@@ -26,13 +26,14 @@ rotation of side 1 against side 0 (Eq. (J3)), which is :math:`\varphi_i` of Eq. 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ffrf.fe.materials import PLA, RIGID, Material
-from ffrf.geometry.link_geometry import arm_waypoints
+from ffrf.geometry.link_geometry import LinkDesign, arm_waypoints
 from ffrf.system.drives import CosineRamp, rpm
 from kinematics import Line, SingleLoop, common_normal, trace_motion
 from kinematics.quaternion import matrix_to_quaternion
@@ -87,25 +88,62 @@ def joint_points(loop: SingleLoop) -> NDArray[np.float64]:
     return points
 
 
-def _erroneous_axis(axis: Line, point: NDArray, other: Line, error: BoreError) -> tuple[Line, NDArray]:
-    """``axis`` (carried with ``other`` by one link) turned about their common normal and moved along it."""
-    normal = common_normal(other, axis)
+class _Side(NamedTuple):
+    """One link's side of a joint: the bore's axis, the joint point on it, and the seat, the point from which
+    the link's housing is placed (the joint point, unless the design attaches the link elsewhere on the axis)."""
+
+    axis: Line
+    point: NDArray
+    seat: NDArray
+
+
+def _erroneous_side(side: _Side, other: Line, error: BoreError) -> _Side:
+    """``side`` (carried with ``other`` by one link) turned about their common normal and moved along it, or
+    put on the measured ``error.axis``."""
+    if error.axis is not None:
+        return _Side(error.axis, error.axis.project(side.point), error.axis.project(side.seat))
+    normal = common_normal(other, side.axis)
     direction = normal.unit
     if direction is None:
         raise ValueError(f"bore error on joint {error.joint} of link {error.link}: the link's two axes coincide")
     rotation = Rotation.from_rotvec(error.twist * direction).as_matrix()
     foot = normal.foot1
-    moved_point = foot + rotation @ (point - foot) + error.offset * direction
-    return Line.from_point_direction(moved_point, rotation @ axis.direction), moved_point
+
+    def moved(point: NDArray) -> NDArray:
+        return foot + rotation @ (point - foot) + error.offset * direction
+
+    moved_point = moved(side.point)
+    return _Side(Line.from_point_direction(moved_point, rotation @ side.axis.direction), moved_point, moved(side.seat))
 
 
-def _link_axes(loop: SingleLoop, points: NDArray, errors: tuple[BoreError, ...]) -> list[list[tuple[Line, NDArray]]]:
-    """Per link its two (axis, joint point) pairs as built."""
+def _seats(loop: SingleLoop, attach: NDArray | None) -> NDArray[np.float64] | None:
+    """Seats ``(n, 2, 3)`` of the links at each joint (link i, link i+1) for housings centred on ``attach``."""
+    if attach is None:
+        return None
+    attach = np.asarray(attach, dtype=float)
+    if attach.shape != (loop.n, 2, 3):
+        raise ValueError(f"attach_points must be (n, 2, 3) = ({loop.n}, 2, 3), got {attach.shape}")
+    offset = LinkDesign().housing_offset
+    seats = np.empty_like(attach)
+    for i, axis in enumerate(loop.axes):
+        # Link i carries h_i as its second axis (housing at seat - s l), link i+1 as its first (seat + s l).
+        seats[i, 0] = attach[i, 0] + offset * axis.direction
+        seats[i, 1] = attach[i, 1] - offset * axis.direction
+    return seats
+
+
+def _link_axes(
+    loop: SingleLoop, points: NDArray, errors: tuple[BoreError, ...], seats: NDArray | None = None
+) -> list[list[_Side]]:
+    """Per link its two sides as built."""
     n = loop.n
     links = []
     for k in range(n):
         first, second = _link_joints(k, n)
-        sides = [(loop.axes[first], points[first]), (loop.axes[second], points[second])]
+        sides = [
+            _Side(loop.axes[first], points[first], points[first] if seats is None else seats[first, 1]),
+            _Side(loop.axes[second], points[second], points[second] if seats is None else seats[second, 0]),
+        ]
         for error in errors:
             if error.link != k:
                 continue
@@ -114,10 +152,7 @@ def _link_axes(loop: SingleLoop, points: NDArray, errors: tuple[BoreError, ...])
                     f"bore error on joint {error.joint} of link {k}: link {k} carries joints {first} and {second}"
                 )
             side = 0 if error.joint == first else 1
-            if error.axis is not None:
-                sides[side] = (error.axis, error.axis.project(sides[side][1]))
-            else:
-                sides[side] = _erroneous_axis(*sides[side], other=sides[1 - side][0], error=error)
+            sides[side] = _erroneous_side(sides[side], sides[1 - side].axis, error)
         links.append(sides)
     return links
 
@@ -163,7 +198,10 @@ class LinkageOptions:
     damping; ``omega``, ``ramp_time``, ``revolutions``: the cosine ramp to ``omega`` (rad/s) and the turns
     after it; ``bore_errors``: the as-built misfits; ``tool_link``: the link whose joint points' mean is
     the sensor ``coupler_point`` (default ``n // 2``, the coupler of a 4R); ``mode``, ``outputs``: of a
-    scene-file run; ``exact_gravity``, ``joint_offsets``: the scene-file settings of the same names.
+    scene-file run; ``exact_gravity``, ``joint_offsets``: the scene-file settings of the same names;
+    ``attach_points`` ``(n, 2, 3)``: where on each joint's axis links i and i+1 attach (housings centred there,
+    e.g. a Rational Linkages design, :func:`kinematics.rational_mechanism.attach_points`; default: both
+    stacked about :func:`joint_points`); the joint point is then their midpoint.
     """
 
     material: Material = PLA
@@ -185,6 +223,7 @@ class LinkageOptions:
     outputs: int = 241
     exact_gravity: bool = True
     joint_offsets: str = "body"
+    attach_points: ArrayLike | None = None
 
 
 def linkage_description(loop: SingleLoop, options: LinkageOptions | None = None) -> dict:
@@ -196,8 +235,9 @@ def linkage_description(loop: SingleLoop, options: LinkageOptions | None = None)
     tool = n // 2 if o.tool_link is None else o.tool_link
     if not 0 < tool < n:
         raise ValueError(f"tool_link must be a moving link 1..{n - 1}, got {tool}")
-    points = joint_points(loop)
-    links = _link_axes(loop, points, tuple(o.bore_errors))
+    attach = None if o.attach_points is None else np.asarray(o.attach_points, dtype=float)
+    points = joint_points(loop) if attach is None else attach.mean(axis=1)
+    links = _link_axes(loop, points, tuple(o.bore_errors), _seats(loop, attach))
     phi = start_pose(loop, o.driver, o.start_angle, o.origin)
     transforms = loop.link_transforms(phi)
     bodies, sensors = [], []
@@ -208,9 +248,9 @@ def linkage_description(loop: SingleLoop, options: LinkageOptions | None = None)
                 "name": f"joint{j}",
                 "point": _vector(line.point),
                 "direction": _vector(line.direction),
-                "joint_point": _vector(p),
+                "joint_point": _vector(seat),
             }
-            for j, (line, p) in zip((first, second), sides, strict=True)
+            for j, (line, _, seat) in zip((first, second), sides, strict=True)
         ]
         interfaces = (["mount"] if k == 0 else []) + [f"joint{first}", f"joint{second}"]
         bodies.append(
@@ -228,7 +268,7 @@ def linkage_description(loop: SingleLoop, options: LinkageOptions | None = None)
             }
         )
         if k > 0:
-            course = arm_waypoints([sides[0][1], sides[1][1]], [sides[0][0], sides[1][0]])
+            course = arm_waypoints([sides[0].seat, sides[1].seat], [sides[0].axis, sides[1].axis])
             sensors += [
                 {"name": f"link{k}_node{j}", "body": f"link{k}", "point": _vector(_along(course, f)), "surface": True}
                 for j, f in enumerate(TRACKED_FRACTIONS)
@@ -238,8 +278,8 @@ def linkage_description(loop: SingleLoop, options: LinkageOptions | None = None)
     ]
     for i in range(n):
         near, far = i, (i + 1) % n  # h_i is the near link's second axis and the far link's first
-        near_side = {"body": f"link{near}", "axis": links[near][1][0].direction, "point": links[near][1][1]}
-        far_side = {"body": f"link{far}", "axis": links[far][0][0].direction, "point": links[far][0][1]}
+        near_side = {"body": f"link{near}", "axis": links[near][1].axis.direction, "point": links[near][1].point}
+        far_side = {"body": f"link{far}", "axis": links[far][0].axis.direction, "point": links[far][0].point}
         side0, side1 = (far_side, near_side) if i == n - 1 else (near_side, far_side)
         joint = {
             "name": f"joint{i} (drive)" if i == o.driver else f"joint{i}",

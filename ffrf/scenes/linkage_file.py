@@ -8,6 +8,7 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
     name = "my 6R"
     model = "collisions_free_6r"       # one source: a model of rational_linkages.models ...
     scale = 0.1                        #   its lengths times scale (the models are of unit size)
+    design_points = false              #   true: links attached where the model's design attaches them
     # dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90], d = [0, 0, 0, 0],
     #       theta_deg = [0, 180, 0, 180]}                   # ... or a closed DH table (paper's convention)
     # axes = [{point = [0, 0, 0], direction = [0, 0, 1]}, ...]   # ... or the joint axes at home
@@ -48,7 +49,14 @@ from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_schema import MATERIAL, PARAMETRIC_H_RANGE, SETTINGS, Key, check_table
 from ffrf.system.drives import rpm
 from kinematics import Line, LoopClosureError, LoopFoldError, SingleLoop, explain_mobility
-from kinematics.rational_mechanism import MODELS, load_model, loop_from_mechanism, regular_start, tool_link
+from kinematics.rational_mechanism import (
+    MODELS,
+    attach_points,
+    load_model,
+    loop_from_mechanism,
+    regular_start,
+    tool_link,
+)
 
 __all__ = ["LINKAGE", "LINKAGE_SCHEMA", "load_linkage"]
 
@@ -117,6 +125,7 @@ LINKAGE = {
     "name": Key("string"),
     "model": Key("string", False, _model),
     "scale": Key("number", False, _positive),
+    "design_points": Key("boolean"),
     "dh": Key("table", keys=DH),
     "axes": Key("tables", keys=AXIS),
     "unit": Key("string", False, _unit),
@@ -135,8 +144,8 @@ LINKAGE = {
 LINKAGE_SCHEMA = {"linkage": Key("table", True, keys=LINKAGE), "scene": Key("table", keys=SETTINGS)}
 
 
-def _loop(spec: dict, where: str) -> tuple[SingleLoop, np.ndarray | None, int | None]:
-    """The loop of the one source, the start pose to trace from (models) and the tool link (models)."""
+def _loop(spec: dict, where: str) -> tuple[SingleLoop, np.ndarray | None, int | None, Any]:
+    """The loop of the one source, the start pose to trace from, the tool link and the mechanism (models)."""
     sources = [key for key in ("model", "dh", "axes") if key in spec]
     if len(sources) != 1:
         raise SceneError(
@@ -145,19 +154,22 @@ def _loop(spec: dict, where: str) -> tuple[SingleLoop, np.ndarray | None, int | 
         )
     if "scale" in spec and "model" not in spec:
         raise SceneError(f"{where}: 'scale' scales a model; give dh or axes lengths in 'unit' instead")
+    if "design_points" in spec and "model" not in spec:
+        raise SceneError(f"{where}: 'design_points' takes a model's own link design; dh and axes have none")
     if "unit" in spec and "model" in spec:
         raise SceneError(f"{where}: 'unit' is for dh and axes; a model is scaled by 'scale'")
     length = 1e-3 if spec.get("unit") == "mm" else 1.0
     if "model" in spec:
         mechanism = load_model(spec["model"])
         loop = loop_from_mechanism(mechanism, scale=spec.get("scale", 0.1))
-        return loop, regular_start(mechanism, loop), tool_link(mechanism)
+        return loop, regular_start(mechanism, loop), tool_link(mechanism), mechanism
     if "axes" in spec:
         axes = spec["axes"]
         return (
             SingleLoop.from_points_directions(
                 [length * np.asarray(a["point"]) for a in axes], [a["direction"] for a in axes]
             ),
+            None,
             None,
             None,
         )
@@ -174,7 +186,7 @@ def _loop(spec: dict, where: str) -> tuple[SingleLoop, np.ndarray | None, int | 
         raise SceneError(
             f"{where}, dh: {error}; for an as-built loop that cannot close, give the nominal table and bore_errors"
         ) from error
-    return loop, None, None
+    return loop, None, None, None
 
 
 def _bore_error(entry: dict, length: float, where: str) -> BoreError:
@@ -196,7 +208,7 @@ def load_linkage(document: dict, base: Path | None = None, where: str = "linkage
     spec = document["linkage"]
     label = f"{where}, linkage"
     try:
-        loop, origin, model_tool = _loop(spec, label)
+        loop, origin, model_tool, mechanism = _loop(spec, label)
     except ValueError as error:  # SingleLoop's own checks (fewer than 4 axes, coinciding neighbours)
         if isinstance(error, SceneError):
             raise
@@ -252,6 +264,9 @@ def load_linkage(document: dict, base: Path | None = None, where: str = "linkage
                 tool_link=tool,
                 exact_gravity=settings.get("exact_gravity", True),
                 joint_offsets=settings.get("joint_offsets", "body"),
+                attach_points=(
+                    attach_points(mechanism, spec.get("scale", 0.1)) if spec.get("design_points", False) else None
+                ),
             ),
         )
     except LoopFoldError as error:

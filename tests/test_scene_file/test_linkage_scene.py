@@ -17,6 +17,7 @@ from ffrf.scenes.assembly import start_state
 from ffrf.scenes.bennett_scene import VARIANTS, bennett_description
 from ffrf.scenes.builder import build_scene
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, drive_sign, joint_points, linkage_description
+from ffrf.scenes.linkage_scene import build_linkage
 from ffrf.solvers.static_solver import quasi_static
 from kinematics import BennettLinkage, SingleLoop
 from kinematics.dual_quaternion import DualQuaternion
@@ -124,3 +125,34 @@ def test_links_on_intersecting_axes_leave_their_housings_radially():
     scene = build_scene(description, where="plane_fold_6r")
     assert len(scene.bodies) == 6 and len(scene.sensors) == 15
     assert np.abs(scene.system.constraint_values(scene.q_initial, 0.0)).max() < 1e-12  # assembled at the start
+
+
+def test_rational_linkages_design_points_attach_each_link_where_its_own_link_api_says():
+    """attach_points against Rational Linkages' MotionFactorization.link: link k of the first factorisation runs
+    between the points our links k attach at on joints k-1 and k; every point lies on its joint's axis."""
+    from kinematics.rational_mechanism import attach_points
+
+    mechanism = load_model("collisions_free_6r")
+    loop = loop_from_mechanism(mechanism, scale=1.0)
+    attach = attach_points(mechanism)
+    first = mechanism.factorizations[0]
+    for k in (1, 2):
+        _, start, end = first.link(k)
+        np.testing.assert_allclose(attach[k - 1, 1], np.asarray(start.normalized_in_3d(), dtype=float), atol=1e-15)
+        np.testing.assert_allclose(attach[k, 0], np.asarray(end.normalized_in_3d(), dtype=float), atol=1e-15)
+    for axis, pair in zip(loop.axes, attach, strict=True):
+        assert np.max(axis.distance_to_point(pair)) < 1e-12
+
+
+def test_the_models_own_design_keeps_more_links_apart_than_ours():
+    """collisions_free_6r at 1/4 scale: with the links attached at the design's connection points, fewer pairs of
+    links come closer than 1 mm along the motion than with the housings stacked at our joint points (5 to 2)."""
+    from kinematics.rational_mechanism import attach_points, regular_start
+
+    mechanism = load_model("collisions_free_6r")
+    loop = loop_from_mechanism(mechanism, scale=0.25)
+    start = regular_start(mechanism, loop)
+    common = dict(h=12e-3, order=1, n_modes=2, start_angle=float(start[0]), origin=start, tool_link=3)
+    ours = build_linkage(loop, LinkageOptions(**common)).clearance()
+    design = build_linkage(loop, LinkageOptions(**common, attach_points=attach_points(mechanism, 0.25))).clearance()
+    assert len(design.collisions) < len(ours.collisions)
