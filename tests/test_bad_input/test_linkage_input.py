@@ -71,6 +71,11 @@ LINKAGE_CASES = {
         "direction = [0, 0, 1]}]",
         ["give either twist_deg/offset or the bore's axis"],
     ),
+    "design points for a DH table": (
+        "driver = 3",
+        "driver = 3\ndesign_points = true",
+        ["'design_points' takes a model"],
+    ),
     "scale for a DH table": ("driver = 3", "driver = 3\nscale = 0.1", ["'scale' scales a model"]),
     "nan in a DH table": ("a = [110, 220, 110, 220]", "a = [110, nan, 110, 220]", ["'a' must be finite"]),
 }
