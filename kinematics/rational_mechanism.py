@@ -114,7 +114,7 @@ def attach_points(mechanism: Any, scale: float = 1.0) -> NDArray[np.float64]:
     m, n = len(first.linkage), len(first.linkage) + len(second.linkage)
 
     def point(joint: Any, k: int) -> NDArray[np.float64]:
-        return scale * np.asarray(joint.points[k].normalized_in_3d(), dtype=float)
+        return scale * np.asarray(joint.points[k].normalized_euclidean(), dtype=float)
 
     rows = [[point(first.linkage[i], 0), point(first.linkage[i], 1)] for i in range(m)]
     rows += [[point(second.linkage[n - 1 - i], 1), point(second.linkage[n - 1 - i], 0)] for i in range(m, n)]

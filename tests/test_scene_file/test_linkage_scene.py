@@ -138,8 +138,8 @@ def test_rational_linkages_design_points_attach_each_link_where_its_own_link_api
     first = mechanism.factorizations[0]
     for k in (1, 2):
         _, start, end = first.link(k)
-        np.testing.assert_allclose(attach[k - 1, 1], np.asarray(start.normalized_in_3d(), dtype=float), atol=1e-15)
-        np.testing.assert_allclose(attach[k, 0], np.asarray(end.normalized_in_3d(), dtype=float), atol=1e-15)
+        np.testing.assert_allclose(attach[k - 1, 1], np.asarray(start.normalized_euclidean(), dtype=float), atol=1e-15)
+        np.testing.assert_allclose(attach[k, 0], np.asarray(end.normalized_euclidean(), dtype=float), atol=1e-15)
     for axis, pair in zip(loop.axes, attach, strict=True):
         assert np.max(axis.distance_to_point(pair)) < 1e-12
 
