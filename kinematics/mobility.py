@@ -204,7 +204,7 @@ def explain_mobility(
         raise ValueError(f"driver must be a joint index 0..{loop.n - 1}, got {driver}")
     origin = np.zeros(loop.n) if start is None else np.asarray(start, dtype=float)
     free = [i for i in range(loop.n) if i != driver]
-    weights = np.array([1.0 / loop.scale] * 3 + [1.0] * 3)
+    weights = loop.residual_weights
 
     def residual(x: NDArray) -> NDArray:
         phi = origin.copy()

@@ -33,6 +33,7 @@ motion polynomial exists (Bennett, Rational Linkages) it is an independent check
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -56,6 +57,11 @@ CLOSURE_TOLERANCE = 1e-13
 
 class LoopFoldError(ValueError):
     """The driving joint cannot turn further: the motion folds back (the joint is a rocker)."""
+
+
+def _residual(product: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Translation and rotation vector of the loop product, Eq. (L2)."""
+    return np.concatenate([product[:3, 3], Rotation.from_matrix(product[:3, :3]).as_rotvec()])
 
 
 def rotation_about(line: Line, angle: float) -> NDArray[np.float64]:
@@ -123,7 +129,7 @@ class SingleLoop:
     def n(self) -> int:
         return len(self.axes)
 
-    @property
+    @cached_property
     def scale(self) -> float:
         """Largest distance between neighbouring axes, else from the origin (m); 1 if all vanish."""
         dh = self.dh()
@@ -131,6 +137,11 @@ class SingleLoop:
         if size == 0.0:
             size = max(float(np.linalg.norm(axis.point)) for axis in self.axes)
         return size if size > 0.0 else 1.0
+
+    @cached_property
+    def residual_weights(self) -> NDArray[np.float64]:
+        """Weights that make the closure residual dimensionless: translation over :attr:`scale`, rotation as is."""
+        return np.array([1.0 / self.scale] * 3 + [1.0] * 3)
 
     def dh(self) -> DHParameters:
         """DH parameters of the home pose (:func:`kinematics.dh.dh_from_axes`); ``theta`` at home."""
@@ -173,8 +184,7 @@ class SingleLoop:
     # -- closure ----------------------------------------------------------------------------
     def closure_residual(self, phi: ArrayLike) -> NDArray[np.float64]:
         """Residual of Eq. (L2): translation (m) and rotation vector (rad) of the loop product, ``(6,)``."""
-        product = self.link_transforms(phi)[self.n]
-        return np.concatenate([product[:3, 3], Rotation.from_matrix(product[:3, :3]).as_rotvec()])
+        return _residual(self.link_transforms(phi)[self.n])
 
     def jacobian(self, phi: ArrayLike) -> NDArray[np.float64]:
         r"""Closure Jacobian of Eq. (L3), ``(6, n)``: column ``i`` is :math:`(m_i, l_i)` of axis ``i`` now.
@@ -183,7 +193,10 @@ class SingleLoop:
         are the exact derivative of the loop product's translation :math:`p`,
         :math:`l_i \times p + m_i`; the rotation rows :math:`l_i` are exact where the loop closes.
         """
-        transforms = self.link_transforms(phi)
+        return self._jacobian(self.link_transforms(phi))
+
+    def _jacobian(self, transforms: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Eq. (L3) from the displacements of :meth:`link_transforms`."""
         translation = transforms[self.n][:3, 3]
         jacobian = np.empty((6, self.n))
         for i, axis in enumerate(self.axes):
@@ -217,11 +230,12 @@ class SingleLoop:
         """
         phi = self._angles(phi).copy()
         free = np.array([i for i in range(self.n) if i != driver])
-        weights = np.array([1.0 / self.scale] * 3 + [1.0] * 3)
+        weights = self.residual_weights
         converged = False
         for _ in range(max_iterations):
-            residual = weights * self.closure_residual(phi)
-            jacobian = weights[:, None] * self.jacobian(phi)[:, free]
+            transforms = self.link_transforms(phi)  # once per iteration, for the residual and the Jacobian
+            residual = weights * _residual(transforms[self.n])
+            jacobian = weights[:, None] * self._jacobian(transforms)[:, free]
             step, *_ = np.linalg.lstsq(jacobian, -residual, rcond=None)
             phi[free] += step
             if converged:  # one more (quadratically convergent) step puts the residual at round-off
@@ -339,7 +353,7 @@ def follow_driver(
             )
         poses.append(phi.copy())
     joint_angles = np.array(poses)
-    weights = np.array([1.0 / loop.scale] * 3 + [1.0] * 3)
+    weights = loop.residual_weights
     residual = np.array([np.max(np.abs(weights * loop.closure_residual(p))) for p in joint_angles])
     values = np.array([loop.singular_values(p) for p in joint_angles])
     return LoopMotion(loop, driver, joint_angles[:, driver], joint_angles, residual, values)
