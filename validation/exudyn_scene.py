@@ -69,14 +69,6 @@ def scene_bodies(scene) -> list:
     return out
 
 
-def _with_gravity_model(scene, exact: bool):
-    from ffrf.system.multibody import MultibodySystem
-
-    bodies = tuple(replace(b, exact_gravity=exact) for b in scene.system.bodies)
-    system = MultibodySystem(bodies, scene.system.constraints, gravity=scene.system.gravity)
-    return replace(scene, system=system, settings=dict(scene.settings, exact_gravity=exact))
-
-
 def _torque_keys(scene) -> dict[str, str]:
     from .exudyn_twin import joint_key
 
@@ -148,7 +140,7 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
     started = time.perf_counter()
     scene = load_scene(path)
     setup_ours = time.perf_counter() - started
-    equivalent, exact = _with_gravity_model(scene, False), _with_gravity_model(scene, True)
+    equivalent, exact = scene.with_exact_gravity(False), scene.with_exact_gravity(True)
     bases = twin_bases(scene_bodies(scene), basis)
     modes = {
         b.name: compare_modes(b.fe, b.reduction, tb.matrix, tb.fixed_interface_frequencies_hz, tb.setup_s)

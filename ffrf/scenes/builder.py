@@ -26,8 +26,9 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -146,6 +147,12 @@ class Scene:
             _constraint(j, self.bodies, self.settings.get("joint_offsets", "body"), fraction) for j in self.joints
         )
         return MultibodySystem(tuple(b.body for b in self.bodies), constraints, gravity=self.system.gravity)
+
+    def with_exact_gravity(self, exact: bool) -> Self:
+        """The same scene with the exact gravity force or Exudyn's simplified one (Eq. (F10))."""
+        bodies = tuple(replace(b, body=replace(b.body, exact_gravity=exact)) for b in self.bodies)
+        scene = replace(self, bodies=bodies, settings=dict(self.settings, exact_gravity=exact))
+        return replace(scene, system=scene.with_misfit(1.0))
 
 
 def build_scene(

@@ -11,7 +11,7 @@ the same curve (``tests/test_kinematics/test_single_loop.py``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -75,12 +75,6 @@ class LinkageScene(Scene):
     def drive_angle(self, t: float) -> float:
         """The driven joint's prescribed angle (rad): start angle plus the ramp."""
         return self.start_angle + float(self.drive(t))
-
-    def with_exact_gravity(self, exact: bool) -> LinkageScene:
-        """The same scene with the exact gravity force or Exudyn's simplified one (Eq. (F10))."""
-        bodies = tuple(replace(b, body=replace(b.body, exact_gravity=exact)) for b in self.bodies)
-        scene = replace(self, bodies=bodies, settings=dict(self.settings, exact_gravity=exact))
-        return replace(scene, system=scene.with_misfit(1.0))
 
     def home_coupler_point(self) -> NDArray[np.float64]:
         """The coupler point at home: the mean of the tool link's two nominal joint points."""
