@@ -276,7 +276,9 @@ def _configure_linkage(parser: argparse.ArgumentParser) -> None:
     from kinematics.rational_mechanism import MODELS
 
     parser.add_argument("--model", choices=MODELS, required=True, help="a mechanism of rational_linkages.models")
-    parser.add_argument("--variant", choices=("rigid", "pla"), default="pla", help="link material")
+    from ffrf.scenes.linkage_description import LINKAGE_VARIANTS
+
+    parser.add_argument("--variant", choices=tuple(LINKAGE_VARIANTS), default="pla", help="link material")
     parser.add_argument("--scale", type=float, default=0.1, help="length scale of the model (its unit -> metres)")
     parser.add_argument("--driver", type=int, default=0, help="driven joint")
     parser.add_argument(
@@ -298,12 +300,12 @@ def _configure_linkage(parser: argparse.ArgumentParser) -> None:
 def _run_linkage(args: argparse.Namespace) -> int:
     import time
 
-    from ffrf.fe.materials import RIGID
+    from ffrf.scenes.linkage_description import LINKAGE_VARIANTS
     from ffrf.scenes.linkage_file import load_linkage
 
     started = time.perf_counter()
     _output_folder(args.out)
-    material = RIGID if args.variant == "rigid" else PLA
+    material = LINKAGE_VARIANTS[args.variant]
     document = {  # the linkage file these options stand for (ffrf.scenes.linkage_file)
         "linkage": {
             "name": f"{args.model} {args.variant}",
