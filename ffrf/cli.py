@@ -13,6 +13,8 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+import numpy as np
+
 from ffrf.fe.fe_model import FEModel
 from ffrf.fe.interfaces import interface_from_group
 from ffrf.fe.materials import PLA
@@ -185,9 +187,15 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
         + (f" (drive time scale / longest link period = {ratio:.0f})" if auto else ""),
         file=sys.stderr,
     )
-    result = run_linkage(
-        scene, mode=mode, n_outputs=options["outputs"], step=options["step"], progress=_progress_printer()
-    )
+    try:
+        result = run_linkage(
+            scene, mode=mode, n_outputs=options["outputs"], step=options["step"], progress=_progress_printer()
+        )
+        stopped = None
+    except (StaticDivergence, NewtonDivergence) as error:  # the path ends: write what was computed, then say so
+        if error.partial is None:
+            raise
+        result, stopped = error.partial, error
     clearance = scene.clearance()
     result.metadata["clearance"] = {
         "summary": clearance.summary(),
@@ -231,6 +239,14 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
     print("assembled state (gravity" + (", misfit" if misfit else "") + f"; {out / 'assembly.vtu'}):")
     for link in assembly.links:
         print("  " + link.line())
+    if stopped is not None:
+        end = result.time[-1]
+        print(
+            f"error: the run stopped: {stopped} (the results up to t = {end:.6g} s, drive angle "
+            f"{np.degrees(scene.drive_angle(end)):.4g} deg, are in {out})",
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 

@@ -56,7 +56,11 @@ class ReductionError(FEInputError):
 
 
 class StaticDivergence(RuntimeError):
-    """Newton found no static equilibrium."""
+    """Newton found no static equilibrium; ``partial``, where given, holds the equilibria found before."""
+
+    def __init__(self, message: str, partial: Any = None):
+        super().__init__(message)
+        self.partial = partial
 
 
 class NewtonDivergence(RuntimeError):

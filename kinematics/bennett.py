@@ -26,7 +26,14 @@ from .dh import dh_axes, home_configuration, loop_closure_residual, wrap_angle
 from .dual_quaternion import DualQuaternion
 from .pluecker import Line, common_normal
 
-__all__ = ["BennettLinkage", "BennettConditionError", "MotionPolynomial", "PAPER_A", "PAPER_ALPHA"]
+__all__ = [
+    "BennettLinkage",
+    "BennettConditionError",
+    "MotionPolynomial",
+    "PAPER_A",
+    "PAPER_ALPHA",
+    "bennett_violations",
+]
 
 #: The paper's Table "DH parameters of the 4R mechanism" (metres, radians).
 PAPER_A = (0.110, 0.220, 0.110, 0.220)
@@ -211,30 +218,38 @@ class BennettLinkage:
         return loop_closure_residual(self.a, self.alpha, None, self.joint_angles(t))
 
 
-def _check_bennett_conditions(a: NDArray, alpha: NDArray, rtol: float) -> None:
+def bennett_violations(a: NDArray, alpha: NDArray, rtol: float = 1e-9) -> tuple[str, ...]:
+    """Every Bennett condition (docs/formulation.md, Bennett linkage) that the lengths ``a`` (m) and twists
+    ``alpha`` (rad) of a 4R with zero offsets violate, each named with its numbers; empty for a Bennett linkage."""
+    a, alpha = np.asarray(a, dtype=float), np.asarray(alpha, dtype=float)
     scale = float(np.max(np.abs(a)))
     if scale == 0.0 or np.any(a <= 0.0):
-        raise BennettConditionError(f"Bennett lengths a_i must be positive, got {a}")
-    if abs(a[0] - a[2]) > rtol * scale:
-        raise BennettConditionError(f"opposite sides must be equal: a0 = {a[0]} m but a2 = {a[2]} m")
-    if abs(a[1] - a[3]) > rtol * scale:
-        raise BennettConditionError(f"opposite sides must be equal: a1 = {a[1]} m but a3 = {a[3]} m")
+        return (f"lengths a_i > 0 (got {a})",)
+    violations = []
+    for i, j in ((0, 2), (1, 3)):
+        if abs(a[i] - a[j]) > rtol * scale:
+            violations.append(f"opposite sides a{i} = a{j} ({1e3 * a[i]:.6g} mm vs {1e3 * a[j]:.6g} mm)")
     for i, j in ((0, 2), (1, 3)):
         if abs(wrap_angle(alpha[i] - alpha[j])) > rtol:
-            raise BennettConditionError(
-                f"opposite twists must be equal: alpha{i} = {np.degrees(alpha[i]):.9g} deg but "
-                f"alpha{j} = {np.degrees(alpha[j]):.9g} deg (a misaligned loop is not a Bennett "
-                "linkage; use kinematics.rigid_mobility to see how far it is from closing)"
-            )
+            twists = f"{np.degrees(alpha[i]):.9g} deg vs {np.degrees(alpha[j]):.9g} deg"
+            violations.append(f"opposite twists alpha{i} = alpha{j} ({twists})")
     s0, s1 = np.sin(alpha[0]), np.sin(alpha[1])
     if abs(s0) < rtol or abs(s1) < rtol:
-        raise BennettConditionError("twists of 0 or pi make a planar or degenerate loop, not a Bennett linkage")
-    if abs(a[0] * s1 - a[1] * s0) > rtol * scale:
-        raise BennettConditionError(
-            f"Bennett condition a0/sin(alpha0) = a1/sin(alpha1) violated: {a[0] / s0:.9g} m vs {a[1] / s1:.9g} m"
-        )
+        violations.append("twists other than 0 and pi (those make a planar or degenerate loop)")
+    elif abs(a[0] * s1 - a[1] * s0) > rtol * scale:
+        violations.append(f"a0/sin(alpha0) = a1/sin(alpha1) ({1e3 * a[0] / s0:.9g} mm vs {1e3 * a[1] / s1:.9g} mm)")
     if abs(np.sin(0.5 * (alpha[1] - alpha[0]))) < rtol:
-        raise BennettConditionError("alpha0 = alpha1 with a0 = a1 is the degenerate (folding) Bennett case")
+        violations.append("alpha0 != alpha1 (alpha0 = alpha1 with a0 = a1 is the degenerate, folding case)")
+    return tuple(violations)
+
+
+def _check_bennett_conditions(a: NDArray, alpha: NDArray, rtol: float) -> None:
+    violations = bennett_violations(a, alpha, rtol)
+    if violations:
+        raise BennettConditionError(
+            "not a Bennett linkage, violated: " + "; ".join(violations) + " (a misaligned loop is not a Bennett "
+            "linkage; use kinematics.rigid_mobility to see how far it is from closing)"
+        )
 
 
 def _configuration_coefficients(axes: tuple[Line, ...]) -> NDArray[np.float64]:

@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from .bennett import bennett_violations
 from .dh import _loop_arrays, dh_matrix, home_configuration, loop_closure_residual
 from .single_loop import SingleLoop
 
@@ -175,21 +176,14 @@ class LoopMobility:
 
 
 def _bennett_violations(loop: SingleLoop, rtol: float = 1e-9) -> tuple[str, ...]:
-    """The Bennett conditions a 4R loop with d = 0 violates (kinematics.bennett), each with its numbers."""
+    """The Bennett conditions (:func:`kinematics.bennett.bennett_violations`) a 4R loop with zero offsets violates;
+    none for the other mobile 4R families, planar (parallel axes) and spherical (axes through one point)."""
     dh = loop.dh()
     if loop.n != 4 or np.any(np.abs(dh.d) > rtol * loop.scale):
         return ()
-    a, alpha = dh.a, dh.alpha
-    violations = []
-    for i, j in ((0, 2), (1, 3)):
-        if abs(a[i] - a[j]) > rtol * loop.scale:
-            violations.append(f"a{i} = a{j} ({1e3 * a[i]:.6g} mm vs {1e3 * a[j]:.6g} mm)")
-        if abs(np.sin(alpha[i] - alpha[j])) > rtol:
-            violations.append(f"alpha{i} = alpha{j} ({np.degrees(alpha[i]):.6g} deg vs {np.degrees(alpha[j]):.6g} deg)")
-    s0, s1 = np.sin(alpha[0]), np.sin(alpha[1])
-    if abs(a[0] * s1 - a[1] * s0) > rtol * loop.scale:
-        violations.append(f"a0 sin(alpha1) = a1 sin(alpha0) ({1e3 * a[0] * s1:.6g} mm vs {1e3 * a[1] * s0:.6g} mm)")
-    return tuple(violations)
+    planar = np.all(np.abs(np.sin(dh.alpha)) <= rtol)
+    spherical = np.all(np.abs(dh.a) <= rtol * loop.scale)
+    return () if planar or spherical else bennett_violations(dh.a, dh.alpha, rtol)
 
 
 def explain_mobility(
@@ -199,29 +193,37 @@ def explain_mobility(
     default home), and if not, by how much does it miss? The closest rigid closure with the driver held (least
     squares over the other joints from ``start``, translation scaled by the loop's size) measures the gap; for
     a 4R the violated Bennett conditions are named. Give a regular ``start`` where home is singular (a loop
-    folded flat): there the least squares may stop at a spurious local minimum."""
+    folded flat): there the least squares may stop at a spurious local minimum. A loop that closes with the
+    driver turned the other way (a start near the driver's dead point) is mobile."""
     if not 0 <= driver < loop.n:
         raise ValueError(f"driver must be a joint index 0..{loop.n - 1}, got {driver}")
     origin = np.zeros(loop.n) if start is None else np.asarray(start, dtype=float)
     free = [i for i in range(loop.n) if i != driver]
     weights = loop.residual_weights
 
-    def residual(x: NDArray) -> NDArray:
-        phi = origin.copy()
-        phi[free] = x
-        phi[driver] = origin[driver] + turn
-        return weights * loop.closure_residual(phi)
+    def closest(signed_turn: float) -> LoopMobility:
+        def residual(x: NDArray) -> NDArray:
+            phi = origin.copy()
+            phi[free] = x
+            phi[driver] = origin[driver] + signed_turn
+            return weights * loop.closure_residual(phi)
 
-    fit = least_squares(residual, origin[free], xtol=1e-15, ftol=1e-15, gtol=1e-15)
-    gap = fit.fun / weights
-    return LoopMobility(
-        n=loop.n,
-        driver=driver,
-        first_order=loop.mobility(origin),
-        singular_values=loop.singular_values(origin),
-        turn=float(turn),
-        gap_translation=float(np.linalg.norm(gap[:3])),
-        gap_rotation=float(np.linalg.norm(gap[3:])),
-        scale=loop.scale,
-        conditions=_bennett_violations(loop),
-    )
+        gap = least_squares(residual, origin[free], xtol=1e-15, ftol=1e-15, gtol=1e-15).fun / weights
+        return LoopMobility(
+            n=loop.n,
+            driver=driver,
+            first_order=loop.mobility(origin),
+            singular_values=loop.singular_values(origin),
+            turn=float(signed_turn),
+            gap_translation=float(np.linalg.norm(gap[:3])),
+            gap_rotation=float(np.linalg.norm(gap[3:])),
+            scale=loop.scale,
+            conditions=_bennett_violations(loop),
+        )
+
+    forward = closest(turn)
+    if forward.mobile:
+        return forward
+    # The start may lie within ``turn`` of a dead point of the driver: the other way it moves.
+    backward = closest(-turn)
+    return backward if backward.mobile else forward

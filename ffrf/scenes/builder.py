@@ -219,7 +219,9 @@ def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | 
         )
     a, b = spec["axes"]
     joint_points = None
-    if "joint_point" in a or "joint_point" in b:
+    if "joint_point" in a and "joint_point" in b:  # parallel axes (a planar loop) have no unique common normal
+        joint_points = [a["joint_point"], b["joint_point"]]
+    elif "joint_point" in a or "joint_point" in b:
         feet = common_normal_feet(Axis.of((a["point"], a["direction"])), Axis.of((b["point"], b["direction"])))
         joint_points = [a.get("joint_point", feet[0]), b.get("joint_point", feet[1])]
     return mesh_link(

@@ -183,6 +183,11 @@ def start_pose(loop: SingleLoop, driver: int, angle: float, origin: ArrayLike | 
     return trace_motion(loop, driver, n_poses=poses, revolution=turn, start=phi, endpoint=True).phi[-1]
 
 
+def _joint_name(joint: int, driver: int) -> str:
+    """The scene's name of joint ``joint``: the driven one says so."""
+    return f"joint{joint} (drive)" if joint == driver else f"joint{joint}"
+
+
 def _vector(x) -> list[float]:
     return [float(v) for v in x]
 
@@ -282,7 +287,7 @@ def linkage_description(loop: SingleLoop, options: LinkageOptions | None = None)
         far_side = {"body": f"link{far}", "axis": links[far][0].axis.direction, "point": links[far][0].point}
         side0, side1 = (far_side, near_side) if i == n - 1 else (near_side, far_side)
         joint = {
-            "name": f"joint{i} (drive)" if i == o.driver else f"joint{i}",
+            "name": _joint_name(i, o.driver),
             "type": "driven_revolute" if i == o.driver else "revolute",
             "body0": side0["body"],
             "interface0": f"joint{i}",
@@ -303,7 +308,11 @@ def linkage_description(loop: SingleLoop, options: LinkageOptions | None = None)
     ramp = CosineRamp(o.omega, o.ramp_time)
     t_end = ramp.time_for_angle(float(ramp.angle(o.ramp_time)) + 2.0 * np.pi * o.revolutions)
     sensors.append(
-        {"name": "coupler_point", "body": f"link{tool}", "joints": [f"joint{j}" for j in _link_joints(tool, n)]}
+        {
+            "name": "coupler_point",
+            "body": f"link{tool}",
+            "joints": [_joint_name(j, o.driver) for j in _link_joints(tool, n)],
+        }
     )
     settings = {
         "name": o.name,

@@ -268,6 +268,7 @@ def load_linkage(document: dict, base: Path | None = None, where: str = "linkage
                     attach_points(mechanism, spec.get("scale", 0.1)) if spec.get("design_points", False) else None
                 ),
             ),
+            where=label,
         )
     except LoopFoldError as error:
         raise SceneError(f"{label}: the start pose cannot be reached: {error}") from error

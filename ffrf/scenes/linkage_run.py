@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ffrf.errors import NewtonDivergence, StaticDivergence
 from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
 from ffrf.output.sensors import scene_sensors
 from ffrf.output.tables import write_results as write_tables
@@ -159,7 +160,9 @@ def run_linkage(
     """Assemble (static, with misalignment continuation), then run over the drive's ramp and
     revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
     generalized-alpha with ``step`` (s) starting from the assembled state at rest. ``t_end``
-    shortens the run (default: the scene's ramp plus revolutions)."""
+    shortens the run (default: the scene's ramp plus revolutions). A run that stops raises the solver's error
+    (:class:`ffrf.errors.StaticDivergence` or :class:`ffrf.errors.NewtonDivergence`) with ``partial``, the
+    :class:`LinkageResult` up to its last output (its metadata says where and why it stopped), when there is one."""
     chosen, ratio = choose_mode(scene)
     mode = chosen if mode == "auto" else mode
     if mode not in MODES:
@@ -169,17 +172,23 @@ def run_linkage(
     stress = scene_assembly_stress(scene, assembly.q, assembly.multipliers)
     assembled = wallclock.perf_counter()
     t_end = scene.t_end if t_end is None else float(t_end)
-    run = simulate(
-        scene.system,
-        assembly.q,
-        mode,
-        t_end,
-        n_outputs,
-        step=step,
-        rho_inf=rho_inf,
-        progress=progress,
-        max_static_step=quasi_static_step(scene),
-    )
+    try:
+        run = simulate(
+            scene.system,
+            assembly.q,
+            mode,
+            t_end,
+            n_outputs,
+            step=step,
+            rho_inf=rho_inf,
+            progress=progress,
+            max_static_step=quasi_static_step(scene),
+        )
+        stopped = None
+    except (StaticDivergence, NewtonDivergence) as error:
+        if error.partial is None or len(error.partial.time) < 2:
+            raise
+        run, stopped = error.partial, error
     times, q, qd, lam = run.time, run.q, run.qd, run.multipliers
     solved = wallclock.perf_counter()
     sensors = evaluate_sensors(scene, times, q, qd, lam)
@@ -207,6 +216,12 @@ def run_linkage(
     )
     out = LinkageResult(times, sensors, q, metadata, stress)
     out.metadata["summary"] = out.summary()
+    if stopped is not None:
+        out.metadata["stopped"] = (
+            f"at t = {times[-1]:.6g} s (drive angle {scene.drive_angle(times[-1]):.6g} rad): {stopped}"
+        )
+        stopped.partial = out
+        raise stopped
     return out
 
 

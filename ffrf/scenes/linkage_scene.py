@@ -16,6 +16,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ffrf.errors import SceneError
 from ffrf.fe.interfaces import boundary_triangles
 from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.output.clearance import Clearance, link_clearance
@@ -29,7 +30,7 @@ from ffrf.scenes.linkage_description import (
     start_pose,
 )
 from ffrf.system.drives import CosineRamp
-from kinematics import SingleLoop, follow_driver, trace_motion
+from kinematics import LoopFoldError, SingleLoop, follow_driver, trace_motion
 
 __all__ = ["LinkageScene", "build_linkage"]
 
@@ -118,11 +119,31 @@ def _plain(error: BoreError) -> dict:
     return {"joint": error.joint, "link": error.link, "twist": error.twist, "offset": error.offset, "axis": axis}
 
 
-def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None) -> LinkageScene:
-    """Build :func:`~ffrf.scenes.linkage_description.linkage_description` of ``loop`` with the one scene builder."""
+def _check_drive_range(loop: SingleLoop, options: LinkageOptions, start_phi: NDArray, turn: float, where: str) -> None:
+    """Refuse a run whose drive turns the driven joint beyond a dead point of the rigid loop (the ideal motion
+    the run is compared with ends there; a flexible model would only be strained past it)."""
+    sign = drive_sign(options.driver, loop.n)
+    poses = int(np.ceil(abs(turn) / np.radians(2.0))) + 1
+    try:
+        trace_motion(loop, options.driver, n_poses=poses, revolution=sign * turn, start=start_phi, endpoint=True)
+    except LoopFoldError as error:
+        raise SceneError(
+            f"{where}: the run turns joint {options.driver} by {np.degrees(turn):.4g} deg from the start, but "
+            f"the rigid loop stops before: {error}, or shorten the run (revolutions)"
+        ) from error
+
+
+def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None, where: str | None = None) -> LinkageScene:
+    """Build :func:`~ffrf.scenes.linkage_description.linkage_description` of ``loop`` with the one scene builder.
+    A drive that turns its joint beyond a dead point of the rigid loop is refused (:class:`ffrf.errors.SceneError`);
+    ``where`` (default the linkage's name) starts every error message."""
     options = LinkageOptions() if options is None else options
+    where = options.name if where is None else where
     description = linkage_description(loop, options)
-    scene = build_scene(description, where=options.name)
+    start_phi = start_pose(loop, options.driver, options.start_angle, options.origin)
+    t_end = float(description["scene"]["t_end"])
+    _check_drive_range(loop, options, start_phi, float(CosineRamp(options.omega, options.ramp_time)(t_end)), where)
+    scene = build_scene(description, where=where)
     angle = next(j.angle for j in scene.joints if j.angle is not None)  # the drive the system runs with
     settings = dict(
         scene.settings,
@@ -143,7 +164,7 @@ def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None) -> Li
         driver=options.driver,
         drive=angle.ramp,
         start_angle=angle.start,
-        start_phi=start_pose(loop, options.driver, options.start_angle, options.origin),
-        t_end=float(description["scene"]["t_end"]),
+        start_phi=start_phi,
+        t_end=t_end,
         tool_link=loop.n // 2 if options.tool_link is None else options.tool_link,
     )

@@ -1,5 +1,8 @@
 """One run of a system: quasi-static equilibria or a dynamic generalized-alpha run, with the output
-stride that puts ``outputs`` rows between t = 0 and ``t_end``. Every scene runs through here."""
+stride that puts ``outputs`` rows between t = 0 and ``t_end``. Every scene runs through here.
+
+A run that stops (:class:`ffrf.errors.StaticDivergence`, :class:`ffrf.errors.NewtonDivergence`) raises with
+``partial``, the :class:`Run` up to its last output, so that callers can still write what was computed."""
 
 from __future__ import annotations
 
@@ -9,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ffrf.errors import NewtonDivergence, StaticDivergence
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.static_solver import quasi_static
 from ffrf.system.multibody import MultibodySystem
@@ -50,18 +54,29 @@ def simulate(
     time step ``step`` and spectral radius ``rho_inf``."""
     if mode == "quasi_static":
         times = np.linspace(0.0, t_end, outputs)
-        solution = quasi_static(system, q0, times, progress=progress, max_step=max_static_step)
+        try:
+            solution = quasi_static(system, q0, times, progress=progress, max_step=max_static_step)
+        except StaticDivergence as error:
+            done = error.partial
+            if done is not None:
+                error.partial = Run(times[: len(done.q)], done.q, None, done.multipliers)
+            raise
         return Run(times, solution.q, None, solution.multipliers)
     if mode == "dynamic":
-        result = generalized_alpha(
-            system,
-            q0,
-            np.zeros_like(q0),
-            t_end,
-            step,
-            rho_inf=rho_inf,
-            output_every=output_stride(t_end, step, outputs),
-            progress=progress,
-        )
+        try:
+            result = generalized_alpha(
+                system,
+                q0,
+                np.zeros_like(q0),
+                t_end,
+                step,
+                rho_inf=rho_inf,
+                output_every=output_stride(t_end, step, outputs),
+                progress=progress,
+            )
+        except NewtonDivergence as error:
+            done = error.partial
+            error.partial = Run(done.time, done.q, done.qd, done.multipliers)
+            raise
         return Run(result.time, result.q, result.qd, result.multipliers)
     raise ValueError(f"run mode {mode!r}: use one of {list(MODES)}")

@@ -217,49 +217,92 @@ _PATH_ADVICE = (
     "the step was already halved 8 times, so the equilibrium path may end here (a limit point, or a "
     "drive that leaves the assembled branch): check the prescribed motion's range and the misfit"
 )
+_START_ADVICE = "the start is not near an equilibrium at this time: assemble it first"
+
+#: Largest Newton correction of an accepted quasi-static step, as a fraction of the predicted step (Eq. (S4)).
+#: A correction larger than the step itself means Newton left the path the predictor followed, typically for
+#: another equilibrium branch through a nearby bifurcation (a flat-folded 6R's home pose).
+MAX_CORRECTION = 0.5
+#: Halvings of one quasi-static step before the path is declared ended.
+MAX_HALVINGS = 8
 
 
-def _continue(
-    model,
-    q,
-    lam,
-    t_from: float,
-    t_to: float,
-    tolerance: float,
-    max_iterations: int,
-    tangent,
-    depth: int = 0,
-    start: tuple[NDArray, NDArray] | None = None,
-    secant: bool = False,
-):
-    """Equilibrium at ``t_to`` from the one at ``t_from`` (Newton starts from ``start`` if given, a
-    predicted ``(q, lam)``); a failed step is retried without secant updates from the last
-    equilibrium, then halved (up to 2^8 parts) from the equilibrium at
-    ``t_from``, which carries the solution through near-singular poses such as a stiff Bennett
-    loop's folded one."""
-    q_start, lam_start = (q, lam) if start is None else start
-    advice = _PATH_ADVICE if depth >= 8 else "the start is not near an equilibrium at this time: assemble it first"
-    try:
-        return _newton(model, q_start, lam_start, t_to, tolerance, max_iterations, tangent, secant, advice)
-    except StaticDivergence:
-        if depth >= 8 or t_to == t_from:
-            raise
-    if secant:
-        # Broyden updates of a tangent from far away can stall on a long step; plain modified
-        # Newton with a fresh tangent from the last equilibrium comes before halving
-        try:
-            return _newton(model, q, lam, t_to, tolerance, max_iterations, None, False, advice)
-        except StaticDivergence:
-            pass
-    t_mid = 0.5 * (t_from + t_to)
-    log.debug("quasi-static step %g -> %g halved", t_from, t_to)
-    q, lam, first, tangent = _continue(
-        model, q, lam, t_from, t_mid, tolerance, max_iterations, None, depth + 1, secant=secant
-    )
-    q, lam, second, tangent = _continue(
-        model, q, lam, t_mid, t_to, tolerance, max_iterations, tangent, depth + 1, secant=secant
-    )
-    return q, lam, first + second, tangent
+class _Path:
+    """The equilibria found so far, newest last, and the polynomial predictor through them (Eq. (S2))."""
+
+    def __init__(self, t: float, q: NDArray, lam: NDArray, order: int):
+        self.times, self.q, self.lam, self.order = [t], [q], [lam], order
+
+    def predict(self, t: float) -> tuple[NDArray, NDArray] | None:
+        """Extrapolated ``(q, lam)`` at ``t`` from the last ``order + 1`` equilibria; ``None`` from one."""
+        known = min(self.order + 1, len(self.times))
+        if known < 2:
+            return None
+        weights = extrapolation_weights(np.array(self.times[-known:]), t)
+        return weights @ np.asarray(self.q[-known:]), weights @ np.asarray(self.lam[-known:])
+
+    def add(self, t: float, q: NDArray, lam: NDArray) -> None:
+        self.times.append(t)
+        self.q.append(q)
+        self.lam.append(lam)
+        del self.times[: -(self.order + 1)], self.q[: -(self.order + 1)], self.lam[: -(self.order + 1)]
+
+
+def _path_departure(q: NDArray, predicted: NDArray, previous: NDArray, tolerance: float) -> tuple[float, float] | None:
+    """Eq. (S4): ``(correction, predicted step)`` when Newton's correction from the prediction exceeds
+    :data:`MAX_CORRECTION` of the predicted step (the step left the path), else ``None``."""
+    correction, step = float(np.abs(q - predicted).max()), float(np.abs(predicted - previous).max())
+    if correction <= MAX_CORRECTION * step + tolerance * max(1.0, float(np.abs(q).max())):
+        return None
+    return correction, step
+
+
+def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: int, tangent, secant: bool):
+    """Equilibrium at ``t_to`` from the path's newest one; a step that fails to converge or leaves the path
+    (Eq. (S4)) is retried without secant updates, then halved, up to :data:`MAX_HALVINGS` times, each
+    part predicted from the equilibria before it. Returns the Newton iterations spent and the kept tangent."""
+    iterations, halvings, t_from = 0, 0, path.times[-1]
+    failure: StaticDivergence | None = None
+    while True:
+        t_try = t_from + (t_to - t_from) / 2.0**halvings
+        q, lam = path.q[-1], path.lam[-1]
+        predicted = path.predict(t_try)
+        q_guess, lam_guess = (q, lam) if predicted is None else predicted
+        attempts = [(tangent, secant)] + ([(None, False)] if secant else [])
+        advice = _PATH_ADVICE if halvings >= MAX_HALVINGS else _START_ADVICE
+        for kept, use_secant in attempts:
+            try:
+                q_new, lam_new, count, tangent = _newton(
+                    model, q_guess, lam_guess, t_try, tolerance, max_iterations, kept, use_secant, advice
+                )
+            except StaticDivergence as error:
+                failure = error
+                continue
+            iterations += count
+            # A prediction through fewer than three equilibria is O(dt^2) off, as large as the step on a drive's
+            # ramp from rest; Eq. (S4) judges only quadratic ones.
+            departure = (
+                None if predicted is None or len(path.times) < 3 else _path_departure(q_new, predicted[0], q, tolerance)
+            )
+            if departure is None:
+                failure = None
+                break
+            failure = StaticDivergence(
+                f"Newton's correction {departure[0]:.3g} from the predicted state exceeds half the predicted step "
+                f"{departure[1]:.3g} at t = {t_try:.6g} s (Eq. (S4)): the path turns sharper than the steps follow, "
+                f"or another equilibrium branch crosses it; {advice}"
+            )
+        if failure is None:
+            path.add(t_try, q_new, lam_new)
+            if t_try == t_to:
+                return iterations, tangent
+            t_from, halvings = t_try, 0  # the rest of the step, whole again
+            continue
+        if halvings >= MAX_HALVINGS or t_try == t_from:
+            raise failure
+        halvings += 1
+        tangent = None
+        log.debug("quasi-static step %g -> %g halved", t_from, t_try)
 
 
 def quasi_static(
@@ -280,38 +323,38 @@ def quasi_static(
     With ``max_step`` (s) the path is followed through intermediate equilibria at most that far apart
     (not returned): long steps can let Newton reach an equilibrium of another assembly branch.
     ``fast_path`` as in :func:`static_equilibrium`. Newton starts from the polynomial of degree
-    ``predictor_order`` through the last equilibria (Eq. (S2); 0: the previous equilibrium) and,
-    with ``secant``, Broyden-updates the kept tangent (Eq. (S3)). ``secant`` is off by default:
+    ``predictor_order`` through the last equilibria (Eq. (S2); 0: the previous equilibrium), and a
+    step whose correction leaves the predicted path (Eq. (S4)) is halved. With ``secant``, Newton
+    Broyden-updates the kept tangent (Eq. (S3)). ``secant`` is off by default:
     on long steps (60 deg of drive between equilibria, coarse Bennett links) its updates led
     Newton to a wrong equilibrium (driving torque -16.5 N m instead of 0.018 N m) that plain
-    modified Newton does not reach; on fine steps it saves about a fifth of the time."""
+    modified Newton does not reach; on fine steps it saves about a fifth of the time. A failed step raises
+    :class:`StaticDivergence` whose ``partial`` holds the equilibria at the ``times`` reached before it."""
     if predictor_order < 0:
         raise ValueError(f"predictor_order must be >= 0, got {predictor_order}")
     outputs = np.asarray(times, dtype=float)
     times, returned = refined_times(outputs, max_step)
-    q = np.array(q0, dtype=float)
-    lam = np.zeros(system.n_constraints)
+    model = newton_model(system, fast_path)
     qs: list[NDArray] = []
     lams: list[NDArray] = []
     counts: list[int] = []
     tangent = None
-    model = newton_model(system, fast_path)
-    t_done = float(times[0])
+    path = _Path(float(times[0]), np.array(q0, dtype=float), np.zeros(system.n_constraints), predictor_order)
     for k, t in enumerate(times):
-        known = min(predictor_order + 1, k)
-        start = None
-        if known >= 2 and np.all(np.diff(times[k - known : k]) != 0.0):
-            weights = extrapolation_weights(times[k - known : k], float(t))
-            start = (weights @ np.asarray(qs[k - known : k]), weights @ np.asarray(lams[k - known : k]))
         try:
-            q, lam, iterations, tangent = _continue(
-                model, q, lam, t_done, float(t), tolerance, max_iterations, tangent, start=start, secant=secant
-            )
+            if k == 0:
+                q, lam, iterations, tangent = _newton(
+                    model, path.q[0], path.lam[0], float(t), tolerance, max_iterations, None, secant, _START_ADVICE
+                )
+                path = _Path(float(t), q, lam, predictor_order)
+            else:
+                iterations, tangent = _advance(model, path, float(t), tolerance, max_iterations, tangent, secant)
         except StaticDivergence as error:
-            raise StaticDivergence(f"quasi-static step {k} at t = {t:.6g} s: {error}") from error
-        t_done = float(t)
-        qs.append(q.copy())
-        lams.append(lam.copy())
+            keep = np.flatnonzero(returned[:k])
+            found = StaticSolution(np.array(qs)[keep], np.array(lams)[keep], tuple(counts[j] for j in keep))
+            raise StaticDivergence(f"quasi-static step {k} at t = {t:.6g} s: {error}", found) from error
+        qs.append(path.q[-1].copy())
+        lams.append(path.lam[-1].copy())
         counts.append(iterations)
         if progress is not None:
             progress(float(t), float(times[-1]))

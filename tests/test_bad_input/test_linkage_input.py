@@ -19,6 +19,11 @@ RIGID_AXES = (
     "axes = [{point = [0, 0, 0], direction = [0, 0, 1]}, {point = [100, 0, 0], direction = [0, 1, 0]}, "
     "{point = [100, 80, 30], direction = [1, 0, 1]}, {point = [-20, 90, 40], direction = [1, 1, 0]}]"
 )
+#: A planar crank-rocker (parallel axes, mm) whose joint 3, the rocker's pivot, swings only about 40 deg.
+CRANK_ROCKER = (
+    "axes = [{point = [0, 0, 0], direction = [0, 0, 1]}, {point = [50, 86.6, 0], direction = [0, 0, 1]}, "
+    "{point = [250, 250, 0], direction = [0, 0, 1]}, {point = [400, 0, 0], direction = [0, 0, 1]}]"
+)
 #: case -> (text replaced, replacement, words the one-line error must contain)
 LINKAGE_CASES = {
     "two sources": (
@@ -77,6 +82,11 @@ LINKAGE_CASES = {
         ["'design_points' takes a model"],
     ),
     "scale for a DH table": ("driver = 3", "driver = 3\nscale = 0.1", ["'scale' scales a model"]),
+    "drive past a dead point": (
+        "dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90]}",
+        CRANK_ROCKER,
+        ["the run turns joint 3 by 363 deg", "cannot turn further", "drive another joint"],
+    ),
     "nan in a DH table": ("a = [110, 220, 110, 220]", "a = [110, nan, 110, 220]", ["'a' must be finite"]),
 }
 

@@ -122,6 +122,33 @@ def test_quasi_static_drive_follows_the_prescribed_angle():
     np.testing.assert_allclose(finer.multipliers[:, -1], -mass * 9.81 * 0.1 * np.cos(times), atol=1e-12)
 
 
+def test_a_quasi_static_run_that_stops_returns_the_equilibria_before_the_stop():
+    """The driven bar of the test above, with a drive table that ends at t = 2.1 s (NaN after): the run stops
+    at the first intermediate equilibrium after it (2.2 s), and the error carries the equilibria at the times
+    asked for before (0 to 2 s), with the closed-form torque."""
+    from ffrf.solvers.static_solver import quasi_static
+    from ffrf.system.joints import GroundFrame, driven_revolute_joint
+    from ffrf.system.markers import frame_marker
+
+    system, _, _, hinge = pendulum(n_modes=0)
+    axes = np.array([[0.0, 0, 1], [1, 0, 0], [0, 1, 0]]).T
+    drive = driven_revolute_joint(
+        GroundFrame(hinge, np.eye(3)),
+        frame_marker(0, 0, hinge),
+        lambda t: t if t <= 2.1 else float("nan"),
+        rotation0=axes,
+        rotation1=axes,
+    )
+    driven = MultibodySystem(system.bodies, (drive,), gravity=GRAVITY)
+    times = np.linspace(0.0, 3.0, 7)
+    with pytest.raises(StaticDivergence, match=r"at t = 2.2 s: NaN in the static residual") as stopped:
+        quasi_static(driven, driven.initial_state(), times, max_step=0.1)
+    partial = stopped.value.partial
+    assert partial.q.shape == (5, driven.n_coordinates)
+    mass = 450.0 * 0.2 * 0.02 * 0.01
+    np.testing.assert_allclose(partial.multipliers[:, -1], -mass * 9.81 * 0.1 * np.cos(times[:5]), atol=1e-12)
+
+
 def test_refined_times_keep_the_given_ones_and_split_long_intervals_equally():
     from ffrf.solvers.static_solver import refined_times
 

@@ -60,6 +60,6 @@ def test_a_turned_bennett_axis_names_the_twist_condition_and_its_gap_grows_linea
     small = explain_mobility(_bennett_with_turned_axis(0.5), driver=3)
     large = explain_mobility(_bennett_with_turned_axis(1.0), driver=3)
     assert not small.mobile and not large.mobile
-    assert any(c.startswith("alpha2 = alpha0") or c.startswith("alpha0 = alpha2") for c in large.conditions)
+    assert any("alpha0 = alpha2" in c for c in large.conditions)
     # First order in the misalignment: twice the error, twice the gap (to 2 %).
     assert large.gap_translation / small.gap_translation == pytest.approx(2.0, rel=0.02)
