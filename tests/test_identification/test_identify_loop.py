@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from kinematics_reference import goldberg_5r
 
 from identification import IdentificationError
 from identification.loop import identify_loop
@@ -56,6 +57,22 @@ def test_rational_mechanisms_are_identified_exactly(name):
     assert np.max(np.abs(identified.dh.d - true.d)) < 1e-12
     assert np.max(np.abs(wrap_angle(identified.dh.alpha - true.alpha))) < 1e-12
     assert (identified.ratios != {}) == (loop.n == 4)
+
+
+def test_the_goldberg_5r_is_identified_exactly():
+    """A 5R (kinematics_reference.goldberg_5r): the identified DH table is Goldberg's, which our DH code never made."""
+    reference = goldberg_5r(0.1, *np.radians([75.0, 45.0, 100.0]), theta0=0.7)
+    loop = SingleLoop.from_points_directions(reference.points, reference.directions)
+    rng = np.random.default_rng(3)
+    record = _record(loop, driver=0, poses=90, rng=rng)
+    a, alpha = reference.dh
+    nominal = alpha + rng.normal(0.0, np.radians(2.0), loop.n)  # a design off by a few degrees
+    identified = identify_loop(record, nominal, tool_link=2)
+    assert _same_lines(identified.axes, loop.axes) < 1e-12  # measured 6.1e-16
+    assert np.max(np.abs(identified.dh.a - a)) < 1e-12  # measured 4.2e-17 m
+    assert np.max(np.abs(identified.dh.d)) < 1e-12  # Goldberg's offsets are all zero; measured 9.9e-17 m
+    assert np.max(np.abs(wrap_angle(identified.dh.alpha - alpha))) < 1e-12  # measured 0
+    assert identified.ratios == {}
 
 
 def test_the_paper_bennett_is_a_4r_case_of_the_same_identification():
