@@ -3,6 +3,7 @@
 The tracked points move with their links along the rigid motion that kinematics.trace_motion finds (itself
 checked against Rational Linkages' motion polynomials); the identified axes and DH parameters must be the
 mechanism's own, to 1e-12 (an exact record: only round-off in the circle fits remains; measured 3e-15).
+With Gaussian noise on the markers, the 6R's parameters scatter without bias and in proportion to the noise.
 """
 
 from __future__ import annotations
@@ -89,3 +90,46 @@ def test_a_missing_link_is_named():
     del record[4]
     with pytest.raises(IdentificationError, match="no trajectory for link 4: links 1 to 5 must be tracked"):
         identify_loop(record, loop.dh().alpha, tool_link=3)
+
+
+def test_6r_noise_against_monte_carlo_and_linear_in_the_noise(rng):
+    """Gaussian marker noise on collisions_free_6r (1/10 scale, 90 frames, 3 markers per link).
+
+    (i) At 0.1 mm the scatter sigma of each a_i, d_i, alpha_i is taken from 80 runs (measured: a 0.013-0.10 mm,
+    d 0.02-0.33 mm, alpha 0.010-0.076 deg); the 80-run mean and three further 5-run means must lie within
+    5 sigma / sqrt(runs) of the mechanism's own values (measured at most 1.6 and 2.7 of those sigmas): the method
+    has no bias that the scatter would hide. (ii) The scatter is linear in the noise: with one set of standard
+    normal draws scaled to 0.05 mm and to 0.2 mm, every parameter's standard deviation grows by 4 (measured
+    3.98 to 4.01). The draws are shared so that the ratio measures the law and not the sampling error of two
+    standard deviations (independent draws of 30 runs each give ratios from 2.7 to 5.7).
+    """
+    mechanism = load_model("collisions_free_6r")
+    loop = loop_from_mechanism(mechanism, scale=0.1)
+    tool = tool_link(mechanism)
+    clean = _record(loop, driver=0, poses=90, rng=rng)
+    nominal = loop.dh().alpha
+    exact = identify_loop(clean, nominal, tool_link=tool)
+    # The truth: the mechanism's axes, oriented as identified (the orientation sets the signs of d).
+    true = dh_from_axes(
+        [b if a.direction @ b.direction > 0 else b.reversed() for a, b in zip(exact.axes, loop.axes, strict=True)]
+    )
+
+    def draws(runs: int) -> list[dict[int, np.ndarray]]:
+        return [{k: rng.normal(size=v.shape) for k, v in clean.items()} for _ in range(runs)]
+
+    def errors(noise: float, normal: list[dict[int, np.ndarray]]) -> np.ndarray:
+        """Identified minus true (a, d, alpha), ``(runs, 3n)``, with markers off by ``noise`` (m) times ``normal``."""
+        rows = []
+        for draw in normal:
+            dh = identify_loop({k: v + noise * draw[k] for k, v in clean.items()}, nominal, tool_link=tool).dh
+            rows.append(np.concatenate([dh.a - true.a, dh.d - true.d, wrap_angle(dh.alpha - true.alpha)]))
+        return np.array(rows)
+
+    monte_carlo = errors(1e-4, draws(80))
+    sigma = monte_carlo.std(axis=0, ddof=1)
+    assert np.all(np.abs(monte_carlo.mean(axis=0)) < 5.0 * sigma / np.sqrt(80))
+    for _ in range(3):
+        assert np.all(np.abs(errors(1e-4, draws(5)).mean(axis=0)) < 5.0 * sigma / np.sqrt(5))
+    shared = draws(20)
+    ratio = errors(2e-4, shared).std(axis=0, ddof=1) / errors(0.5e-4, shared).std(axis=0, ddof=1)
+    np.testing.assert_allclose(ratio, 4.0, rtol=0.25)
