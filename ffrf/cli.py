@@ -193,6 +193,7 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
         )
         stopped = None
     except (StaticDivergence, NewtonDivergence) as error:  # the path ends: write what was computed, then say so
+        print(file=sys.stderr)  # end the progress bar's line
         if error.partial is None:
             raise
         result, stopped = error.partial, error

@@ -162,7 +162,7 @@ def run_linkage(
     generalized-alpha with ``step`` (s) starting from the assembled state at rest. ``t_end``
     shortens the run (default: the scene's ramp plus revolutions). A run that stops raises the solver's error
     (:class:`ffrf.errors.StaticDivergence` or :class:`ffrf.errors.NewtonDivergence`) with ``partial``, the
-    :class:`LinkageResult` up to its last output (its metadata says where and why it stopped), when there is one."""
+    :class:`LinkageResult` up to its last output (its metadata's ``stopped`` says where and why), when there is one."""
     chosen, ratio = choose_mode(scene)
     mode = chosen if mode == "auto" else mode
     if mode not in MODES:
@@ -217,9 +217,12 @@ def run_linkage(
     out = LinkageResult(times, sensors, q, metadata, stress)
     out.metadata["summary"] = out.summary()
     if stopped is not None:
-        out.metadata["stopped"] = (
-            f"at t = {times[-1]:.6g} s (drive angle {scene.drive_angle(times[-1]):.6g} rad): {stopped}"
-        )
+        out.metadata["stopped"] = {
+            "time_s": float(times[-1]),
+            "drive_angle_rad": scene.drive_angle(times[-1]),
+            "drive_angle_deg": float(np.degrees(scene.drive_angle(times[-1]))),
+            "reason": str(stopped),
+        }
         stopped.partial = out
         raise stopped
     return out

@@ -95,3 +95,22 @@ def test_a_measured_bore_axis_is_the_same_as_built_as_its_twist(tmp_path):
         assert np.max(np.abs(np.subtract(a.axes, b.axes))) < 1e-12
         assert np.max(np.abs(np.subtract(a.points, b.points))) < 1e-12
     np.testing.assert_allclose(axis.q_initial, twist.q_initial, atol=1e-12)
+
+
+def test_a_run_whose_path_ends_writes_what_it_computed_and_says_where(tmp_path, capsys):
+    """plane_fold_6r in PLA under gravity: its quasi-static path ends just past the flat-folded home pose, where
+    the rigid loop has first-order mobility 3 (docs/formulation.md, Eq. (S4)). The command exits 1 with one error
+    line naming where, and the results up to there are written, the last of them past the fold."""
+    path = tmp_path / "plane_fold.toml"
+    path.write_text('[linkage]\nmodel = "plane_fold_6r"\n' + COARSE + '[scene]\noutputs = 121\nmode = "quasi_static"\n')
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 1
+    errors = [line for line in capsys.readouterr().err.splitlines() if line.startswith("error:")]
+    assert len(errors) == 1 and "the run stopped" in errors[0] and "are in" in errors[0]
+    metadata = json.loads((tmp_path / "out" / "metadata.json").read_text())
+    stopped = metadata["stopped"]
+    results = np.load(tmp_path / "out" / "results.npz")
+    assert results["time"][-1] == pytest.approx(stopped["time_s"]) and 10 < len(results["time"]) < 121
+    assert np.degrees(results["drive_angle"][-1]) == pytest.approx(stopped["drive_angle_deg"])
+    assert -3.0 < stopped["drive_angle_deg"] < 5.0  # home, the fold, is at 0 deg
+    for name in ("results.csv", "assembly.vtu", "coupler_deviation.png", "driving_torque.png"):
+        assert (tmp_path / "out" / name).is_file()

@@ -81,11 +81,13 @@ def test_joint_points_lie_on_their_axes_between_the_feet_of_the_normals():
         assert axis.distance_to_point(point) < 1e-15
 
 
-def _stiff_6r_against_rational_linkages(name: str, gravity: float, outputs: int) -> float:
+def _stiff_6r_against_rational_linkages(name: str, gravity: float, outputs: int) -> tuple[float, float]:
     """Largest distance (m) over ramp and one revolution between the coupler point (mean of link 3's joint points)
     of the model ``name`` at 1/10 scale with E = 1e15 Pa links and the point moved by C(t) of Rational Linkages,
-    at the t of its own joint-angle map for the drive angle; from a regular start (plane_fold_6r is flat at home)."""
-    from kinematics.rational_mechanism import regular_start
+    at the t of its own joint-angle map for the drive angle, and largest difference (rad) of the joint-angle
+    sensors from the angles of C(t)'s factors (Eq. (L5)); from a regular start (plane_fold_6r is flat at home)."""
+    from kinematics import wrap_angle
+    from kinematics.rational_mechanism import factor_joint_angles, regular_start
 
     mechanism = load_model(name)
     loop = loop_from_mechanism(mechanism, scale=0.1)
@@ -102,26 +104,32 @@ def _stiff_6r_against_rational_linkages(name: str, gravity: float, outputs: int)
     scene = build_scene(linkage_description(loop, options), where=name)
     times = np.linspace(0.0, float(scene.settings["t_end"]), outputs)
     solution = quasi_static(scene.system, start_state(scene), times)
-    coupler = scene_sensors(scene, times, solution.q, solution.multipliers)["coupler_point"]
+    sensors = scene_sensors(scene, times, solution.q, solution.multipliers)
+    angles = np.column_stack([sensors[j.name + "_angle"] for j in scene.joints if j.name != "clamp"])
     drive = next(j.angle for j in scene.joints if j.angle is not None)
     tool = tool_link(mechanism)
     points = joint_points(loop)
     home_point = 0.5 * (points[tool - 1] + points[tool])
     first = mechanism.factorizations[0]
-    worst = 0.0
-    for t, ours in zip(times, coupler, strict=True):
+    signs = np.array([drive_sign(i, loop.n) for i in range(loop.n)])  # the closing joint's angle is -phi
+    worst_point = worst_angle = 0.0
+    for t, ours, joint_angles in zip(times, sensors["coupler_point"], angles, strict=True):
         phi0 = drive_sign(0, loop.n) * (drive.start + drive.ramp(t))
         parameter = first.joint_angle_to_t_param(float(np.mod(-phi0, 2.0 * np.pi)))  # Rational Linkages' map
         pose = DualQuaternion(np.asarray(mechanism.evaluate(parameter), dtype=float)).normalized()
-        worst = max(worst, float(np.linalg.norm(ours - pose.act(home_point / 0.1) * 0.1)))
-    return worst
+        worst_point = max(worst_point, float(np.linalg.norm(ours - pose.act(home_point / 0.1) * 0.1)))
+        expected = signs * factor_joint_angles(mechanism, parameter)
+        worst_angle = max(worst_angle, float(np.max(np.abs(wrap_angle(joint_angles - expected)))))
+    return worst_point, worst_angle
 
 
 @pytest.mark.parametrize("name", ["collisions_free_6r", "plane_fold_6r"])
 def test_stiff_6r_follows_the_motion_polynomial_of_rational_linkages(name):
     """Unloaded, the stiff model follows C(t) over a whole revolution, through plane_fold_6r's two flat-folded poses
-    (measured 4.7e-15 m and 1.5e-14 m; with gravity the links' 1e-10 strain gives collisions_free_6r 3.3e-9 m)."""
-    assert _stiff_6r_against_rational_linkages(name, gravity=0.0, outputs=25) < 1e-12
+    (measured 1.0e-14 m and 1.5e-14 m; with gravity the links' 1e-10 strain gives collisions_free_6r 3.3e-9 m),
+    and its joint angles are those of C(t)'s factors (measured 1.2e-13 and 8.8e-14 rad)."""
+    point, angle = _stiff_6r_against_rational_linkages(name, gravity=0.0, outputs=25)
+    assert point < 1e-12 and angle < 1e-11
 
 
 def test_stiff_plane_fold_6r_under_gravity_keeps_its_branch_through_the_flat_folds():
@@ -129,7 +137,7 @@ def test_stiff_plane_fold_6r_under_gravity_keeps_its_branch_through_the_flat_fol
     mobility 3 there: gravity acts on two freedoms that only the second order resists, measured 4.9e-5 m off C(t)
     at the fold). With 1.5 deg between outputs, Newton from the predicted state converged to one of them (0.18 m
     off C(t)) until steps whose correction exceeds half the predicted step were halved (Eq. (S4))."""
-    assert _stiff_6r_against_rational_linkages("plane_fold_6r", gravity=-9.81, outputs=241) < 1e-3
+    assert _stiff_6r_against_rational_linkages("plane_fold_6r", gravity=-9.81, outputs=241)[0] < 1e-3
 
 
 def test_a_planar_four_bar_from_parallel_axes_follows_its_closed_form():
@@ -208,3 +216,18 @@ def test_the_models_own_design_keeps_more_links_apart_than_ours():
     ours = build_linkage(loop, LinkageOptions(**common)).clearance()
     design = build_linkage(loop, LinkageOptions(**common, attach_points=attach_points(mechanism, 0.25))).clearance()
     assert len(design.collisions) < len(ours.collisions)
+
+
+def test_a_stiff_goldberg_5r_follows_its_rigid_motion():
+    """Goldberg's 5R (tests/kinematics_reference.py; its rigid motion equals the two Bennett linkages' closed form,
+    tests/test_kinematics/test_goldberg_5r.py) as a flexible linkage with E = 1e15 Pa links and no load: the coupler
+    point follows the rigid motion over ramp and revolution (measured 6.6e-15 m), and every joint closes."""
+    from kinematics_reference import goldberg_5r
+
+    from ffrf.scenes.linkage_run import run_linkage
+
+    goldberg = goldberg_5r(0.1, np.radians(75.0), np.radians(45.0), np.radians(100.0), theta0=0.7)
+    loop = SingleLoop.from_points_directions(goldberg.points, goldberg.directions)
+    options = LinkageOptions(material=RIGID, h=12e-3, order=1, n_modes=2, gravity=(0.0, 0.0, 0.0))
+    summary = run_linkage(build_linkage(loop, options), mode="quasi_static", n_outputs=25).summary()
+    assert summary["max_coupler_deviation_m"] < 1e-12 and summary["max_constraint_residual"] < 1e-10
