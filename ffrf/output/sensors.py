@@ -10,7 +10,8 @@ For every output row, and for any scene built by :mod:`ffrf.scenes.builder` (duc
   frame 0 (N, N m; :mod:`ffrf.system.reactions`); for a driven joint ``J_torque``, the multiplier of its
   angle equation, the driving torque applied to side 1 (N m); ``J_point0``, ``J_point1``, the joint
   point on each side (world, m);
-* ``energy_kinetic``, ``energy_strain``, ``energy_potential`` (J) and ``constraint_residual``
+* ``energy_kinetic``, ``energy_strain``, ``energy_potential`` (J), ``energy_elements`` (stored in force
+  elements, when there are any) and ``constraint_residual``
   (largest |g|), and with exactly one driven joint its work and the energy balance
   (:mod:`ffrf.output.energy_balance`).
 """
@@ -66,9 +67,9 @@ def joint_rows(
             rows[f"{joint.name}_reaction"].append(np.concatenate([reaction.force_local, reaction.torque_local]))
             if joint.angle is not None:  # the angle equation is the joint's last row
                 rows[f"{joint.name}_torque"].append(multipliers[row, int(system.rows[k + 1]) - 1])
-        energies = system.energies(qq, np.zeros_like(qq) if qd is None else qd[row])
-        for kind in ("kinetic", "strain", "potential"):
-            rows[f"energy_{kind}"].append(energies[kind])
+        energies = system.energies(qq, np.zeros_like(qq) if qd is None else qd[row], float(t))
+        for kind, value in energies.items():  # kinetic, strain, potential; elements with force elements
+            rows.setdefault(f"energy_{kind}", []).append(value)
         rows["constraint_residual"].append(np.abs(model.constraint_values(qq, float(t))).max())
     return {name: np.array(values) for name, values in rows.items()}
 

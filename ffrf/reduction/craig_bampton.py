@@ -97,11 +97,13 @@ class CraigBamptonBasis:
     def n_modes(self) -> int:
         return self.basis.shape[1]
 
-    def reduced_damping(self, beta: float = 0.005) -> NDArray[np.float64]:
-        """Stiffness-proportional damping D = beta K_red (eq. (HCB-8)); the paper uses beta = 0.005 s."""
+    def reduced_damping(self, beta: float = 0.005, alpha: float = 0.0) -> NDArray[np.float64]:
+        """Rayleigh damping D = alpha M_red + beta K_red (eq. (HCB-8)); the paper uses beta = 0.005 s, alpha = 0."""
         if not (np.isfinite(beta) and beta >= 0.0):
             raise ReductionError(f"damping factor beta={beta!r} must be finite and >= 0 (seconds)")
-        return beta * self.reduced_stiffness
+        if not (np.isfinite(alpha) and alpha >= 0.0):
+            raise ReductionError(f"damping factor alpha={alpha!r} must be finite and >= 0 (1/s)")
+        return alpha * self.reduced_mass + beta * self.reduced_stiffness
 
     def summary(self) -> str:
         """Mode count and order as text, for logs and reports."""

@@ -25,7 +25,6 @@ stays in the bodies. A joint with one ``axis``/``point`` has the same frame on b
 from __future__ import annotations
 
 import logging
-import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Self
@@ -52,18 +51,10 @@ from ffrf.geometry.meshing import mesh_stl
 from ffrf.mesh.tet_mesh import TetMesh, read_mesh
 from ffrf.reduction.craig_bampton import CraigBamptonBasis, craig_bampton
 from ffrf.reduction.reduced_io import reduction_fingerprint
+from ffrf.scenes.scene_forces import build_forces
+from ffrf.scenes.scene_joints import JointGeometry, joint_constraint, joint_geometry
 from ffrf.scenes.scene_schema import check_scene
-from ffrf.system.drives import CosineRamp, RampedAngle, rpm
-from ffrf.system.joints import (
-    GroundFrame,
-    MarkerJoint,
-    driven_revolute_joint,
-    fixed_joint,
-    frame_from_axis,
-    revolute_joint,
-    turned_frame,
-)
-from ffrf.system.markers import BodyMarker, attach_joint_point, rigid_interface_marker
+from ffrf.system.markers import BodyMarker, rigid_interface_marker
 from ffrf.system.multibody import MultibodySystem
 
 __all__ = ["SceneBody", "JointGeometry", "Scene", "build_scene"]
@@ -89,31 +80,6 @@ class SceneBody:
     geometry: LinkGeometry | None = None
 
 
-@dataclass(frozen=True)
-class JointGeometry:
-    """A joint as described: type, sides (body index and interface; side 0 may be the ground,
-    ``(None, None)``, side 1 is always a body), each side's axis and point (mesh coordinates) and
-    the prescribed angle of a driven joint."""
-
-    name: str
-    kind: str
-    bodies: tuple[int | None, int]
-    interfaces: tuple[str | None, str]
-    axes: tuple[NDArray[np.float64], NDArray[np.float64]]
-    points: tuple[NDArray[np.float64], NDArray[np.float64]]
-    angle: RampedAngle | None = None
-
-    @property
-    def misfit_degrees(self) -> float:
-        """Angle between the two sides' axes (deg)."""
-        a, b = (axis / np.linalg.norm(axis) for axis in self.axes)
-        return math.degrees(math.atan2(float(np.linalg.norm(np.cross(a, b))), float(a @ b)))
-
-    @property
-    def misfit(self) -> bool:
-        return self.misfit_degrees > 0.0 or bool(np.any(self.points[0] != self.points[1]))
-
-
 @dataclass(frozen=True, eq=False)
 class Scene:
     """A built scene: the description it came from, its bodies and joints, the as-built system,
@@ -131,6 +97,17 @@ class Scene:
     settings: dict
 
     @property
+    def qd_initial(self) -> NDArray[np.float64]:
+        """Start velocities: each body's rigid ``velocity = {linear, angular}`` (world; the frame origin's velocity
+        and the angular velocity, :meth:`~ffrf.system.multibody.MultibodySystem.rigid_velocity`), else at rest."""
+        qd = np.zeros(self.system.n_coordinates)
+        for body, entry in zip(self.bodies, self.description["bodies"], strict=True):
+            velocity = entry.get("velocity", {})
+            linear, angular = velocity.get("linear", [0.0, 0.0, 0.0]), velocity.get("angular", [0.0, 0.0, 0.0])
+            qd += self.system.rigid_velocity(self.q_initial, body.index, linear, angular)
+        return qd
+
+    @property
     def driven(self) -> tuple[str, ...]:
         """Names of the driven joints."""
         return tuple(j.name for j in self.joints if j.angle is not None)
@@ -144,9 +121,11 @@ class Scene:
         """The system with every joint's side 0 moved ``fraction`` of the way from side 1's frame and
         point (0: closable) to its own (1: as built, :attr:`system`)."""
         constraints = tuple(
-            _constraint(j, self.bodies, self.settings.get("joint_offsets", "body"), fraction) for j in self.joints
+            joint_constraint(j, self.bodies, self.settings.get("joint_offsets", "body"), fraction) for j in self.joints
         )
-        return MultibodySystem(tuple(b.body for b in self.bodies), constraints, gravity=self.system.gravity)
+        return MultibodySystem(
+            tuple(b.body for b in self.bodies), constraints, gravity=self.system.gravity, forces=self.system.forces
+        )
 
     def with_exact_gravity(self, exact: bool) -> Self:
         """The same scene with the exact gravity force or Exudyn's simplified one (Eq. (F10))."""
@@ -170,12 +149,13 @@ def build_scene(
     reductions = _REDUCTIONS if reductions is None else reductions
     bodies = tuple(_body(k, entry, base, settings, reductions) for k, entry in enumerate(description["bodies"]))
     index = {b.name: b.index for b in bodies}
-    joints = tuple(_joint_geometry(spec, index, bodies) for spec in description.get("joints", []))
+    joints = tuple(joint_geometry(spec, index, bodies) for spec in description.get("joints", []))
     offsets = settings.get("joint_offsets", "body")
     system = MultibodySystem(
         tuple(b.body for b in bodies),
-        tuple(_constraint(j, bodies, offsets, 1.0) for j in joints),
+        tuple(joint_constraint(j, bodies, offsets, 1.0) for j in joints),
         gravity=np.asarray(settings.get("gravity", [0.0, 0.0, -9.81]), dtype=float),
+        forces=build_forces(description.get("forces", []), bodies, index, offsets, where),
     )
     q_initial = system.initial_state()
     for body, entry in zip(bodies, description["bodies"], strict=True):
@@ -276,7 +256,7 @@ def _body(k: int, entry: dict, base: Path, settings: dict, reductions: dict[str,
         name,
         modal_moments(fe.nodes, fe.mass, basis),
         reduction.reduced_stiffness,
-        reduction.reduced_damping(float(settings.get("beta", 0.0))),
+        reduction.reduced_damping(float(settings.get("beta", 0.0)), float(settings.get("alpha", 0.0))),
         settings.get("exact_gravity", True),
     )
     markers = {
@@ -285,72 +265,6 @@ def _body(k: int, entry: dict, base: Path, settings: dict, reductions: dict[str,
     }
     log.info("body %s: %d nodes, %d modes (%s)", name, fe.nodes.shape[0], reduction.n_modes, reduction.summary())
     return SceneBody(k, name, fe, interfaces, reduction, body, markers, geometry)
-
-
-def _drive(spec: dict) -> RampedAngle:
-    omega = float(spec["omega"]) if "omega" in spec else rpm(float(spec["rpm"]))
-    start = (
-        float(spec["start_angle"]) if "start_angle" in spec else math.radians(float(spec.get("start_angle_deg", 0.0)))
-    )
-    return RampedAngle(float(start), CosineRamp(omega, float(spec.get("ramp_time", 1.0))))
-
-
-def _joint_geometry(spec: dict, index: dict[str, int], bodies: tuple[SceneBody, ...]) -> JointGeometry:
-    """The sides of a joint as described; body 1 is always a body (the ground goes to side 0)."""
-    sides = [
-        (None, None) if spec[f"body{s}"] == "ground" else (index[spec[f"body{s}"]], spec[f"interface{s}"])
-        for s in ("0", "1")
-    ]
-    keys = ("0", "1")
-    if sides[1][0] is None:
-        sides, keys = sides[::-1], keys[::-1]
-    axis = spec.get("axis", [0.0, 0.0, 1.0])
-    body1, interface1 = sides[1]
-    if body1 is None or interface1 is None:  # check_scene rejects it first
-        raise SceneError(f"joint {spec.get('name', 'joint')!r}: at least one side must be a body, both are 'ground'")
-    point = spec.get("point", bodies[body1].markers[interface1].point)
-    axis0, axis1 = (np.asarray(spec.get(f"axis{s}", axis), dtype=np.float64) for s in keys)
-    point0, point1 = (np.asarray(spec.get(f"point{s}", point), dtype=np.float64) for s in keys)
-    return JointGeometry(
-        spec.get("name", "joint"),
-        spec.get("type", "revolute"),
-        (sides[0][0], body1),
-        (sides[0][1], interface1),
-        (axis0, axis1),
-        (point0, point1),
-        _drive(spec["drive"]) if "drive" in spec else None,
-    )
-
-
-def _constraint(
-    joint: JointGeometry, bodies: tuple[SceneBody, ...], joint_offsets: str, fraction: float
-) -> MarkerJoint:
-    """Eqs. (J1)-(J3) for ``joint`` with side 0 at ``fraction`` of its misfit (module docstring)."""
-    frame1 = frame_from_axis(joint.axes[1])
-    point1 = joint.points[1]
-    if joint.misfit:
-        own = frame_from_axis(joint.axes[0], frame1[:, 0])
-        frame0 = turned_frame(frame1, own, fraction)
-        point0 = point1 + fraction * (joint.points[0] - point1)
-    else:
-        frame0, point0 = frame1, joint.points[0]
-    body1, interface1 = joint.bodies[1], joint.interfaces[1]
-    side1, offset1 = attach_joint_point(bodies[body1].markers[interface1], point1, joint_offsets)
-    body0, interface0 = joint.bodies[0], joint.interfaces[0]
-    side0: GroundFrame | BodyMarker
-    if body0 is None:
-        side0, offset0 = GroundFrame(point0, np.eye(3)), np.zeros(3)
-    elif interface0 is None:
-        raise SceneError(f"joint {joint.name!r}: side 0 is body {body0} but names no interface")
-    else:
-        side0, offset0 = attach_joint_point(bodies[body0].markers[interface0], point0, joint_offsets)
-    if joint.kind == "revolute":
-        return revolute_joint(side0, side1, frame0, frame1, offset0, offset1, name=joint.name)
-    if joint.kind == "fixed":
-        return fixed_joint(side0, side1, frame0, frame1, offset0, offset1, name=joint.name)
-    if joint.angle is None:  # check_scene rejects it first
-        raise SceneError(f"joint {joint.name!r}: a {joint.kind} joint needs a drive (its prescribed angle)")
-    return driven_revolute_joint(side0, side1, joint.angle, frame0, frame1, offset0, offset1, name=joint.name)
 
 
 def _sensor_node(spec: dict, body: SceneBody) -> int:

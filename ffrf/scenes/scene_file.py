@@ -15,7 +15,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     [scene]
     name = "hinged link"
     gravity = [0.0, 0.0, -9.81]
-    beta = 0.005                      # stiffness-proportional damping
+    beta = 0.005                      # Rayleigh damping alpha M + beta K of the modal coordinates (s)
+    alpha = 0.0                       # (1/s)
     mode = "dynamic"                  # or "quasi_static"
     t_end = 1.0
     step = 1e-3                       # dynamic time step
@@ -36,6 +37,7 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     order = 2                         # default 2: linear tetrahedra are too stiff in bending
     modes = 4
     pose = {position = [0, 0, 0], euler_parameters = [1, 0, 0, 0]}   # optional start pose of the body frame
+    velocity = {linear = [0, 0, 0], angular = [0, 0, 0]}   # optional start velocity of the frame (world, m/s, rad/s)
     interfaces = [                    # the first is the body's frame interface
         {name = "bore0", group = "joint0"},
         {name = "bore1", cylinder = {point = [0.1, 0, 0], direction = [0, 0, 1], radius = 0.0095,
@@ -63,6 +65,9 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     point = [0.2, 0.0, 0.0]           # the mesh node nearest to this point (mesh coordinates); or node = index,
                                       # or joints = ["hinge", ...]: the mean of these joints' points on this body
     surface = true                    # optional: the nearest node on the body's surface
+
+Force elements (spring-dampers and bushings on a joint's equations, loads on interfaces, motors) are
+``[[forces]]`` tables, documented in :mod:`ffrf.scenes.scene_forces`.
 
 Every interface selector weights its nodes by the surface area of the boundary triangles they span
 (``ffrf.fe.interfaces``), unless a ``nodes_file`` gives a weight per node in a second column. The file is
@@ -146,6 +151,7 @@ def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> Ru
         rho_inf=float(s.get("rho_inf", 0.9)),
         progress=progress,
         max_static_step=quasi_static_step(scene),
+        qd0=scene.qd_initial,
     )
 
 

@@ -10,13 +10,24 @@ its body) stay with the builder in :mod:`ffrf.scenes.scene_file`.
 
 from __future__ import annotations
 
-import difflib
-import math
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
-from typing import Any
+from collections.abc import Mapping
 
 from ffrf.errors import SceneError
+from ffrf.scenes.scene_forces import ELASTIC, FORCE_TYPES, check_force
+from ffrf.scenes.schema_keys import (
+    Key,
+    between,
+    check_table,
+    label,
+    non_negative,
+    nonzero,
+    nonzero_vector,
+    one_of,
+    ordered_pair,
+    positive,
+    unique,
+    unit_quaternion,
+)
 from ffrf.system.markers import JOINT_OFFSETS
 
 __all__ = ["Key", "MATERIAL", "SCHEMA", "SETTINGS", "check_scene", "check_table"]
@@ -30,92 +41,36 @@ MESH_UNITS = ("m", "mm")
 MODES = ("dynamic", "quasi_static")
 
 
-@dataclass(frozen=True)
-class Key:
-    """One key: its kind (``number``, ``integer``, ``string``, ``boolean``, ``vector3``, ``vector4``,
-    ``pair``, ``numbers``, ``strings``, ``table`` or ``tables``), whether it is required, a check of its
-    value returning the problem (or ``None``), and, for ``table``/``tables``, the keys inside."""
-
-    kind: str
-    required: bool = False
-    check: Callable[[object], str | None] | None = None
-    keys: Mapping[str, Key] | None = None
-
-
-def _positive(value) -> str | None:
-    return None if value > 0 else f"must be > 0, got {value!r}"
-
-
-def _non_negative(value) -> str | None:
-    return None if value >= 0 else f"must be >= 0, got {value!r}"
-
-
-def _between(low: float, high: float, closed: bool) -> Callable[[object], str | None]:
-    def check(value) -> str | None:
-        inside = low <= value <= high if closed else low < value < high
-        bounds = f"[{low:g}, {high:g}]" if closed else f"({low:g}, {high:g})"
-        return None if inside else f"must lie in {bounds}, got {value!r}"
-
-    return check
-
-
-def _one_of(choices: tuple) -> Callable[[object], str | None]:
-    return lambda value: None if value in choices else f"must be one of {list(choices)}, got {value!r}"
-
-
-def _at_least(bound: int) -> Callable[[Any], str | None]:
-    return lambda value: None if value >= bound else f"must be >= {bound}, got {value!r}"
-
-
-def _nonzero_vector(value) -> str | None:
-    return None if math.hypot(*value) > 0.0 else "has zero length; give a direction such as [0.0, 0.0, 1.0]"
-
-
-def _ordered_pair(value) -> str | None:
-    return None if value[0] <= value[1] else f"is reversed ({value!r}); give [t_min, t_max]"
-
-
-def _nonzero(value) -> str | None:
-    return None if value != 0 else "must not be 0 (a drive that never turns); remove the drive or give a speed"
-
-
-def _unit_quaternion(value) -> str | None:
-    norm = math.sqrt(sum(v * v for v in value))
-    return (
-        None if abs(norm - 1.0) < 1e-9 else f"must have unit length (Euler parameters e0, e1, e2, e3), norm {norm:.6g}"
-    )
-
-
 MATERIAL = {
     "name": Key("string"),
-    "E": Key("number", True, _positive),
-    "nu": Key("number", True, _between(-1.0, 0.5, closed=False)),
-    "rho": Key("number", True, _positive),
+    "E": Key("number", True, positive),
+    "nu": Key("number", True, between(-1.0, 0.5, closed=False)),
+    "rho": Key("number", True, positive),
 }
 LINK_AXIS = {
     "name": Key("string", True),
     "point": Key("vector3", True),
-    "direction": Key("vector3", True, _nonzero_vector),
+    "direction": Key("vector3", True, nonzero_vector),
     "joint_point": Key("vector3"),
 }
 PARAMETRIC = {
-    "link": Key("integer", False, _one_of((0, 1, 2, 3))),
+    "link": Key("integer", False, one_of((0, 1, 2, 3))),
     "alpha3_deg": Key("number"),
     "axes": Key("tables", keys=LINK_AXIS),
     "mount": Key("boolean"),
-    "h": Key("number", False, _between(*PARAMETRIC_H_RANGE, closed=True)),
+    "h": Key("number", False, between(*PARAMETRIC_H_RANGE, closed=True)),
 }
 CYLINDER = {
     "point": Key("vector3", True),
-    "direction": Key("vector3", True, _nonzero_vector),
-    "radius": Key("number", True, _positive),
-    "axial_extent": Key("pair", True, _ordered_pair),
-    "tolerance": Key("number", False, _positive),
+    "direction": Key("vector3", True, nonzero_vector),
+    "radius": Key("number", True, positive),
+    "axial_extent": Key("pair", True, ordered_pair),
+    "tolerance": Key("number", False, positive),
 }
 AROUND_AXIS = {
     "point": Key("vector3", True),
-    "direction": Key("vector3", True, _nonzero_vector),
-    "tolerance": Key("number", False, _positive),
+    "direction": Key("vector3", True, nonzero_vector),
+    "tolerance": Key("number", False, positive),
 }
 INTERFACE = {
     "name": Key("string", True),
@@ -126,60 +81,89 @@ INTERFACE = {
 }
 POSE = {
     "position": Key("vector3"),
-    "euler_parameters": Key("vector4", False, _unit_quaternion),
+    "euler_parameters": Key("vector4", False, unit_quaternion),
+}
+VELOCITY = {
+    "linear": Key("vector3"),
+    "angular": Key("vector3"),
 }
 BODY = {
     "name": Key("string", True),
     "mesh": Key("string"),
-    "unit": Key("string", False, _one_of(MESH_UNITS)),
-    "h": Key("number", False, _between(*PARAMETRIC_H_RANGE, closed=True)),
+    "unit": Key("string", False, one_of(MESH_UNITS)),
+    "h": Key("number", False, between(*PARAMETRIC_H_RANGE, closed=True)),
     "parametric": Key("table", keys=PARAMETRIC),
     "material": Key("table", True, keys=MATERIAL),
-    "order": Key("integer", False, _one_of((1, 2))),
-    "modes": Key("integer", False, _non_negative),
+    "order": Key("integer", False, one_of((1, 2))),
+    "modes": Key("integer", False, non_negative),
     "interfaces": Key("tables", True, keys=INTERFACE),
     "pose": Key("table", keys=POSE),
+    "velocity": Key("table", keys=VELOCITY),
 }
 DRIVE = {
-    "rpm": Key("number", False, _nonzero),
-    "omega": Key("number", False, _nonzero),
-    "ramp_time": Key("number", False, _positive),
+    "rpm": Key("number", False, nonzero),
+    "omega": Key("number", False, nonzero),
+    "ramp_time": Key("number", False, positive),
     "start_angle": Key("number"),
     "start_angle_deg": Key("number"),
 }
 JOINT = {
     "name": Key("string"),
-    "type": Key("string", False, _one_of(JOINT_TYPES)),
+    "type": Key("string", False, one_of(JOINT_TYPES)),
     "body0": Key("string", True),
     "body1": Key("string", True),
     "interface0": Key("string"),
     "interface1": Key("string"),
-    "axis": Key("vector3", False, _nonzero_vector),
+    "axis": Key("vector3", False, nonzero_vector),
     "point": Key("vector3"),
-    "axis0": Key("vector3", False, _nonzero_vector),
+    "axis0": Key("vector3", False, nonzero_vector),
     "point0": Key("vector3"),
-    "axis1": Key("vector3", False, _nonzero_vector),
+    "axis1": Key("vector3", False, nonzero_vector),
     "point1": Key("vector3"),
     "drive": Key("table", keys=DRIVE),
+}
+LOAD_TABLE = {
+    "time": Key("numbers", True),
+    "scale": Key("numbers", True),
+}
+FORCE = {
+    "name": Key("string", True),
+    "type": Key("string", True, one_of(FORCE_TYPES)),
+    "body0": Key("string"),
+    "body1": Key("string"),
+    **{key: JOINT[key] for key in ("interface0", "interface1", "axis", "point", "axis0", "point0", "axis1", "point1")},
+    "elastic": Key("string", False, one_of(tuple(ELASTIC))),
+    "stiffness": Key("numbers"),
+    "damping": Key("numbers"),
+    "offset": Key("numbers"),
+    "body": Key("string"),
+    "interface": Key("string"),
+    "force": Key("vector3"),
+    "torque": Key("vector3"),
+    "frame": Key("string", False, one_of(("world", "marker"))),
+    "table": Key("table", keys=LOAD_TABLE),
+    "stall_torque": Key("number"),
+    "no_load_speed": Key("number", False, positive),
 }
 SENSOR = {
     "name": Key("string", True),
     "body": Key("string", True),
     "point": Key("vector3"),
-    "node": Key("integer", False, _non_negative),
+    "node": Key("integer", False, non_negative),
     "surface": Key("boolean"),
     "joints": Key("strings"),
 }
 SETTINGS = {
     "name": Key("string"),
     "gravity": Key("vector3"),
-    "beta": Key("number", False, _non_negative),
-    "mode": Key("string", False, _one_of(MODES)),
-    "t_end": Key("number", False, _positive),
-    "step": Key("number", False, _positive),
-    "rho_inf": Key("number", False, _between(0.0, 1.0, closed=True)),
-    "outputs": Key("integer", False, _between(2, MAX_OUTPUTS, closed=True)),
-    "joint_offsets": Key("string", False, _one_of(JOINT_OFFSETS)),
+    "beta": Key("number", False, non_negative),
+    "alpha": Key("number", False, non_negative),
+    "mode": Key("string", False, one_of(MODES)),
+    "t_end": Key("number", False, positive),
+    "step": Key("number", False, positive),
+    "rho_inf": Key("number", False, between(0.0, 1.0, closed=True)),
+    "outputs": Key("integer", False, between(2, MAX_OUTPUTS, closed=True)),
+    "joint_offsets": Key("string", False, one_of(JOINT_OFFSETS)),
     "exact_gravity": Key("boolean"),
     "static_start": Key("boolean"),
 }
@@ -189,90 +173,8 @@ SCHEMA = {
     "bodies": Key("tables", True, keys=BODY),
     "joints": Key("tables", keys=JOINT),
     "sensors": Key("tables", keys=SENSOR),
+    "forces": Key("tables", keys=FORCE),
 }
-
-_KIND_NAMES = {
-    "number": "a number",
-    "integer": "an integer",
-    "string": "a string",
-    "boolean": "true or false",
-    "vector3": "a list of 3 numbers",
-    "vector4": "a list of 4 numbers",
-    "pair": "a list of 2 numbers",
-    "table": "a table {...}",
-    "tables": "a list of tables ([[...]] or [{...}, ...])",
-    "strings": "a list of strings",
-    "numbers": "a list of numbers",
-}
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-def _type_problem(kind: str, value) -> str | None:
-    """Why ``value`` is not of ``kind`` (None if it is); nan and inf are not numbers of a scene."""
-    if kind in ("number", "integer"):
-        if not _is_number(value) or (kind == "integer" and not isinstance(value, int)):
-            return f"must be {_KIND_NAMES[kind]}, got {value!r}"
-        return None if math.isfinite(value) else f"must be finite, got {value!r}"
-    if kind in ("vector3", "vector4", "pair"):
-        size = {"vector3": 3, "vector4": 4, "pair": 2}[kind]
-        if not isinstance(value, list) or len(value) != size or not all(_is_number(v) for v in value):
-            return f"must be {_KIND_NAMES[kind]}, got {value!r}"
-        return None if all(math.isfinite(v) for v in value) else f"must be finite, got {value!r}"
-    if kind == "numbers":
-        if not isinstance(value, list) or not value or not all(_is_number(v) for v in value):
-            return f"must be {_KIND_NAMES[kind]} (at least one), got {value!r}"
-        return None if all(math.isfinite(v) for v in value) else f"must be finite, got {value!r}"
-    if kind == "strings":
-        ok = isinstance(value, list) and value and all(isinstance(v, str) for v in value)
-        return None if ok else f"must be {_KIND_NAMES[kind]} (at least one), got {value!r}"
-    expected = {"string": str, "boolean": bool, "table": dict}.get(kind)
-    if expected is not None:
-        return None if isinstance(value, expected) else f"must be {_KIND_NAMES[kind]}, got {value!r}"
-    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
-        return f"must be {_KIND_NAMES[kind]}, got {value!r}"
-    return None
-
-
-def check_table(table: dict, keys: Mapping[str, Key], where: str) -> None:
-    """Raise :class:`SceneError` for the first key of ``table`` (and of the tables inside) that ``keys`` refuses."""
-    for name in table:
-        if name not in keys:
-            close = difflib.get_close_matches(name, keys, n=1)
-            hint = f"did you mean {close[0]!r}? " if close else ""
-            raise SceneError(f"{where}: unknown key {name!r}; {hint}valid keys are {sorted(keys)}")
-    for name, key in keys.items():
-        if name not in table:
-            if key.required:
-                raise SceneError(f"{where}: missing required key {name!r} ({_KIND_NAMES[key.kind]})")
-            continue
-        value = table[name]
-        problem = _type_problem(key.kind, value)
-        if problem is None and key.check is not None:
-            problem = key.check(value)
-        if problem is not None:
-            raise SceneError(f"{where}: {name!r} {problem}")
-        if key.kind == "table":
-            check_table(value, key.keys or {}, f"{where}, {name}")
-        elif key.kind == "tables":
-            for k, entry in enumerate(value):
-                check_table(entry, key.keys or {}, f"{where}, {name}[{k}]{_label(entry)}")
-
-
-def _label(entry: dict) -> str:
-    name = entry.get("name")
-    return f" {name!r}" if isinstance(name, str) else ""
-
-
-def _unique(entries: list[dict], what: str, where: str) -> None:
-    seen: set[str | None] = set()
-    for entry in entries:
-        name = entry.get("name")
-        if name in seen:
-            raise SceneError(f"{where}: two {what} are named {name!r}; give each a unique name")
-        seen.add(name)
 
 
 def _check_body(body: dict, where: str) -> None:
@@ -300,12 +202,12 @@ def _check_body(body: dict, where: str) -> None:
         raise SceneError(f"{where}: 'unit' scales a mesh file; a parametric link is in metres, remove 'unit'")
     if not body["interfaces"]:
         raise SceneError(f"{where}: list at least one interface (the first is the body's frame)")
-    _unique(body["interfaces"], "interfaces", where)
+    unique(body["interfaces"], "interfaces", where)
     for k, interface in enumerate(body["interfaces"]):
         selectors = [key for key in ("group", "cylinder", "axis", "nodes_file") if key in interface]
         if len(selectors) != 1:
             raise SceneError(
-                f"{where}, interfaces[{k}]{_label(interface)}: select it by exactly one of group, "
+                f"{where}, interfaces[{k}]{label(interface)}: select it by exactly one of group, "
                 f"cylinder, axis or nodes_file, got {selectors or 'none'}"
             )
 
@@ -361,28 +263,43 @@ def check_scene(document: dict, where: str = "scene") -> None:
     bodies, joints, sensors = document["bodies"], document.get("joints", []), document.get("sensors", [])
     if not bodies:
         raise SceneError(f"{where}: no [[bodies]]; a scene needs at least one body")
-    _unique(bodies, "bodies", where)
-    _unique(joints, "joints", where)
-    _unique(sensors, "sensors", where)
+    unique(bodies, "bodies", where)
+    unique(joints, "joints", where)
+    unique(sensors, "sensors", where)
     for k, body in enumerate(bodies):
-        _check_body(body, f"{where}, bodies[{k}]{_label(body)}")
+        _check_body(body, f"{where}, bodies[{k}]{label(body)}")
     interfaces = {body["name"]: {i["name"] for i in body["interfaces"]} for body in bodies}
     if "ground" in interfaces:
         raise SceneError(f"{where}: a body is named 'ground', which names the world in joints; rename the body")
     for k, joint in enumerate(joints):
-        _check_joint(joint, interfaces, f"{where}, joints[{k}]{_label(joint)}")
+        _check_joint(joint, interfaces, f"{where}, joints[{k}]{label(joint)}")
+    forces = document.get("forces", [])
+    unique(forces, "forces", where)
+    for k, force in enumerate(forces):
+        place = f"{where}, forces[{k}]{label(force)}"
+        check_force(force, place)
+        if force["type"] != "load" and "body0" in force and "body1" in force:
+            _check_joint(force, interfaces, place)
+        elif force["type"] == "load" and "body" in force:
+            body, interface = force["body"], force.get("interface")
+            if body not in interfaces:
+                raise SceneError(f"{place}: unknown body {body!r}; bodies are {sorted(interfaces)}")
+            if interface not in interfaces[body]:
+                raise SceneError(
+                    f"{place}: body {body!r} has no interface {interface!r}; it has {sorted(interfaces[body])}"
+                )
     for k, sensor in enumerate(sensors):
-        label = f"{where}, sensors[{k}]{_label(sensor)}"
+        place = f"{where}, sensors[{k}]{label(sensor)}"
         if sensor["body"] not in interfaces:
-            raise SceneError(f"{label}: unknown body {sensor['body']!r}; bodies are {sorted(interfaces)}")
+            raise SceneError(f"{place}: unknown body {sensor['body']!r}; bodies are {sorted(interfaces)}")
         if sum(key in sensor for key in ("point", "node", "joints")) != 1:
             raise SceneError(
-                f"{label}: give exactly one of point = [x, y, z] (m), node = index or joints = [names] (the mean "
+                f"{place}: give exactly one of point = [x, y, z] (m), node = index or joints = [names] (the mean "
                 "of their joint points on this body)"
             )
         for name in sensor.get("joints", []):
             sides = next((j for j in joints if j.get("name", "joint") == name), None)
             if sides is None:
-                raise SceneError(f"{label}: unknown joint {name!r}; joints are {[j.get('name') for j in joints]}")
+                raise SceneError(f"{place}: unknown joint {name!r}; joints are {[j.get('name') for j in joints]}")
             if sensor["body"] not in (sides["body0"], sides["body1"]):
-                raise SceneError(f"{label}: joint {name!r} does not hold body {sensor['body']!r}")
+                raise SceneError(f"{place}: joint {name!r} does not hold body {sensor['body']!r}")

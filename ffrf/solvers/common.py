@@ -39,7 +39,7 @@ def consistent_accelerations(system: MultibodySystem, q, qd, t: float = 0.0):
     rule (R1); the accelerations are still unique, and the multipliers are the minimum-norm ones."""
     n, k = system.n_coordinates, system.n_constraints
     mass = system.mass_matrix(q)
-    forces = -system.body_residuals(q, qd, np.zeros(n))  # M*0 - Q = -Q
+    forces = -system.body_residuals(q, qd, np.zeros(n), t)  # M*0 - Q = -Q
     cq = system.constraint_jacobian(q, t)
     matrix = np.block([[mass, cq.T], [cq, np.zeros((k, k))]])
     rhs = np.concatenate([forces, -system.constraint_acceleration_term(q, qd, t)])

@@ -48,10 +48,11 @@ def simulate(
     rho_inf: float = 0.9,
     progress: Callable[[float, float], None] | None = None,
     max_static_step: float | None = None,
+    qd0: NDArray | None = None,
 ) -> Run:
     """``quasi_static``: equilibria at ``outputs`` equally spaced times, followed through intermediate
-    ones at most ``max_static_step`` (s) apart; ``dynamic``: generalized-alpha from ``q0`` at rest with
-    time step ``step`` and spectral radius ``rho_inf``."""
+    ones at most ``max_static_step`` (s) apart; ``dynamic``: generalized-alpha from ``q0`` with velocities ``qd0``
+    (default at rest) with time step ``step`` and spectral radius ``rho_inf``."""
     if mode == "quasi_static":
         times = np.linspace(0.0, t_end, outputs)
         try:
@@ -67,7 +68,7 @@ def simulate(
             result = generalized_alpha(
                 system,
                 q0,
-                np.zeros_like(q0),
+                np.zeros_like(q0) if qd0 is None else np.asarray(qd0, dtype=float),
                 t_end,
                 step,
                 rho_inf=rho_inf,

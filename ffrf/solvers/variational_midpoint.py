@@ -190,6 +190,11 @@ def variational_midpoint(
     """
     if step <= 0 or t_end <= 0:
         raise ValueError(f"step and t_end must be positive, got step={step}, t_end={t_end}")
+    if system.forces:
+        raise ValueError(
+            f"the variational midpoint integrator does not take force elements (the system has "
+            f"{len(system.forces)}, e.g. {system.forces[0].name!r}); integrate with generalized_alpha"
+        )
     n_steps = int(round(t_end / step))
     h = t_end / n_steps
     n = system.n_coordinates

@@ -1,7 +1,8 @@
-r"""A multibody system: flexible bodies, constraints and gravity, on one coordinate vector.
+r"""A multibody system: flexible bodies, constraints, force elements and gravity, on one coordinate vector.
 
 The coordinates are the bodies' blocks ``[R, p, zeta]`` one after another; the multipliers
-are the constraints' in order, beginning with one Euler-parameter normalisation per body.
+are the constraints' in order, beginning with one Euler-parameter normalisation per body. Force elements
+(:mod:`ffrf.system.forces`) add to the applied forces :math:`Q`.
 The system provides the pieces of the index-3 DAE (``docs/formulation.md``, Eq. (G1))
 
 .. math:: M(q)\ddot q - Q(q, \dot q) + C_q^T\lambda = 0, \qquad g(q, t) = 0,
@@ -16,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ffrf.body.euler_parameters import g_bar, rotation_matrix
 from ffrf.body.flexible_body import FlexibleBody
 from ffrf.system.constraints import (
     Constraint,
@@ -23,17 +25,19 @@ from ffrf.system.constraints import (
     constraint_hessian_term,
     constraint_velocity_derivative,
 )
+from ffrf.system.forces import ForceElement, element_tangents
 
 __all__ = ["MultibodySystem"]
 
 
 @dataclass(frozen=True, eq=False)
 class MultibodySystem:
-    """Bodies, constraints (normalisations are added first) and the gravity vector (m/s^2)."""
+    """Bodies, constraints (normalisations are added first), the gravity vector (m/s^2) and force elements."""
 
     bodies: tuple[FlexibleBody, ...]
     constraints: tuple[Constraint, ...] = ()
     gravity: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    forces: tuple[ForceElement, ...] = ()
     offsets: NDArray[np.int64] = field(init=False, repr=False)
     all_constraints: tuple[Constraint, ...] = field(init=False, repr=False)
     rows: NDArray[np.int64] = field(init=False, repr=False)
@@ -44,13 +48,14 @@ class MultibodySystem:
         names = [b.name for b in self.bodies]
         if len(set(names)) != len(names):
             raise ValueError(f"body names must be unique, got {names}")
-        for c in self.constraints:
-            bad = [i for i in c.bodies if not 0 <= i < len(self.bodies)]
-            if bad:
-                raise ValueError(
-                    f"constraint {c.name!r} refers to unknown body index {bad}; there are "
-                    f"{len(self.bodies)} bodies {names}"
-                )
+        for kind, items in (("constraint", self.constraints), ("force element", self.forces)):
+            for c in items:
+                bad = [i for i in c.bodies if not 0 <= i < len(self.bodies)]
+                if bad:
+                    raise ValueError(
+                        f"{kind} {c.name!r} refers to unknown body index {bad}; there are "
+                        f"{len(self.bodies)} bodies {names}"
+                    )
         normalisations = tuple(
             EulerNormalization((i,), f"{b.name}: Euler parameter norm") for i, b in enumerate(self.bodies)
         )
@@ -72,13 +77,21 @@ class MultibodySystem:
     def block(self, i: int) -> slice:
         return slice(int(self.offsets[i]), int(self.offsets[i + 1]))
 
-    def body_residuals(self, q, qd, qdd) -> NDArray[np.float64]:
-        """Eqs. (F8)-(F11) for all bodies: ``M qdd - Q`` (without constraint forces)."""
+    def body_residuals(self, q, qd, qdd, t: float = 0.0) -> NDArray[np.float64]:
+        """Eqs. (F8)-(F11) for all bodies: ``M qdd - Q`` (without constraint forces), ``Q`` with the force
+        elements' forces at time ``t`` (Eqs. (E1)-(E5))."""
         out = np.empty(self.n_coordinates)
         for i, body in enumerate(self.bodies):
             s = self.block(i)
             out[s] = body.residual(q[s], qd[s], qdd[s], self.gravity)
+        for element in self.forces:
+            blocks, rates = self._blocks(element.bodies, q, qd)
+            for i, force in zip(element.bodies, element.forces(blocks, rates, t), strict=True):
+                out[self.block(i)] -= force
         return out
+
+    def _blocks(self, bodies: tuple[int, ...], q: NDArray, qd: NDArray) -> tuple[list[NDArray], list[NDArray]]:
+        return [q[self.block(i)] for i in bodies], [qd[self.block(i)] for i in bodies]
 
     def constraint_values(self, q, t) -> NDArray[np.float64]:
         return np.concatenate([c.value([q[self.block(i)] for i in c.bodies], t) for c in self.all_constraints])
@@ -115,7 +128,7 @@ class MultibodySystem:
 
     def residual(self, q, qd, qdd, lam, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         r"""Eq. (G1): ``M qdd - Q + C_q^T lambda`` and ``g(q, t)`` (what Newton drives to zero)."""
-        forces = self.body_residuals(q, qd, qdd) + self.constraint_jacobian(q, t).T @ lam
+        forces = self.body_residuals(q, qd, qdd, t) + self.constraint_jacobian(q, t).T @ lam
         return forces, self.constraint_values(q, t)
 
     def iteration_matrix(
@@ -123,7 +136,7 @@ class MultibodySystem:
     ) -> NDArray[np.float64]:
         r"""Eq. (FP6): ``[[c M + beta' (K_t + H) + gamma' D_t, C_q^T], [C_q, 0]]``, with ``c = 1`` for
         generalized-alpha (Eq. (G3)) and ``c = 0, beta' = 1, gamma' = 0`` for statics (Eq. (S1))."""
-        jq, jqd = self.body_tangents(q, qd, qdd)
+        jq, jqd = self.body_tangents(q, qd, qdd, t)
         upper = beta_p * (jq + self.constraint_hessian(q, lam, t))
         if gamma_p != 0.0:
             upper += gamma_p * jqd
@@ -132,13 +145,20 @@ class MultibodySystem:
         cq = self.constraint_jacobian(q, t)
         return np.block([[upper, cq.T], [cq, np.zeros((cq.shape[0], cq.shape[0]))]])
 
-    def body_tangents(self, q, qd, qdd) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Block-diagonal exact ``d(M qdd - Q)/dq`` and ``d(M qdd - Q)/dqd``."""
+    def body_tangents(self, q, qd, qdd, t: float = 0.0) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Exact ``d(M qdd - Q)/dq`` and ``d(M qdd - Q)/dqd``: block-diagonal, plus the force elements' couplings."""
         n = self.n_coordinates
         jq, jqd = np.zeros((n, n)), np.zeros((n, n))
         for i, body in enumerate(self.bodies):
             s = self.block(i)
             jq[s, s], jqd[s, s] = body.jacobians(q[s], qd[s], qdd[s], self.gravity)
+        for element in self.forces:
+            blocks, rates = self._blocks(element.bodies, q, qd)
+            d_q, d_qd = element_tangents(element, blocks, rates, t)
+            for a, i in enumerate(element.bodies):
+                for b, j in enumerate(element.bodies):
+                    jq[self.block(i), self.block(j)] -= d_q[a][b]
+                    jqd[self.block(i), self.block(j)] -= d_qd[a][b]
         return jq, jqd
 
     def mass_matrix(self, q) -> NDArray[np.float64]:
@@ -149,12 +169,39 @@ class MultibodySystem:
             out[s, s] = body.mass_matrix(q[s])
         return out
 
-    def energies(self, q, qd) -> dict[str, float]:
-        """Kinetic, strain and gravity potential energy (J)."""
+    def energies(self, q, qd, t: float = 0.0) -> dict[str, float]:
+        """Kinetic, strain and gravity potential energy (J); with force elements also ``elements``, the
+        energy stored in them (Eq. (E2))."""
         kinetic = sum(b.kinetic_energy(q[self.block(i)], qd[self.block(i)]) for i, b in enumerate(self.bodies))
         strain = sum(b.strain_energy(q[self.block(i)]) for i, b in enumerate(self.bodies))
         potential = sum(b.potential_energy(q[self.block(i)], self.gravity) for i, b in enumerate(self.bodies))
-        return {"kinetic": kinetic, "strain": strain, "potential": potential}
+        out = {"kinetic": kinetic, "strain": strain, "potential": potential}
+        if self.forces:
+            out["elements"] = sum(e.potential_energy(self._blocks(e.bodies, q, qd)[0], t) for e in self.forces)
+        return out
+
+    def rigid_velocity(
+        self,
+        q: NDArray,
+        body: int,
+        velocity: ArrayLike = (0.0, 0.0, 0.0),
+        angular_velocity: ArrayLike = (0.0, 0.0, 0.0),
+        point: ArrayLike = (0.0, 0.0, 0.0),
+    ) -> NDArray[np.float64]:
+        r"""Velocities ``qd`` (all bodies; zero except ``body``) of a rigid motion of ``body``: its point ``point``
+        (body coordinates) moving at ``velocity`` and the body turning at ``angular_velocity`` (both world).
+        Eq. (R2): :math:`\dot p = 	frac14ar G(p)^T A(p)^T\omega` (for unit :math:`p`, :math:`ar Gar G^T = 4I`),
+        :math:`\dot R = v - \omega	imes A(p)\,ar u`, modal velocities zero."""
+        qd = np.zeros(self.n_coordinates)
+        s = self.block(body)
+        p = np.asarray(q[s][3:7], dtype=float)
+        rotation = rotation_matrix(p)
+        omega = np.asarray(angular_velocity, dtype=float)
+        qd[s.start : s.start + 3] = np.asarray(velocity, dtype=float) - np.cross(
+            omega, rotation @ np.asarray(point, dtype=float)
+        )
+        qd[s.start + 3 : s.start + 7] = 0.25 * g_bar(p).T @ (rotation.T @ omega)
+        return qd
 
     def initial_state(
         self, positions: ArrayLike | None = None, rotations: ArrayLike | None = None

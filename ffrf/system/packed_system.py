@@ -175,6 +175,8 @@ _PLACEHOLDER_SIDE = (-1, np.zeros(3), np.eye(3), np.zeros(3), np.zeros((3, 0)), 
 
 def _unsupported(system: MultibodySystem) -> str | None:
     """Why the fast path cannot take ``system`` (``None`` when it can)."""
+    if system.forces:
+        return f"force element {system.forces[0].name!r} (force elements run on the reference path)"
     for body in system.bodies:
         if type(body) is not FlexibleBody:
             return f"body {body.name!r} is a {type(body).__name__}"

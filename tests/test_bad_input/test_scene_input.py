@@ -11,8 +11,57 @@ from scene_fixtures import PENDULUM, write_bar
 from ffrf.errors import FEInputError, MaterialError, MeshError, SceneError
 from ffrf.scenes.scene_file import load_scene
 
+#: A valid spring-damper entry, edited by the force cases below.
+SPRING = (
+    '[[forces]]\nname = "support"\ntype = "spring_damper"\nbody0 = "ground"\nbody1 = "bar"\ninterface1 = "hinge"\n'
+    "stiffness = [1e3]\n"
+)
+
+
+def _with_force(text: str) -> str:
+    return text + "\n[[sensors]]"
+
+
 CASES = {
     # class: (replace this, by this, expected words in the message)
+    "unknown force type": (
+        "[[sensors]]",
+        _with_force(SPRING.replace("spring_damper", "spring")),
+        ["forces[0] 'support'", "'type' must be one of ['spring_damper', 'load', 'motor']"],
+    ),
+    "spring-damper without stiffness": (
+        "[[sensors]]",
+        _with_force(SPRING.replace("stiffness = [1e3]\n", "")),
+        ["a spring_damper needs stiffness"],
+    ),
+    "spring-damper stiffness count": (
+        "[[sensors]]",
+        _with_force(SPRING.replace("[1e3]", "[1e3, 1e3]")),
+        ["stiffness needs one value or 3 (one per elastic equation), got 2"],
+    ),
+    "key of another force type": (
+        "[[sensors]]",
+        _with_force(SPRING + "stall_torque = 1.0\n"),
+        ["a spring_damper takes no ['stall_torque']"],
+    ),
+    "load without force or torque": (
+        "[[sensors]]",
+        _with_force('[[forces]]\nname = "push"\ntype = "load"\nbody = "bar"\ninterface = "hinge"\n'),
+        ["a load needs force = [fx, fy, fz] (N), torque = [mx, my, mz] (N m) or both"],
+    ),
+    "load on an unknown interface": (
+        "[[sensors]]",
+        _with_force('[[forces]]\nname = "push"\ntype = "load"\nbody = "bar"\ninterface = "tip"\nforce = [1, 0, 0]\n'),
+        ["body 'bar' has no interface 'tip'", "it has ['hinge']"],
+    ),
+    "motor without its curve": (
+        "[[sensors]]",
+        _with_force(
+            '[[forces]]\nname = "m"\ntype = "motor"\nbody0 = "ground"\nbody1 = "bar"\ninterface1 = "hinge"\n'
+            "stall_torque = 1.0\n"
+        ),
+        ["a motor needs stall_torque (N m) and no_load_speed (rad/s)"],
+    ),
     "element size for a volume mesh": (
         'mesh = "bar.vtu"',
         'mesh = "bar.vtu"\nh = 0.01',

@@ -1,0 +1,233 @@
+r"""Applied forces: spring-dampers and bushings between markers, loads on markers, torque drives.
+
+An element adds generalized forces :math:`Q_e(q, \dot q, t)` to the bodies' applied forces of Eq. (G1)
+(``docs/formulation.md``, Sect. "Force elements and loads", Eqs. (E1)-(E5)):
+
+* :class:`SpringDamperJoint`: a joint (:class:`~ffrf.system.joints.MarkerJoint`) made compliant, its
+  equations :math:`g` held by :math:`f = K(g - g_0) + D\,C_q\dot q` instead of multipliers,
+  :math:`Q = -C_q^Tf` (E1), with the potential :math:`\tfrac12 (g - g_0)^TK(g - g_0)` (E2). A joint locking
+  three translations gives Exudyn's ``CartesianSpringDamper`` (world components of :math:`p_1 - p_0`); a
+  revolute joint, a bushing (the five locked directions compliant); all six, a rigid-body spring-damper for
+  small relative rotations.
+* :class:`MarkerLoad`: a force and a torque on a marker, constant or functions of time, in the world or the
+  marker frame: :math:`Q = G_p^TF + G_\omega^TM` (E3), with the marker's position and angular velocity
+  Jacobians (E4).
+* :class:`JointTorque`: a torque about a joint's z axis between its two markers, a function of time, the
+  relative angle and the relative angular speed (a motor's torque-speed curve) (E5).
+
+Tangents :math:`\partial Q/\partial q` and :math:`\partial Q/\partial\dot q` for the iteration matrix are
+exact (complex-step differentiation) for elements whose functions are analytic (``complex_safe``); a
+user's function (a load's time law, a torque curve) is differentiated by central differences.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ffrf.system.joints import GroundFrame, MarkerJoint, joint_side
+from ffrf.system.markers import BodyMarker
+
+__all__ = [
+    "ForceElement",
+    "JointTorque",
+    "MarkerLoad",
+    "SpringDamperJoint",
+    "element_tangents",
+    "marker_jacobians",
+    "spring_damper",
+]
+
+Vector = Callable[[float], ArrayLike]
+
+
+@dataclass(frozen=True, eq=False)
+class ForceElement:
+    """Base: ``bodies`` whose coordinates the element reads and loads; ``complex_safe``: its forces are analytic
+    in ``q`` and ``qd`` (exact complex-step tangents), else central differences."""
+
+    bodies: tuple[int, ...]
+    name: str
+
+    @property
+    def complex_safe(self) -> bool:
+        return True
+
+    def forces(self, blocks: list[NDArray], velocities: list[NDArray], t: float) -> list[NDArray]:
+        """Generalized forces ``Q`` on each body of ``bodies`` (added to the applied forces of Eq. (G1))."""
+        raise NotImplementedError  # pragma: no cover - abstract
+
+    def potential_energy(self, blocks: list[NDArray], t: float) -> float:
+        """Energy stored in the element (J); zero for loads and drives."""
+        return 0.0
+
+
+def marker_jacobians(marker: BodyMarker | GroundFrame, q: NDArray | None) -> tuple[NDArray, NDArray, Any, Any]:
+    r"""Point, axes (columns) and Eq. (E4)'s Jacobians :math:`G_p = \partial r/\partial q` and
+    :math:`G_\omega` (:math:`\omega = G_\omega\dot q`, world) of a marker; ``None`` Jacobians on the ground."""
+    point, axes, d_point, d_axes = joint_side(marker, q, np.eye(3), np.zeros(3))
+    if d_point is None:
+        return point, axes, None, None
+    # omega = 1/2 sum_k a_k x da_k/dt for the orthonormal axes a_k (Eq. (E4))
+    omega = 0.5 * sum(np.cross(axes[:, k], d_axes[k], axisa=0, axisb=0, axisc=0) for k in range(3))
+    return point, axes, d_point, omega
+
+
+def _vector(value: ArrayLike | Vector | None, t: float) -> NDArray[np.float64]:
+    if value is None:
+        return np.zeros(3)
+    return np.asarray(value(t) if callable(value) else value, dtype=float)
+
+
+@dataclass(frozen=True, eq=False)
+class SpringDamperJoint(ForceElement):
+    r"""Eqs. (E1)-(E2): the equations of ``joint`` held by stiffness ``stiffness`` and damping ``damping``
+    (``(size,)`` diagonals or ``(size, size)`` matrices in the units of the joint's equations: N/m and N s/m for
+    translations, N m for the rotation equations, which are sines of small angles) about ``offset`` :math:`g_0`."""
+
+    joint: MarkerJoint
+    stiffness: NDArray[np.float64]
+    damping: NDArray[np.float64]
+    offset: NDArray[np.float64]
+
+    def _force(self, blocks: list[NDArray], velocities: list[NDArray], t: float):
+        rows = self.joint.jacobian(blocks, t)
+        rate = sum(r @ v for r, v in zip(rows, velocities, strict=True))
+        return rows, self.stiffness @ (self.joint.value(blocks, t) - self.offset) + self.damping @ rate
+
+    def forces(self, blocks, velocities, t):
+        rows, force = self._force(blocks, velocities, t)
+        return [-(r.T @ force) for r in rows]
+
+    def potential_energy(self, blocks, t):
+        stretch = self.joint.value(blocks, t) - self.offset
+        return float(0.5 * stretch @ self.stiffness @ stretch)
+
+    def joint_force(self, blocks: list[NDArray], velocities: list[NDArray], t: float) -> NDArray[np.float64]:
+        """The element's force :math:`f` in the units of the joint's equations (the reaction a rigid joint's
+        multipliers would carry)."""
+        return np.real(self._force(blocks, velocities, t)[1])
+
+
+def spring_damper(
+    joint: MarkerJoint, stiffness: ArrayLike, damping: ArrayLike = 0.0, offset: ArrayLike | None = None
+) -> SpringDamperJoint:
+    """``joint``'s equations held elastically (Eqs. (E1)-(E2)); scalars and diagonals are spread to matrices."""
+    n = joint.size
+
+    def matrix(value: ArrayLike, what: str) -> NDArray[np.float64]:
+        value = np.asarray(value, dtype=float)
+        if value.ndim == 0:
+            value = np.full(n, float(value))
+        if value.ndim == 1:
+            value = np.diag(value)
+        if value.shape != (n, n) or not np.all(np.isfinite(value)):
+            raise ValueError(
+                f"spring-damper {joint.name!r}: {what} must be a number, {n} diagonal values or a {n} x {n} matrix "
+                f"(the joint has {n} equations), got shape {value.shape}"
+            )
+        if not np.allclose(value, value.T, rtol=1e-12, atol=0.0):
+            raise ValueError(f"spring-damper {joint.name!r}: the {what} matrix must be symmetric")
+        return value
+
+    g0 = np.zeros(n) if offset is None else np.asarray(offset, dtype=float)
+    if g0.shape != (n,):
+        raise ValueError(f"spring-damper {joint.name!r}: offset needs {n} values, got shape {g0.shape}")
+    return SpringDamperJoint(
+        joint.bodies, joint.name, joint, matrix(stiffness, "stiffness"), matrix(damping, "damping"), g0
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class MarkerLoad(ForceElement):
+    r"""Eq. (E3): force ``force`` (N) and torque ``torque`` (N m) on ``marker``, each a constant vector or a
+    function of time, in world axes or, with ``frame="marker"``, in the marker's axes (turning with it)."""
+
+    marker: BodyMarker
+    force: ArrayLike | Vector | None = None
+    torque: ArrayLike | Vector | None = None
+    frame: str = "world"
+
+    def __post_init__(self):
+        if self.frame not in ("world", "marker"):
+            raise ValueError(f"load {self.name!r}: frame must be 'world' or 'marker', got {self.frame!r}")
+
+    def forces(self, blocks, velocities, t):
+        _, axes, g_point, g_omega = marker_jacobians(self.marker, blocks[0])
+        force, torque = _vector(self.force, t), _vector(self.torque, t)
+        if self.frame == "marker":
+            force, torque = axes @ force, axes @ torque
+        return [g_point.T @ force + g_omega.T @ torque]
+
+
+@dataclass(frozen=True, eq=False)
+class JointTorque(ForceElement):
+    r"""Eq. (E5): torque :math:`\tau(t, \varphi, \dot\varphi)` (N m) about the z axis of ``joint``'s frame on
+    marker 0, acting on marker 1 (and its reaction on marker 0), with :math:`\varphi` the relative angle about
+    that axis (from the joint's reference pose) and :math:`\dot\varphi` the relative angular speed."""
+
+    joint: MarkerJoint
+    torque: Callable[[float, float, float], float]
+
+    @property
+    def complex_safe(self) -> bool:
+        return False
+
+    def forces(self, blocks, velocities, t):
+        j = self.joint
+        ground = isinstance(j.marker0, GroundFrame)
+        q0, v0 = (None, None) if ground else (blocks[0], velocities[0])
+        q1, v1 = blocks[-1], velocities[-1]
+        _, axes0, _, g_omega0 = marker_jacobians(j.marker0, q0)
+        _, axes1, _, g_omega1 = marker_jacobians(j.marker1, q1)
+        frame0, frame1 = axes0 @ j.rotation0, axes1 @ j.rotation1
+        axis = frame0[:, 2]
+        angle = float(np.arctan2(frame0[:, 1] @ frame1[:, 0], frame0[:, 0] @ frame1[:, 0]))
+        speed = axis @ (g_omega1 @ v1 - (0.0 if ground else g_omega0 @ v0))
+        moment = float(self.torque(t, angle, float(speed))) * axis
+        out = [g_omega1.T @ moment]
+        return out if ground else [-(g_omega0.T @ moment)] + out
+
+
+_STEP = 1e-30
+
+
+def _shifted(blocks: list[NDArray], j: int, k: int, step: complex | float) -> list[NDArray]:
+    out = [b.astype(np.result_type(b, step)) for b in blocks]
+    out[j][k] += step
+    return out
+
+
+def element_tangents(
+    element: ForceElement, blocks: list[NDArray], velocities: list[NDArray], t: float
+) -> tuple[list[list[NDArray]], list[list[NDArray]]]:
+    r""":math:`\partial Q/\partial q` and :math:`\partial Q/\partial\dot q` as blocks ``[i][j]`` (body i rows,
+    body j columns): complex step (exact) for a ``complex_safe`` element, else central differences."""
+    sizes = [b.shape[0] for b in blocks]
+    d_q = [[np.zeros((sizes[i], sizes[j])) for j in range(len(blocks))] for i in range(len(blocks))]
+    d_qd = [[np.zeros((sizes[i], sizes[j])) for j in range(len(blocks))] for i in range(len(blocks))]
+    for target, position in ((d_q, True), (d_qd, False)):
+        for j, block in enumerate(blocks if position else velocities):
+            for k in range(block.shape[0]):
+                if element.complex_safe:
+                    if position:
+                        columns = element.forces(_shifted(blocks, j, k, 1j * _STEP), velocities, t)
+                    else:
+                        columns = element.forces(blocks, _shifted(velocities, j, k, 1j * _STEP), t)
+                    for i in range(len(blocks)):
+                        target[i][j][:, k] = np.imag(columns[i]) / _STEP
+                    continue
+                h = 1e-7 * max(1.0, abs(float(block[k])))
+                if position:
+                    plus = element.forces(_shifted(blocks, j, k, h), velocities, t)
+                    minus = element.forces(_shifted(blocks, j, k, -h), velocities, t)
+                else:
+                    plus = element.forces(blocks, _shifted(velocities, j, k, h), t)
+                    minus = element.forces(blocks, _shifted(velocities, j, k, -h), t)
+                for i in range(len(blocks)):
+                    target[i][j][:, k] = (plus[i] - minus[i]) / (2.0 * h)
+    return d_q, d_qd

@@ -1,0 +1,126 @@
+"""Force elements in scene files (``[[forces]]``, ffrf.scenes.scene_forces) against closed forms: a bar hanging from
+a spring-damper sags by its weight over the stiffness, a tip load ramped by a table bends a cantilever as the Ritz
+solution of its basis, and a motor spins a hinged bar towards its no-load speed."""
+
+from __future__ import annotations
+
+import numpy as np
+from scene_fixtures import PENDULUM, write_bar
+
+from ffrf.fe.fe_model import rigid_body_modes
+from ffrf.output.sensors import scene_sensors
+from ffrf.scenes.scene_file import load_scene, simulate_scene
+
+SPRING = """
+[[forces]]
+name = "support"
+type = "spring_damper"
+elastic = "fixed"
+body0 = "ground"
+body1 = "bar"
+interface1 = "hinge"
+axis = [0.0, 1.0, 0.0]
+stiffness = [5e3, 5e3, 5e3, 20.0, 20.0, 20.0]
+"""
+
+
+def _scene(tmp_path, text: str):
+    write_bar(tmp_path)
+    (tmp_path / "scene.toml").write_text(text)
+    return load_scene(tmp_path / "scene.toml")
+
+
+def test_a_bar_hanging_from_a_spring_damper_sinks_by_its_weight_over_the_stiffness(tmp_path):
+    """The pendulum's hinge replaced by a 'fixed' spring-damper (translations 5e3 N/m, rotations 20 N m) under
+    gravity, statically: the spring alone carries the weight, so the hinge interface sinks by m g / k exactly
+    (the translation equations are the world components of p1 - p0), whatever the bar's rotation."""
+    text = PENDULUM.replace('mode = "dynamic"', 'mode = "quasi_static"').replace("outputs = 101", "outputs = 2")
+    text = text[: text.index("[[joints]]")] + SPRING
+    scene = _scene(tmp_path, text)
+    run = simulate_scene(scene)
+    mass = scene.bodies[0].fe.total_mass
+    hinge = scene.bodies[0].markers["hinge"]
+    sag = hinge.position(run.q[-1]) - hinge.position(scene.q_initial)
+    np.testing.assert_allclose(sag, [0.0, 0.0, -mass * 9.81 / 5e3], rtol=0.0, atol=1e-12 * mass * 9.81 / 5e3)
+
+
+def test_a_ramped_tip_load_bends_a_cantilever_as_the_ritz_solution_of_its_basis(tmp_path):
+    """The bar clamped at its hinge face (a fixed joint), no gravity, a 1e-3 N load along -z on its tip face
+    ramped by a table to full at 0.05 s: at the end, the generalized coordinates solve K_r zeta = P^T f with P
+    the tip interface's averaged modes (the clamped frame makes the model linear)."""
+    text = PENDULUM.replace('mode = "dynamic"', 'mode = "quasi_static"').replace("outputs = 101", "outputs = 3")
+    text = text.replace("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, 0.0, 0.0]").replace(
+        'type = "revolute"', 'type = "fixed"'
+    )
+    text = text.replace(
+        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]',
+        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}, {name = "tip", nodes_file = "tip.txt"}]',
+    )
+    text += """
+[[forces]]
+name = "payload"
+type = "load"
+body = "bar"
+interface = "tip"
+force = [0.0, 0.0, -1e-3]
+table = {time = [0.0, 0.05], scale = [0.0, 1.0]}
+"""
+    model = write_bar(tmp_path)
+    np.savetxt(tmp_path / "tip.txt", np.flatnonzero(model.nodes[:, 0] > 0.2 - 1e-9), fmt="%d")
+    (tmp_path / "scene.toml").write_text(text)
+    scene = load_scene(tmp_path / "scene.toml")
+    run = simulate_scene(scene)
+    body = scene.bodies[0]
+    tip = body.markers["tip"]
+    ritz = np.linalg.solve(body.reduction.reduced_stiffness, tip.position_modes.T @ np.array([0.0, 0.0, -1e-3]))
+    assert np.linalg.norm(ritz) > 0.0
+    np.testing.assert_allclose(run.q[-1, 7:], ritz, rtol=0.0, atol=1e-12 * np.abs(ritz).max())
+    np.testing.assert_allclose(run.q[1, 7:], ritz, rtol=0.0, atol=1e-12 * np.abs(ritz).max())  # t = 0.05 s, full
+
+
+def test_a_motor_spins_a_hinged_bar_towards_its_no_load_speed(tmp_path):
+    """A motor tau = tau0 (1 - w / w0) on the pendulum's hinge, no gravity, the bar made stiff (E = 1e13 Pa):
+    I dw/dt = tau with I from the FE mass matrix, so the hinge turns by phi(t) = w0 t - w0 T (1 - exp(-t / T)),
+    T = I w0 / tau0 (measured 1.2e-6 of phi: the time step and the bar's vibration, which the step torque starts)."""
+    text = PENDULUM.replace("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, 0.0, 0.0]").replace(
+        "t_end = 0.1", "t_end = 0.3"
+    )
+    text = text.replace("E = 1e8", "E = 1e13")
+    text += """
+[[forces]]
+name = "motor"
+type = "motor"
+body0 = "ground"
+body1 = "bar"
+interface1 = "hinge"
+axis = [0.0, 1.0, 0.0]
+stall_torque = 2e-4
+no_load_speed = 3.0
+"""
+    scene = _scene(tmp_path, text)
+    run = simulate_scene(scene)
+    angle = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)["hinge_angle"]
+    fe = scene.bodies[0].fe
+    rotation = rigid_body_modes(fe.nodes, scene.bodies[0].markers["hinge"].point)[:, 4]
+    constant = float(rotation @ fe.mass @ rotation) * 3.0 / 2e-4
+    exact = 3.0 * run.time - 3.0 * constant * (1.0 - np.exp(-run.time / constant))
+    assert exact[-1] > 0.01
+    assert np.max(np.abs(angle - exact)) < 1e-4 * exact[-1]
+
+
+def test_a_body_started_turning_in_a_scene_file_keeps_turning(tmp_path):
+    """``velocity = {linear, angular}`` of the pendulum's bar, the frame origin's velocity chosen so that the hinge
+    point stays (v = -w x h): with no gravity, the stiff bar turns at w = 2 rad/s about its hinge, phi = 2 t (to
+    the integrator's phase error, measured 1.1e-8 rad after 0.2 rad)."""
+    hinge = np.array([0.0, 0.01, 0.005])  # centre of the bar's x = 0 face, where its frame interface is
+    linear = -np.cross([0.0, 2.0, 0.0], hinge)
+    text = PENDULUM.replace("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, 0.0, 0.0]").replace("E = 1e8", "E = 1e13")
+    text = text.replace(
+        "modes = 3\n",
+        f"modes = 3\nvelocity = {{linear = [{linear[0]}, {linear[1]}, {linear[2]}], angular = [0, 2, 0]}}\n",
+    )
+    scene = _scene(tmp_path, text)
+    np.testing.assert_allclose(scene.bodies[0].markers["hinge"].point, hinge, atol=1e-15)
+    run = simulate_scene(scene)
+    angle = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)["hinge_angle"]
+    assert np.max(np.abs(angle - 2.0 * run.time)) < 1e-6
