@@ -11,7 +11,7 @@ from scipy.integrate import cumulative_simpson
 
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["cumulative_integral", "energy_balance"]
+__all__ = ["cumulative_integral", "element_work", "energy_balance"]
 
 
 def cumulative_integral(values: NDArray, x: NDArray) -> NDArray[np.float64]:
@@ -21,13 +21,38 @@ def cumulative_integral(values: NDArray, x: NDArray) -> NDArray[np.float64]:
     return cumulative_simpson(values, x=x, initial=0.0)
 
 
+def element_work(system: MultibodySystem, time: NDArray, q: NDArray, qd: NDArray | None) -> NDArray[np.float64]:
+    """Work done on the bodies by the force elements (Eqs. (E1)-(E5)) since the first row: the integral of
+    ``Q_e . qd`` over time (dynamic runs), or of ``Q_e . dq`` along the path (quasi-static, ``qd`` None;
+    trapezoids); springs give back what they stored, dampers take, loads and motors add."""
+    if not system.forces:
+        return np.zeros(len(time))
+    forces = []
+    for t, row, rate in zip(time, q, np.zeros_like(q) if qd is None else qd, strict=True):
+        total = np.zeros(system.n_coordinates)
+        for element in system.forces:
+            blocks, rates = (
+                [row[system.block(i)] for i in element.bodies],
+                [rate[system.block(i)] for i in element.bodies],
+            )
+            for i, force in zip(element.bodies, element.forces(blocks, rates, float(t)), strict=True):
+                total[system.block(i)] += np.real(force)
+        forces.append(total)
+    forces_array = np.array(forces)
+    if qd is not None:
+        return cumulative_integral(np.einsum("ij,ij->i", forces_array, qd), time)
+    steps = np.einsum("ij,ij->i", 0.5 * (forces_array[1:] + forces_array[:-1]), np.diff(q, axis=0))
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
 def energy_balance(
-    system: MultibodySystem, time: NDArray, sensors: dict[str, NDArray], qd: NDArray | None
+    system: MultibodySystem, time: NDArray, sensors: dict[str, NDArray], qd: NDArray | None, q: NDArray | None = None
 ) -> dict[str, NDArray]:
     """Work of the drive (integral of ``driving_torque`` over ``drive_angle``), damping dissipation
     (integral of zetad^T D zetad over time; none for quasi-static runs, ``qd`` None) and the balance
     residual W - (dE_kin + dE_pot + dE_strain + D), from the rows of ``sensors`` (``energy_kinetic``,
-    ``energy_potential``, ``energy_strain``)."""
+    ``energy_potential``, ``energy_strain``); with force elements (and ``q``) W includes their work
+    (:func:`element_work`, ``energy_elements_work``)."""
     work = cumulative_integral(sensors["driving_torque"], sensors["drive_angle"])
     if qd is None:
         dissipated = np.zeros_like(work)
@@ -43,8 +68,9 @@ def energy_balance(
     stored = sum(
         sensors[f"energy_{kind}"] - sensors[f"energy_{kind}"][0] for kind in ("kinetic", "potential", "strain")
     )
-    return {
-        "energy_drive_work": work,
-        "energy_dissipated": dissipated,
-        "energy_balance_residual": work - stored - dissipated,
-    }
+    out = {"energy_drive_work": work, "energy_dissipated": dissipated}
+    if system.forces and q is not None:
+        out["energy_elements_work"] = element_work(system, time, q, qd)
+        work = work + out["energy_elements_work"]
+    out["energy_balance_residual"] = work - stored - dissipated
+    return out

@@ -97,5 +97,5 @@ def scene_sensors(
         joint, angle = driven[0]
         out["drive_angle"] = np.array([angle(float(t)) for t in time])
         out["driving_torque"] = out[f"{joint.name}_torque"]
-        out.update(energy_balance(system, time, out, qd))
+        out.update(energy_balance(system, time, out, qd, q))
     return out
