@@ -1,0 +1,77 @@
+r"""Stability of a static equilibrium: the squared frequencies of small vibrations about it on the constraints.
+
+At an equilibrium :math:`(q, \lambda)` of Eq. (S1) the motions the constraints allow to first order are the null
+space :math:`N` of :math:`C_q` (drives held: a position-controlled drive is a constraint). Small vibrations
+:math:`q = q^* + N\eta` obey :math:`N^TMN\,\ddot\eta + N^T(K_t + H)N\,\eta = 0` (``docs/formulation.md``, Eq. (B1)),
+so the equilibrium is stable when every eigenvalue :math:`\mu` of
+
+.. math:: N^T(K_t + H)N\,x = \mu\,N^TMN\,x                                              \qquad (B1)
+
+is positive; :math:`\mu = \omega^2` (rad^2/s^2) is the squared frequency of the mode :math:`Nx`. The count of
+negative :math:`\mu` does not depend on the coordinates (Sylvester's law of inertia), and the smallest
+:math:`\mu` passing through zero along a path marks a limit point or a bifurcation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.linalg import eigh
+
+from ffrf.system.multibody import MultibodySystem
+from ffrf.system.packed_system import newton_model
+
+__all__ = ["EquilibriumStability", "equilibrium_stability", "stability_along"]
+
+
+@dataclass(frozen=True)
+class EquilibriumStability:
+    """The ``count`` smallest :math:`\\mu` of Eq. (B1) (rad^2/s^2, ascending), their modes in ``q`` (columns), the
+    number of free motions (dimension of :math:`N`) and the tangent's asymmetry (relative; round-off at an
+    equilibrium of a conservative system)."""
+
+    squared_frequencies: NDArray[np.float64]
+    modes: NDArray[np.float64]
+    free_motions: int
+    asymmetry: float
+
+    @property
+    def stable(self) -> bool:
+        return bool(self.squared_frequencies[0] > 0.0)
+
+
+def _null_space(matrix: NDArray) -> NDArray[np.float64]:
+    """Orthonormal null space by the rank rule (R1): singular values below ``max(shape) eps`` of the largest."""
+    _, values, vt = np.linalg.svd(matrix)
+    rank = int(np.sum(values > max(matrix.shape) * np.finfo(float).eps * values[0])) if values.size else 0
+    return vt[rank:].T
+
+
+def equilibrium_stability(
+    system: MultibodySystem, q: NDArray, multipliers: NDArray, t: float = 0.0, count: int = 3
+) -> EquilibriumStability:
+    """Eq. (B1) at the equilibrium ``(q, multipliers)`` at time ``t`` (drives at their prescribed angles)."""
+    n = system.n_coordinates
+    zeros = np.zeros(n)
+    matrix = newton_model(system).iteration_matrix(q, zeros, zeros, multipliers, t, 0.0, 1.0, 0.0)
+    tangent, jacobian = matrix[:n, :n], matrix[n:, :n]
+    symmetric = 0.5 * (tangent + tangent.T)
+    asymmetry = float(np.abs(tangent - tangent.T).max() / max(np.abs(tangent).max(), 1e-300))
+    free = _null_space(jacobian)
+    stiffness = free.T @ symmetric @ free
+    mass = free.T @ system.mass_matrix(q) @ free
+    values, vectors = eigh(0.5 * (stiffness + stiffness.T), 0.5 * (mass + mass.T))
+    k = min(count, values.size)
+    return EquilibriumStability(values[:k], free @ vectors[:, :k], free.shape[1], asymmetry)
+
+
+def stability_along(
+    system: MultibodySystem, times: NDArray, q: NDArray, multipliers: NDArray, count: int = 3
+) -> list[EquilibriumStability]:
+    """Eq. (B1) at every row of a quasi-static run (``times``, ``q``, ``multipliers``)."""
+    return [
+        equilibrium_stability(system, row, lam, float(t), count)
+        for t, row, lam in zip(times, q, multipliers, strict=True)
+    ]
