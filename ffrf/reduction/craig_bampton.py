@@ -26,6 +26,7 @@ from scipy.linalg import eigh
 
 from ffrf.errors import InterfaceError, ReductionError
 from ffrf.numerics.eigen import factorize_spd, fix_signs, lowest_eigenpairs
+from ffrf.reduction.mode_basis import stiffness_proportional_damping
 
 __all__ = [
     "REFERENCE_CONDITIONS",
@@ -99,9 +100,7 @@ class CraigBamptonBasis:
 
     def reduced_damping(self, beta: float = 0.005) -> NDArray[np.float64]:
         """Stiffness-proportional damping D = beta K_red (eq. (HCB-8)); the paper uses beta = 0.005 s."""
-        if not (np.isfinite(beta) and beta >= 0.0):
-            raise ReductionError(f"damping factor beta={beta!r} must be finite and >= 0 (seconds)")
-        return beta * self.reduced_stiffness
+        return stiffness_proportional_damping(self.reduced_stiffness, beta)
 
     def summary(self) -> str:
         """Mode count and order as text, for logs and reports."""
