@@ -2,7 +2,9 @@
 
 Data flow: geometry (:mod:`ffrf.geometry.link_geometry`, gmsh OCC) -> linear tetrahedral mesh
 (:mod:`ffrf.geometry.meshing`, :mod:`ffrf.mesh.tet_mesh`) -> FE matrices (:mod:`ffrf.fe.fe_model`, scikit-fem)
--> interfaces (:mod:`ffrf.fe.interfaces`) -> Craig-Bampton basis (:mod:`ffrf.reduction.craig_bampton`)
+-> interfaces (:mod:`ffrf.fe.interfaces`) -> Craig-Bampton basis (:mod:`ffrf.reduction.craig_bampton`);
+or nodes and matrices from another FE program (:mod:`ffrf.fe.matrix_import`) -> free-free basis
+(:mod:`ffrf.reduction.free_free`)
 -> modal moments and FFRF body (:mod:`ffrf.body.modal_moments`, :mod:`ffrf.body.flexible_body`)
 -> markers and joints (:mod:`ffrf.system.markers`, :mod:`ffrf.system.joints`) -> system
 (:mod:`ffrf.system.multibody`) -> generalized-alpha, variational midpoint or static solution
@@ -20,6 +22,7 @@ from ffrf.body.flexible_body import FlexibleBody
 # Floating frame of reference bodies, constraints, joints and solvers.
 from ffrf.body.modal_moments import ModalMoments, modal_moments
 from ffrf.errors import (
+    ExternalFEError,
     FEInputError,
     GeometryError,
     InterfaceError,
@@ -31,6 +34,7 @@ from ffrf.errors import (
     SingularIterationMatrix,
     StaticDivergence,
 )
+from ffrf.fe.external_model import ExternalFEModel
 from ffrf.fe.fe_model import FEModel, rigid_body_modes
 from ffrf.fe.interfaces import (
     InterfaceNodes,
@@ -42,7 +46,16 @@ from ffrf.fe.interfaces import (
     interface_in_cylinder,
 )
 from ffrf.fe.materials import PLA, RIGID, Material
+from ffrf.fe.matrix_import import (
+    abaqus_model,
+    read_abaqus_matrix,
+    read_abaqus_mesh,
+    read_matrix_market,
+    read_npz_model,
+    write_npz_model,
+)
 from ffrf.fe.modal import Modes, clamped_modes, free_free_modes
+from ffrf.fe.node_selection import node_at_point, nodes_in_plane, surface_area_weights, surface_triangles
 from ffrf.geometry.joint_axes import PAPER_AXES, Axis, paper_link_axes
 from ffrf.geometry.link_geometry import LinkDesign, LinkGeometry, build_link, mesh_link
 from ffrf.geometry.meshing import gmsh_session, mesh_stl
@@ -60,7 +73,9 @@ from ffrf.reduction.component_modes_post import element_strains, free_free_frequ
 
 # Reduction (Craig-Bampton), inertia invariants and reduced-body files.
 from ffrf.reduction.craig_bampton import REFERENCE_CONDITIONS, CraigBamptonBasis, craig_bampton
+from ffrf.reduction.free_free import FreeFreeBasis, free_free_basis
 from ffrf.reduction.invariants import InertiaInvariants, inertia_invariants
+from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.reduction.reduced_io import (
     ReducedBodyFileError,
     cached_craig_bampton,
@@ -85,6 +100,7 @@ from ffrf.system.multibody import MultibodySystem
 
 __all__ = [
     "FEInputError",
+    "ExternalFEError",
     "GeometryError",
     "InterfaceError",
     "MaterialError",
@@ -93,6 +109,17 @@ __all__ = [
     "SingularIterationMatrix",
     "FEModel",
     "rigid_body_modes",
+    "ExternalFEModel",
+    "abaqus_model",
+    "read_abaqus_mesh",
+    "read_abaqus_matrix",
+    "read_matrix_market",
+    "read_npz_model",
+    "write_npz_model",
+    "node_at_point",
+    "nodes_in_plane",
+    "surface_triangles",
+    "surface_area_weights",
     "InterfaceNodes",
     "boundary_triangles",
     "interface_from_group",
@@ -127,6 +154,9 @@ __all__ = [
     "CraigBamptonBasis",
     "ReductionError",
     "craig_bampton",
+    "FreeFreeBasis",
+    "free_free_basis",
+    "ModeBasis",
     "InertiaInvariants",
     "inertia_invariants",
     "ReducedBodyFileError",

@@ -18,6 +18,7 @@ __all__ = [
     "GeometryError",
     "SceneError",
     "ReductionError",
+    "ExternalFEError",
     "StaticDivergence",
     "NewtonDivergence",
     "SingularIterationMatrix",
@@ -50,6 +51,11 @@ class SceneError(FEInputError):
 
 class ReductionError(FEInputError):
     """A model, an interface set or a request that the HCB reduction cannot handle."""
+
+
+class ExternalFEError(FEInputError):
+    """Nodes and matrices given from outside (Abaqus, Matrix Market or .npz files, or arrays) that
+    cannot be read or do not make one solid FE model."""
 
 
 # Solver failures: not bad input, so not FEInputError.

@@ -4,7 +4,8 @@ ARPACK's ``eigsh`` starts Lanczos from a random vector unless given one, so two 
 differed (Craig-Bampton bases by 1.4e-11, a near-rigid loop's driving torque by 1.5e-6 N m).
 Here Lanczos always starts from :func:`lanczos_start`, and every mode's sign follows
 :func:`fix_signs`, so a rerun on the same machine reproduces every bit. :func:`lowest_eigenpairs`
-(the fixed-interface modes of :mod:`ffrf.reduction.craig_bampton`) checks its count of modes with a
+(the fixed-interface modes of :mod:`ffrf.reduction.craig_bampton`, the free-free modes of
+:mod:`ffrf.reduction.free_free`) checks its count of modes with a
 Sturm sequence (:func:`count_eigenvalues_below`), so no mode of a cluster is missed.
 """
 
@@ -124,13 +125,13 @@ def _verified_lanczos(stiffness, mass, n: int, solve, verify_count: bool):
         j = int(gaps[0])
         count = count_eigenvalues_below(stiffness, mass, 0.5 * (values[j - 1] + values[j]))
         if count is None:
-            logger.warning("Sturm count unavailable (off-diagonal pivoting); fixed-interface mode count not verified")
+            logger.warning("Sturm count unavailable (off-diagonal pivoting); the mode count is not verified")
         if count is None or count == j:
             return values, vectors
         logger.warning("shift-invert Lanczos missed %d of the lowest %d eigenvalues; recomputing", count - j, count)
         request = min(count + guard, size - 1)
     raise ReductionError(
-        f"could not verify the lowest {n} fixed-interface modes after 4 attempts; "
+        f"could not verify the lowest {n} eigenmodes after 4 attempts; "
         "ask for fewer modes or pass verify_mode_count=False"
     )
 
@@ -159,7 +160,7 @@ def lowest_eigenpairs(
         values, vectors = _verified_lanczos(stiffness, mass, n, solve, verify_count)
     if len(values) > n and values[n] <= values[n - 1] * (1.0 + _CLUSTER_REL_GAP):
         logger.warning(
-            "fixed-interface modes %d and %d have the same frequency: the basis holds an arbitrary part "
+            "modes %d and %d have the same frequency: the basis holds an arbitrary part "
             "of a repeated-mode space; choose n_modes so that repeated modes are kept together",
             n,
             n + 1,

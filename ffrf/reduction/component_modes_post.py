@@ -21,8 +21,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigh
 
 from ffrf.errors import ReductionError
-from ffrf.reduction.craig_bampton import CraigBamptonBasis
 from ffrf.reduction.invariants import InertiaInvariants
+from ffrf.reduction.mode_basis import ModeBasis
 
 __all__ = [
     "mode_displacements",
@@ -38,7 +38,7 @@ def _skew(v: NDArray) -> NDArray[np.float64]:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
-def mode_displacements(reduction: CraigBamptonBasis | NDArray, modes: ArrayLike | None = None) -> NDArray[np.float64]:
+def mode_displacements(reduction: ModeBasis | NDArray, modes: ArrayLike | None = None) -> NDArray[np.float64]:
     """Nodal displacement vectors of modes (default: all), shape (n_selected, N, 3)."""
     basis = np.asarray(getattr(reduction, "basis", reduction))
     selected = np.arange(basis.shape[1]) if modes is None else np.atleast_1d(np.asarray(modes, dtype=np.int64))
@@ -96,7 +96,7 @@ def linearized_ffrf_matrices(
     return mass, stiffness
 
 
-def free_free_frequencies_hz(reduction: CraigBamptonBasis, invariants: InertiaInvariants) -> NDArray[np.float64]:
+def free_free_frequencies_hz(reduction: ModeBasis, invariants: InertiaInvariants) -> NDArray[np.float64]:
     """Elastic free-free frequencies (Hz, ascending) of the reduced floating body.
 
     Needs a basis without rigid-body content (reference "interface" or "mean_axis");

@@ -26,6 +26,7 @@ from scipy.linalg import eigh
 
 from ffrf.errors import InterfaceError, ReductionError
 from ffrf.numerics.eigen import factorize_spd, fix_signs, lowest_eigenpairs
+from ffrf.reduction.mode_basis import rayleigh_damping
 
 __all__ = [
     "REFERENCE_CONDITIONS",
@@ -99,11 +100,7 @@ class CraigBamptonBasis:
 
     def reduced_damping(self, beta: float = 0.005, alpha: float = 0.0) -> NDArray[np.float64]:
         """Rayleigh damping D = alpha M_red + beta K_red (eq. (HCB-8)); the paper uses beta = 0.005 s, alpha = 0."""
-        if not (np.isfinite(beta) and beta >= 0.0):
-            raise ReductionError(f"damping factor beta={beta!r} must be finite and >= 0 (seconds)")
-        if not (np.isfinite(alpha) and alpha >= 0.0):
-            raise ReductionError(f"damping factor alpha={alpha!r} must be finite and >= 0 (1/s)")
-        return alpha * self.reduced_mass + beta * self.reduced_stiffness
+        return rayleigh_damping(self.reduced_mass, self.reduced_stiffness, beta, alpha)
 
     def summary(self) -> str:
         """Mode count and order as text, for logs and reports."""
