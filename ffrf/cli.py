@@ -22,7 +22,7 @@ from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
 from ffrf.geometry.link_geometry import LinkDesign, mesh_link
 from ffrf.mesh.tet_mesh import quality_summary, write_vtu
 
-from .errors import FEInputError, NewtonDivergence, StaticDivergence
+from .errors import FEInputError, NewtonDivergence, SceneError, StaticDivergence
 
 __all__ = ["main", "SUBCOMMANDS", "bennett_axes", "link_summary"]
 
@@ -142,6 +142,12 @@ def _configure_linkage_run(parser: argparse.ArgumentParser) -> None:
     mode.add_argument("--dynamic", dest="mode", action="store_const", const="dynamic")
     parser.set_defaults(mode="auto")
     parser.add_argument(
+        "--stability",
+        action="store_true",
+        help="judge every equilibrium of a quasi-static run (squared frequencies of small vibrations, "
+        "docs/formulation.md Eq. (B1)); writes stability.json and stability.png",
+    )
+    parser.add_argument(
         "--vtk-every",
         type=int,
         default=0,
@@ -182,6 +188,10 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
 
     auto = options["mode"] == "auto"
     mode, ratio = choose_mode(scene) if auto else (options["mode"], float("nan"))
+    if options.get("stability", False):
+        if not auto and mode != "quasi_static":
+            raise SceneError("stability is judged at equilibria: run quasi-statically (drop --dynamic / mode)")
+        mode = "quasi_static"
     print(
         f"Running {mode.replace('_', '-')} over {scene.t_end:.1f} s of drive"
         + (f" (drive time scale / longest link period = {ratio:.0f})" if auto else ""),
@@ -189,7 +199,12 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
     )
     try:
         result = run_linkage(
-            scene, mode=mode, n_outputs=options["outputs"], step=options["step"], progress=_progress_printer()
+            scene,
+            mode=mode,
+            n_outputs=options["outputs"],
+            step=options["step"],
+            progress=_progress_printer(),
+            stability=options.get("stability", False),
         )
         stopped = None
     except (StaticDivergence, NewtonDivergence) as error:  # the path ends: write what was computed, then say so
@@ -224,6 +239,8 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
     write_assembly_vtu(out / "assembly.vtu", scene, assembly)
     plot_coupler_deviation({label: result}, out / "coupler_deviation.png")
     plot_driving_torque({label: result}, out / "driving_torque.png")
+    if "stability" in result.metadata:
+        _write_stability(result, out)
     summary = result.summary()
     print(
         f"{label}: max coupler deviation from the ideal path "
@@ -251,6 +268,30 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
     return 0
 
 
+def _write_stability(result, out: Path) -> None:
+    """``stability.json`` (per output: time, drive angle, squared frequencies of Eq. (B1)) and ``stability.png``."""
+    from ffrf.output.bennett_figures import plot_over_drive_angle
+
+    values = result.sensors["stability_squared_frequencies"]
+    angle = result.sensors["drive_angle"]
+    table = {
+        "summary": result.metadata["stability"],
+        "time_s": result.time.tolist(),
+        "drive_angle_rad": angle.tolist(),
+        "squared_frequencies_rad2_per_s2": values.tolist(),
+    }
+    (out / "stability.json").write_text(json.dumps(table, indent=1))
+    since_start = angle - angle[0]
+    series = {f"mode {k + 1}": (since_start, values[:, k]) for k in range(values.shape[1])}
+    plot_over_drive_angle(series, "squared frequency (rad^2/s^2)", out / "stability.png", "Stability (Eq. (B1))")
+    s = result.metadata["stability"]
+    print(
+        f"stability: smallest squared frequency {s['min_squared_frequency']:.4g} rad^2/s^2 "
+        f"({s['min_frequency_hz']:.3g} Hz) at drive angle {s['at_drive_angle_deg']:.4g} deg; "
+        f"{s['unstable_poses']} unstable pose(s) -> {out / 'stability.json'}"
+    )
+
+
 def _run_bennett(args: argparse.Namespace) -> int:
     import time
 
@@ -272,7 +313,13 @@ def _run_bennett(args: argparse.Namespace) -> int:
 
 
 def _options(args: argparse.Namespace) -> dict:
-    return {"mode": args.mode, "outputs": args.outputs, "step": args.dt, "vtk_every": args.vtk_every}
+    return {
+        "mode": args.mode,
+        "outputs": args.outputs,
+        "step": args.dt,
+        "vtk_every": args.vtk_every,
+        "stability": args.stability,
+    }
 
 
 def _bore_error(text: str) -> dict:
@@ -369,6 +416,7 @@ def _run_scene_file(args: argparse.Namespace) -> int:
             "outputs": s.get("outputs", 241),
             "step": s.get("step", 4e-3),
             "vtk_every": 0,
+            "stability": s.get("stability", False),
         }
         return _run_and_report(scene, out, scene.name, started, options)
     print(
@@ -406,6 +454,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING)
     try:
+        if getattr(args, "stability", False) and getattr(args, "mode", None) == "dynamic":
+            raise SceneError("stability is judged at equilibria: run quasi-statically (drop --dynamic)")
         return SUBCOMMANDS[args.command][2](args)
     except FEInputError as exc:
         print(f"error: {exc}", file=sys.stderr)

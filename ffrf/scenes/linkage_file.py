@@ -272,5 +272,5 @@ def load_linkage(document: dict, base: Path | None = None, where: str = "linkage
         )
     except LoopFoldError as error:
         raise SceneError(f"{label}: the start pose cannot be reached: {error}") from error
-    run = {key: settings[key] for key in ("mode", "outputs", "step", "rho_inf") if key in settings}
+    run = {key: settings[key] for key in ("mode", "outputs", "step", "rho_inf", "stability") if key in settings}
     return replace(scene, settings=dict({k: v for k, v in scene.settings.items() if k != "mode"}, **run))

@@ -40,6 +40,7 @@ from ffrf.output.tables import write_results as write_tables
 from ffrf.scenes.assembly import assemble, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.solvers.simulate import MODES, simulate
+from ffrf.solvers.stability import stability_along
 from ffrf.system.joints import MarkerJoint
 
 __all__ = [
@@ -48,6 +49,7 @@ __all__ = [
     "evaluate_sensors",
     "choose_mode",
     "inertia_number",
+    "stability_summary",
     "write_results",
 ]
 
@@ -156,17 +158,22 @@ def run_linkage(
     rho_inf: float = 0.9,
     progress: Callable[[float, float], None] | None = None,
     t_end: float | None = None,
+    stability: bool = False,
 ) -> LinkageResult:
     """Assemble (static, with misalignment continuation), then run over the drive's ramp and
     revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
     generalized-alpha with ``step`` (s) starting from the assembled state at rest. ``t_end``
     shortens the run (default: the scene's ramp plus revolutions). A run that stops raises the solver's error
     (:class:`ffrf.errors.StaticDivergence` or :class:`ffrf.errors.NewtonDivergence`) with ``partial``, the
-    :class:`LinkageResult` up to its last output (its metadata's ``stopped`` says where and why), when there is one."""
+    :class:`LinkageResult` up to its last output (its metadata's ``stopped`` says where and why), when there is one.
+    With ``stability`` (quasi-static runs) every equilibrium's three smallest squared frequencies of Eq. (B1) are
+    the sensor ``stability_squared_frequencies`` (rad^2/s^2) and the metadata's ``stability`` sums them up."""
     chosen, ratio = choose_mode(scene)
     mode = chosen if mode == "auto" else mode
     if mode not in MODES:
         raise ValueError(f"mode must be 'auto', 'quasi_static' or 'dynamic', got {mode!r}")
+    if stability and mode != "quasi_static":
+        raise ValueError("stability is judged at equilibria: run quasi-statically (mode='quasi_static') to monitor it")
     started = wallclock.perf_counter()
     assembly = assemble(scene)
     stress = scene_assembly_stress(scene, assembly.q, assembly.multipliers)
@@ -192,6 +199,10 @@ def run_linkage(
     times, q, qd, lam = run.time, run.q, run.qd, run.multipliers
     solved = wallclock.perf_counter()
     sensors = evaluate_sensors(scene, times, q, qd, lam)
+    if stability:
+        sensors["stability_squared_frequencies"] = np.array(
+            [s.squared_frequencies for s in stability_along(scene.system, times, q, lam, count=3)]
+        )
     metadata = dict(
         scene.settings,
         mode=mode,
@@ -216,6 +227,8 @@ def run_linkage(
     )
     out = LinkageResult(times, sensors, q, metadata, stress)
     out.metadata["summary"] = out.summary()
+    if stability:
+        out.metadata["stability"] = stability_summary(sensors["stability_squared_frequencies"], sensors["drive_angle"])
     if stopped is not None:
         out.metadata["stopped"] = {
             "time_s": float(times[-1]),
@@ -226,6 +239,20 @@ def run_linkage(
         stopped.partial = out
         raise stopped
     return out
+
+
+def stability_summary(squared_frequencies: NDArray, drive_angle: NDArray) -> dict:
+    """The smallest squared frequency of Eq. (B1) over a run (rad^2/s^2) and where, and the unstable poses."""
+    lowest = squared_frequencies[:, 0]
+    k = int(np.argmin(lowest))
+    unstable = np.flatnonzero(lowest <= 0.0)
+    return {
+        "min_squared_frequency": float(lowest[k]),
+        "min_frequency_hz": float(np.sqrt(max(lowest[k], 0.0)) / (2.0 * np.pi)),
+        "at_drive_angle_deg": float(np.degrees(drive_angle[k])),
+        "unstable_poses": int(unstable.size),
+        "first_unstable_drive_angle_deg": float(np.degrees(drive_angle[unstable[0]])) if unstable.size else None,
+    }
 
 
 def write_results(result: LinkageResult, directory: str | Path) -> Path:

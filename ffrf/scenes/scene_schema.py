@@ -166,6 +166,7 @@ SETTINGS = {
     "joint_offsets": Key("string", False, one_of(JOINT_OFFSETS)),
     "exact_gravity": Key("boolean"),
     "static_start": Key("boolean"),
+    "stability": Key("boolean"),
 }
 #: The whole document: ``[scene]``, ``[[bodies]]``, ``[[joints]]``, ``[[sensors]]``.
 SCHEMA = {
@@ -260,6 +261,9 @@ def check_scene(document: dict, where: str = "scene") -> None:
     """Raise :class:`SceneError` for the first thing in a parsed scene file that is not allowed."""
     check_table(document, SCHEMA, where)
     _check_run_size(document.get("scene", {}), f"{where}, scene")
+    settings = document.get("scene", {})
+    if settings.get("stability", False) and settings.get("mode", "dynamic") == "dynamic":
+        raise SceneError(f'{where}, scene: stability is judged at equilibria; set mode = "quasi_static"')
     bodies, joints, sensors = document["bodies"], document.get("joints", []), document.get("sensors", [])
     if not bodies:
         raise SceneError(f"{where}: no [[bodies]]; a scene needs at least one body")

@@ -24,6 +24,11 @@ def _with_force(text: str) -> str:
 
 CASES = {
     # class: (replace this, by this, expected words in the message)
+    "stability of a dynamic run": (
+        "rho_inf = 0.8",
+        "rho_inf = 0.8\nstability = true",
+        ["scene.toml, scene", "stability is judged at equilibria", 'set mode = "quasi_static"'],
+    ),
     "unknown force type": (
         "[[sensors]]",
         _with_force(SPRING.replace("spring_damper", "spring")),
