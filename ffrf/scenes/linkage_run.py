@@ -252,6 +252,9 @@ def stability_summary(squared_frequencies: NDArray, drive_angle: NDArray) -> dic
         "at_drive_angle_deg": float(np.degrees(drive_angle[k])),
         "unstable_poses": int(unstable.size),
         "first_unstable_drive_angle_deg": float(np.degrees(drive_angle[unstable[0]])) if unstable.size else None,
+        "first_squared_frequencies": squared_frequencies[0].tolist(),
+        "last_squared_frequencies": squared_frequencies[-1].tolist(),
+        "last_drive_angle_deg": float(np.degrees(drive_angle[-1])),
     }
 
 
