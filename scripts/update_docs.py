@@ -59,6 +59,7 @@ UNITS: dict[str, tuple[str, float]] = {
     "x": ("ratio", 1.0),
     "%": ("ratio", 1e-2),
     "Hz": ("frequency", 1.0),
+    "rad^2/s^2": ("squared frequency", 1.0),
 }
 #: Unit suffix of a key in a result file -> unit.
 KEY_SUFFIXES = {
