@@ -26,7 +26,7 @@ from scipy.linalg import eigh
 
 from ffrf.errors import InterfaceError, ReductionError
 from ffrf.numerics.eigen import factorize_spd, fix_signs, lowest_eigenpairs
-from ffrf.reduction.mode_basis import rayleigh_damping
+from ffrf.reduction.mode_basis import ReducedMatrices
 
 __all__ = [
     "REFERENCE_CONDITIONS",
@@ -69,7 +69,7 @@ class RigidInterface:
 
 
 @dataclass(frozen=True, eq=False)
-class CraigBamptonBasis:
+class CraigBamptonBasis(ReducedMatrices):
     """Result of :func:`craig_bampton`.
 
     Attributes
@@ -93,14 +93,6 @@ class CraigBamptonBasis:
     mode_labels: tuple[str, ...]
     reference: str = "interface"
     orthonormalized: bool = False
-
-    @property
-    def n_modes(self) -> int:
-        return self.basis.shape[1]
-
-    def reduced_damping(self, beta: float = 0.005, alpha: float = 0.0) -> NDArray[np.float64]:
-        """Rayleigh damping D = alpha M_red + beta K_red (eq. (HCB-8)); the paper uses beta = 0.005 s, alpha = 0."""
-        return rayleigh_damping(self.reduced_mass, self.reduced_stiffness, beta, alpha)
 
     def summary(self) -> str:
         """Mode count and order as text, for logs and reports."""

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from ffrf.errors import ReductionError
 from ffrf.numerics.eigen import factorize_spd, lowest_eigenpairs
 from ffrf.reduction.craig_bampton import checked_model, rigid_body_basis
-from ffrf.reduction.mode_basis import rayleigh_damping
+from ffrf.reduction.mode_basis import ReducedMatrices
 
 __all__ = ["FreeFreeBasis", "free_free_basis", "rigid_body_coupling"]
 
@@ -43,7 +43,7 @@ _RIGID_SPAN_TOL = 1e-6
 
 
 @dataclass(frozen=True, eq=False)
-class FreeFreeBasis:
+class FreeFreeBasis(ReducedMatrices):
     """Result of :func:`free_free_basis`; a :class:`ffrf.reduction.mode_basis.ModeBasis`.
 
     Attributes
@@ -66,14 +66,6 @@ class FreeFreeBasis:
     reference_residual: float
     mode_labels: tuple[str, ...]
     reference: str = "mean_axis"
-
-    @property
-    def n_modes(self) -> int:
-        return self.basis.shape[1]
-
-    def reduced_damping(self, beta: float = 0.005, alpha: float = 0.0) -> NDArray[np.float64]:
-        """Rayleigh damping D = alpha M_red + beta K_red (eq. (HCB-8))."""
-        return rayleigh_damping(self.reduced_mass, self.reduced_stiffness, beta, alpha)
 
     def summary(self) -> str:
         """Mode count and order as text, for logs and reports."""

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from ffrf.errors import ReductionError
 
-__all__ = ["ModeBasis", "rayleigh_damping"]
+__all__ = ["ModeBasis", "ReducedMatrices", "rayleigh_damping"]
 
 
 @runtime_checkable
@@ -49,3 +49,19 @@ def rayleigh_damping(
     if not (np.isfinite(alpha) and alpha >= 0.0):
         raise ReductionError(f"damping factor alpha={alpha!r} must be finite and >= 0 (1/s)")
     return alpha * reduced_mass + beta * reduced_stiffness
+
+
+class ReducedMatrices:
+    """What every basis derives from its ``basis`` and reduced matrices: the mode count and Rayleigh damping."""
+
+    basis: NDArray[np.float64]
+    reduced_mass: NDArray[np.float64]
+    reduced_stiffness: NDArray[np.float64]
+
+    @property
+    def n_modes(self) -> int:
+        return self.basis.shape[1]
+
+    def reduced_damping(self, beta: float = 0.005, alpha: float = 0.0) -> NDArray[np.float64]:
+        """Rayleigh damping D = alpha M_red + beta K_red (eq. (HCB-8)); the paper uses beta = 0.005 s, alpha = 0."""
+        return rayleigh_damping(self.reduced_mass, self.reduced_stiffness, beta, alpha)
