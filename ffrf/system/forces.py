@@ -14,6 +14,8 @@ An element adds generalized forces :math:`Q_e(q, \dot q, t)` to the bodies' appl
   Jacobians (E4).
 * :class:`JointTorque`: a torque about a joint's z axis between its two markers, a function of time, the
   relative angle and the relative angular speed (a motor's torque-speed curve) (E5).
+* :class:`AxialSpringDamper`: a spring-damper along the line between two marker points (E6), Exudyn's
+  ``SpringDamper``; geometrically nonlinear (a truss of them can snap through).
 
 Tangents :math:`\partial Q/\partial q` and :math:`\partial Q/\partial\dot q` for the iteration matrix are
 exact (complex-step differentiation) for elements whose functions are analytic (``complex_safe``); a
@@ -33,6 +35,7 @@ from ffrf.system.joints import GroundFrame, MarkerJoint, joint_side
 from ffrf.system.markers import BodyMarker
 
 __all__ = [
+    "AxialSpringDamper",
     "ForceElement",
     "JointTorque",
     "MarkerLoad",
@@ -111,6 +114,40 @@ class SpringDamperJoint(ForceElement):
         """The element's force :math:`f` in the units of the joint's equations (the reaction a rigid joint's
         multipliers would carry)."""
         return np.real(self._force(blocks, velocities, t)[1])
+
+
+@dataclass(frozen=True, eq=False)
+class AxialSpringDamper(ForceElement):
+    r"""Eq. (E6): a spring-damper along the line between two marker points (Exudyn's ``SpringDamper``):
+    :math:`f = k(L - L_0) + c\,\dot L` with :math:`L = |p_1 - p_0|`, pulling the points together when stretched;
+    stored energy :math:`\tfrac12 k (L - L_0)^2`. ``marker0`` may be the ground."""
+
+    marker0: BodyMarker | GroundFrame
+    marker1: BodyMarker
+    stiffness: float
+    damping: float
+    length: float
+
+    def _sides(self, blocks: list[NDArray], velocities: list[NDArray]):
+        ground = isinstance(self.marker0, GroundFrame)
+        q0, v0 = (None, None) if ground else (blocks[0], velocities[0])
+        p0, _, g0, _ = marker_jacobians(self.marker0, q0)
+        p1, _, g1, _ = marker_jacobians(self.marker1, blocks[-1])
+        gap = p1 - p0
+        rate = g1 @ velocities[-1] - (0.0 if g0 is None else g0 @ v0)
+        return g0, g1, gap, rate
+
+    def forces(self, blocks, velocities, t):
+        g0, g1, gap, rate = self._sides(blocks, velocities)
+        length = np.sqrt(gap @ gap)
+        unit = gap / length
+        pull = (self.stiffness * (length - self.length) + self.damping * (unit @ rate)) * unit
+        out = [-(g1.T @ pull)]
+        return out if g0 is None else [g0.T @ pull] + out
+
+    def potential_energy(self, blocks, t):
+        gap = self._sides(blocks, [np.zeros_like(b) for b in blocks])[2]
+        return float(0.5 * self.stiffness * (np.sqrt(gap @ gap) - self.length) ** 2)
 
 
 def spring_damper(

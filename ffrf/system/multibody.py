@@ -190,8 +190,8 @@ class MultibodySystem:
     ) -> NDArray[np.float64]:
         r"""Velocities ``qd`` (all bodies; zero except ``body``) of a rigid motion of ``body``: its point ``point``
         (body coordinates) moving at ``velocity`` and the body turning at ``angular_velocity`` (both world).
-        Eq. (R2): :math:`\dot p = 	frac14ar G(p)^T A(p)^T\omega` (for unit :math:`p`, :math:`ar Gar G^T = 4I`),
-        :math:`\dot R = v - \omega	imes A(p)\,ar u`, modal velocities zero."""
+        Eq. (R2): :math:`\dot p = \tfrac14\bar G(p)^T A(p)^T\omega` (for unit :math:`p`, :math:`\bar G\bar G^T = 4I`),
+        :math:`\dot R = v - \omega\times A(p)\,\bar u`, modal velocities zero."""
         qd = np.zeros(self.n_coordinates)
         s = self.block(body)
         p = np.asarray(q[s][3:7], dtype=float)
