@@ -19,7 +19,11 @@ Conventions matched (see the report in ``docs`` / the tests):
 * ``AddObjectFFRFreducedOrder(initialAngularVelocity=...)`` expects the **global** angular
   velocity (``GetRigidBodyNode`` -> ``AngularVelocity2EulerParameters_t``); we give the
   body-frame one and convert with the reference rotation.
-* Damping: both use D = beta K_red (``stiffnessProportionalDamping``).
+* Initial velocity: ``initialVelocity`` is the frame origin's, v - omega x A c for a scene's
+  velocity v of the body point c; ours: :meth:`ffrf.system.multibody.MultibodySystem.rigid_velocity`.
+* Damping: both use D = alpha M_red + beta K_red (``massProportionalDamping``,
+  ``stiffnessProportionalDamping``; ours Eq. (HCB-8)) on the modal coordinates.
+* Force elements and loads: :mod:`validation.single_body_forces`.
 * Newton: full Newton, fixed steps, no adaptive step, consistent initial accelerations.
 
 ``exudyn`` is imported lazily, so that our solver's runs work where Exudyn is missing.
@@ -44,6 +48,7 @@ from .exudyn_items import (
     add_mesh_node_sensor,
 )
 from .exudyn_solvers import check_output_times, dynamic_settings, solve_dynamic
+from .single_body_forces import add_exudyn_force_items, ffrf_force_elements
 from .single_body_scenes import Hinge, Scene
 
 if TYPE_CHECKING:
@@ -89,15 +94,16 @@ class TrajectoryResult:
 # --------------------------------------------------------------------------------------------
 
 
-def _add_exudyn_hinge(mbs, scene: Scene, hinge: Hinge, body_object: int) -> None:
+def _add_exudyn_hinge(mbs, scene: Scene, hinge: Hinge, body_object: int) -> tuple[int, int]:
     """Interface marker on bore 0 (our weights) + ground marker + GenericJoint (free rz) for
-    ``hinge``, the hinge of ``scene``."""
+    ``hinge``, the hinge of ``scene``; returns the (ground, body) markers, joint frames."""
     body = scene.body
     frame = hinge.frame()  # world = body axes at t = 0 (identity reference rotation)
     centre_world = np.asarray(scene.position, dtype=float) + body.frame_center
     m_ground = add_ground_marker(mbs, add_ground(mbs), frame, centre_world)
     m_body = add_interface_marker(mbs, body_object, body.frame_nodes, body.frame_weights, frame)
     add_generic_joint(mbs, m_ground, m_body, (1, 1, 1, 1, 1, 0))
+    return m_ground, m_body
 
 
 def run_exudyn(
@@ -116,6 +122,7 @@ def run_exudyn(
     mbs = sc.AddSystem()
     body = scene.body
     rotation_ref = scene.rotation0()
+    omega = rotation_ref @ np.asarray(scene.omega_bar, dtype=float)  # Exudyn expects the global omega
     items = add_ffrf_body(
         mbs,
         body.nodes,
@@ -127,11 +134,13 @@ def run_exudyn(
         scene.initial_zeta(),
         scene.gravity,
         scene.beta,
-        velocity=scene.velocity,
-        angular_velocity=rotation_ref @ np.asarray(scene.omega_bar, dtype=float),  # Exudyn expects the global omega
+        velocity=np.asarray(scene.velocity, dtype=float)
+        - np.cross(omega, rotation_ref @ np.asarray(scene.velocity_point)),
+        angular_velocity=omega,
+        alpha=scene.alpha,
     )
-    if scene.hinge is not None:
-        _add_exudyn_hinge(mbs, scene, scene.hinge, items.body)
+    hinge_markers = None if scene.hinge is None else _add_exudyn_hinge(mbs, scene, scene.hinge, items.body)
+    add_exudyn_force_items(mbs, scene, items.body, hinge_markers)
     rigid_sensor = add_coordinates_sensor(mbs, items.rigid_node)
     modal_sensor = add_coordinates_sensor(mbs, items.modal_node)
     node_sensors = [add_mesh_node_sensor(mbs, items.body, node) for node in scene.tracked_nodes]
@@ -168,13 +177,13 @@ def run_exudyn(
 # --------------------------------------------------------------------------------------------
 
 
-def ffrf_system(scene: Scene, exact_gravity: bool = False):
+def ffrf_system(scene: Scene, exact_gravity: bool = False, exudyn_definitions: bool = False):
     """Our :class:`ffrf.system.multibody.MultibodySystem` of ``scene`` and its initial state (q0, qd0).
 
     ``exact_gravity=False`` (default) is Exudyn's simplified gravity moment; True keeps the
-    deformation-dependent term (only for sensitivity studies).
+    deformation-dependent term (only for sensitivity studies). ``exudyn_definitions``: force elements
+    with Exudyn's definitions where they differ (:mod:`validation.exudyn_force_conventions`).
     """
-    from ffrf.body.euler_parameters import g_bar
     from ffrf.body.flexible_body import FlexibleBody
     from ffrf.body.modal_moments import modal_moments
     from ffrf.system.constraints import GroundPerpendicular, GroundPoint
@@ -186,7 +195,7 @@ def ffrf_system(scene: Scene, exact_gravity: bool = False):
         "bar",
         moments,
         stiffness=body.reduced_stiffness,
-        damping=scene.beta * body.reduced_stiffness,
+        damping=scene.alpha * body.reduced_mass + scene.beta * body.reduced_stiffness,  # Eq. (HCB-8)
         exact_gravity=exact_gravity,
     )
     constraints: tuple[Constraint, ...] = ()
@@ -201,26 +210,34 @@ def ffrf_system(scene: Scene, exact_gravity: bool = False):
                 bodies=(0,), name="hinge axis", vector=frame[:, 2].copy(), normals=np.ascontiguousarray(frame[:, :2].T)
             ),
         )
-    system = MultibodySystem(bodies=(flexible,), constraints=constraints, gravity=np.asarray(scene.gravity, float))
+    system = MultibodySystem(
+        bodies=(flexible,),
+        constraints=constraints,
+        gravity=np.asarray(scene.gravity, float),
+        forces=ffrf_force_elements(scene, exudyn_definitions),
+    )
     q0 = system.initial_state(positions=[scene.position], rotations=[scene.euler0])
     q0[7:] = scene.initial_zeta()
-    qd0 = np.zeros_like(q0)
-    qd0[:3] = scene.velocity
-    qd0[3:7] = g_bar(q0[3:7]).T @ np.asarray(scene.omega_bar, dtype=float) / 4.0  # G G^T = 4 I
+    omega = scene.rotation0() @ np.asarray(scene.omega_bar, dtype=float)
+    qd0 = system.rigid_velocity(q0, 0, scene.velocity, omega, scene.velocity_point)
     return system, q0, qd0
 
 
 def run_ffrf(
-    scene: Scene, tolerance: float = 1e-12, exact_gravity: bool = False, modified_newton: bool | None = None
+    scene: Scene,
+    tolerance: float = 1e-12,
+    exact_gravity: bool = False,
+    modified_newton: bool | None = None,
+    exudyn_definitions: bool = False,
 ) -> TrajectoryResult:
     """Integrate ``scene`` with our generalized-alpha solver (Newton ``tolerance``, see
     :func:`ffrf.solvers.generalized_alpha.generalized_alpha`); ``modified_newton=None`` keeps the
-    solver's default."""
+    solver's default; ``exudyn_definitions``: see :func:`ffrf_system`."""
     from ffrf.body.flexible_body import node_positions
     from ffrf.solvers.generalized_alpha import generalized_alpha
 
     started = time.perf_counter()
-    system, q0, qd0 = ffrf_system(scene, exact_gravity)
+    system, q0, qd0 = ffrf_system(scene, exact_gravity, exudyn_definitions)
     setup = time.perf_counter() - started
     options: dict[str, Any] = {} if modified_newton is None else {"modified_newton": modified_newton}
     result = generalized_alpha(
@@ -236,5 +253,6 @@ def run_ffrf(
         setup,
         result.wall_time,
         int(result.newton_iterations.sum()),
-        "ffrf" if modified_newton is None else f"ffrf (modified_newton={modified_newton})",
+        ("ffrf" if modified_newton is None else f"ffrf (modified_newton={modified_newton})")
+        + (" with Exudyn's force definitions" if exudyn_definitions else ""),
     )

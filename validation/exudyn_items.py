@@ -11,6 +11,9 @@ r"""The Exudyn items of our models, one function per kind: every twin (the singl
   (``useAlternativeApproach=True``, exponential map), its ``localHT`` applied in the body frame;
   a ground frame: ``MarkerBodyRigid`` on an ``ObjectGround``;
 * a joint: ``GenericJoint`` with our locked axes;
+* force elements and loads (:mod:`validation.single_body_forces`): ``MarkerSuperElementPosition`` (the
+  weighted centre of an interface), ``CartesianSpringDamper``, ``RigidBodySpringDamper``,
+  ``TorsionalSpringDamper``, ``LoadForceVector`` and ``LoadTorqueVector`` (constant or a user function of time);
 * sensors stored in memory (no files): node coordinates, mesh-node and marker positions, joint
   torques.
 
@@ -20,6 +23,7 @@ expects the *global* angular velocity. ``exudyn`` is imported lazily.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -34,6 +38,11 @@ __all__ = [
     "add_ground_marker",
     "add_interface_marker",
     "add_generic_joint",
+    "add_interface_position_marker",
+    "add_cartesian_spring_damper",
+    "add_rigid_body_spring_damper",
+    "add_torsional_spring_damper",
+    "add_vector_load",
     "add_stored_sensor",
     "add_coordinates_sensor",
     "add_mesh_node_sensor",
@@ -81,10 +90,13 @@ def add_ffrf_body(
     velocity: ArrayLike = (0.0, 0.0, 0.0),
     angular_velocity: ArrayLike = (0.0, 0.0, 0.0),
     name: str = "",
+    alpha: float = 0.0,
 ) -> FFRFItems:
     """An ``ObjectFFRFreducedOrder`` of our FE data: reference ``position`` and ``rotation`` (body to
-    world) of its frame, modal initial values ``zeta0``, initial ``velocity`` and *global*
-    ``angular_velocity``, ``gravity`` and stiffness-proportional damping ``beta`` (s)."""
+    world) of its frame, modal initial values ``zeta0``, initial ``velocity`` (of the frame origin) and
+    *global* ``angular_velocity``, ``gravity`` and Rayleigh damping D = alpha M_red + beta K_red of the modal
+    coordinates (``massProportionalDamping`` alpha in 1/s, ``stiffnessProportionalDamping`` beta in s; ours:
+    ``docs/formulation.md`` Eq. (HCB-8))."""
     from exudyn.FEM import ObjectFFRFreducedOrderInterface
 
     cms = ObjectFFRFreducedOrderInterface(exudyn_fem(nodes, mass, stiffness, basis))  # Euler parameters
@@ -95,6 +107,7 @@ def add_ffrf_body(
         rotationMatrixRef=np.asarray(rotation, dtype=float),
         initialAngularVelocity=_floats(angular_velocity),
         gravity=_floats(gravity),
+        massProportionalDamping=float(alpha),
         stiffnessProportionalDamping=float(beta),
         name=name,
     )
@@ -158,6 +171,112 @@ def add_generic_joint(mbs, marker0: int, marker1: int, locked: ArrayLike, name: 
         eii.GenericJoint(
             markerNumbers=[marker0, marker1], constrainedAxes=[int(v) for v in np.asarray(locked)], name=name
         )
+    )
+
+
+def add_interface_position_marker(mbs, body: int, nodes: ArrayLike, weights: ArrayLike, name: str = "") -> int:
+    """``MarkerSuperElementPosition``: the weighted centre ``sum w_i r_i`` of mesh ``nodes`` of FFRF object
+    ``body`` (velocity ``sum w_i v_i``), our rigid interface marker's point (Eq. (K1))."""
+    import exudyn.itemInterface as eii
+
+    return mbs.AddMarker(
+        eii.MarkerSuperElementPosition(
+            bodyNumber=body,
+            meshNodeNumbers=[int(i) for i in np.asarray(nodes)],
+            weightingFactors=_floats(weights),
+            name=name,
+        )
+    )
+
+
+def add_cartesian_spring_damper(
+    mbs, marker0: int, marker1: int, stiffness: ArrayLike, damping: ArrayLike, offset: ArrayLike, name: str = ""
+) -> int:
+    """``CartesianSpringDamper``: f = k o (p1 - p0 - offset) + d o (v1 - v0) per world axis, -f on marker 1 and
+    +f on marker 0 (its ``ComputeODE2LHS`` adds J1^T f and -J0^T f to the left-hand side)."""
+    import exudyn.itemInterface as eii
+
+    return mbs.AddObject(
+        eii.ObjectConnectorCartesianSpringDamper(
+            markerNumbers=[marker0, marker1],
+            stiffness=_floats(stiffness),
+            damping=_floats(damping),
+            offset=_floats(offset),
+            name=name,
+        )
+    )
+
+
+def add_rigid_body_spring_damper(
+    mbs, marker0: int, marker1: int, stiffness: ArrayLike, damping: ArrayLike, offset: ArrayLike, name: str = ""
+) -> int:
+    """``RigidBodySpringDamper`` (not intrinsic): 6 x 6 ``stiffness`` and ``damping`` on the displacement
+    A0^T (p1 - p0) and the xyz (Tait-Bryan) angles of A0^T A1 in marker 0's frame, minus ``offset`` (6)."""
+    import exudyn.itemInterface as eii
+
+    return mbs.AddObject(
+        eii.ObjectConnectorRigidBodySpringDamper(
+            markerNumbers=[marker0, marker1],
+            stiffness=np.asarray(stiffness, dtype=float),
+            damping=np.asarray(damping, dtype=float),
+            offset=_floats(offset),
+            useIntrinsicFormulation=False,
+            name=name,
+        )
+    )
+
+
+def add_torsional_spring_damper(
+    mbs,
+    marker0: int,
+    marker1: int,
+    stiffness: float,
+    damping: float,
+    offset: float = 0.0,
+    torque: float = 0.0,
+    name: str = "",
+) -> int:
+    """``TorsionalSpringDamper`` about marker 0's z axis: T = stiffness (phi - offset) + damping phi_dot + torque,
+    with phi the z angle of the xyz angles of A0^T A1; it adds J_w1^T T z0 to marker 1's left-hand side, so the
+    torque *acting* on marker 1 is -T z0 (and +T z0 on marker 0)."""
+    import exudyn.itemInterface as eii
+
+    return mbs.AddObject(
+        eii.ObjectConnectorTorsionalSpringDamper(
+            markerNumbers=[marker0, marker1],
+            stiffness=float(stiffness),
+            damping=float(damping),
+            offset=float(offset),
+            torque=float(torque),
+            name=name,
+        )
+    )
+
+
+def add_vector_load(
+    mbs,
+    marker: int,
+    kind: str,
+    vector: ArrayLike,
+    law: Callable[[float], float] | None = None,
+    body_fixed: bool = False,
+    name: str = "",
+) -> int:
+    """``LoadForceVector`` (``kind="force"``, Q = J_p^T F) or ``LoadTorqueVector`` (``"torque"``, Q = J_w^T M) on
+    ``marker``: ``vector`` times ``law(t)`` (a ``loadVectorUserFunction``; constant without), in world axes or,
+    with ``body_fixed``, in the marker's (turned by its orientation)."""
+    import exudyn.itemInterface as eii
+
+    item = {"force": eii.LoadForceVector, "torque": eii.LoadTorqueVector}[kind]
+    options = {}
+    if law is not None:
+
+        def user_function(mbs, t, load_vector):
+            return list(law(t) * np.asarray(load_vector, dtype=float))
+
+        options["loadVectorUserFunction"] = user_function
+    return mbs.AddLoad(
+        item(markerNumber=marker, loadVector=_floats(vector), bodyFixed=bool(body_fixed), name=name, **options)
     )
 
 

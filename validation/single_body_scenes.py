@@ -1,6 +1,7 @@
 r"""The single-body scenes of the Exudyn cross-checks, solver neutral: a :class:`Scene` is one
-:class:`validation.reduced_body.ReducedBody` with gravity, damping, its initial state and an
-optional revolute joint to ground at the frame interface (:class:`Hinge`).
+:class:`validation.reduced_body.ReducedBody` with gravity, Rayleigh damping, its initial state, an
+optional revolute joint to ground at the frame interface (:class:`Hinge`) and force elements and loads
+(:mod:`validation.single_body_forces`).
 
 Scene 1, :func:`pendulum_scene`: the bar hinged at bore 0, released from horizontal at rest.
 Scene 2, :func:`free_body_scene`: the bar spinning freely, no gravity, elastically pre-deformed.
@@ -10,11 +11,15 @@ Scene 2, :func:`free_body_scene`: the bar spinning freely, no gravity, elastical
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .reduced_body import ReducedBody, static_deflection, tip_node
+
+if TYPE_CHECKING:
+    from .single_body_forces import ForceSpec
 
 __all__ = ["Hinge", "Scene", "pendulum_scene", "free_body_scene"]
 
@@ -44,13 +49,14 @@ class Scene:
 
     ``euler0`` is the initial (= Exudyn reference) rotation of the frame as unit Euler
     parameters; a hinged scene needs the identity. ``omega_bar`` is the body-frame angular
-    velocity.
+    velocity, ``velocity`` the initial velocity of the body point ``velocity_point`` (body
+    coordinates; default the frame origin). Damping is Rayleigh's D = alpha M_red + beta K_red.
     """
 
     body: ReducedBody
     tracked_nodes: tuple[int, ...]
     gravity: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    beta: float = 0.0  # stiffness-proportional damping D = beta K_red (s)
+    beta: float = 0.0  # stiffness-proportional damping (s)
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     omega_bar: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -60,6 +66,9 @@ class Scene:
     t_end: float = 1.0
     step: float = 1e-3
     rho_inf: float = 0.8
+    alpha: float = 0.0  # mass-proportional damping (1/s)
+    velocity_point: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    forces: tuple[ForceSpec, ...] = ()
 
     def __post_init__(self):
         p = np.asarray(self.euler0, dtype=float)
