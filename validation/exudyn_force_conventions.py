@@ -5,12 +5,10 @@ the single-body twins (:mod:`validation.single_body_forces`) agree to round-off 
 difference is attributed:
 
 **Marker velocity (damping of spring-dampers).** Exudyn's marker velocities use the frame's angular
-velocity :math:`\bar\omega = \bar G\dot p` of the Euler parameters: :math:`v = \dot R + A(\bar\omega\times u
-+ \dot u)`. Ours, :math:`C_q\dot q` in Eq. (E1), is the time derivative of :math:`g(q)` and with the
-quadratic form :math:`A(p)` (Eq. (R1)) it has the extra term :math:`2(p\cdot\dot p)Au`. Index-3
-generalized-alpha keeps :math:`p\cdot p = 1` but not :math:`p\cdot\dot p = 0`, so the two dampers differ by
-O(h^2). :class:`ExudynSpringDamperJoint` projects :math:`\dot p` onto the tangent of :math:`p\cdot p = 1`,
-which gives Exudyn's velocity. Angular velocities (Eq. (E4)) do not see :math:`p\cdot\dot p`.
+velocity :math:`\bar\omega = \bar G\dot p`; the derivative of :math:`g(q)` with the quadratic form :math:`A(p)`
+(Eq. (R1)) has the extra term :math:`2(p\cdot\dot p)Au`, which index-3 integration does not keep at zero. Our
+dampers (Eq. (E1), :func:`ffrf.system.forces.tangent_rates`) project :math:`\dot p` onto the tangent of
+:math:`p\cdot p = 1` as Exudyn does, so the two agree without alignment.
 
 **Rotation Jacobian of ``MarkerSuperElementRigid`` (torque loads).** Exudyn's ``LoadTorqueVector`` uses
 :math:`Q = J_\omega^TM` with :math:`J_\omega = A[\bar G_{2}, T(\theta)\Theta]` (``TExpSO3``, our right
@@ -44,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.body.euler_parameters import rotation_matrix
-from ffrf.system.forces import ForceElement, MarkerLoad, SpringDamperJoint, marker_jacobians
+from ffrf.system.forces import ForceElement, MarkerLoad, marker_jacobians, tangent_rates
 from ffrf.system.joints import GroundFrame, exp_so3_tangent
 from ffrf.system.markers import BodyMarker
 
@@ -54,22 +52,10 @@ if TYPE_CHECKING:
 __all__ = [
     "ExudynMarkerLoad",
     "ExudynRigidBodySpringDamper",
-    "ExudynSpringDamperJoint",
     "exudyn_marker_jacobians",
     "exudyn_marker_load",
-    "exudyn_spring_damper",
-    "tangent_velocity",
     "xyz_angles",
 ]
-
-
-def tangent_velocity(q: NDArray, qd: NDArray) -> NDArray:
-    r"""``qd`` with :math:`\dot p` projected onto the tangent of :math:`p\cdot p = 1`,
-    :math:`\dot p - p\,(p\cdot\dot p)/(p\cdot p)`: the velocity Exudyn's markers see (analytic, complex-safe)."""
-    out = qd.astype(np.result_type(q, qd))
-    p = q[3:7]
-    out[3:7] = qd[3:7] - p * ((p @ qd[3:7]) / (p @ p))
-    return out
 
 
 def exudyn_marker_jacobians(marker: BodyMarker, q: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
@@ -83,16 +69,6 @@ def exudyn_marker_jacobians(marker: BodyMarker, q: NDArray) -> tuple[NDArray, ND
         g_omega = g_omega.copy()
         g_omega[:, 7:] = rotation_matrix(np.ascontiguousarray(q[3:7])) @ exp_so3_tangent(theta) @ modes
     return point, axes, g_point, g_omega
-
-
-@dataclass(frozen=True, eq=False)
-class ExudynSpringDamperJoint(SpringDamperJoint):
-    """Eq. (E1) with Exudyn's marker velocity: the rate :math:`C_q\\dot q` of the damper from the tangent
-    :math:`\\dot p` (:func:`tangent_velocity`), as ``CartesianSpringDamper`` on its markers' velocities."""
-
-    def _force(self, blocks, velocities, t):
-        tangent = [tangent_velocity(b, v) for b, v in zip(blocks, velocities, strict=True)]
-        return super()._force(blocks, tangent, t)
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,11 +88,6 @@ class ExudynMarkerLoad(MarkerLoad):
 
 def _copy_as(cls: type, element: Any) -> Any:
     return cls(**{f.name: getattr(element, f.name) for f in dataclasses.fields(element)})
-
-
-def exudyn_spring_damper(element: SpringDamperJoint) -> ExudynSpringDamperJoint:
-    """``element`` with Exudyn's marker velocity in its damper."""
-    return _copy_as(ExudynSpringDamperJoint, element)
 
 
 def exudyn_marker_load(load: MarkerLoad) -> ExudynMarkerLoad:
@@ -160,7 +131,7 @@ class ExudynRigidBodySpringDamper(ForceElement):
 
     def forces(self, blocks, velocities, t):
         q = blocks[0]
-        qd = tangent_velocity(q, velocities[0])
+        qd = tangent_rates(q, velocities[0])
         point, axes, g_point, g_omega = exudyn_marker_jacobians(self.marker1, q)
         a0 = self.marker0.rotation
         body_rotation = rotation_matrix(np.ascontiguousarray(q[3:7]))

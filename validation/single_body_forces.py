@@ -160,7 +160,7 @@ def ffrf_force_elements(scene: Scene, exudyn_definitions: bool = False) -> tuple
                 (0,), name, GroundFrame(point=np.asarray(spec.anchor, float)), marker, locked=(True,) * 3 + (False,) * 3
             )
             element = spring_damper(joint, spec.stiffness, spec.damping, spec.offset)
-            out.append(conventions.exudyn_spring_damper(element) if exudyn_definitions else element)
+            out.append(element)  # our damper already sees Exudyn's marker velocity (tangent rates)
         elif isinstance(spec, InterfaceLoad):
             vector = np.asarray(spec.vector, dtype=float)
             law = spec.law

@@ -6,7 +6,8 @@ Each entry becomes one element of :mod:`ffrf.system.forces` (``docs/formulation.
     name = "support"
     type = "spring_damper"            # a joint's equations held elastically (E1)
     elastic = "translations"          # "translations" (Exudyn's CartesianSpringDamper, world axes),
-                                      # "revolute" (a bushing: five directions, the turn about axis free) or "fixed"
+                                      # "revolute" (a bushing: five directions in the joint's frame, the turn
+                                      # about axis free) or "fixed" (all six, in the joint's frame)
     body0 = "ground"                  # the sides as a joint's: body0/body1, interface0/interface1, axis, point
     body1 = "bar"                     # (or axis0/point0, axis1/point1 as built)
     interface1 = "end"
@@ -125,7 +126,8 @@ def build_forces(
         if kind == "spring_damper":
             elastic = spec.get("elastic", "translations")
             joint = _joint(spec, bodies, index, joint_offsets, "fixed" if elastic == "fixed" else "revolute")
-            joint = replace(joint, locked=ELASTIC[elastic])
+            # a bushing's translational stiffness turns with its frame; a Cartesian one stays in world axes
+            joint = replace(joint, locked=ELASTIC[elastic], frame_translations=elastic != "translations")
             n = joint.size
             stiffness = _per_equation(spec["stiffness"], n, "stiffness", place)
             damping = _per_equation(spec.get("damping"), n, "damping", place)

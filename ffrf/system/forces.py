@@ -43,6 +43,7 @@ __all__ = [
     "element_tangents",
     "marker_jacobians",
     "spring_damper",
+    "tangent_rates",
 ]
 
 Vector = Callable[[float], ArrayLike]
@@ -80,6 +81,16 @@ def marker_jacobians(marker: BodyMarker | GroundFrame, q: NDArray | None) -> tup
     return point, axes, d_point, omega
 
 
+def tangent_rates(q: NDArray, qd: NDArray) -> NDArray:
+    r"""``qd`` with :math:`\dot p` projected onto the tangent of :math:`p\cdot p = 1`, :math:`\dot p - p\,(p\cdot\dot
+    p)/(p\cdot p)` (Eq. (E1)): index-3 integration keeps :math:`p\cdot p = 1` but not :math:`p\cdot\dot p = 0`, and
+    a damper must not feel that drift (Exudyn's markers leave it out too). Analytic, so complex-safe."""
+    out = qd.astype(np.result_type(q, qd))
+    p = q[3:7]
+    out[3:7] = qd[3:7] - p * ((p @ qd[3:7]) / (p @ p))
+    return out
+
+
 def _vector(value: ArrayLike | Vector | None, t: float) -> NDArray[np.float64]:
     if value is None:
         return np.zeros(3)
@@ -90,7 +101,9 @@ def _vector(value: ArrayLike | Vector | None, t: float) -> NDArray[np.float64]:
 class SpringDamperJoint(ForceElement):
     r"""Eqs. (E1)-(E2): the equations of ``joint`` held by stiffness ``stiffness`` and damping ``damping``
     (``(size,)`` diagonals or ``(size, size)`` matrices in the units of the joint's equations: N/m and N s/m for
-    translations, N m for the rotation equations, which are sines of small angles) about ``offset`` :math:`g_0`."""
+    translations, N m for the rotation equations z0.y1, z0.x1, x0.y1, which are (phi_x, -phi_y, -phi_z) to first
+    order) about ``offset`` :math:`g_0`. Translations are world components when the joint locks all three, unless
+    its ``frame_translations`` (then, as for a subset, components in joint frame 0: an anisotropic bushing)."""
 
     joint: MarkerJoint
     stiffness: NDArray[np.float64]
@@ -99,7 +112,7 @@ class SpringDamperJoint(ForceElement):
 
     def _force(self, blocks: list[NDArray], velocities: list[NDArray], t: float):
         rows = self.joint.jacobian(blocks, t)
-        rate = sum(r @ v for r, v in zip(rows, velocities, strict=True))
+        rate = sum(r @ tangent_rates(b, v) for r, b, v in zip(rows, blocks, velocities, strict=True))
         return rows, self.stiffness @ (self.joint.value(blocks, t) - self.offset) + self.damping @ rate
 
     def forces(self, blocks, velocities, t):
@@ -129,12 +142,13 @@ class AxialSpringDamper(ForceElement):
     length: float
 
     def _sides(self, blocks: list[NDArray], velocities: list[NDArray]):
-        ground = isinstance(self.marker0, GroundFrame)
-        q0, v0 = (None, None) if ground else (blocks[0], velocities[0])
+        q0 = None if isinstance(self.marker0, GroundFrame) else blocks[0]
         p0, _, g0, _ = marker_jacobians(self.marker0, q0)
         p1, _, g1, _ = marker_jacobians(self.marker1, blocks[-1])
         gap = p1 - p0
-        rate = g1 @ velocities[-1] - (0.0 if g0 is None else g0 @ v0)
+        rate = g1 @ tangent_rates(blocks[-1], velocities[-1])
+        if g0 is not None:
+            rate = rate - g0 @ tangent_rates(blocks[0], velocities[0])
         return g0, g1, gap, rate
 
     def forces(self, blocks, velocities, t):
@@ -154,6 +168,11 @@ def spring_damper(
     joint: MarkerJoint, stiffness: ArrayLike, damping: ArrayLike = 0.0, offset: ArrayLike | None = None
 ) -> SpringDamperJoint:
     """``joint``'s equations held elastically (Eqs. (E1)-(E2)); scalars and diagonals are spread to matrices."""
+    if joint.angle is not None:
+        raise ValueError(
+            f"spring-damper {joint.name!r}: its joint has a prescribed angle; a spring-damper holds a passive joint's "
+            "equations (drive it with a separate driven joint or a JointTorque)"
+        )
     n = joint.size
 
     def matrix(value: ArrayLike, what: str) -> NDArray[np.float64]:
@@ -167,7 +186,7 @@ def spring_damper(
                 f"spring-damper {joint.name!r}: {what} must be a number, {n} diagonal values or a {n} x {n} matrix "
                 f"(the joint has {n} equations), got shape {value.shape}"
             )
-        if not np.allclose(value, value.T, rtol=1e-12, atol=0.0):
+        if not np.allclose(value, value.T, rtol=0.0, atol=1e-12 * max(float(np.abs(value).max()), 1e-300)):
             raise ValueError(f"spring-damper {joint.name!r}: the {what} matrix must be symmetric")
         return value
 

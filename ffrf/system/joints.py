@@ -10,7 +10,8 @@ coordinates; e.g. the axial offset from a bore centre to the joint point):
 
 Equations, as Exudyn's ``GenericJoint`` (so that reactions compare one to one):
 
-* translations (J1): all three locked: :math:`p_1 - p_0 = 0` (world); a subset: components of
+* translations (J1): all three locked: :math:`p_1 - p_0 = 0` (world); a subset (or all three with
+  ``frame_translations``, for a compliant bushing whose stiffness turns with it): components of
   :math:`J_0^T(p_1 - p_0)`;
 * rotations (J2): about x :math:`z_0\cdot y_1 = 0`, about y :math:`z_0\cdot x_1 = 0`, about z
   :math:`x_0'\cdot y_1 = 0`, where :math:`x_0'` is :math:`x_0` turned about :math:`z_0` by the
@@ -117,6 +118,7 @@ class MarkerJoint(Constraint):
     offset1: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
     locked: tuple[bool, bool, bool, bool, bool, bool] = (True, True, True, True, True, False)
     angle: Callable[[float], float] | None = None
+    frame_translations: bool = False
 
     def __post_init__(self):
         if self.marker1 is None or isinstance(self.marker1, GroundFrame):
@@ -152,7 +154,8 @@ class MarkerJoint(Constraint):
 
     def _equations(self, p0, axes0, p1, axes1, t):
         gap = p1 - p0
-        out = list(gap) if all(self.locked[:3]) else [axes0[:, i] @ gap for i in range(3) if self.locked[i]]
+        world = all(self.locked[:3]) and not self.frame_translations
+        out = list(gap) if world else [axes0[:, i] @ gap for i in range(3) if self.locked[i]]
         if self.locked[3]:
             out.append(axes0[:, 2] @ axes1[:, 1])
         if self.locked[4]:
@@ -171,7 +174,7 @@ class MarkerJoint(Constraint):
         rows0 = None if ground else np.zeros((self.size, q0.shape[0]), dtype=dtype)
         row = 0
         gap = p1 - p0
-        if all(self.locked[:3]):
+        if all(self.locked[:3]) and not self.frame_translations:
             rows1[0:3] = dp1
             if not ground:
                 rows0[0:3] = -dp0

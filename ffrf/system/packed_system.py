@@ -185,6 +185,8 @@ def _unsupported(system: MultibodySystem) -> str | None:
             continue
         if type(c) is not MarkerJoint:
             return f"constraint {c.name!r} is a {type(c).__name__}"
+        if c.frame_translations:
+            return f"joint {c.name!r} takes its translations in its frame"
         if type(c.marker1) is not BodyMarker or type(c.marker0) not in (BodyMarker, GroundFrame):
             return f"joint {c.name!r} has a marker of type {type(c.marker0).__name__}/{type(c.marker1).__name__}"
     return None
