@@ -225,6 +225,8 @@ _START_ADVICE = "the start is not near an equilibrium at this time: assemble it 
 MAX_CORRECTION = 0.5
 #: Halvings of one quasi-static step before the path is declared ended.
 MAX_HALVINGS = 8
+#: Parts one quasi-static step may be done in (each a halved step that converged).
+MAX_PARTS = 64
 
 
 class _Path:
@@ -261,10 +263,16 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
     """Equilibrium at ``t_to`` from the path's newest one; a step that fails to converge or leaves the path
     (Eq. (S4)) is retried without secant updates, then halved, up to :data:`MAX_HALVINGS` times, each
     part predicted from the equilibria before it. Returns the Newton iterations spent and the kept tangent."""
-    iterations, halvings, t_from = 0, 0, path.times[-1]
+    iterations, halvings, t_from, parts = 0, 0, path.times[-1], 0
     failure: StaticDivergence | None = None
     while True:
         t_try = t_from + (t_to - t_from) / 2.0**halvings
+        if t_try == t_from or parts >= MAX_PARTS:
+            # Halved steps that keep converging ever closer to t_to without reaching it: a limit point at t_to.
+            raise StaticDivergence(
+                f"the steps towards t = {t_to:.9g} s shrink without reaching it ({parts} parts, the last at "
+                f"t = {t_from:.9g} s); {_PATH_ADVICE}"
+            )
         q, lam = path.q[-1], path.lam[-1]
         predicted = path.predict(t_try)
         q_guess, lam_guess = (q, lam) if predicted is None else predicted
@@ -296,7 +304,7 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
             path.add(t_try, q_new, lam_new)
             if t_try == t_to:
                 return iterations, tangent
-            t_from, halvings = t_try, 0  # the rest of the step, whole again
+            t_from, halvings, parts = t_try, 0, parts + 1  # the rest of the step, whole again
             continue
         if halvings >= MAX_HALVINGS or t_try == t_from:
             raise failure

@@ -1,0 +1,164 @@
+r"""Equilibrium paths through limit points: pseudo-arclength continuation in the load parameter t.
+
+A quasi-static run (:func:`ffrf.solvers.static_solver.quasi_static`) prescribes t (the drive angle's or a load's
+time law) and solves Eq. (S1) for ``(q, lambda)``; at a limit point the path turns back in t and there is no
+equilibrium beyond it. Continuation makes t an unknown and prescribes the distance along the path instead
+(Keller's pseudo-arclength, ``docs/formulation.md``, Eq. (S5)):
+
+.. math::
+    F(q, \lambda, t) = 0,\qquad \tau_q\cdot(q - \hat q) + c^2\,\tau_t\,(t - \hat t) = 0,
+
+with :math:`(\hat q, \hat t) = (q_k, t_k) + \Delta s\,\tau` the predictor along the unit tangent :math:`\tau`
+(in the norm :math:`|\delta q|^2 + c^2\,\delta t^2`, ``c`` the start's :math:`|dq/dt|` so that both count). Newton
+solves the bordered system :math:`[F_y, F_t; \tau_q^T, 0, c^2\tau_t]`, regular at limit points where
+:math:`F_y` alone is singular. The tangent at a new point solves the same bordered matrix with right-hand side
+:math:`(0, 1)`, which keeps the direction of travel. ``F_t`` is a central difference in t.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ffrf.errors import StaticDivergence
+from ffrf.numerics.rank_revealing import factor
+from ffrf.system.multibody import MultibodySystem
+from ffrf.system.packed_system import newton_model
+
+__all__ = ["EquilibriumPath", "continue_path"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class EquilibriumPath:
+    """Equilibria along the path: parameter ``t``, coordinates ``q``, multipliers, arclength ``s`` (path order)."""
+
+    t: NDArray[np.float64]
+    q: NDArray[np.float64]
+    multipliers: NDArray[np.float64]
+    s: NDArray[np.float64]
+
+    def limit_points(self) -> NDArray[np.float64]:
+        """The path's extrema in t (limit points), each from the parabola through the three points around it."""
+        out = []
+        for k in range(1, len(self.t) - 1):
+            before, after = self.t[k] - self.t[k - 1], self.t[k + 1] - self.t[k]
+            if before * after < 0.0:
+                s, t = self.s[k - 1 : k + 2], self.t[k - 1 : k + 2]
+                a, b, c = np.polyfit(s - s[1], t, 2)
+                out.append(c - b * b / (4.0 * a))
+        return np.array(out)
+
+
+class _Model:
+    """F(y) = [R; g] of Eq. (S1) and its bordered Jacobian for y = (q, lambda), t."""
+
+    def __init__(self, system: MultibodySystem):
+        self.model = newton_model(system)
+        self.n = system.n_coordinates
+        self.zeros = np.zeros(self.n)
+
+    def residual(self, q: NDArray, lam: NDArray, t: float) -> NDArray[np.float64]:
+        forces, gap = self.model.residual(q, self.zeros, self.zeros, lam, t)
+        return np.concatenate([forces, gap])
+
+    def jacobians(self, q: NDArray, lam: NDArray, t: float) -> tuple[NDArray, NDArray]:
+        matrix = self.model.iteration_matrix(q, self.zeros, self.zeros, lam, t, 0.0, 1.0, 0.0)
+        h = 1e-6 * max(1.0, abs(t))
+        rate = (self.residual(q, lam, t + h) - self.residual(q, lam, t - h)) / (2.0 * h)
+        return matrix, rate
+
+
+def _bordered(matrix: NDArray, rate: NDArray, tangent_q: NDArray, tangent_t: float, weight: float, n: int):
+    size = matrix.shape[0]
+    out = np.zeros((size + 1, size + 1))
+    out[:size, :size] = matrix
+    out[:size, size] = rate
+    out[size, :n] = tangent_q
+    out[size, size] = weight * tangent_t
+    return out
+
+
+def _unit(dq: NDArray, dt: float, weight: float) -> tuple[NDArray, float]:
+    norm = np.sqrt(dq @ dq + weight * dt * dt)
+    return dq / norm, dt / norm
+
+
+def continue_path(
+    system: MultibodySystem,
+    q0: NDArray,
+    multipliers0: NDArray,
+    t0: float,
+    t_end: float,
+    step: float,
+    max_points: int = 400,
+    tolerance: float = 1e-10,
+    max_iterations: int = 12,
+    min_step: float | None = None,
+    max_step: float | None = None,
+) -> EquilibriumPath:
+    """Follow the equilibria of ``system`` from the equilibrium ``(q0, multipliers0)`` at ``t0`` (Eq. (S5)) until
+    t passes ``t_end`` (the last point lies beyond it) or ``max_points`` points: ``step`` is the first arclength
+    step (in the norm of the module docstring), halved on a failed correction down to ``min_step`` (default
+    step / 1024), grown by 1.5 after easy ones up to ``max_step`` (default 8 step). Passes limit points in t."""
+    n = system.n_coordinates
+    model = _Model(system)
+    q, lam, t = np.array(q0, dtype=float), np.array(multipliers0, dtype=float), float(t0)
+    min_step = step / 1024.0 if min_step is None else min_step
+    max_step = 8.0 * step if max_step is None else max_step
+    direction = 1.0 if t_end >= t0 else -1.0
+    matrix, rate = model.jacobians(q, lam, t)
+    start = factor(matrix, what="static tangent at the path's start").solve(-rate)
+    weight = float(max(np.abs(start[:n]).max(), 1e-12)) ** 2  # c^2: |dq/dt| at the start
+    tangent_q, tangent_t = _unit(direction * start[:n], direction, weight)
+    tangent_lam = direction * start[n:] / np.sqrt(start[:n] @ start[:n] + weight)
+    points_t, points_q, points_lam, points_s = [t], [q.copy()], [lam.copy()], [0.0]
+    arclength, size = 0.0, step
+    while len(points_t) < max_points:
+        guess_q, guess_lam, guess_t = q + size * tangent_q, lam + size * tangent_lam, t + size * tangent_t
+        converged = None
+        y_q, y_lam, y_t = guess_q.copy(), guess_lam.copy(), guess_t
+        for iteration in range(1, max_iterations + 1):
+            matrix, rate = model.jacobians(y_q, y_lam, y_t)
+            residual = model.residual(y_q, y_lam, y_t)
+            arc = tangent_q @ (y_q - guess_q) + weight * tangent_t * (y_t - guess_t)
+            delta = factor(_bordered(matrix, rate, tangent_q, tangent_t, weight, n), what="bordered tangent").solve(
+                -np.append(residual, arc)
+            )
+            y_q, y_lam, y_t = y_q + delta[:n], y_lam + delta[n:-1], y_t + delta[-1]
+            if (
+                np.abs(delta[:n]).max() <= tolerance * max(1.0, np.abs(y_q).max())
+                and np.abs(residual[n:]).max() <= tolerance
+            ):
+                converged = iteration
+                break
+        if converged is None:
+            if size <= min_step:
+                raise StaticDivergence(
+                    f"continuation stopped at t = {t:.6g} after {len(points_t)} points: no equilibrium within "
+                    f"arclength {size:.3g} (min_step); the path may branch here"
+                )
+            size *= 0.5
+            log.debug("continuation step halved to %g at t = %g", size, t)
+            continue
+        matrix, rate = model.jacobians(y_q, y_lam, y_t)
+        bordered = _bordered(matrix, rate, tangent_q, tangent_t, weight, n)
+        right = np.zeros(bordered.shape[0])
+        right[-1] = 1.0
+        new = factor(bordered, what="bordered tangent").solve(right)
+        norm = np.sqrt(new[:n] @ new[:n] + weight * new[-1] ** 2)
+        tangent_q, tangent_t, tangent_lam = new[:n] / norm, new[-1] / norm, new[n:-1] / norm
+        arclength += size
+        q, lam, t = y_q, y_lam, float(y_t)
+        points_t.append(t)
+        points_q.append(q.copy())
+        points_lam.append(lam.copy())
+        points_s.append(arclength)
+        if (t - t_end) * direction >= 0.0:
+            break
+        size = min(max_step, 1.5 * size) if converged <= 4 else size
+    return EquilibriumPath(np.array(points_t), np.array(points_q), np.array(points_lam), np.array(points_s))
