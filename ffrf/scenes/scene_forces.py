@@ -16,6 +16,17 @@ Each entry becomes one element of :mod:`ffrf.system.forces` (``docs/formulation.
     offset = [0.0, 0.0, 0.0]          # the equations' values at which the element is unloaded
 
     [[forces]]
+    name = "tie"
+    type = "spring"                   # along the line between two interfaces' centres (E6), geometrically nonlinear
+    body0 = "ground"                  # a ground end needs point0 = [x, y, z]
+    point0 = [0.0, 0.0, -0.2]
+    body1 = "bar"
+    interface1 = "tip"
+    stiffness = [100.0]               # N/m
+    damping = [0.1]                   # N s/m
+    length = 0.15                     # m, unloaded length (default: the start distance)
+
+    [[forces]]
     name = "payload"
     type = "load"                     # force and torque on an interface's marker (E3)
     body = "bar"
@@ -46,11 +57,13 @@ import numpy as np
 
 from ffrf.errors import SceneError
 from ffrf.scenes.scene_joints import HasMarkers, joint_constraint, joint_geometry
-from ffrf.system.forces import ForceElement, JointTorque, MarkerLoad, spring_damper
+from ffrf.system.forces import AxialSpringDamper, ForceElement, JointTorque, MarkerLoad, spring_damper
+from ffrf.system.joints import GroundFrame
+from ffrf.system.markers import BodyMarker
 
 __all__ = ["ELASTIC", "FORCE_TYPES", "build_forces", "check_force"]
 
-FORCE_TYPES = ("spring_damper", "load", "motor")
+FORCE_TYPES = ("spring_damper", "spring", "load", "motor")
 #: Which of a joint's equations a spring-damper holds, as the joint's locked directions.
 ELASTIC = {
     "translations": (True, True, True, False, False, False),
@@ -63,6 +76,7 @@ _KEYS = {
     "spring_damper": _SIDES | {"elastic", "stiffness", "damping", "offset"},
     "load": {"body", "interface", "force", "torque", "frame", "table"},
     "motor": _SIDES | {"stall_torque", "no_load_speed"},
+    "spring": {"body0", "body1", "interface0", "interface1", "point0", "stiffness", "damping", "length"},
 }
 
 
@@ -76,6 +90,13 @@ def check_force(spec: dict, where: str) -> None:
         raise SceneError(f"{where}: a {kind} connects body0 and body1 (either may be 'ground'), as a joint does")
     if kind == "load" and ("force" not in spec and "torque" not in spec):
         raise SceneError(f"{where}: a load needs force = [fx, fy, fz] (N), torque = [mx, my, mz] (N m) or both")
+    if kind == "spring" and (len(spec.get("stiffness", [])) != 1 or len(spec.get("damping", [0.0])) != 1):
+        raise SceneError(
+            f"{where}: a spring (along the line between two interfaces) needs stiffness = [k] (N/m), optionally "
+            "damping = [c] (N s/m) and length (m; default the start distance)"
+        )
+    if kind == "spring" and "ground" in (spec.get("body0"), spec.get("body1")) and "point0" not in spec:
+        raise SceneError(f"{where}: a spring to the ground needs point0 = [x, y, z], its end on the ground (m)")
     if kind == "spring_damper" and "stiffness" not in spec:
         raise SceneError(f"{where}: a spring_damper needs stiffness = [...] (one value, or one per equation)")
     if kind == "motor" and ("stall_torque" not in spec or "no_load_speed" not in spec):
@@ -108,6 +129,22 @@ def _motor(stall: float, no_load_speed: float, t: float, angle: float, speed: fl
     return stall * (1.0 - speed / no_load_speed)
 
 
+def _spring(spec: dict, bodies: Sequence[HasMarkers], index: dict[str, int]) -> AxialSpringDamper:
+    """Eq. (E6) between two interfaces' marker points, or an interface and ``point0`` on the ground."""
+    markers = [
+        bodies[index[spec[f"body{k}"]]].markers[spec[f"interface{k}"]] for k in "01" if spec[f"body{k}"] != "ground"
+    ]
+    end1 = markers[-1]
+    end0: BodyMarker | GroundFrame = (
+        markers[0] if len(markers) == 2 else GroundFrame(point=np.asarray(spec["point0"], dtype=float))
+    )
+    start = float(np.linalg.norm(end1.point - end0.point))
+    stiffness, damping = float(spec["stiffness"][0]), float(spec.get("damping", [0.0])[0])
+    return AxialSpringDamper(
+        tuple(m.body for m in markers), spec["name"], end0, end1, stiffness, damping, float(spec.get("length", start))
+    )
+
+
 def _joint(spec: dict, bodies: Sequence[HasMarkers], index: dict[str, int], offsets: str, kind: str):
     sides = {key: spec[key] for key in _SIDES if key in spec}
     return joint_constraint(
@@ -134,6 +171,8 @@ def build_forces(
             elements.append(
                 spring_damper(joint, stiffness, damping, _per_equation(spec.get("offset"), n, "offset", place))
             )
+        elif kind == "spring":
+            elements.append(_spring(spec, bodies, index))
         elif kind == "load":
             body = bodies[index[spec["body"]]]
             law = _time_law(spec.get("table"), place)

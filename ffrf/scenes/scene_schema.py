@@ -143,6 +143,7 @@ FORCE = {
     "frame": Key("string", False, one_of(("world", "marker"))),
     "table": Key("table", keys=LOAD_TABLE),
     "stall_torque": Key("number"),
+    "length": Key("number", False, positive),
     "no_load_speed": Key("number", False, positive),
 }
 SENSOR = {

@@ -31,8 +31,13 @@ CASES = {
     ),
     "unknown force type": (
         "[[sensors]]",
+        _with_force(SPRING.replace("spring_damper", "sprung")),
+        ["forces[0] 'support'", "'type' must be one of ['spring_damper', 'spring', 'load', 'motor']"],
+    ),
+    "spring to the ground without its point": (
+        "[[sensors]]",
         _with_force(SPRING.replace("spring_damper", "spring")),
-        ["forces[0] 'support'", "'type' must be one of ['spring_damper', 'load', 'motor']"],
+        ["a spring to the ground needs point0 = [x, y, z]"],
     ),
     "spring-damper without stiffness": (
         "[[sensors]]",

@@ -162,3 +162,50 @@ damping = [0.05]
     assert np.max(np.abs(elements)) > 0.1 * np.max(np.abs(drive))  # the spring-damper matters
     residual = np.max(np.abs(sensors["energy_balance_residual"])) / np.max(np.abs(drive))
     assert residual < 1e-4  # measured 6.6e-7 of the drive work (without the element work: over 0.1)
+
+
+def test_a_hinged_bar_held_up_by_an_axial_spring_settles_where_the_moments_balance(tmp_path):
+    """The stiff pendulum (E = 1e13 Pa) held near horizontal by a spring (Eq. (E6)) from its tip to a ground point
+    0.1 m above the tip, unloaded at the start: statically the bar turns down by the angle where gravity's moment
+    about the hinge equals the spring's (a one-degree-of-freedom closed form, solved here by bisection)."""
+    from scipy.optimize import brentq
+
+    text = PENDULUM.replace('mode = "dynamic"', 'mode = "quasi_static"').replace("outputs = 101", "outputs = 2")
+    text = text.replace("E = 1e8", "E = 1e13").replace(
+        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]',
+        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}, {name = "tip", nodes_file = "tip.txt"}]',
+    )
+    k, rise = 2.0, 0.1
+    text += f"""
+[[forces]]
+name = "tie"
+type = "spring"
+body0 = "ground"
+point0 = [0.2, 0.01, {0.005 + rise}]
+body1 = "bar"
+interface1 = "tip"
+stiffness = [{k}]
+"""
+    model = write_bar(tmp_path)
+    np.savetxt(tmp_path / "tip.txt", np.flatnonzero(model.nodes[:, 0] > 0.2 - 1e-9), fmt="%d")
+    (tmp_path / "scene.toml").write_text(text)
+    scene = load_scene(tmp_path / "scene.toml")
+    body = scene.bodies[0]
+    hinge, tip = body.markers["hinge"].point, body.markers["tip"].point
+    np.testing.assert_allclose(tip - hinge, [0.2, 0.0, 0.0], atol=1e-15)
+    arm = (body.fe.center_of_mass - hinge)[0]
+    weight = body.fe.total_mass * 9.81
+
+    def moment(angle: float) -> float:  # about +y through the hinge; the bar turned down by angle
+        end = np.array([0.2 * np.cos(angle), 0.0, -0.2 * np.sin(angle)])
+        pull = np.array([0.2, 0.0, rise]) - end
+        length = np.linalg.norm(pull)
+        force = k * (length - rise) * pull / length
+        return weight * arm * np.cos(angle) + (end[2] * force[0] - end[0] * force[2])
+
+    expected = brentq(moment, 0.0, 1.0, xtol=1e-15)
+    run = simulate_scene(scene)
+    p = run.q[-1, 3:7]
+    angle = 2.0 * np.arctan2(p[2], p[0])
+    assert expected > 0.05  # the spring holds the bar well above hanging
+    assert abs(angle - expected) < 1e-7  # measured 1.5e-9 rad (the stiff bar still bends a little)
