@@ -25,9 +25,19 @@ stiffness = [5e3, 5e3, 5e3, 20.0, 20.0, 20.0]
 
 
 def _scene(tmp_path, text: str):
-    write_bar(tmp_path)
+    """The scene ``text`` on the bar of ``scene_fixtures``, with a second interface ``tip`` (the x = 0.2 m face)."""
+    model = write_bar(tmp_path)
+    np.savetxt(tmp_path / "tip.txt", np.flatnonzero(model.nodes[:, 0] > 0.2 - 1e-9), fmt="%d")
     (tmp_path / "scene.toml").write_text(text)
     return load_scene(tmp_path / "scene.toml")
+
+
+def _with_tip(text: str) -> str:
+    """``text`` with the bar's tip face as a second interface, ``tip``."""
+    return text.replace(
+        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]',
+        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}, {name = "tip", nodes_file = "tip.txt"}]',
+    )
 
 
 def test_a_bar_hanging_from_a_spring_damper_sinks_by_its_weight_over_the_stiffness(tmp_path):
@@ -52,10 +62,7 @@ def test_a_ramped_tip_load_bends_a_cantilever_as_the_ritz_solution_of_its_basis(
     text = text.replace("gravity = [0.0, 0.0, -9.81]", "gravity = [0.0, 0.0, 0.0]").replace(
         'type = "revolute"', 'type = "fixed"'
     )
-    text = text.replace(
-        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]',
-        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}, {name = "tip", nodes_file = "tip.txt"}]',
-    )
+    text = _with_tip(text)
     text += """
 [[forces]]
 name = "payload"
@@ -65,10 +72,7 @@ interface = "tip"
 force = [0.0, 0.0, -1e-3]
 table = {time = [0.0, 0.05], scale = [0.0, 1.0]}
 """
-    model = write_bar(tmp_path)
-    np.savetxt(tmp_path / "tip.txt", np.flatnonzero(model.nodes[:, 0] > 0.2 - 1e-9), fmt="%d")
-    (tmp_path / "scene.toml").write_text(text)
-    scene = load_scene(tmp_path / "scene.toml")
+    scene = _scene(tmp_path, text)
     run = simulate_scene(scene)
     body = scene.bodies[0]
     tip = body.markers["tip"]
@@ -137,10 +141,7 @@ def test_the_energy_balance_of_a_driven_bar_pulling_a_spring_damper_closes(tmp_p
         .replace("outputs = 101", "outputs = 201")
     )
     text = text.replace('mode = "dynamic"', 'mode = "dynamic"\nbeta = 1e-4')
-    text = text.replace(
-        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]',
-        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}, {name = "tip", nodes_file = "tip.txt"}]',
-    )
+    text = _with_tip(text)
     text += """
 [[forces]]
 name = "tie"
@@ -151,10 +152,7 @@ interface1 = "tip"
 stiffness = [20.0]
 damping = [0.05]
 """
-    model = write_bar(tmp_path)
-    np.savetxt(tmp_path / "tip.txt", np.flatnonzero(model.nodes[:, 0] > 0.2 - 1e-9), fmt="%d")
-    (tmp_path / "scene.toml").write_text(text)
-    scene = load_scene(tmp_path / "scene.toml")
+    scene = _scene(tmp_path, text)
     run = simulate_scene(scene)
     sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
     elements = sensors["energy_elements_work"]
@@ -171,10 +169,7 @@ def test_a_hinged_bar_held_up_by_an_axial_spring_settles_where_the_moments_balan
     from scipy.optimize import brentq
 
     text = PENDULUM.replace('mode = "dynamic"', 'mode = "quasi_static"').replace("outputs = 101", "outputs = 2")
-    text = text.replace("E = 1e8", "E = 1e13").replace(
-        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}]',
-        'interfaces = [{name = "hinge", nodes_file = "hinge.txt"}, {name = "tip", nodes_file = "tip.txt"}]',
-    )
+    text = _with_tip(text.replace("E = 1e8", "E = 1e13"))
     k, rise = 2.0, 0.1
     text += f"""
 [[forces]]
@@ -186,10 +181,7 @@ body1 = "bar"
 interface1 = "tip"
 stiffness = [{k}]
 """
-    model = write_bar(tmp_path)
-    np.savetxt(tmp_path / "tip.txt", np.flatnonzero(model.nodes[:, 0] > 0.2 - 1e-9), fmt="%d")
-    (tmp_path / "scene.toml").write_text(text)
-    scene = load_scene(tmp_path / "scene.toml")
+    scene = _scene(tmp_path, text)
     body = scene.bodies[0]
     hinge, tip = body.markers["hinge"].point, body.markers["tip"].point
     np.testing.assert_allclose(tip - hinge, [0.2, 0.0, 0.0], atol=1e-15)
