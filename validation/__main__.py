@@ -1,11 +1,14 @@
-"""Command line: ``python -m validation report (--variant NAME | --scene SCENE.toml) --out DIR``
-and ``python -m validation summary --variants rigid pla pla1 pla2 --out DIR``.
+"""Command line: ``python -m validation report (--variant NAME | --scene SCENE.toml) --out DIR``,
+``python -m validation summary --variants rigid pla pla1 pla2 --out DIR`` and
+``python -m validation testmodels [--models NAME ...] [--no-exudyn] [--json OUT.json]``.
 
 ``report`` cross-validates one built-in Bennett variant, or a scene file of ``python -m ffrf
 run``, against its Exudyn twin and writes ``DIR/report.md``, ``DIR/metrics.json`` and the
 figures (for a scene file, its own mode and settings are used); ``summary`` does so for several
 variants (``DIR/<variant>/``) and writes ``DIR/summary.md`` in the layout of the paper's
-results. Exit status (scripts and CI rely on it): 0 when every target is met, 1 when a target is
+results; ``testmodels`` runs our twins of Exudyn's TestModels with modal flexible bodies
+(:mod:`validation.testmodels`) next to Exudyn's own runs and the values Exudyn stores. Exit status
+(scripts and CI rely on it): 0 when every target is met, 1 when a target is
 missed (the reports are written and say which), 2 when a run fails (the reason is printed, the
 reports written so far stay).
 """
@@ -70,7 +73,16 @@ def main(argv: list[str] | None = None) -> int:
     summary = commands.add_parser("summary", help="several variants and a summary in the paper's layout")
     summary.add_argument("--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS))
     _settings_arguments(summary)
+    testmodels = commands.add_parser("testmodels", help="Exudyn's TestModels: stored value, Exudyn's run and ours")
+    testmodels.add_argument("--models", nargs="+", metavar="NAME", help="these models only (default: all)")
+    testmodels.add_argument("--no-exudyn", action="store_true", help="ours against the stored values only")
+    testmodels.add_argument("--json", type=Path, help="write every number to this JSON file")
     args = parser.parse_args(argv)
+
+    if args.command == "testmodels":
+        from .testmodels.report import main as testmodels_main
+
+        return testmodels_main(args.models, not args.no_exudyn, args.json)
 
     if args.command == "report" and args.scene is not None:
         return _scene_report(args.scene, args.basis, args.out)
