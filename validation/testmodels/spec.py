@@ -54,7 +54,7 @@ STORED_TOLERANCE = 1e-9
 #: Ours against Exudyn's converged run, both with tightened tolerances (relative).
 CONVERGED_TOLERANCE = 1e-11
 #: Exudyn's run at the script's settings reproduces the stored value (relative): the eigensolver's
-#: start vector and the summation order move it by up to 7e-13 (objectFFRFreducedOrderTest).
+#: basis (another one of the same span each run) moves it by up to 1e-12 (objectFFRFreducedOrderTest).
 REPRODUCED_TOLERANCE = 1e-11
 #: Exudyn's tightened Newton tolerances, full Newton (:func:`solve`). Relative 1e-10 is not enough for
 #: superElementRigidJointTest (it moves by 4e-13); at relative 1e-12, 2 of 12 runs of
