@@ -99,12 +99,20 @@ class Scene:
     @property
     def qd_initial(self) -> NDArray[np.float64]:
         """Start velocities: each body's rigid ``velocity = {linear, angular}`` (world; the frame origin's velocity
-        and the angular velocity, :meth:`~ffrf.system.multibody.MultibodySystem.rigid_velocity`), else at rest."""
+        and the angular velocity, :meth:`~ffrf.system.multibody.MultibodySystem.rigid_velocity`) and ``modal``
+        (one rate per mode, in the reduction's order), else at rest."""
         qd = np.zeros(self.system.n_coordinates)
         for body, entry in zip(self.bodies, self.description["bodies"], strict=True):
             velocity = entry.get("velocity", {})
             linear, angular = velocity.get("linear", [0.0, 0.0, 0.0]), velocity.get("angular", [0.0, 0.0, 0.0])
             qd += self.system.rigid_velocity(self.q_initial, body.index, linear, angular)
+            if "modal" in velocity:
+                modal, m = np.asarray(velocity["modal"], dtype=float), body.reduction.n_modes
+                if modal.shape != (m,):
+                    raise SceneError(
+                        f"body {body.name!r}: velocity.modal needs one rate per mode ({m}), got {modal.size}"
+                    )
+                qd[self.system.block(body.index)][7:] = modal
         return qd
 
     @property

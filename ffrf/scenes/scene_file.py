@@ -37,7 +37,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     order = 2                         # default 2: linear tetrahedra are too stiff in bending
     modes = 4
     pose = {position = [0, 0, 0], euler_parameters = [1, 0, 0, 0]}   # optional start pose of the body frame
-    velocity = {linear = [0, 0, 0], angular = [0, 0, 0]}   # optional start velocity of the frame (world, m/s, rad/s)
+    velocity = {linear = [0, 0, 0], angular = [0, 0, 0]}   # optional start velocity of the frame (world, m/s, rad/s);
+                                      # modal = [...]: one rate per mode
     interfaces = [                    # the first is the body's frame interface
         {name = "bore0", group = "joint0"},
         {name = "bore1", cylinder = {point = [0.1, 0, 0], direction = [0, 0, 1], radius = 0.0095,

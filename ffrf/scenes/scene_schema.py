@@ -86,6 +86,7 @@ POSE = {
 VELOCITY = {
     "linear": Key("vector3"),
     "angular": Key("vector3"),
+    "modal": Key("numbers"),
 }
 BODY = {
     "name": Key("string", True),

@@ -24,6 +24,7 @@ user's function (a load's time law, a torque curve) is differentiated by central
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -47,6 +48,7 @@ __all__ = [
 ]
 
 Vector = Callable[[float], ArrayLike]
+StateVector = Callable[[float, NDArray, NDArray], ArrayLike]
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,10 +93,17 @@ def tangent_rates(q: NDArray, qd: NDArray) -> NDArray:
     return out
 
 
-def _vector(value: ArrayLike | Vector | None, t: float) -> NDArray[np.float64]:
+def _takes_state(value: object) -> bool:
+    """Whether a load's function reads the state, ``f(t, position, velocity)``, rather than time alone."""
+    return callable(value) and len(inspect.signature(value).parameters) == 3
+
+
+def _vector(value: ArrayLike | Vector | StateVector | None, t: float, point=None, velocity=None) -> NDArray:
     if value is None:
         return np.zeros(3)
-    return np.asarray(value(t) if callable(value) else value, dtype=float)
+    if not callable(value):
+        return np.asarray(value, dtype=float)
+    return np.asarray(value(t, point, velocity) if _takes_state(value) else value(t))  # type: ignore[call-arg]
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,21 +209,27 @@ def spring_damper(
 
 @dataclass(frozen=True, eq=False)
 class MarkerLoad(ForceElement):
-    r"""Eq. (E3): force ``force`` (N) and torque ``torque`` (N m) on ``marker``, each a constant vector or a
-    function of time, in world axes or, with ``frame="marker"``, in the marker's axes (turning with it)."""
+    r"""Eq. (E3): force ``force`` (N) and torque ``torque`` (N m) on ``marker``, each a constant vector, a
+    function of time ``f(t)`` or of the state ``f(t, position, velocity)`` (the marker point's world position and
+    velocity: a payload's drag, a contact), in world axes or, with ``frame="marker"``, in the marker's axes."""
 
     marker: BodyMarker
-    force: ArrayLike | Vector | None = None
-    torque: ArrayLike | Vector | None = None
+    force: ArrayLike | Vector | StateVector | None = None
+    torque: ArrayLike | Vector | StateVector | None = None
     frame: str = "world"
 
     def __post_init__(self):
         if self.frame not in ("world", "marker"):
             raise ValueError(f"load {self.name!r}: frame must be 'world' or 'marker', got {self.frame!r}")
 
+    @property
+    def complex_safe(self) -> bool:
+        return not (_takes_state(self.force) or _takes_state(self.torque))
+
     def forces(self, blocks, velocities, t):
-        _, axes, g_point, g_omega = marker_jacobians(self.marker, blocks[0])
-        force, torque = _vector(self.force, t), _vector(self.torque, t)
+        point, axes, g_point, g_omega = marker_jacobians(self.marker, blocks[0])
+        velocity = g_point @ tangent_rates(blocks[0], velocities[0])
+        force, torque = _vector(self.force, t, point, velocity), _vector(self.torque, t, point, velocity)
         if self.frame == "marker":
             force, torque = axes @ force, axes @ torque
         return [g_point.T @ force + g_omega.T @ torque]

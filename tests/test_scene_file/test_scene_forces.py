@@ -5,8 +5,10 @@ solution of its basis, and a motor spins a hinged bar towards its no-load speed.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scene_fixtures import PENDULUM, write_bar
 
+from ffrf.errors import SceneError
 from ffrf.fe.fe_model import rigid_body_modes
 from ffrf.output.sensors import scene_sensors
 from ffrf.scenes.scene_file import load_scene, simulate_scene
@@ -201,3 +203,20 @@ stiffness = [{k}]
     angle = 2.0 * np.arctan2(p[2], p[0])
     assert expected > 0.05  # the spring holds the bar well above hanging
     assert abs(angle - expected) < 1e-7  # measured 1.5e-9 rad (the stiff bar still bends a little)
+
+
+def test_modal_start_velocities_carry_the_kinetic_energy_of_the_reduced_mass(tmp_path):
+    """``velocity = {modal = [...]}`` of the clamped bar: the start's kinetic energy is v^T M_red v / 2 (the frame
+    does not move); a list of the wrong length is refused with the number of modes."""
+    text = PENDULUM.replace('type = "revolute"', 'type = "fixed"').replace(
+        "modes = 3\n", "modes = 3\nvelocity = {modal = [0.3, -0.2, 0.1]}\n"
+    )
+    scene = _scene(tmp_path, text)
+    rates = np.array([0.3, -0.2, 0.1])
+    body = scene.bodies[0]
+    assert body.reduction.n_modes == 3
+    kinetic = scene.system.energies(scene.q_initial, scene.qd_initial)["kinetic"]
+    assert abs(kinetic / (0.5 * rates @ body.reduction.reduced_mass @ rates) - 1.0) < 1e-12
+    wrong = _scene(tmp_path, text.replace("[0.3, -0.2, 0.1]", "[0.3, -0.2]"))
+    with pytest.raises(SceneError, match=r"velocity.modal needs one rate per mode \(3\), got 2"):
+        wrong.qd_initial  # noqa: B018 - the property raises
