@@ -95,7 +95,14 @@ def tangent_rates(q: NDArray, qd: NDArray) -> NDArray:
 
 def _takes_state(value: object) -> bool:
     """Whether a load's function reads the state, ``f(t, position, velocity)``, rather than time alone."""
-    return callable(value) and len(inspect.signature(value).parameters) == 3
+    if not callable(value):
+        return False
+    required = [
+        p
+        for p in inspect.signature(value).parameters.values()
+        if p.default is p.empty and p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)
+    ]
+    return len(required) == 3
 
 
 def _vector(value: ArrayLike | Vector | StateVector | None, t: float, point=None, velocity=None) -> NDArray:

@@ -268,6 +268,8 @@ def test_a_state_dependent_drag_load_damps_a_mass_on_a_spring_as_the_closed_form
     centre = model.center_of_mass
     drag = MarkerLoad((0,), "drag", frame_marker(0, 0, centre), force=lambda t, position, velocity: -c * velocity)
     assert not drag.complex_safe  # a user's state function: central-difference tangents
+    timed = MarkerLoad((0,), "timed", frame_marker(0, 0, centre), force=lambda t, a=1.0, b=2.0: [a * t, b, 0.0])
+    assert timed.complex_safe  # a time law whose extra parameters have defaults reads time only
     system = MultibodySystem((body,), (), forces=(_translational_spring(body, centre, k), drag))
     q0 = system.initial_state()
     q0[0] = 1e-3
