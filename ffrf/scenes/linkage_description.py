@@ -47,6 +47,7 @@ __all__ = [
     "joint_points",
     "linkage_description",
     "start_pose",
+    "checked_tool_link",
 ]
 
 #: Materials of the built-in linkage variants (as the paper's Bennett variants).
@@ -231,19 +232,29 @@ class LinkageOptions:
     attach_points: ArrayLike | None = None
 
 
-def linkage_description(loop: SingleLoop, options: LinkageOptions | None = None) -> dict:
-    """The loop as a scene description (module docstring), built as ``options`` say."""
-    o = LinkageOptions() if options is None else options
+def checked_tool_link(loop: SingleLoop, options: LinkageOptions) -> int:
+    """The tool link of ``options`` (default ``n // 2``), after checking it and the driver against the loop."""
     n = loop.n
-    if not 0 <= o.driver < n:
-        raise ValueError(f"driver must be a joint index 0..{n - 1}, got {o.driver}")
-    tool = n // 2 if o.tool_link is None else o.tool_link
+    if not 0 <= options.driver < n:
+        raise ValueError(f"driver must be a joint index 0..{n - 1}, got {options.driver}")
+    tool = n // 2 if options.tool_link is None else options.tool_link
     if not 0 < tool < n:
         raise ValueError(f"tool_link must be a moving link 1..{n - 1}, got {tool}")
+    return tool
+
+
+def linkage_description(
+    loop: SingleLoop, options: LinkageOptions | None = None, start_phi: ArrayLike | None = None
+) -> dict:
+    """The loop as a scene description (module docstring), built as ``options`` say; ``start_phi``: the rigid
+    loop's joint rotations at the start, when the caller has them (default :func:`start_pose` of ``options``)."""
+    o = LinkageOptions() if options is None else options
+    n = loop.n
+    tool = checked_tool_link(loop, o)
     attach = None if o.attach_points is None else np.asarray(o.attach_points, dtype=float)
     points = joint_points(loop) if attach is None else attach.mean(axis=1)
     links = _link_axes(loop, points, tuple(o.bore_errors), _seats(loop, attach))
-    phi = start_pose(loop, o.driver, o.start_angle, o.origin)
+    phi = start_pose(loop, o.driver, o.start_angle, o.origin) if start_phi is None else np.asarray(start_phi)
     transforms = loop.link_transforms(phi)
     bodies, sensors = [], []
     for k, sides in enumerate(links):

@@ -40,7 +40,7 @@ from ffrf.output.tables import write_results as write_tables
 from ffrf.scenes.assembly import assemble, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.solvers.simulate import MODES, simulate
-from ffrf.solvers.stability import stability_along
+from ffrf.solvers.stability import stability_along, stability_summary
 from ffrf.system.joints import MarkerJoint
 
 __all__ = [
@@ -49,7 +49,6 @@ __all__ = [
     "evaluate_sensors",
     "choose_mode",
     "inertia_number",
-    "stability_summary",
     "write_results",
 ]
 
@@ -228,7 +227,9 @@ def run_linkage(
     out = LinkageResult(times, sensors, q, metadata, stress)
     out.metadata["summary"] = out.summary()
     if stability:
-        out.metadata["stability"] = stability_summary(sensors["stability_squared_frequencies"], sensors["drive_angle"])
+        out.metadata["stability"] = stability_summary(
+            sensors["stability_squared_frequencies"], np.degrees(sensors["drive_angle"]), "drive_angle_deg"
+        )
     if stopped is not None:
         out.metadata["stopped"] = {
             "time_s": float(times[-1]),
@@ -239,23 +240,6 @@ def run_linkage(
         stopped.partial = out
         raise stopped
     return out
-
-
-def stability_summary(squared_frequencies: NDArray, drive_angle: NDArray) -> dict:
-    """The smallest squared frequency of Eq. (B1) over a run (rad^2/s^2) and where, and the unstable poses."""
-    lowest = squared_frequencies[:, 0]
-    k = int(np.argmin(lowest))
-    unstable = np.flatnonzero(lowest <= 0.0)
-    return {
-        "min_squared_frequency": float(lowest[k]),
-        "min_frequency_hz": float(np.sqrt(max(lowest[k], 0.0)) / (2.0 * np.pi)),
-        "at_drive_angle_deg": float(np.degrees(drive_angle[k])),
-        "unstable_poses": int(unstable.size),
-        "first_unstable_drive_angle_deg": float(np.degrees(drive_angle[unstable[0]])) if unstable.size else None,
-        "first_squared_frequencies": squared_frequencies[0].tolist(),
-        "last_squared_frequencies": squared_frequencies[-1].tolist(),
-        "last_drive_angle_deg": float(np.degrees(drive_angle[-1])),
-    }
 
 
 def write_results(result: LinkageResult, directory: str | Path) -> Path:

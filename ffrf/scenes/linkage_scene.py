@@ -24,6 +24,7 @@ from ffrf.scenes.builder import Scene, SceneBody, build_scene
 from ffrf.scenes.linkage_description import (
     BoreError,
     LinkageOptions,
+    checked_tool_link,
     drive_sign,
     joint_points,
     linkage_description,
@@ -139,8 +140,9 @@ def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None, where
     ``where`` (default the linkage's name) starts every error message."""
     options = LinkageOptions() if options is None else options
     where = options.name if where is None else where
-    description = linkage_description(loop, options)
+    tool = checked_tool_link(loop, options)
     start_phi = start_pose(loop, options.driver, options.start_angle, options.origin)
+    description = linkage_description(loop, options, start_phi)
     t_end = float(description["scene"]["t_end"])
     _check_drive_range(loop, options, start_phi, float(CosineRamp(options.omega, options.ramp_time)(t_end)), where)
     scene = build_scene(description, where=where)
@@ -166,5 +168,5 @@ def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None, where
         start_angle=angle.start,
         start_phi=start_phi,
         t_end=t_end,
-        tool_link=loop.n // 2 if options.tool_link is None else options.tool_link,
+        tool_link=tool,
     )

@@ -102,7 +102,7 @@ from ffrf.scenes.assembly import assemble, quasi_static_step, start_state, start
 from ffrf.scenes.builder import Scene, build_scene
 from ffrf.scenes.linkage_file import load_linkage
 from ffrf.solvers.simulate import Run, simulate
-from ffrf.solvers.stability import stability_along
+from ffrf.solvers.stability import stability_along, stability_summary
 
 __all__ = ["SceneError", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
 
@@ -184,12 +184,7 @@ def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
     if scene.settings.get("stability", False):
         judged = stability_along(scene.system, run.time, run.q, run.multipliers, count=3)
         sensors["stability_squared_frequencies"] = np.array([s.squared_frequencies for s in judged])
-        lowest = sensors["stability_squared_frequencies"][:, 0]
-        metadata["stability"] = {
-            "min_squared_frequency": float(lowest.min()),
-            "at_time_s": float(run.time[int(np.argmin(lowest))]),
-            "unstable_poses": int(np.sum(lowest <= 0.0)),
-        }
+        metadata["stability"] = stability_summary(sensors["stability_squared_frequencies"], run.time, "time_s")
     metadata["wall_time_s"] = wallclock.perf_counter() - started
     write_results(directory, {"time": run.time, **sensors}, metadata, coordinates=run.q)
     return metadata

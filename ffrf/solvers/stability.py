@@ -23,7 +23,7 @@ from scipy.linalg import eigh
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
 
-__all__ = ["EquilibriumStability", "equilibrium_stability", "stability_along"]
+__all__ = ["EquilibriumStability", "equilibrium_stability", "stability_along", "stability_summary"]
 
 
 @dataclass(frozen=True)
@@ -75,3 +75,21 @@ def stability_along(
         equilibrium_stability(system, row, lam, float(t), count)
         for t, row, lam in zip(times, q, multipliers, strict=True)
     ]
+
+
+def stability_summary(squared_frequencies: NDArray, along: NDArray, name: str) -> dict:
+    """The smallest squared frequency of Eq. (B1) over a run (rad^2/s^2) and where, the unstable poses, and the
+    first and last poses' values; ``along`` (one value per pose) locates them, under the keys ``*_{name}``."""
+    lowest = squared_frequencies[:, 0]
+    k = int(np.argmin(lowest))
+    unstable = np.flatnonzero(lowest <= 0.0)
+    return {
+        "min_squared_frequency": float(lowest[k]),
+        "min_frequency_hz": float(np.sqrt(max(lowest[k], 0.0)) / (2.0 * np.pi)),
+        f"at_{name}": float(along[k]),
+        "unstable_poses": int(unstable.size),
+        f"first_unstable_{name}": float(along[unstable[0]]) if unstable.size else None,
+        "first_squared_frequencies": squared_frequencies[0].tolist(),
+        "last_squared_frequencies": squared_frequencies[-1].tolist(),
+        f"last_{name}": float(along[-1]),
+    }

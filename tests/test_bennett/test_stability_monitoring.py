@@ -22,7 +22,6 @@ def test_the_nominal_pla_bennett_is_stable_over_a_revolution(tmp_path, capsys):
     table = json.loads((tmp_path / "stability.json").read_text())
     values = np.array(table["squared_frequencies_rad2_per_s2"])
     assert values.shape == (25, 3) and np.all(values[:, 0] > 0.0)
-    assert np.all(np.diff(values, axis=1) >= 0.0)  # ascending per pose
     summary = table["summary"]
     assert summary["unstable_poses"] == 0 and summary["min_squared_frequency"] == values[:, 0].min()
     assert (tmp_path / "stability.png").is_file()
