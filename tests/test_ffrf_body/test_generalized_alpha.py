@@ -7,7 +7,8 @@ from pendulum_fixtures import pendulum, tip_position
 from scipy.integrate import solve_ivp
 
 from ffrf.body.euler_parameters import rotation_matrix
-from ffrf.solvers.generalized_alpha import AlphaParameters, generalized_alpha
+from ffrf.errors import NewtonDivergence
+from ffrf.solvers.generalized_alpha import AlphaParameters, generalized_alpha, precision_floor
 
 
 def test_parameters_from_spectral_radius():
@@ -92,3 +93,27 @@ def test_newton_start_extrapolates_linear_histories_exactly():
     # after a step more than twice shorter (cut to land on an output) nothing is extrapolated
     short = (a + b * (t_now - 1e-6), 2 * a - b * (t_now - 1e-6), 1e-6)
     np.testing.assert_array_equal(module._predicted_unknowns(state, h, short)[0], state.qdd)
+
+
+def test_a_tolerance_below_round_off_is_named_as_such_and_the_floor_is_where_newton_stalls():
+    """The precision floor (``precision_floor``: an ulp of the positions seen through gamma'/beta')
+    separates tolerances Newton meets from those it cannot: at 3x the floor a flexible pendulum's
+    swing converges; at a tenth of it Newton stalls at round-off and the error says the tolerance is
+    below what double precision reaches (not "reduce the step size", which would raise the floor)."""
+    system, _, _, _ = pendulum(n_modes=3)
+    q0 = system.initial_state()
+    step = 1e-3
+    floor = precision_floor(AlphaParameters(0.8), step, q0, np.zeros_like(q0))
+    assert 1e-14 < floor < 1e-11  # 4.4e-13 at this step: gamma/(h beta) = 1978 ulps of |q| = 1
+    generalized_alpha(system, q0, np.zeros_like(q0), 0.05, step, rho_inf=0.8, tolerance=3.0 * floor)
+    with pytest.raises(NewtonDivergence, match="below what double precision can reach") as failure:
+        generalized_alpha(system, q0, np.zeros_like(q0), 0.05, step, rho_inf=0.8, tolerance=0.1 * floor)
+    assert "reduce the step size" not in str(failure.value)
+
+
+def test_a_newton_failure_above_the_floor_still_advises_a_shorter_step():
+    """Out of iterations with a reachable tolerance: the remedy is the step or the model."""
+    system, _, _, _ = pendulum(n_modes=3)
+    q0 = system.initial_state()
+    with pytest.raises(NewtonDivergence, match="reduce the step size"):
+        generalized_alpha(system, q0, np.zeros_like(q0), 0.05, 1e-3, rho_inf=0.8, tolerance=1e-10, max_iterations=1)
