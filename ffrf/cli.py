@@ -290,6 +290,19 @@ def _write_stability(result, out: Path) -> None:
         f"({s['min_frequency_hz']:.3g} Hz) at drive angle {s['at_drive_angle_deg']:.4g} deg; "
         f"{s['unstable_poses']} unstable pose(s) -> {out / 'stability.json'}"
     )
+    for snap in s.get("snaps", []):
+        links = sorted(snap["critical_mode_link_shares"].items(), key=lambda item: -item[1])[:2]
+        jump = (
+            f"the linkage jumps to another branch, coupler point {1e3 * snap['coupler_jump_m']:.4g} mm away, "
+            f"releasing {1e3 * snap['energy_released_J']:.4g} mJ"
+            if snap["landed"]
+            else "no stable equilibrium to land on was found along the traced path (run it dynamically)"
+        )
+        print(
+            f"snap: the equilibrium path folds at drive angle {snap['drive_angle_deg']:.4g} deg "
+            f"(driving torque {1e3 * snap['driving_torque_Nm']:.4g} N mm); {jump}; critical mode mostly in "
+            + ", ".join(f"{name} ({100 * share:.0f} %)" for name, share in links)
+        )
 
 
 def _run_bennett(args: argparse.Namespace) -> int:

@@ -62,11 +62,13 @@ class ExternalFEError(FEInputError):
 
 
 class StaticDivergence(RuntimeError):
-    """Newton found no static equilibrium; ``partial``, where given, holds the equilibria found before."""
+    """Newton found no static equilibrium; ``partial``, where given, holds the equilibria found before, and
+    ``snaps`` the folds a run went through or stopped at (:mod:`ffrf.solvers.snap_through`)."""
 
-    def __init__(self, message: str, partial: Any = None):
+    def __init__(self, message: str, partial: Any = None, snaps: tuple = ()):
         super().__init__(message)
         self.partial = partial
+        self.snaps = snaps
 
 
 class NewtonDivergence(RuntimeError):

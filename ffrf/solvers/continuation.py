@@ -18,6 +18,7 @@ solves the bordered system :math:`[F_y, F_t; \tau_q^T, 0, c^2\tau_t]`, regular a
 from __future__ import annotations
 
 import logging
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,7 +29,7 @@ from ffrf.numerics.rank_revealing import factor
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
 
-__all__ = ["EquilibriumPath", "continue_path"]
+__all__ = ["EquilibriumPath", "continue_path", "equilibrium_path", "path_points", "parabola_vertex", "path_speed"]
 
 log = logging.getLogger(__name__)
 
@@ -48,10 +49,20 @@ class EquilibriumPath:
         for k in range(1, len(self.t) - 1):
             before, after = self.t[k] - self.t[k - 1], self.t[k + 1] - self.t[k]
             if before * after < 0.0:
-                s, t = self.s[k - 1 : k + 2], self.t[k - 1 : k + 2]
-                a, b, c = np.polyfit(s - s[1], t, 2)
-                out.append(c - b * b / (4.0 * a))
+                out.append(parabola_vertex(self.s[k - 1 : k + 2], self.t[k - 1 : k + 2])[0])
         return np.array(out)
+
+
+def parabola_vertex(s: NDArray, t: NDArray) -> tuple[float, NDArray]:
+    """The extremum of the parabola t(s) through three points: ``(t at the vertex, Lagrange weights of the three
+    points at the vertex's s)``, so that any quantity along the path can be interpolated there the same way."""
+    a, b, c = np.polyfit(s - s[1], t, 2)
+    vertex = -b / (2.0 * a)
+    nodes = s - s[1]
+    weights = np.array(
+        [np.prod([(vertex - nodes[j]) / (nodes[i] - nodes[j]) for j in range(3) if j != i]) for i in range(3)]
+    )
+    return float(c - b * b / (4.0 * a)), weights
 
 
 class _Model:
@@ -88,37 +99,39 @@ def _unit(dq: NDArray, dt: float, weight: float) -> tuple[NDArray, float]:
     return dq / norm, dt / norm
 
 
-def continue_path(
+def path_points(
     system: MultibodySystem,
     q0: NDArray,
     multipliers0: NDArray,
     t0: float,
-    t_end: float,
+    direction: float,
     step: float,
-    max_points: int = 400,
     tolerance: float = 1e-10,
     max_iterations: int = 12,
     min_step: float | None = None,
     max_step: float | None = None,
-) -> EquilibriumPath:
-    """Follow the equilibria of ``system`` from the equilibrium ``(q0, multipliers0)`` at ``t0`` (Eq. (S5)) until
-    t passes ``t_end`` (the last point lies beyond it) or ``max_points`` points: ``step`` is the first arclength
-    step (in the norm of the module docstring), halved on a failed correction down to ``min_step`` (default
-    step / 1024), grown by 1.5 after easy ones up to ``max_step`` (default 8 step). Passes limit points in t."""
+    speed: float | None = None,
+) -> Iterator[tuple[float, NDArray, NDArray, float]]:
+    """The equilibria of ``system`` along its path from ``(q0, multipliers0)`` at ``t0`` (Eq. (S5)), the start
+    first, as ``(t, q, multipliers, s)``, leaving the start towards growing t (``direction`` 1) or falling t (-1);
+    endless: the caller stops. Arclength steps and ``s`` in units of t (the norm of the module docstring divided
+    by c; ``speed`` sets c, default :func:`path_speed` at the start), as in :func:`continue_path`. Passes limit
+    points in t."""
     n = system.n_coordinates
     model = _Model(system)
     q, lam, t = np.array(q0, dtype=float), np.array(multipliers0, dtype=float), float(t0)
     min_step = step / 1024.0 if min_step is None else min_step
     max_step = 8.0 * step if max_step is None else max_step
-    direction = 1.0 if t_end >= t0 else -1.0
     matrix, rate = model.jacobians(q, lam, t)
     start = factor(matrix, what="static tangent at the path's start").solve(-rate)
-    weight = float(max(np.abs(start[:n]).max(), 1e-12)) ** 2  # c^2: |dq/dt| at the start
+    weight = (_speed(start, n) if speed is None else speed) ** 2
     tangent_q, tangent_t = _unit(direction * start[:n], direction, weight)
     tangent_lam = direction * start[n:] / np.sqrt(start[:n] @ start[:n] + weight)
-    points_t, points_q, points_lam, points_s = [t], [q.copy()], [lam.copy()], [0.0]
-    arclength, size = 0.0, step
-    while len(points_t) < max_points:
+    scale = np.sqrt(weight)  # arclength in units of t: the norm divided by c
+    count, arclength, size = 1, 0.0, step * scale
+    min_step, max_step = min_step * scale, max_step * scale
+    yield t, q.copy(), lam.copy(), 0.0
+    while True:
         guess_q, guess_lam, guess_t = q + size * tangent_q, lam + size * tangent_lam, t + size * tangent_t
         converged = None
         y_q, y_lam, y_t = guess_q.copy(), guess_lam.copy(), guess_t
@@ -139,7 +152,7 @@ def continue_path(
         if converged is None:
             if size <= min_step:
                 raise StaticDivergence(
-                    f"continuation stopped at t = {t:.6g} after {len(points_t)} points: no equilibrium within "
+                    f"continuation stopped at t = {t:.6g} after {count} points: no equilibrium within "
                     f"arclength {size:.3g} (min_step); the path may branch here"
                 )
             size *= 0.5
@@ -154,11 +167,52 @@ def continue_path(
         tangent_q, tangent_t, tangent_lam = new[:n] / norm, new[-1] / norm, new[n:-1] / norm
         arclength += size
         q, lam, t = y_q, y_lam, float(y_t)
-        points_t.append(t)
-        points_q.append(q.copy())
-        points_lam.append(lam.copy())
-        points_s.append(arclength)
-        if (t - t_end) * direction >= 0.0:
-            break
+        count += 1
+        yield t, q.copy(), lam.copy(), arclength / scale
         size = min(max_step, 1.5 * size) if converged <= 4 else size
-    return EquilibriumPath(np.array(points_t), np.array(points_q), np.array(points_lam), np.array(points_s))
+
+
+def _speed(rate_of_change: NDArray, n: int) -> float:
+    """c: the largest |dq/dt| of the path's tangent (y_t of ``F_y y_t = -F_t``), floored at 1e-12."""
+    return float(max(np.abs(rate_of_change[:n]).max(), 1e-12))
+
+
+def path_speed(system: MultibodySystem, q: NDArray, multipliers: NDArray, t: float) -> float:
+    """c of Eq. (S5) at an equilibrium: how fast the coordinates move with t there (largest |dq/dt|)."""
+    matrix, rate = _Model(system).jacobians(q, multipliers, t)
+    return _speed(factor(matrix, what="static tangent").solve(-rate), system.n_coordinates)
+
+
+def continue_path(
+    system: MultibodySystem,
+    q0: NDArray,
+    multipliers0: NDArray,
+    t0: float,
+    t_end: float,
+    step: float,
+    max_points: int = 400,
+    tolerance: float = 1e-10,
+    max_iterations: int = 12,
+    min_step: float | None = None,
+    max_step: float | None = None,
+) -> EquilibriumPath:
+    """Follow the equilibria of ``system`` from the equilibrium ``(q0, multipliers0)`` at ``t0`` (Eq. (S5)) until
+    t passes ``t_end`` (the last point lies beyond it) or ``max_points`` points: ``step`` is the first arclength
+    step in units of t (the norm of the module docstring divided by c: a step of the start's tangent that
+    moves t by ``step / sqrt(2)``), halved on a failed correction down to ``min_step`` (default
+    step / 1024), grown by 1.5 after easy ones up to ``max_step`` (default 8 step). Passes limit points in t."""
+    direction = 1.0 if t_end >= t0 else -1.0
+    points = []
+    for point in path_points(
+        system, q0, multipliers0, t0, direction, step, tolerance, max_iterations, min_step, max_step
+    ):
+        points.append(point)
+        if len(points) >= max_points or (len(points) > 1 and (point[0] - t_end) * direction >= 0.0):
+            break
+    return equilibrium_path(points)
+
+
+def equilibrium_path(points: list[tuple[float, NDArray, NDArray, float]]) -> EquilibriumPath:
+    """The :class:`EquilibriumPath` of the points of :func:`path_points`."""
+    t, q, lam, s = zip(*points, strict=True)
+    return EquilibriumPath(np.array(t), np.array(q), np.array(lam), np.array(s))

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from ffrf.errors import NewtonDivergence, StaticDivergence
 from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.solvers.snap_through import SnapThrough, quasi_static_through_snaps
 from ffrf.solvers.static_solver import quasi_static
 from ffrf.system.multibody import MultibodySystem
 
@@ -24,12 +25,14 @@ MODES = ("quasi_static", "dynamic")
 
 @dataclass(frozen=True)
 class Run:
-    """Output times and coordinates, velocities (``None`` for quasi-static runs) and multipliers."""
+    """Output times and coordinates, velocities (``None`` for quasi-static runs) and multipliers, and the snaps a
+    quasi-static run went through (:func:`ffrf.solvers.snap_through.quasi_static_through_snaps`)."""
 
     time: NDArray[np.float64]
     q: NDArray[np.float64]
     qd: NDArray[np.float64] | None
     multipliers: NDArray[np.float64]
+    snaps: tuple[SnapThrough, ...] = ()
 
 
 def output_stride(t_end: float, step: float, outputs: int) -> int:
@@ -49,20 +52,28 @@ def simulate(
     progress: Callable[[float, float], None] | None = None,
     max_static_step: float | None = None,
     qd0: NDArray | None = None,
+    through_snaps: bool = False,
 ) -> Run:
     """``quasi_static``: equilibria at ``outputs`` equally spaced times, followed through intermediate
-    ones at most ``max_static_step`` (s) apart; ``dynamic``: generalized-alpha from ``q0`` with velocities ``qd0``
+    ones at most ``max_static_step`` (s) apart, and with ``through_snaps`` on past folds of the equilibrium
+    path (the jump to another branch, Eq. (S6)); ``dynamic``: generalized-alpha from ``q0`` with velocities ``qd0``
     (default at rest) with time step ``step`` and spectral radius ``rho_inf``."""
     if mode == "quasi_static":
         times = np.linspace(0.0, t_end, outputs)
+        snaps: tuple[SnapThrough, ...] = ()
         try:
-            solution = quasi_static(system, q0, times, progress=progress, max_step=max_static_step)
+            if through_snaps:
+                solution, snaps = quasi_static_through_snaps(
+                    system, q0, times, progress=progress, max_step=max_static_step
+                )
+            else:
+                solution = quasi_static(system, q0, times, progress=progress, max_step=max_static_step)
         except StaticDivergence as error:
             done = error.partial
             if done is not None:
-                error.partial = Run(times[: len(done.q)], done.q, None, done.multipliers)
+                error.partial = Run(times[: len(done.q)], done.q, None, done.multipliers, error.snaps)
             raise
-        return Run(times, solution.q, None, solution.multipliers)
+        return Run(times, solution.q, None, solution.multipliers, snaps)
     if mode == "dynamic":
         try:
             result = generalized_alpha(

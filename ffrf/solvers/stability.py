@@ -23,7 +23,7 @@ from scipy.linalg import eigh
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
 
-__all__ = ["EquilibriumStability", "equilibrium_stability", "stability_along", "stability_summary"]
+__all__ = ["EquilibriumStability", "equilibrium_stability", "mode_shares", "stability_along", "stability_summary"]
 
 
 @dataclass(frozen=True)
@@ -93,3 +93,15 @@ def stability_summary(squared_frequencies: NDArray, along: NDArray, name: str) -
         "last_squared_frequencies": squared_frequencies[-1].tolist(),
         f"last_{name}": float(along[-1]),
     }
+
+
+def mode_shares(system: MultibodySystem, q: NDArray, mode: NDArray) -> NDArray[np.float64]:
+    """Each body's share of a mode's kinetic energy (``x_b^T M_b x_b / x^T M x``, summing to one): which bodies
+    the mode moves."""
+    energies = np.array(
+        [
+            mode[system.block(i)] @ body.mass_matrix(q[system.block(i)]) @ mode[system.block(i)]
+            for i, body in enumerate(system.bodies)
+        ]
+    )
+    return energies / energies.sum()

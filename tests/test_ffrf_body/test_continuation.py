@@ -9,11 +9,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from body_fixtures import bar_model
+from scipy.optimize import brentq
 
 from ffrf.body.flexible_body import FlexibleBody
 from ffrf.body.modal_moments import modal_moments
 from ffrf.errors import StaticDivergence
 from ffrf.solvers.continuation import continue_path
+from ffrf.solvers.snap_through import trace_snap
 from ffrf.solvers.stability import equilibrium_stability
 from ffrf.solvers.static_solver import quasi_static, static_equilibrium
 from ffrf.system.forces import AxialSpringDamper, MarkerLoad
@@ -74,7 +76,7 @@ def test_continuation_passes_the_limit_point_of_the_closed_form():
     system, limit = _truss()
     start = static_equilibrium(system, system.initial_state())
     end = 1.2 * limit / LOAD_RATE
-    path = continue_path(system, start.q, start.multipliers, 0.0, end, step=2e-3, max_step=4e-3, max_points=400)
+    path = continue_path(system, start.q, start.multipliers, 0.0, end, step=0.4, max_step=0.8, max_points=400)
     assert path.t[-1] >= end  # back up on the inverted branch
     peaks = path.limit_points() * LOAD_RATE / limit
     assert peaks.shape == (2,)
@@ -89,3 +91,39 @@ def test_continuation_passes_the_limit_point_of_the_closed_form():
         for k in (top - 1, top + 1)
     )
     assert before > 0.0 > after
+
+
+def test_the_truss_snaps_at_the_limit_load_onto_the_inverted_branch_of_the_closed_form():
+    """Eq. (S6): past P_max the apex jumps, at that load, to the inverted branch. The landing rise solves the
+    closed form P(z) = P_max beyond the other fold z < -z* (scipy's brentq on the closed form; measured
+    1.5e-14 m), the fold is at P_max (1.4e-6 relative, traced again at a tenth of the step), the return fold
+    at -P_max (5.6e-5), and the energy released is the springs' energy drop k [(L - L0)^2 at the fold less at
+    the landing] (no gravity, a rigid apex; measured 7e-13 relative)."""
+    system, limit = _truss()
+    start = static_equilibrium(system, system.initial_state())
+    snap = trace_snap(system, start.q, start.multipliers, 0.0, 1.2 * limit / LOAD_RATE, step=0.4, max_points=400)
+    assert snap is not None and snap.landing_q is not None and snap.return_t is not None
+    assert snap.fold_t * LOAD_RATE / limit == pytest.approx(1.0, abs=5e-5)
+    assert snap.return_t * LOAD_RATE / limit == pytest.approx(-1.0, abs=5e-3)
+    length0 = np.hypot(HALF_SPAN, RISE)
+
+    def load(rise: float) -> float:
+        length = np.hypot(HALF_SPAN, rise)
+        return 2.0 * STIFFNESS * (length0 - length) * rise / length
+
+    critical_rise = np.sqrt((length0 * HALF_SPAN**2) ** (2.0 / 3.0) - HALF_SPAN**2)
+    applied = LOAD_RATE * snap.fold_t
+    landing_rise = brentq(lambda z: load(z) - applied, -10.0 * RISE, -critical_rise)
+    rise = RISE + snap.landing_q[2] - start.q[2]
+    assert abs(rise - landing_rise) < 1e-12
+    fold_rise = RISE + snap.fold_q[2] - start.q[2]
+    stretch = [np.hypot(HALF_SPAN, z) - length0 for z in (fold_rise, landing_rise)]
+    released = STIFFNESS * (stretch[0] ** 2 - stretch[1] ** 2)
+    assert snap.energy_released(system) == pytest.approx(released, rel=1e-10)
+
+
+def test_a_path_without_a_fold_is_no_snap():
+    """Up to 0.9 P_max the truss path rises monotonically: no snap."""
+    system, limit = _truss()
+    start = static_equilibrium(system, system.initial_state())
+    assert trace_snap(system, start.q, start.multipliers, 0.0, 0.9 * limit / LOAD_RATE, step=0.4) is None
