@@ -256,10 +256,10 @@ def _check_interfaces(body: dict, selectors: tuple[str, ...], where: str) -> Non
     for k, interface in enumerate(body["interfaces"]):
         given = [key for key in SELECTORS if key in interface]
         if len(given) != 1 or given[0] not in selectors:
-            kind = "from matrices (no named groups, no surface mesh of ours)" if "matrices" in body else "from a mesh"
+            why = "; a body from matrices has no named groups or surface mesh of ours" if "matrices" in body else ""
             raise SceneError(
                 f"{where}, interfaces[{k}]{label(interface)}: select it by exactly one of {', '.join(selectors[:-1])} "
-                f"or {selectors[-1]} (a body {kind}), got {given or 'none'}"
+                f"or {selectors[-1]}, got {given or 'none'}{why}"
             )
 
 

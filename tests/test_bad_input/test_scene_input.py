@@ -145,7 +145,7 @@ CASES = {
     "group interface on a body from matrices": (
         MESH_BODY + 'modes = 3\ninterfaces = [{name = "hinge", nodes_file = "hinge.txt"}]',
         NPZ + 'modes = 3\ninterfaces = [{name = "hinge", group = "end"}]',
-        ["select it by exactly one of cylinder, plane or nodes_file (a body from matrices", "got ['group']"],
+        ["select it by exactly one of cylinder, plane or nodes_file, got ['group']; a body from matrices has no named"],
     ),
     "unknown reduction": (
         "modes = 3",
