@@ -226,7 +226,7 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
 
         pvd = write_time_series(
             out,
-            [(link.fe, link.reduction.basis) for link in scene.links],
+            [(link.mesh_model, link.reduction.basis) for link in scene.links],
             [scene.system.block(k) for k in range(len(scene.links))],
             result.time,
             result.q,

@@ -47,6 +47,16 @@ def write_bar(tmp_path):
     return model
 
 
+def write_tet_matrices(tmp_path):
+    """Files of a model that does not fit together: M and K of 4 nodes (12 x 12), a node table of 3."""
+    import scipy.io
+    import scipy.sparse as sp
+
+    for name in ("tet_M.mtx", "tet_K.mtx"):
+        scipy.io.mmwrite(tmp_path / name, sp.identity(12, format="coo"))
+    np.savetxt(tmp_path / "tri_nodes.txt", np.eye(3))
+
+
 def driven_link_scene(axis: str, t_end: float, outputs: int, modes: int, sensor: bool = False) -> str:
     """Quasi-static parametric PLA link 1 driven at its first bore about ``axis`` (TOML list text)."""
     text = f"""

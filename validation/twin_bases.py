@@ -12,6 +12,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from ffrf.errors import SceneError
+from ffrf.reduction.craig_bampton import CraigBamptonBasis
+
 if TYPE_CHECKING:
     from .exudyn_twin import TwinBody
 
@@ -46,6 +49,11 @@ def twin_bases(bodies: list[TwinBody], source: str = "exudyn") -> list[TwinBasis
         raise ValueError(f"basis source must be 'exudyn' or 'ffrf', got {source!r}")
     out = []
     for body in bodies:
+        if not isinstance(body.reduction, CraigBamptonBasis):
+            raise SceneError(
+                f"body {body.name!r}: the Exudyn twin of a scene rebuilds Craig-Bampton bases; use reduction = "
+                '"craig_bampton" here (free-free bodies are cross-validated by `python -m validation testmodels`)'
+            )
         ours = np.asarray(body.reduction.basis)
         frequencies_ours = body.reduction.fixed_interface_frequencies_hz
         if source == "ffrf":

@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ffrf.errors import InterfaceError
 from ffrf.fe.fe_model import FEModel
+from ffrf.fe.node_selection import on_cylinder
 from ffrf.mesh.tet_mesh import TetMesh
 
 __all__ = [
@@ -41,6 +42,7 @@ __all__ = [
     "interface_from_triangles",
     "interface_in_cylinder",
     "interface_around_axis",
+    "read_nodes_file",
     "triangles_in_cylinder",
     "triangles_spanned_by",
 ]
@@ -226,9 +228,9 @@ def _area_weighted(model: FEModel, name: str, nodes: NDArray[np.int64]) -> Inter
     return InterfaceNodes(name, all_nodes, weights, surface.area)
 
 
-def interface_from_nodes_file(model: FEModel, name: str, path: str | Path) -> InterfaceNodes:
-    """Interface from a text file of 0-based node indices, one per line, with an optional second
-    column of weights (otherwise area weights, as :func:`interface_from_nodes`)."""
+def read_nodes_file(name: str, path: str | Path) -> tuple[NDArray[np.int64], NDArray[np.float64] | None]:
+    """0-based node indices of a text file, one per line, and the optional second column of weights
+    (``None`` without it), for interface ``name``."""
     path = Path(path)
     if not path.is_file():
         raise InterfaceError(f"interface {name!r}: nodes_file {path} not found; give a path relative to the scene file")
@@ -252,8 +254,14 @@ def interface_from_nodes_file(model: FEModel, name: str, path: str | Path) -> In
             f"interface {name!r}: nodes_file {path} lists non-integer node indices; the first "
             "column holds 0-based node indices"
         )
-    weights = table[:, 1] if table.shape[1] == 2 else None
-    return interface_from_nodes(model, name, indices.astype(np.int64), weights)
+    return indices.astype(np.int64), (table[:, 1] if table.shape[1] == 2 else None)
+
+
+def interface_from_nodes_file(model: FEModel, name: str, path: str | Path) -> InterfaceNodes:
+    """Interface from a text file of 0-based node indices, one per line, with an optional second
+    column of weights (otherwise area weights, as :func:`interface_from_nodes`)."""
+    indices, weights = read_nodes_file(name, path)
+    return interface_from_nodes(model, name, indices, weights)
 
 
 def interface_from_group(model: FEModel, name: str, group: str | None = None) -> InterfaceNodes:
@@ -272,24 +280,9 @@ def triangles_in_cylinder(
 ) -> NDArray[np.int64]:
     """Boundary triangles whose three vertices lie on the cylinder surface.
 
-    A vertex is on it when its distance to the axis is within ``tol`` of
-    ``radius`` and its axial coordinate t = (p - point) . direction lies in
-    ``[axial_extent[0] - tol, axial_extent[1] + tol]``.
+    A vertex is on it by :func:`ffrf.fe.node_selection.on_cylinder`.
     """
-    d = np.asarray(direction, dtype=float)
-    norm = np.linalg.norm(d)
-    if not norm > 0.0:
-        raise InterfaceError(f"cylinder selection: axis direction {direction!r} has zero length")
-    if not (radius > 0.0 and tol > 0.0):
-        raise InterfaceError(f"cylinder selection: radius={radius!r} and tol={tol!r} must be > 0 (metres)")
-    t_min, t_max = axial_extent
-    if t_max < t_min:
-        raise InterfaceError(f"cylinder selection: axial_extent {axial_extent!r} is reversed; give (t_min, t_max)")
-    d = d / norm
-    rel = mesh.points - np.asarray(point, dtype=float)
-    t = rel @ d
-    r = np.linalg.norm(rel - np.outer(t, d), axis=1)
-    on_surface = (np.abs(r - radius) <= tol) & (t >= t_min - tol) & (t <= t_max + tol)
+    on_surface = on_cylinder(mesh.points, point, direction, radius, axial_extent, tol)
     tris = boundary_triangles(mesh)
     return tris[on_surface[tris].all(axis=1)]
 

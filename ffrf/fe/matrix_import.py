@@ -9,6 +9,7 @@
   1-based DOF numbers, row = 3 (node label - 1) + direction, eq. (X1)), as Exudyn's
   ``ReadMassMatrixFromAbaqus`` / ``ReadStiffnessMatrixFromAbaqus``.
 * :func:`read_matrix_market`: any Matrix Market file, through :func:`scipy.io.mmread`.
+* :func:`read_node_table`: node coordinates as a text table, one node "x y z" per line (row k: node k).
 * :func:`read_npz_model` / :func:`write_npz_model`: nodes, matrices and elements in one ``.npz``
   (keys in :data:`NPZ_KEYS`), read without unpickling anything.
 
@@ -45,6 +46,7 @@ __all__ = [
     "read_abaqus_mesh",
     "read_abaqus_matrix",
     "read_matrix_market",
+    "read_node_table",
     "read_npz_model",
     "write_npz_model",
 ]
@@ -345,6 +347,26 @@ def read_matrix_market(path: str | Path, n_dofs: int | None = None) -> sp.csr_ma
         expected = "square" if n_dofs is None else f"{n_dofs} x {n_dofs} (3 DOFs per node)"
         raise ExternalFEError(f"{path}: the matrix is {matrix.shape[0]} x {matrix.shape[1]}, expected {expected}")
     return sp.csr_matrix(matrix, dtype=float)
+
+
+def read_node_table(path: str | Path) -> NDArray[np.float64]:
+    """(N, 3) node coordinates from a text file, one node "x y z" per line (spaces or commas; ``#`` comments),
+    row k is node k: the DOFs 3k, 3k + 1, 3k + 2 of the matrices."""
+    path = Path(path)
+    with _open_text(path) as stream:
+        text = stream.read().replace(",", " ")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # numpy warns on an empty file; refused below
+        try:
+            table = np.loadtxt(io.StringIO(text), ndmin=2)
+        except ValueError as error:
+            raise ExternalFEError(f"{path}: not a table of numbers ({error}); write one node x y z per line") from None
+    if table.size == 0 or table.shape[1] != 3:
+        raise ExternalFEError(
+            f"{path}: {table.shape[1] if table.size else 0} columns, expected 3 (x y z of one node per line, row k "
+            "is node k)"
+        )
+    return table
 
 
 def abaqus_model(inp: str | Path, mass: str | Path, stiffness: str | Path, name: str | None = None) -> ExternalFEModel:

@@ -4,6 +4,7 @@ Exudyn's ``FEMinterface`` selection helpers, on plain arrays, so that they serve
 (:class:`ffrf.fe.external_model.ExternalFEModel` in particular):
 
 * :func:`node_at_point` (``GetNodeAtPoint``) and :func:`nodes_in_plane` (``GetNodesInPlane``);
+* :func:`on_cylinder`: which points lie on a cylinder surface (a bearing bore), for any point cloud;
 * :func:`surface_triangles` (``VolumeToSurfaceElements``): the element faces that belong to one
   element only, by their corner nodes, quadrilaterals split into two triangles as Exudyn does;
 * :func:`surface_area_weights` (``GetNodeWeightsFromSurfaceAreas``): every surface triangle whose
@@ -22,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ffrf.errors import InterfaceError, MeshError
 
-__all__ = ["FACES", "node_at_point", "nodes_in_plane", "surface_triangles", "surface_area_weights"]
+__all__ = ["FACES", "node_at_point", "nodes_in_plane", "on_cylinder", "surface_triangles", "surface_area_weights"]
 
 #: Faces of each element type by local corner index (Exudyn's tables; Abaqus node order).
 FACES: dict[str, list[list[int]]] = {
@@ -62,6 +63,32 @@ def nodes_in_plane(nodes: ArrayLike, point: ArrayLike, normal: ArrayLike, tolera
             f"{normal.tolist()}; check the plane and the units"
         )
     return found
+
+
+def on_cylinder(
+    points: ArrayLike,
+    point: ArrayLike,
+    direction: ArrayLike,
+    radius: float,
+    axial_extent: tuple[float, float],
+    tol: float,
+) -> NDArray[np.bool_]:
+    """Which ``points`` lie on the cylinder surface: distance to the axis within ``tol`` of ``radius`` and
+    axial coordinate t = (p - point) . direction (unit) in ``[axial_extent[0] - tol, axial_extent[1] + tol]``."""
+    d = np.asarray(direction, dtype=float)
+    norm = np.linalg.norm(d)
+    if not norm > 0.0:
+        raise InterfaceError(f"cylinder selection: axis direction {direction!r} has zero length")
+    if not (radius > 0.0 and tol > 0.0):
+        raise InterfaceError(f"cylinder selection: radius={radius!r} and tol={tol!r} must be > 0 (metres)")
+    t_min, t_max = axial_extent
+    if t_max < t_min:
+        raise InterfaceError(f"cylinder selection: axial_extent {axial_extent!r} is reversed; give (t_min, t_max)")
+    d = d / norm
+    rel = np.asarray(points, dtype=float) - np.asarray(point, dtype=float)
+    t = rel @ d
+    r = np.linalg.norm(rel - np.outer(t, d), axis=1)
+    return (np.abs(r - radius) <= tol) & (t >= t_min - tol) & (t <= t_max + tol)
 
 
 def surface_triangles(elements: Mapping[str, ArrayLike]) -> NDArray[np.int64]:

@@ -18,11 +18,14 @@ carries the elastic displacement :math:`u = \Psi\zeta` in its body frame (Eq. (H
 
 The pure functions take plain arrays; :func:`scene_assembly_stress`
 adapts any built scene (:class:`ffrf.scenes.builder.Scene`: ``bodies[k].fe``, ``.reduction``, ``.interfaces``) and
-:func:`write_assembly_vtu` writes the deformed assembly for ParaView.
+:func:`write_assembly_vtu` writes the deformed assembly for ParaView. A body given by its matrices
+(:class:`~ffrf.fe.external_model.ExternalFEModel`) has no elements and material of ours: it reports its strain
+energy and reactions, no stresses (``None`` in the summary), and is left out of the ``.vtu``.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,10 +44,13 @@ __all__ = [
     "nodal_average",
     "nearest_feature",
     "link_stress",
+    "strain_energy_only",
     "joint_reactions",
     "scene_assembly_stress",
     "write_assembly_vtu",
 ]
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,14 +66,20 @@ class LinkStress:
     element_von_mises: NDArray[np.float64] = field(repr=False)
     reactions: dict[str, dict[str, float]] = field(default_factory=dict)
 
+    @property
+    def has_stress(self) -> bool:
+        """False for a body given by its matrices: no elements of ours, no stress."""
+        return bool(np.isfinite(self.max_von_mises_pa))
+
     def as_dict(self) -> dict:
-        """JSON-ready summary (no per-element arrays)."""
+        """JSON-ready summary (no per-element arrays; ``None`` where a body from matrices has no stress)."""
+        stress = self.has_stress
         out = {
             "link": self.link,
-            "max_von_mises_pa": self.max_von_mises_pa,
-            "max_location_m": self.max_location_m.tolist(),
-            "nearest_feature": self.nearest_feature,
-            "feature_distance_m": self.feature_distance_m,
+            "max_von_mises_pa": self.max_von_mises_pa if stress else None,
+            "max_location_m": self.max_location_m.tolist() if stress else None,
+            "nearest_feature": self.nearest_feature if stress else None,
+            "feature_distance_m": self.feature_distance_m if stress else None,
             "strain_energy_j": self.strain_energy_j,
             "reactions": self.reactions,
         }
@@ -78,12 +90,14 @@ class LinkStress:
 
     def line(self) -> str:
         """One line of text (MPa, mm, mJ), as the ``bennett`` command prints it."""
-        text = (
-            f"link {self.link}: max von Mises {1e-6 * self.max_von_mises_pa:.3f} MPa at "
+        where = (
+            f"max von Mises {1e-6 * self.max_von_mises_pa:.3f} MPa at "
             f"({', '.join(f'{1e3 * x:.1f}' for x in self.max_location_m)}) mm, "
-            f"{1e3 * self.feature_distance_m:.1f} mm from {self.nearest_feature}; strain energy "
-            f"{1e3 * self.strain_energy_j:.4g} mJ"
+            f"{1e3 * self.feature_distance_m:.1f} mm from {self.nearest_feature}"
+            if self.has_stress
+            else "no stress (given by its matrices, no elements of ours)"
         )
+        text = f"link {self.link}: {where}; strain energy {1e3 * self.strain_energy_j:.4g} mJ"
         if self.reactions:
             d = self.as_dict()
             text += (
@@ -103,7 +117,7 @@ class AssemblyStress:
     def as_dict(self) -> dict:
         return {
             "links": [link.as_dict() for link in self.links],
-            "max_von_mises_pa": max(link.max_von_mises_pa for link in self.links),
+            "max_von_mises_pa": max((link.max_von_mises_pa for link in self.links if link.has_stress), default=None),
             "strain_energy_j": sum(link.strain_energy_j for link in self.links),
         }
 
@@ -153,6 +167,13 @@ def link_stress(index: int, fe: FEModel, displacement: ArrayLike, features: Mapp
     return LinkStress(index, float(stress[worst]), centroid, name, distance, energy, stress)
 
 
+def strain_energy_only(index: int, stiffness, displacement: ArrayLike) -> LinkStress:
+    """The strain energy 1/2 u^T K u of a body without elements of ours (given by its matrices); no stress."""
+    u = np.asarray(displacement, dtype=float).reshape(-1)
+    nan = float("nan")
+    return LinkStress(index, nan, np.full(3, nan), "", nan, 0.5 * float(u @ (stiffness @ u)), np.zeros(0))
+
+
 def joint_reactions(
     names: Sequence[str], sizes: Sequence[int], driven: Sequence[bool], multipliers: ArrayLike
 ) -> dict[str, dict[str, float]]:
@@ -199,7 +220,13 @@ def scene_assembly_stress(scene, q: ArrayLike, multipliers: ArrayLike | None = N
     for link in scene.bodies:
         zeta = q[system.block(link.index)][7:]
         features = {name: link.fe.nodes[itf.nodes] for name, itf in link.interfaces.items()}
-        stress = link_stress(link.index, link.fe, link.reduction.basis @ zeta, features)
+        u = link.reduction.basis @ zeta
+        fe = link.fe
+        stress = (
+            link_stress(link.index, fe, u, features)
+            if isinstance(fe, FEModel)
+            else strain_energy_only(link.index, fe.stiffness, u)
+        )
         own = {name: r for name, r in reactions.items() if link.index in bodies_of[name]}
         out.append(
             LinkStress(
@@ -216,18 +243,31 @@ def scene_assembly_stress(scene, q: ArrayLike, multipliers: ArrayLike | None = N
     return AssemblyStress(tuple(out), q.copy())
 
 
-def write_assembly_vtu(path: str | Path, scene, stress: AssemblyStress) -> Path:
+def write_assembly_vtu(path: str | Path, scene, stress: AssemblyStress) -> Path | None:
     """The deformed assembly as one ``.vtu``: all links' tetrahedra at their current positions, point data
     ``displacement`` (current minus reference, for "Warp By Vector"), ``elastic_displacement`` (world axes),
-    ``von_mises`` (Pa, volume-weighted vertex average), ``body``; cell data ``von_mises`` (Pa)."""
+    ``von_mises`` (Pa, volume-weighted vertex average), ``body``; cell data ``von_mises`` (Pa). Bodies given by
+    their matrices are left out (logged); ``None`` and no file when no body has elements of ours."""
     import meshio
 
     from ffrf.output.paraview import _frame_points  # one definition of a body's current vertex positions
 
     path = Path(path)
+    pairs = list(zip(scene.bodies, stress.links, strict=True))
+    meshed = [(link, result) for link, result in pairs if isinstance(link.fe, FEModel)]
+    left_out = [link.name for link, _ in pairs if not isinstance(link.fe, FEModel)]
+    if left_out:
+        logger.warning(
+            "%s: bodies %s are left out: given by their matrices, they have no elements of ours (build a body from "
+            "a mesh to see its stresses)",
+            path,
+            left_out,
+        )
+    if not meshed:
+        return None
     path.parent.mkdir(parents=True, exist_ok=True)
     points, elastic, reference, tets, nodal, body, offset = [], [], [], [], [], [], 0
-    for link, link_result in zip(scene.bodies, stress.links, strict=True):
+    for link, link_result in meshed:
         fe = link.fe
         n = len(fe.mesh.points)
         current, world_elastic = _frame_points(fe, link.reduction.basis, stress.q[scene.system.block(link.index)])
@@ -252,7 +292,7 @@ def write_assembly_vtu(path: str | Path, scene, stress: AssemblyStress) -> Path:
                 "von_mises": np.concatenate(nodal),
                 "body": np.concatenate(body),
             },
-            cell_data={"von_mises": [np.concatenate([s.element_von_mises for s in stress.links])]},
+            cell_data={"von_mises": [np.concatenate([s.element_von_mises for _, s in meshed])]},
         ),
     )
     return path

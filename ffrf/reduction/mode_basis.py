@@ -26,11 +26,21 @@ class ModeBasis(Protocol):
     "none"; ``docs/formulation.md`` (HCB-5), (HCB-6), (FF-3)).
     """
 
-    basis: NDArray[np.float64]
-    reduced_mass: NDArray[np.float64]
-    reduced_stiffness: NDArray[np.float64]
-    mode_labels: tuple[str, ...]
-    reference: str
+    # Read-only members: the bases are frozen dataclasses.
+    @property
+    def basis(self) -> NDArray[np.float64]: ...
+
+    @property
+    def reduced_mass(self) -> NDArray[np.float64]: ...
+
+    @property
+    def reduced_stiffness(self) -> NDArray[np.float64]: ...
+
+    @property
+    def mode_labels(self) -> tuple[str, ...]: ...
+
+    @property
+    def reference(self) -> str: ...
 
     @property
     def n_modes(self) -> int: ...

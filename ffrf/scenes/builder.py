@@ -34,25 +34,31 @@ from numpy.typing import NDArray
 
 from ffrf.body.flexible_body import FlexibleBody
 from ffrf.body.modal_moments import modal_moments
-from ffrf.errors import SceneError
+from ffrf.errors import ReductionError, SceneError
+from ffrf.fe.external_model import ExternalFEModel
 from ffrf.fe.fe_model import FEModel
 from ffrf.fe.interfaces import (
     InterfaceNodes,
     boundary_triangles,
     interface_around_axis,
     interface_from_group,
+    interface_from_nodes,
     interface_from_nodes_file,
     interface_in_cylinder,
 )
 from ffrf.fe.materials import Material
+from ffrf.fe.node_selection import nodes_in_plane, surface_triangles
 from ffrf.geometry.joint_axes import Axis, bennett_axes, common_normal_feet, paper_link_axes
 from ffrf.geometry.link_geometry import LinkGeometry, mesh_link
 from ffrf.geometry.meshing import mesh_stl
 from ffrf.mesh.tet_mesh import TetMesh, read_mesh
-from ffrf.reduction.craig_bampton import CraigBamptonBasis, craig_bampton
+from ffrf.reduction.craig_bampton import craig_bampton
+from ffrf.reduction.free_free import free_free_basis
+from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.reduction.reduced_io import reduction_fingerprint
 from ffrf.scenes.scene_forces import build_forces
 from ffrf.scenes.scene_joints import JointGeometry, joint_constraint, joint_geometry
+from ffrf.scenes.scene_matrices import NODE_TOLERANCE, matrices_interface, matrices_model
 from ffrf.scenes.scene_schema import check_scene
 from ffrf.system.markers import BodyMarker, rigid_interface_marker
 from ffrf.system.multibody import MultibodySystem
@@ -67,17 +73,29 @@ SENSOR_REACH = 0.1
 
 @dataclass(frozen=True, eq=False)
 class SceneBody:
-    """One body: FE model, interfaces, reduction, the FFRF body, a rigid marker per interface, and
-    the parametric link's geometry (``None`` for a body from a mesh file)."""
+    """One body: FE model (our own from a mesh, or nodes and matrices from another program), interfaces,
+    reduction (Craig-Bampton or free-free), the FFRF body, a rigid marker per interface, and the parametric
+    link's geometry (``None`` for a body from a mesh file or from matrices)."""
 
     index: int
     name: str
-    fe: FEModel
+    fe: FEModel | ExternalFEModel
     interfaces: dict[str, InterfaceNodes]
-    reduction: CraigBamptonBasis
+    reduction: ModeBasis
     body: FlexibleBody
     markers: dict[str, BodyMarker]
     geometry: LinkGeometry | None = None
+
+    @property
+    def mesh_model(self) -> FEModel:
+        """Our own FE model (elements, material) for what needs it: stresses, surfaces, ParaView; a body from
+        matrices has none, which is a :class:`SceneError` naming the body."""
+        if not isinstance(self.fe, FEModel):
+            raise SceneError(
+                f"body {self.name!r} is given by its matrices ({self.fe.name}): it has no elements and material of "
+                "ours; build it from a mesh for stresses and ParaView output"
+            )
+        return self.fe
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,11 +164,11 @@ def build_scene(
     description: dict,
     base: str | Path = ".",
     where: str = "scene",
-    reductions: dict[str, CraigBamptonBasis] | None = None,
+    reductions: dict[str, ModeBasis] | None = None,
 ) -> Scene:
     """Check and build a scene description; relative file names are resolved against ``base``.
-    ``reductions`` (fingerprint -> basis) reuses Craig-Bampton bases computed from the same mesh,
-    material, order, interfaces and number of modes (:func:`~ffrf.reduction.reduced_io.reduction_fingerprint`)."""
+    ``reductions`` (fingerprint -> basis) reuses bases computed from the same M, K, interfaces, kind and number
+    of modes (:func:`~ffrf.reduction.reduced_io.reduction_fingerprint`)."""
     check_scene(description, where)
     base = Path(base)
     settings = dict(description.get("scene", {}))
@@ -187,7 +205,7 @@ def build_scene(
 
 
 #: Reductions built in this process, by content (see :func:`build_scene`).
-_REDUCTIONS: dict[str, CraigBamptonBasis] = {}
+_REDUCTIONS: dict[str, ModeBasis] = {}
 
 
 def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | None]:
@@ -223,8 +241,22 @@ def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | 
     )
 
 
-def _interface(fe: FEModel, spec: dict, base: Path) -> InterfaceNodes:
+def _interface(fe: FEModel | ExternalFEModel, spec: dict, base: Path) -> InterfaceNodes:
+    if isinstance(fe, ExternalFEModel):
+        return matrices_interface(fe, spec, base)
+    interface = _mesh_interface(fe, spec, base)
+    if spec.get("weights", "area") == "equal":  # all nodes alike, as Exudyn's 1/n weights
+        return replace(interface, weights=np.full(len(interface.nodes), 1.0 / len(interface.nodes)))
+    return interface
+
+
+def _mesh_interface(fe: FEModel, spec: dict, base: Path) -> InterfaceNodes:
     name = spec["name"]
+    if "plane" in spec:  # the nodes in a plane (a face), weighted by the boundary triangles they span
+        p = spec["plane"]
+        return interface_from_nodes(
+            fe, name, nodes_in_plane(fe.nodes, p["point"], p["normal"], float(p.get("tolerance", NODE_TOLERANCE)))
+        )
     if "group" in spec:
         return interface_from_group(fe, name, spec["group"])
     if "cylinder" in spec:
@@ -244,21 +276,44 @@ def _interface(fe: FEModel, spec: dict, base: Path) -> InterfaceNodes:
     return interface_from_nodes_file(fe, name, base / spec["nodes_file"])
 
 
-def _body(k: int, entry: dict, base: Path, settings: dict, reductions: dict[str, CraigBamptonBasis]) -> SceneBody:
-    name = entry["name"]
+def _fe_model(entry: dict, base: Path, where: str) -> tuple[FEModel | ExternalFEModel, LinkGeometry | None]:
+    """The body's FE model: from its ``matrices``, or assembled on its mesh with its material and order."""
+    if "matrices" in entry:
+        return matrices_model(entry["matrices"], base, entry["name"], where), None
     m = entry["material"]
-    material = Material(float(m["E"]), float(m["nu"]), float(m["rho"]), name=m.get("name", f"{name} material"))
-    mesh, geometry = _mesh(entry, base, f"body {name!r}")
-    fe = FEModel.from_tet_mesh(mesh, material, entry.get("order", 2))
+    material = Material(float(m["E"]), float(m["nu"]), float(m["rho"]), name=m.get("name", f"{entry['name']} material"))
+    mesh, geometry = _mesh(entry, base, where)
+    return FEModel.from_tet_mesh(mesh, material, entry.get("order", 2)), geometry
+
+
+def _reduction(
+    fe: FEModel | ExternalFEModel, interfaces: list[InterfaceNodes], entry: dict, reductions: dict[str, ModeBasis]
+) -> ModeBasis:
+    """Craig-Bampton on the interfaces (default), or ``reduction = "free_free"``: the lowest ``modes`` elastic
+    free-free modes (eqs. (FF-1)-(FF-3)), whose interfaces are only where markers average nodes."""
+    n_modes = int(entry.get("modes", 4))
+    if entry.get("reduction", "craig_bampton") == "craig_bampton":
+        key = reduction_fingerprint(fe, interfaces, n_modes)
+        if key not in reductions:
+            reductions[key] = craig_bampton(fe, interfaces, n_modes)
+        return reductions[key]
+    key = reduction_fingerprint(fe, interfaces, n_modes, reduction="free_free")
+    if key not in reductions:
+        try:
+            reductions[key] = free_free_basis(fe, n_modes)
+        except ReductionError as error:  # a supported model (boundary conditions in K), too few DOFs, ...
+            raise SceneError(f'body {entry["name"]!r}, reduction = "free_free": {error}') from error
+    return reductions[key]
+
+
+def _body(k: int, entry: dict, base: Path, settings: dict, reductions: dict[str, ModeBasis]) -> SceneBody:
+    name = entry["name"]
+    fe, geometry = _fe_model(entry, base, f"body {name!r}")
     interfaces: dict[str, InterfaceNodes] = {}
     for spec in entry["interfaces"]:
         interface = _interface(fe, spec, base)
         interfaces[interface.name] = interface
-    n_modes = int(entry.get("modes", 4))
-    key = reduction_fingerprint(fe, list(interfaces.values()), n_modes)
-    if key not in reductions:
-        reductions[key] = craig_bampton(fe, list(interfaces.values()), n_modes)
-    reduction = reductions[key]
+    reduction = _reduction(fe, list(interfaces.values()), entry, reductions)
     basis = reduction.basis
     body = FlexibleBody(
         name,
@@ -275,6 +330,18 @@ def _body(k: int, entry: dict, base: Path, settings: dict, reductions: dict[str,
     return SceneBody(k, name, fe, interfaces, reduction, body, markers, geometry)
 
 
+def _surface_nodes(body: SceneBody, sensor: str) -> NDArray[np.int64]:
+    """The nodes on the body's surface: of our mesh's boundary triangles, or of the external model's elements."""
+    if isinstance(body.fe, FEModel):
+        return np.unique(boundary_triangles(body.fe.mesh))
+    if not body.fe.elements:
+        raise SceneError(
+            f"sensor {sensor!r}: body {body.name!r} is given by matrices without elements, so it has no surface; "
+            "remove surface = true or give node = index"
+        )
+    return np.unique(surface_triangles(body.fe.elements))
+
+
 def _sensor_node(spec: dict, body: SceneBody) -> int:
     """The node a sensor reads: given, or the node (a surface node with ``surface = true``) nearest
     to its point, which must lie on the body."""
@@ -286,7 +353,7 @@ def _sensor_node(spec: dict, body: SceneBody) -> int:
                 f"has nodes 0 to {len(nodes) - 1}"
             )
         return spec["node"]
-    candidates = np.unique(boundary_triangles(body.fe.mesh)) if spec.get("surface", False) else np.arange(len(nodes))
+    candidates = _surface_nodes(body, spec["name"]) if spec.get("surface", False) else np.arange(len(nodes))
     distances = np.linalg.norm(nodes[candidates] - np.asarray(spec["point"], dtype=float), axis=1)
     size = float(np.linalg.norm(np.ptp(nodes, axis=0)))
     if distances.min() > SENSOR_REACH * size:

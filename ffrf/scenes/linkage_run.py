@@ -37,6 +37,7 @@ from ffrf.errors import NewtonDivergence, StaticDivergence
 from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
 from ffrf.output.sensors import scene_sensors
 from ffrf.output.tables import write_results as write_tables
+from ffrf.reduction.craig_bampton import CraigBamptonBasis
 from ffrf.scenes.assembly import assemble, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.solvers.simulate import MODES, simulate
@@ -105,9 +106,9 @@ def choose_mode(scene: LinkageScene) -> tuple[str, float]:
     the vibration ratio. The second test matters: at 60 rpm the vibration ratio is still about
     100 while inertia changes the torque by 28 % (``docs/hard_cases.md``)."""
     longest = max(
-        1.0 / float(link.reduction.fixed_interface_frequencies_hz[0])
-        for link in scene.links
-        if link.reduction.fixed_interface_frequencies_hz.size
+        1.0 / float(reduction.fixed_interface_frequencies_hz[0])
+        for reduction in (link.reduction for link in scene.links)
+        if isinstance(reduction, CraigBamptonBasis) and reduction.fixed_interface_frequencies_hz.size
     )
     ratio = (1.0 / scene.drive.omega) / longest
     slow = ratio > 100.0 and inertia_number(scene) < INERTIA_LIMIT

@@ -96,7 +96,8 @@ class LinkageScene(Scene):
         motion = trace_motion(
             self.loop, self.driver, n_poses=n_poses, revolution=sign * 2 * np.pi, start=self.start_phi
         )
-        surfaces = [body.fe.mesh.points[np.unique(boundary_triangles(body.fe.mesh))] for body in self.bodies]
+        meshes = [body.mesh_model.mesh for body in self.bodies]
+        surfaces = [mesh.points[np.unique(boundary_triangles(mesh))] for mesh in meshes]
         points = joint_points(self.loop)
         n = self.loop.n
         shared = {(min(k, (k + 1) % n), max(k, (k + 1) % n)): points[k] for k in range(n)}

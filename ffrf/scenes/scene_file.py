@@ -36,6 +36,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     material = {E = 1.2e9, nu = 0.33, rho = 450.0}
     order = 2                         # default 2: linear tetrahedra are too stiff in bending
     modes = 4
+    reduction = "craig_bampton"       # default; or "free_free": modes = the lowest elastic free-free modes (>= 1),
+                                      # eqs. (FF-1)-(FF-3); interfaces then only place markers (mean of their nodes)
     pose = {position = [0, 0, 0], euler_parameters = [1, 0, 0, 0]}   # optional start pose of the body frame
     velocity = {linear = [0, 0, 0], angular = [0, 0, 0]}   # optional start velocity of the frame (world, m/s, rad/s);
                                       # modal = [...]: one rate per mode
@@ -45,7 +47,9 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
                                      axial_extent = [-0.01, 0.01]}},
         {name = "pad", nodes_file = "pad_nodes.txt"},   # 0-based node indices, optional 2nd column: weights
         {name = "bore2", axis = {point = [0.2, 0, 0], direction = [0, 0, 1]}},  # the bore nearest the axis
-    ]
+        {name = "end", plane = {point = [0.3, 0, 0], normal = [1, 0, 0]}},     # the nodes within tolerance = 1e-5
+    ]                                                                           # (m) of a plane (a face)
+    # Any interface may say weights = "equal" (all its nodes alike, as Exudyn's 1/n) instead of area weights.
 
     [[joints]]
     name = "hinge"
@@ -67,11 +71,37 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
                                       # or joints = ["hinge", ...]: the mean of these joints' points on this body
     surface = true                    # optional: the nearest node on the body's surface
 
+A body given by the mass and stiffness matrices another FE program assembled (SI units, 3 DOFs per node in
+the order of the nodes) says ``matrices = {...}`` instead of ``mesh``/``parametric`` and has no ``material``,
+``order`` or ``unit`` (:mod:`ffrf.scenes.scene_matrices`)::
+
+    [[bodies]]
+    name = "block"
+    modes = 5
+    interfaces = [{name = "face", plane = {point = [0, 0, 0], normal = [-1, 0, 0]}}]   # cylinder, plane or nodes_file
+    [bodies.matrices]                 # the matrices table of this body (or matrices = {...} on one line)
+    format = "abaqus"                 # *MATRIX OUTPUT, STIFFNESS, MASS, FORMAT=COORDINATE files (.gz, .xz read)
+    nodes = "block.inp"               # nodes and elements of a *Part or *Instance of an Abaqus input file ...
+    instance = "block-1"
+    mass = "block_MASS1.mtx"
+    stiffness = "block_STIF1.mtx"
+    scale_stiffness = 1.0             # optional: K times this (Exudyn's ScaleStiffnessMatrix)
+    point_masses = [{node = 9, mass = 0.1}, {point = [4, 0, 0], mass = 0.1}]   # optional (kg; AddNodeMass)
+    # format = "matrix_market": mass and stiffness as Matrix Market files; nodes = "nodes.txt" (also with
+    #   "abaqus"): one node "x y z" per line, row k is node k (DOFs 3k, 3k + 1, 3k + 2), no elements
+    # format = "npz", file = "block.npz": nodes, M, K and optional elements in one file (ffrf.fe.matrix_import.NPZ_KEYS)
+
+Its interfaces are weighted by the surface area of the elements they span (Exudyn's rule: corner nodes), or
+need ``weights = "equal"`` or a weight column in their ``nodes_file`` when the matrices come without elements.
+Such a body has no stresses of ours: the assembly reports its strain energy and reactions, ``assembly.vtu``
+leaves it out, and a ``surface = true`` sensor on it needs elements.
+
 Force elements (spring-dampers and bushings on a joint's equations, loads on interfaces, motors) are
 ``[[forces]]`` tables, documented in :mod:`ffrf.scenes.scene_forces`.
 
 Every interface selector weights its nodes by the surface area of the boundary triangles they span
-(``ffrf.fe.interfaces``), unless a ``nodes_file`` gives a weight per node in a second column. The file is
+(``ffrf.fe.interfaces``), unless a ``nodes_file`` gives a weight per node in a second column or the interface
+says ``weights = "equal"``. The file is
 checked against :mod:`ffrf.scenes.scene_schema` before anything is built: an unknown or misspelt key, a wrong
 type or an impossible value is a :class:`SceneError` naming the key, where it is and the fix.
 

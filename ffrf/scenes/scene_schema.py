@@ -14,6 +14,7 @@ from collections.abc import Mapping
 
 from ffrf.errors import SceneError
 from ffrf.scenes.scene_forces import ELASTIC, FORCE_TYPES, check_force
+from ffrf.scenes.scene_matrices import MATRIX_FILES, MATRIX_FORMATS, is_abaqus_input
 from ffrf.scenes.schema_keys import (
     Key,
     between,
@@ -30,7 +31,7 @@ from ffrf.scenes.schema_keys import (
 )
 from ffrf.system.markers import JOINT_OFFSETS
 
-__all__ = ["Key", "MATERIAL", "SCHEMA", "SETTINGS", "check_scene", "check_table"]
+__all__ = ["Key", "MATERIAL", "REDUCTIONS", "SCHEMA", "SETTINGS", "check_scene", "check_table"]
 
 JOINT_TYPES = ("revolute", "fixed", "driven_revolute")
 #: Runs beyond these sizes are typing mistakes, not studies: they would not finish (or not fit in memory).
@@ -39,6 +40,10 @@ MAX_OUTPUTS = 1_000_000
 PARAMETRIC_H_RANGE = (5e-4, 0.05)  # m: finer meshes of a whole link do not fit in memory
 MESH_UNITS = ("m", "mm")
 MODES = ("dynamic", "quasi_static")
+#: Mode bases of a body: Craig-Bampton (interface and fixed-interface modes) or free-free eigenmodes.
+REDUCTIONS = ("craig_bampton", "free_free")
+#: Body keys that describe a mesh (and its material), not a body from matrices.
+MESH_KEYS = ("material", "order", "unit", "h")
 
 
 MATERIAL = {
@@ -72,12 +77,36 @@ AROUND_AXIS = {
     "direction": Key("vector3", True, nonzero_vector),
     "tolerance": Key("number", False, positive),
 }
+PLANE = {
+    "point": Key("vector3", True),
+    "normal": Key("vector3", True, nonzero_vector),
+    "tolerance": Key("number", False, positive),
+}
 INTERFACE = {
     "name": Key("string", True),
     "axis": Key("table", keys=AROUND_AXIS),
     "group": Key("string"),
     "cylinder": Key("table", keys=CYLINDER),
+    "plane": Key("table", keys=PLANE),
     "nodes_file": Key("string"),
+    "weights": Key("string", False, one_of(("area", "equal"))),
+}
+SELECTORS = ("group", "cylinder", "axis", "plane", "nodes_file")
+POINT_MASS = {
+    "node": Key("integer", False, non_negative),
+    "point": Key("vector3"),
+    "tolerance": Key("number", False, positive),
+    "mass": Key("number", True, non_negative),
+}
+MATRICES = {
+    "format": Key("string", True, one_of(MATRIX_FORMATS)),
+    "file": Key("string"),
+    "nodes": Key("string"),
+    "instance": Key("string"),
+    "mass": Key("string"),
+    "stiffness": Key("string"),
+    "scale_stiffness": Key("number", False, positive),
+    "point_masses": Key("tables", keys=POINT_MASS),
 }
 POSE = {
     "position": Key("vector3"),
@@ -94,8 +123,10 @@ BODY = {
     "unit": Key("string", False, one_of(MESH_UNITS)),
     "h": Key("number", False, between(*PARAMETRIC_H_RANGE, closed=True)),
     "parametric": Key("table", keys=PARAMETRIC),
-    "material": Key("table", True, keys=MATERIAL),
+    "matrices": Key("table", keys=MATRICES),
+    "material": Key("table", keys=MATERIAL),
     "order": Key("integer", False, one_of((1, 2))),
+    "reduction": Key("string", False, one_of(REDUCTIONS)),
     "modes": Key("integer", False, non_negative),
     "interfaces": Key("tables", True, keys=INTERFACE),
     "pose": Key("table", keys=POSE),
@@ -181,11 +212,22 @@ SCHEMA = {
 
 
 def _check_body(body: dict, where: str) -> None:
-    sources = [key for key in ("mesh", "parametric") if key in body]
+    sources = [key for key in ("mesh", "parametric", "matrices") if key in body]
     if len(sources) != 1:
         raise SceneError(
-            f'{where}: give exactly one of mesh = "file" or parametric = {{link = ...}}, got {sources or "neither"}'
+            f'{where}: give exactly one of mesh = "file", parametric = {{link = ...}} or matrices = {{format = ...}}, '
+            f"got {sources or 'none'}"
         )
+    if body.get("reduction") == "free_free" and body.get("modes", 4) < 1:
+        raise SceneError(
+            f'{where}: reduction = "free_free" keeps modes >= 1 flexible free-free modes, got 0 (a body without '
+            'them is rigid); give modes >= 1, or reduction = "craig_bampton" for interface modes only'
+        )
+    if "matrices" in body:
+        _check_matrices_body(body, where)
+        return
+    if "material" not in body:
+        raise SceneError(f"{where}: missing required key 'material' (a table {{E, nu, rho}} for the mesh)")
     spec = body.get("parametric")
     if spec is not None and ("link" in spec) == ("axes" in spec):
         raise SceneError(
@@ -203,16 +245,47 @@ def _check_body(body: dict, where: str) -> None:
         )
     if "unit" in body and "mesh" not in body:
         raise SceneError(f"{where}: 'unit' scales a mesh file; a parametric link is in metres, remove 'unit'")
+    _check_interfaces(body, SELECTORS, where)
+
+
+def _check_interfaces(body: dict, selectors: tuple[str, ...], where: str) -> None:
+    """At least one interface, unique names, each selected by exactly one of ``selectors``."""
     if not body["interfaces"]:
         raise SceneError(f"{where}: list at least one interface (the first is the body's frame)")
     unique(body["interfaces"], "interfaces", where)
     for k, interface in enumerate(body["interfaces"]):
-        selectors = [key for key in ("group", "cylinder", "axis", "nodes_file") if key in interface]
-        if len(selectors) != 1:
+        given = [key for key in SELECTORS if key in interface]
+        if len(given) != 1 or given[0] not in selectors:
+            why = "; a body from matrices has no named groups or surface mesh of ours" if "matrices" in body else ""
             raise SceneError(
-                f"{where}, interfaces[{k}]{label(interface)}: select it by exactly one of group, "
-                f"cylinder, axis or nodes_file, got {selectors or 'none'}"
+                f"{where}, interfaces[{k}]{label(interface)}: select it by exactly one of {', '.join(selectors[:-1])} "
+                f"or {selectors[-1]}, got {given or 'none'}{why}"
             )
+
+
+def _check_matrices_body(body: dict, where: str) -> None:
+    """A body from matrices: no mesh keys, the files its format reads, interfaces on nodes."""
+    spec, place = body["matrices"], f"{where}, matrices"
+    mesh_keys = [key for key in MESH_KEYS if key in body]
+    if mesh_keys:
+        raise SceneError(
+            f"{where}: {mesh_keys} describe a mesh; a body from matrices takes its mass and stiffness from its "
+            "files (SI units), remove them"
+        )
+    wanted = MATRIX_FILES[spec["format"]]
+    missing = [key for key in wanted if key not in spec]
+    extra = [key for key in ("file", "nodes", "mass", "stiffness") if key in spec and key not in wanted]
+    if missing or extra:
+        raise SceneError(
+            f"{place}: format = {spec['format']!r} reads {' = ..., '.join(wanted)} = ... "
+            f"({'missing ' + str(missing) if missing else 'not ' + str(extra)})"
+        )
+    if "instance" in spec and not is_abaqus_input(spec.get("nodes", "")):
+        raise SceneError(f"{place}: 'instance' names a *Part or *Instance of an Abaqus .inp given as nodes = ...")
+    for k, point_mass in enumerate(spec.get("point_masses", [])):
+        if ("node" in point_mass) == ("point" in point_mass):
+            raise SceneError(f"{place}, point_masses[{k}]: give exactly one of node = index or point = [x, y, z] (m)")
+    _check_interfaces(body, ("cylinder", "plane", "nodes_file"), where)
 
 
 def _check_joint(joint: dict, interfaces: Mapping[str, set[str]], where: str) -> None:

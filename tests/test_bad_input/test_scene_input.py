@@ -6,7 +6,7 @@ schema refuses it before any body is built, so the cases are cheap."""
 import re
 
 import pytest
-from scene_fixtures import PENDULUM, write_bar
+from scene_fixtures import PENDULUM, write_bar, write_tet_matrices
 
 from ffrf.errors import FEInputError, MaterialError, MeshError, SceneError
 from ffrf.scenes.scene_file import load_scene
@@ -20,6 +20,11 @@ SPRING = (
 
 def _with_force(text: str) -> str:
     return text + "\n[[sensors]]"
+
+
+#: The bar's mesh, material and order: what a body from matrices says instead.
+MESH_BODY = 'mesh = "bar.vtu"\nunit = "mm"\nmaterial = {E = 1e8, nu = 0.3, rho = 450.0}\norder = 1\n'
+NPZ = 'matrices = {format = "npz", file = "bar.npz"}\n'
 
 
 CASES = {
@@ -114,7 +119,43 @@ CASES = {
     "two selectors": (
         'nodes_file = "hinge.txt"}',
         'nodes_file = "hinge.txt", group = "end"}',
-        ["exactly one of group, cylinder, axis or nodes_file"],
+        ["exactly one of group, cylinder, axis, plane or nodes_file"],
+    ),
+    "mesh and matrices": (
+        'mesh = "bar.vtu"',
+        'mesh = "bar.vtu"\nmatrices = {format = "npz", file = "bar.npz"}',
+        ['give exactly one of mesh = "file", parametric', "or matrices", "got ['mesh', 'matrices']"],
+    ),
+    "mesh keys on a body from matrices": (
+        'mesh = "bar.vtu"\nunit = "mm"\n',
+        NPZ,
+        ["['material', 'order'] describe a mesh; a body from matrices takes its mass and stiffness from its files"],
+    ),
+    "missing matrix file": (MESH_BODY, NPZ, ["matrices: file = 'bar.npz'", "not found; give a path relative to"]),
+    "files of another matrix format": (
+        MESH_BODY,
+        'matrices = {format = "npz", file = "bar.npz", mass = "M.mtx"}\n',
+        ["matrices: format = 'npz' reads file = ... (not ['mass'])"],
+    ),
+    "matrix sizes disagree": (
+        MESH_BODY,
+        'matrices = {format = "matrix_market", nodes = "tri_nodes.txt", mass = "tet_M.mtx", stiffness = "tet_K.mtx"}\n',
+        ["body 'bar', matrices:", "tet_M.mtx: the matrix is 12 x 12, expected 9 x 9 (3 DOFs per node)"],
+    ),
+    "group interface on a body from matrices": (
+        MESH_BODY + 'modes = 3\ninterfaces = [{name = "hinge", nodes_file = "hinge.txt"}]',
+        NPZ + 'modes = 3\ninterfaces = [{name = "hinge", group = "end"}]',
+        ["select it by exactly one of cylinder, plane or nodes_file, got ['group']; a body from matrices has no named"],
+    ),
+    "unknown reduction": (
+        "modes = 3",
+        'modes = 3\nreduction = "guyan"',
+        ["'reduction' must be one of ['craig_bampton', 'free_free'], got 'guyan'"],
+    ),
+    "free-free body without modes": (
+        "modes = 3",
+        'modes = 0\nreduction = "free_free"',
+        ['reduction = "free_free" keeps modes >= 1 flexible free-free modes, got 0', "give modes >= 1"],
     ),
     "zero joint axis": ("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 0.0]", ["'axis' has zero length"]),
     "one side's axis and the common axis": (
@@ -169,6 +210,7 @@ def test_bad_scene_is_refused_with_a_clear_message(tmp_path, case):
     old, new, words = CASES[case]
     assert PENDULUM.count(old) >= 1, "the case must edit the valid scene"
     write_bar(tmp_path)
+    write_tet_matrices(tmp_path)
     (tmp_path / "scene.toml").write_text(PENDULUM.replace(old, new, 1))
     with pytest.raises(SceneError) as error:
         load_scene(tmp_path / "scene.toml")
