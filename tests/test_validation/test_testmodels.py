@@ -189,8 +189,9 @@ def test_the_command_exits_2_when_a_run_fails(monkeypatch, capsys):
     assert "no model" in capsys.readouterr().err
 
 
-#: Measured 2026-12 (one run each): sensor rows, ours against Exudyn's converged run and at the script's
-#: settings; Exudyn's own Newton error (its run at the script's settings against its converged run).
+#: Measured 2026-12 (two runs each; the tests allow 10 times these): sensor rows, ours against Exudyn's
+#: converged run and at the script's settings; Exudyn's own Newton error (its run at the script's settings
+#: against its converged run).
 EXAMPLES_MEASURED = {
     "NGsolveModalAnalysis": {
         "ours_vs_exudyn_tight": 1.5e-9,
@@ -217,7 +218,7 @@ def test_examples_meet_exudyns_converged_run(name):
     assert entry["passed"], entry["reason"]
     t = entry["differences"]["trajectory"]
     for key, measured in EXAMPLES_MEASURED[name].items():
-        assert t[key] <= 3 * measured
+        assert t[key] <= 10 * measured
     example = model_named(name)
     assert t["ours_vs_exudyn_tight"] <= example.converged_tolerance  # type: ignore[union-attr]
 
