@@ -1,9 +1,10 @@
-"""Node sets of a model given by nodes and volume elements: by point, by plane, and surface weights.
+"""Node sets of a model given by nodes and volume elements: by point, plane or box, and surface weights.
 
 Exudyn's ``FEMinterface`` selection helpers, on plain arrays, so that they serve any model
 (:class:`ffrf.fe.external_model.ExternalFEModel` in particular):
 
-* :func:`node_at_point` (``GetNodeAtPoint``) and :func:`nodes_in_plane` (``GetNodesInPlane``);
+* :func:`node_at_point` (``GetNodeAtPoint``), :func:`nodes_in_plane` (``GetNodesInPlane``) and
+  :func:`nodes_in_box` (``GetNodesInCube``);
 * :func:`on_cylinder`: which points lie on a cylinder surface (a bearing bore), for any point cloud;
 * :func:`surface_triangles` (``VolumeToSurfaceElements``): the element faces that belong to one
   element only, by their corner nodes, quadrilaterals split into two triangles as Exudyn does;
@@ -23,7 +24,15 @@ from numpy.typing import ArrayLike, NDArray
 
 from ffrf.errors import InterfaceError, MeshError
 
-__all__ = ["FACES", "node_at_point", "nodes_in_plane", "on_cylinder", "surface_triangles", "surface_area_weights"]
+__all__ = [
+    "FACES",
+    "node_at_point",
+    "nodes_in_plane",
+    "nodes_in_box",
+    "on_cylinder",
+    "surface_triangles",
+    "surface_area_weights",
+]
 
 #: Faces of each element type by local corner index (Exudyn's tables; Abaqus node order).
 FACES: dict[str, list[list[int]]] = {
@@ -89,6 +98,19 @@ def on_cylinder(
     t = rel @ d
     r = np.linalg.norm(rel - np.outer(t, d), axis=1)
     return (np.abs(r - radius) <= tol) & (t >= t_min - tol) & (t <= t_max + tol)
+
+
+def nodes_in_box(nodes: ArrayLike, lower: ArrayLike, upper: ArrayLike) -> NDArray[np.int64]:
+    """Indices (ascending) of the nodes with ``lower <= x <= upper`` in every coordinate (bounds included)."""
+    nodes, lower, upper = (np.asarray(v, dtype=float) for v in (nodes, lower, upper))
+    if np.any(lower > upper):
+        raise InterfaceError(f"box {lower.tolist()} .. {upper.tolist()}: a lower bound exceeds its upper bound")
+    found = np.flatnonzero(np.all((nodes >= lower) & (nodes <= upper), axis=1))
+    if found.size == 0:
+        raise InterfaceError(
+            f"no node in the box {lower.tolist()} .. {upper.tolist()}; check the corners and the units"
+        )
+    return found
 
 
 def surface_triangles(elements: Mapping[str, ArrayLike]) -> NDArray[np.int64]:

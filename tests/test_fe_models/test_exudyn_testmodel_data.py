@@ -19,10 +19,11 @@ import numpy as np
 import pytest
 from scipy.sparse.linalg import norm as sparse_norm
 
+from ffrf.errors import InterfaceError
 from ffrf.fe.external_model import ExternalFEModel
 from ffrf.fe.fe_model import rigid_body_modes
 from ffrf.fe.matrix_import import abaqus_model, read_npz_model, write_npz_model
-from ffrf.fe.node_selection import node_at_point, nodes_in_plane, surface_area_weights, surface_triangles
+from ffrf.fe.node_selection import node_at_point, nodes_in_box, nodes_in_plane, surface_area_weights, surface_triangles
 
 DATA = Path(__file__).parents[2] / "validation" / "data" / "exudyn_testmodels"
 BLOCKS = ("C3D4", "C3D10", "C3D8", "C3D20", "C3D20R")
@@ -191,6 +192,19 @@ def test_node_sets_and_surface_weights_equal_exudyns(name):
         assert raw.sum() == pytest.approx(1.0, rel=1e-14)  # measured 1.1e-16
     corner = model.nodes[triangles[0, 0]]
     assert node_at_point(model.nodes, corner + 1e-6) == fem.GetNodeAtPoint(list(corner + 1e-6))
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_nodes_in_box_equal_exudyns_get_nodes_in_cube(name):
+    """A box around a corner region and a flat box on a face (bounds included, as ``GetNodesInCube``)."""
+    model, fem = ours(name), exudyns(name)
+    low, high = model.nodes.min(axis=0), model.nodes.max(axis=0)
+    for lower, upper in ((low, low + 0.3 * (high - low)), (low - 1e-3, np.r_[high[:2], low[2]] + 1e-3)):
+        selected = nodes_in_box(model.nodes, lower, upper)
+        np.testing.assert_array_equal(selected, fem.GetNodesInCube(list(lower), list(upper)))
+        assert np.all((model.nodes[selected] >= lower) & (model.nodes[selected] <= upper))
+    with pytest.raises(InterfaceError, match="no node in the box"):
+        nodes_in_box(model.nodes, high + 1.0, high + 2.0)
 
 
 def test_netgen_pickle_converts_to_an_npz_model(tmp_path):

@@ -15,6 +15,11 @@ modified Newton) and so carries that run's Newton error. Where that error is lar
 :data:`STORED_TOLERANCE`), ours passes if it is within :data:`CONVERGED_TOLERANCE` of that converged run
 (NGsolveCMStest: both 1.24e-9 from the stored value). A wrong stored value is not explained so: Exudyn's
 run at the script's settings would not reproduce it.
+
+An :class:`Example` is one of Exudyn's examples (``main/pythonDev/Examples/<name>.py``): it stores no
+value, so ours is judged against Exudyn's run of the same model (:func:`judge_example`): its sensor rows
+within ``converged_tolerance`` (:data:`CONVERGED_TOLERANCE` unless the example states why its round-off
+floor is higher) of Exudyn's converged run.
 """
 
 from __future__ import annotations
@@ -35,12 +40,15 @@ __all__ = [
     "TIGHT_ABSOLUTE",
     "TIGHT_RELATIVE_FALLBACK",
     "OUR_TOLERANCE",
+    "FREQUENCY_TOLERANCE",
     "StoredValue",
     "ModelRun",
     "TestModel",
+    "Example",
     "Verdict",
     "relative",
     "judge",
+    "judge_example",
     "exudyn_settings",
     "exudyn_label",
     "solve",
@@ -118,6 +126,38 @@ class TestModel:
     __test__ = False  # not a pytest class
 
 
+@dataclass(frozen=True)
+class Example:
+    """One of Exudyn's examples and its twin; no stored value (see the module docstring).
+
+    ``source_blob``: the script's git blob id at :data:`EXUDYN_COMMIT`. ``converged_tolerance``: ours
+    against Exudyn's converged run, sensor rows (largest difference over largest value); above
+    :data:`CONVERGED_TOLERANCE` only with ``floor_reason``. ``frequencies``: named eigenfrequency
+    sets (Hz) to report, ``"ours"`` and ``"exudyn"`` (same mesh) judged to ``FREQUENCY_TOLERANCE``."""
+
+    name: str
+    source_blob: str
+    description: str
+    result_formula: str
+    ours: Callable[[float], ModelRun]
+    exudyn: Callable[[bool], ModelRun]
+    tolerance: float = OUR_TOLERANCE
+    converged_tolerance: float = CONVERGED_TOLERANCE
+    floor_reason: str = ""
+    frequencies: Callable[[], dict[str, NDArray[np.float64]]] | None = None
+    slow: bool = True
+
+    __test__ = False
+
+    def __post_init__(self) -> None:
+        if self.converged_tolerance > CONVERGED_TOLERANCE and not self.floor_reason:
+            raise ValueError(f"example {self.name}: a tolerance above {CONVERGED_TOLERANCE:g} needs its reason")
+
+
+#: Our fixed-interface eigenfrequencies against Exudyn's on the same mesh (relative).
+FREQUENCY_TOLERANCE = 1e-9
+
+
 def relative(a: float, b: float) -> float:
     """|a - b| / |b|."""
     return abs(a - b) / abs(b)
@@ -166,6 +206,23 @@ def judge(stored: float, ours: float, exudyn: float | None = None, exudyn_tight:
         f"ours - Exudyn converged = {to_converged:.1e}",
         checks,
     )
+
+
+def judge_example(example: Example, ours_vs_converged: float, frequency_error: float | None = None) -> Verdict:
+    """Ours passes if its sensor rows are within ``example.converged_tolerance`` of Exudyn's converged
+    run and, where compared, its eigenfrequencies within :data:`FREQUENCY_TOLERANCE` of Exudyn's."""
+    checks = {"ours_vs_exudyn_converged": ours_vs_converged}
+    bound = example.converged_tolerance
+    passed = ours_vs_converged <= bound
+    reason = f"sensor rows: ours - Exudyn converged = {ours_vs_converged:.1e} {'<=' if passed else '>'} {bound:g}"
+    if bound > CONVERGED_TOLERANCE:
+        reason += f" ({example.floor_reason})"
+    if frequency_error is not None:
+        checks["frequencies_ours_vs_exudyn"] = frequency_error
+        fine = frequency_error <= FREQUENCY_TOLERANCE
+        passed = passed and fine
+        reason += f"; eigenfrequencies {frequency_error:.1e} {'<=' if fine else '>'} {FREQUENCY_TOLERANCE:g}"
+    return Verdict(passed, reason, checks)
 
 
 def exudyn_settings(step: float, t_end: float, rho_inf: float, relative_tolerance: float | None = None):
