@@ -182,7 +182,7 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
     ``options``: ``mode`` (``auto``, ``quasi_static``, ``dynamic``), ``outputs``, ``step`` (s), ``vtk_every``."""
     import time
 
-    from ffrf.output.assembly_stress import write_assembly_vtu
+    from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
     from ffrf.output.bennett_figures import plot_coupler_deviation, plot_driving_torque
     from ffrf.scenes.linkage_run import choose_mode, run_linkage, write_results
 
@@ -241,6 +241,14 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
     plot_driving_torque({label: result}, out / "driving_torque.png")
     if "stability" in result.metadata:
         _write_stability(result, out)
+        if result.critical is not None:
+            critical = result.critical
+            stress = scene_assembly_stress(scene, critical.q, critical.multipliers)
+            where = write_assembly_vtu(out / "stability_critical.vtu", scene, stress, {"critical_mode": critical.mode})
+            print(
+                f"critical pose ({critical.where}, drive angle {np.degrees(scene.drive_angle(critical.t)):.4g} deg, "
+                f"squared frequency {critical.squared_frequency:.4g} rad^2/s^2) with its mode: {where}"
+            )
     summary = result.summary()
     print(
         f"{label}: max coupler deviation from the ideal path "
@@ -270,7 +278,7 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
 
 def _write_stability(result, out: Path) -> None:
     """``stability.json`` (per output: time, drive angle, squared frequencies of Eq. (B1)) and ``stability.png``."""
-    from ffrf.output.bennett_figures import plot_over_drive_angle
+    from ffrf.output.bennett_figures import plot_stability
 
     values = result.sensors["stability_squared_frequencies"]
     angle = result.sensors["drive_angle"]
@@ -281,10 +289,9 @@ def _write_stability(result, out: Path) -> None:
         "squared_frequencies_rad2_per_s2": values.tolist(),
     }
     (out / "stability.json").write_text(json.dumps(table, indent=1))
-    since_start = angle - angle[0]
-    series = {f"mode {k + 1}": (since_start, values[:, k]) for k in range(values.shape[1])}
-    plot_over_drive_angle(series, "squared frequency (rad^2/s^2)", out / "stability.png", "Stability (Eq. (B1))")
     s = result.metadata["stability"]
+    folds = [snap["drive_angle_deg"] for snap in s.get("snaps", [])]
+    plot_stability(angle, values, result.sensors["driving_torque"], out / "stability.png", folds)
     print(
         f"stability: smallest squared frequency {s['min_squared_frequency']:.4g} rad^2/s^2 "
         f"({s['min_frequency_hz']:.3g} Hz) at drive angle {s['at_drive_angle_deg']:.4g} deg; "

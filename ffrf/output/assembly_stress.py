@@ -243,11 +243,15 @@ def scene_assembly_stress(scene, q: ArrayLike, multipliers: ArrayLike | None = N
     return AssemblyStress(tuple(out), q.copy())
 
 
-def write_assembly_vtu(path: str | Path, scene, stress: AssemblyStress) -> Path | None:
+def write_assembly_vtu(
+    path: str | Path, scene, stress: AssemblyStress, modes: Mapping[str, NDArray] | None = None
+) -> Path | None:
     """The deformed assembly as one ``.vtu``: all links' tetrahedra at their current positions, point data
     ``displacement`` (current minus reference, for "Warp By Vector"), ``elastic_displacement`` (world axes),
-    ``von_mises`` (Pa, volume-weighted vertex average), ``body``; cell data ``von_mises`` (Pa). Bodies given by
-    their matrices are left out (logged); ``None`` and no file when no body has elements of ours."""
+    ``von_mises`` (Pa, volume-weighted vertex average), ``body``; cell data ``von_mises`` (Pa). ``modes`` adds a
+    point field per named coordinate vector (a mode of Eq. (B1)): the vertices' motion along it, to first order,
+    scaled to a largest vertex motion of one. Bodies given by their matrices are left out (logged); ``None`` and
+    no file when no body has elements of ours."""
     import meshio
 
     from ffrf.output.paraview import _frame_points  # one definition of a body's current vertex positions
@@ -281,6 +285,7 @@ def write_assembly_vtu(path: str | Path, scene, stress: AssemblyStress) -> Path 
         body.append(np.full(n, float(link.index)))
         offset += n
     points_all = np.vstack(points)
+    mode_data = {name: _mode_motion(scene, meshed, stress.q, vector) for name, vector in (modes or {}).items()}
     meshio.write(
         path,
         meshio.Mesh(
@@ -291,8 +296,25 @@ def write_assembly_vtu(path: str | Path, scene, stress: AssemblyStress) -> Path 
                 "elastic_displacement": np.vstack(elastic),
                 "von_mises": np.concatenate(nodal),
                 "body": np.concatenate(body),
+                **mode_data,
             },
             cell_data={"von_mises": [np.concatenate([s.element_von_mises for _, s in meshed])]},
         ),
     )
     return path
+
+
+def _mode_motion(scene, meshed: list, q: NDArray, mode: NDArray) -> NDArray[np.float64]:
+    """Vertex motions of the meshed bodies along ``mode`` (central difference of their positions), scaled to a
+    largest motion of one."""
+    from ffrf.output.paraview import _frame_points
+
+    step = 1e-6 / max(float(np.abs(mode).max()), 1e-300)
+    motions = []
+    for link, _ in meshed:
+        block = scene.system.block(link.index)
+        ahead = _frame_points(link.fe, link.reduction.basis, q[block] + step * mode[block])[0]
+        behind = _frame_points(link.fe, link.reduction.basis, q[block] - step * mode[block])[0]
+        motions.append((ahead - behind) / (2.0 * step))
+    motion = np.vstack(motions)
+    return motion / max(float(np.linalg.norm(motion, axis=1).max()), 1e-300)

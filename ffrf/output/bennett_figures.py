@@ -36,6 +36,7 @@ __all__ = [
     "Run",
     "PAPER_COLORS",
     "plot_over_drive_angle",
+    "plot_stability",
     "run_sensors",
     "coupler_deviation_series",
     "driving_torque_series",
@@ -159,3 +160,36 @@ def plot_driving_torque(
         "Driving torque",
         dashed=tuple(extra or ()),
     )
+
+
+def plot_stability(
+    angle: ArrayLike,
+    squared_frequencies: ArrayLike,
+    torque: ArrayLike,
+    path: str | Path | None = None,
+    folds: ArrayLike = (),
+):
+    """Stability along a quasi-static run: (a) the smallest squared frequencies of Eq. (B1) (rad^2/s^2, one line
+    per mode, zero marked) and (b) the driving torque (N mm), over the drive angle (deg, absolute), with the folds
+    of the path (deg) as vertical lines."""
+    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    degrees = np.degrees(np.asarray(angle, dtype=float))
+    values = np.asarray(squared_frequencies, dtype=float)
+    for k in range(values.shape[1]):
+        top.plot(degrees, values[:, k], ".-", markersize=2, linewidth=1.0, label=f"mode {k + 1}")
+    top.axhline(0.0, color="black", linewidth=0.8)
+    top.set_yscale("symlog", linthresh=max(1.0, float(np.min(np.abs(values[:, 0]))) or 1.0))
+    top.set_ylabel("squared frequency (rad^2/s^2)")
+    top.legend(loc="best", fontsize=8)
+    bottom.plot(degrees, 1e3 * np.asarray(torque, dtype=float), linewidth=1.2)
+    bottom.set_ylabel("driving torque (N mm)")
+    bottom.set_xlabel("drive angle (deg)")
+    for axes in (top, bottom):
+        for fold in np.atleast_1d(np.asarray(folds, dtype=float)):
+            axes.axvline(fold, color="tab:red", linestyle="--", linewidth=0.9)
+        axes.grid(True, alpha=0.3)
+    top.set_title("Stability (Eq. (B1)); folds of the path dashed")
+    if path is not None:
+        fig.savefig(os.fspath(path), dpi=120)
+    return fig, (top, bottom)

@@ -42,7 +42,14 @@ from ffrf.scenes.assembly import assemble, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.solvers.simulate import MODES, simulate
 from ffrf.solvers.snap_through import SnapThrough
-from ffrf.solvers.stability import equilibrium_stability, mode_shares, stability_along, stability_summary
+from ffrf.solvers.stability import (
+    CriticalPose,
+    critical_pose,
+    equilibrium_stability,
+    mode_shares,
+    stability_along,
+    stability_summary,
+)
 from ffrf.system.joints import MarkerJoint
 
 __all__ = [
@@ -67,6 +74,7 @@ class LinkageResult:
     q: NDArray[np.float64]
     metadata: dict = field(default_factory=dict)
     assembly: AssemblyStress | None = None
+    critical: CriticalPose | None = None  # with stability: the fold, or the least stable output
 
     def summary(self) -> dict[str, float]:
         s = self.sensors
@@ -233,7 +241,28 @@ def run_linkage(
         out.metadata["stability"] = stability_summary(
             sensors["stability_squared_frequencies"], np.degrees(sensors["drive_angle"]), "drive_angle_deg"
         )
-        out.metadata["stability"]["snaps"] = [_snap_report(scene, snap) for snap in getattr(run, "snaps", ())]
+        snaps = getattr(run, "snaps", ())
+        out.metadata["stability"]["snaps"] = [_snap_report(scene, snap) for snap in snaps]
+        if snaps:
+            out.critical = critical_pose(
+                scene.system, "fold", snaps[0].fold_t, snaps[0].fold_q, snaps[0].fold_multipliers
+            )
+        else:
+            k = int(np.argmin(sensors["stability_squared_frequencies"][:, 0]))
+            out.critical = critical_pose(scene.system, "least stable output", times[k], q[k], lam[k])
+        out.metadata["stability"]["critical"] = {
+            "where": out.critical.where,
+            "time_s": out.critical.t,
+            "drive_angle_deg": float(np.degrees(scene.drive_angle(out.critical.t))),
+            "squared_frequency": out.critical.squared_frequency,
+            "link_shares": dict(
+                zip(
+                    [link.name for link in scene.links],
+                    mode_shares(scene.system, out.critical.q, out.critical.mode).tolist(),
+                    strict=True,
+                )
+            ),
+        }
     if stopped is not None:
         out.metadata["stopped"] = {
             "time_s": float(times[-1]),

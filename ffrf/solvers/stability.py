@@ -23,7 +23,15 @@ from scipy.linalg import eigh
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
 
-__all__ = ["EquilibriumStability", "equilibrium_stability", "mode_shares", "stability_along", "stability_summary"]
+__all__ = [
+    "CriticalPose",
+    "EquilibriumStability",
+    "critical_pose",
+    "equilibrium_stability",
+    "mode_shares",
+    "stability_along",
+    "stability_summary",
+]
 
 
 @dataclass(frozen=True)
@@ -83,7 +91,19 @@ def stability_summary(squared_frequencies: NDArray, along: NDArray, name: str) -
     lowest = squared_frequencies[:, 0]
     k = int(np.argmin(lowest))
     unstable = np.flatnonzero(lowest <= 0.0)
+    crossings = np.flatnonzero(np.sign(lowest[1:]) != np.sign(lowest[:-1]))
+    # A quasi-static path cannot pass a limit point of its parameter (it stops there, or goes on past a fold
+    # through Eq. (S6), between outputs of positive mu): a sign change between two outputs is a branch point.
+    changes = [
+        {
+            f"{name}": float(along[j] + (along[j + 1] - along[j]) * lowest[j] / (lowest[j] - lowest[j + 1])),
+            "kind": "branch point (bifurcation): the path goes on through it",
+            "stability": "lost" if lowest[j] > 0.0 else "regained",
+        }
+        for j in crossings
+    ]
     return {
+        "sign_changes": changes,
         "min_squared_frequency": float(lowest[k]),
         "min_frequency_hz": float(np.sqrt(max(lowest[k], 0.0)) / (2.0 * np.pi)),
         f"at_{name}": float(along[k]),
@@ -105,3 +125,22 @@ def mode_shares(system: MultibodySystem, q: NDArray, mode: NDArray) -> NDArray[n
         ]
     )
     return energies / energies.sum()
+
+
+@dataclass(frozen=True)
+class CriticalPose:
+    """The equilibrium of a run closest to instability (``where``: a fold of the path or the least stable output),
+    at ``t``, with its smallest squared frequency of Eq. (B1) and that mode."""
+
+    where: str
+    t: float
+    q: NDArray[np.float64]
+    multipliers: NDArray[np.float64]
+    squared_frequency: float
+    mode: NDArray[np.float64]
+
+
+def critical_pose(system: MultibodySystem, where: str, t: float, q: NDArray, multipliers: NDArray) -> CriticalPose:
+    """:class:`CriticalPose` of the equilibrium ``(q, multipliers)`` at ``t``."""
+    judged = equilibrium_stability(system, q, multipliers, t, count=1)
+    return CriticalPose(where, float(t), q, multipliers, float(judged.squared_frequencies[0]), judged.modes[:, 0])
