@@ -3,7 +3,8 @@ mesh refinement of the critical drive angle, and the cost of monitoring stabilit
 
 For each discretisation (``--meshes``, h in mm / element order / fixed-interface modes per link) the PLA
 linkage runs quasi-statically up to ``--t-end`` seconds of drive, once without and once with stability
-monitoring (Eq. (B1) at every output, and past a fold Eq. (S6): continuation to the landing equilibrium).
+monitoring (Eq. (B1) at every output, and past a fold Eq. (S6): continuation to the landing equilibrium);
+the default PLA Bennett scene's revolution (no fold) likewise, for the monitoring's cost alone.
 Recorded: the fold's drive angle and driving torque, the other fold, the coupler's jump and the energy
 released, and the wall times of both runs (their ratio is the monitoring's cost; the tracing of the fold is part
 of it). On the first discretisation a dynamic run (generalized-alpha, ``--step``) drives through the fold: the
@@ -64,6 +65,26 @@ def _dynamic_snap_angle(result, snap: dict, fold: np.ndarray, landing: np.ndarra
     angles = np.degrees(result.sensors["drive_angle"])
     beyond = np.flatnonzero((covered >= 0.5) & (angles > snap["drive_angle_deg"] - 5.0))
     return float(angles[beyond[0]]) if beyond.size else None
+
+
+def _bennett_monitoring_cost(outputs: int) -> dict:
+    """The default PLA Bennett scene (no fold): a quasi-static revolution without and with stability monitoring."""
+    from ffrf.scenes.bennett_scene import build_bennett
+
+    scene = build_bennett("pla")
+    run_linkage(scene, "quasi_static", 5, t_end=0.5)  # compile and warm the kernels outside the timings
+    times = {}
+    for stability in (False, True):
+        started = time.perf_counter()
+        result = run_linkage(scene, "quasi_static", outputs, stability=stability)
+        times[stability] = time.perf_counter() - started
+    return {
+        "outputs": outputs,
+        "plain_run_s": times[False],
+        "monitored_run_s": times[True],
+        "monitoring_cost_ratio": times[True] / times[False],
+        "min_squared_frequency": result.metadata["stability"]["min_squared_frequency"],
+    }
 
 
 def main() -> int:
@@ -127,8 +148,11 @@ def main() -> int:
             }
             print(json.dumps(dynamic), flush=True)
     folds = [r["snaps"][0]["drive_angle_deg"] for r in rows if r["snaps"]]
+    bennett = _bennett_monitoring_cost(args.outputs)
+    print(json.dumps(bennett), flush=True)
     report = {
         "linkage": "plane_fold_6r, PLA, scale 0.1, 1 rpm",
+        "bennett_pla_revolution": bennett,
         "meshes": rows,
         "dynamic": dynamic,
         "fold_change_between_meshes_deg": float(np.ptp(folds)) if len(folds) > 1 else None,
