@@ -115,3 +115,5 @@ def test_nearby_command_prints_the_table_and_writes_json(tmp_path, capsys):
     assert summary["starts"] == 8 and summary["model"] == "collisions_free_6r"
     assert all(len(a["phi_rad"]) == 6 for a in summary["assemblies"])
     assert main(["nearby", "--model", "collisions_free_6r", "--starts", "0"]) == 2
+    assert main(["nearby", "--model", "collisions_free_6r", "--spread", "nan"]) == 2
+    assert capsys.readouterr().err.count("error: ") == 2
