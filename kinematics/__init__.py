@@ -7,6 +7,7 @@ matrices (the right factor acts first); the paper's DH convention
 and the paper's line embedding ``l - eps m``.
 """
 
+from .assemblies import Assembly, NearbyAssemblies, nearby_assemblies, solve_closure
 from .bennett import PAPER_A, PAPER_ALPHA, BennettConditionError, BennettLinkage, MotionPolynomial
 from .dh import (
     ClosureResidual,
@@ -29,6 +30,7 @@ from .single_loop import LoopFoldError, LoopMotion, SingleLoop, follow_driver, t
 __all__ = [
     "PAPER_A",
     "PAPER_ALPHA",
+    "Assembly",
     "BennettConditionError",
     "BennettLinkage",
     "ClosureResidual",
@@ -42,6 +44,7 @@ __all__ = [
     "LoopMotion",
     "MobilityReport",
     "MotionPolynomial",
+    "NearbyAssemblies",
     "SingleLoop",
     "angle",
     "common_normal",
@@ -54,8 +57,10 @@ __all__ = [
     "explain_mobility",
     "home_configuration",
     "loop_closure_residual",
+    "nearby_assemblies",
     "open_loop_axes",
     "rigid_mobility",
+    "solve_closure",
     "trace_motion",
     "wrap_angle",
 ]

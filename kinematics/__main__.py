@@ -1,8 +1,10 @@
-"""Command line: ``python -m kinematics bennett [--alpha3-deg A] [--out DIR]``.
+"""Command line: ``python -m kinematics bennett [--alpha3-deg A] [--out DIR]`` and ``nearby --model M``.
 
-Prints the DH table, the joint axes as in the paper, the configuration curve and the
+``bennett`` prints the DH table, the joint axes as in the paper, the configuration curve and the
 motion polynomial of the Bennett linkage, and writes the ideal coupler path (CSV, PNG and
 JSON) to ``DIR``. With a misaligned base twist it reports that the rigid loop cannot move.
+``nearby`` prints the isolated (rigid) assemblies of a Rational Linkages model near its motion
+(:func:`kinematics.assemblies.nearby_assemblies`), and writes them as JSON with ``--json FILE``.
 Bad input (a non-finite twist, too few points, an unwritable ``DIR``) is one line ``error: ...``
 on stderr and exit status 2.
 """
@@ -12,12 +14,16 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
 
+from .assemblies import NearbyAssemblies, nearby_assemblies
 from .bennett import PAPER_A, PAPER_ALPHA, BennettConditionError, BennettLinkage
 from .mobility import rigid_mobility
+from .rational_mechanism import MODELS, load_model, loop_from_mechanism, regular_start
+from .single_loop import trace_motion
 
 
 def _quaternion_text(q: np.ndarray) -> str:
@@ -72,6 +78,62 @@ def _argument_problem(alpha3_deg: float, points: int) -> str | None:
     return None
 
 
+def _print_nearby(model: str, scale: float, result: NearbyAssemblies, seconds: float) -> None:
+    print(
+        f"{model} (scale {scale:g}): {result.starts} starts (seed {result.seed}, spread {result.spread:g} rad), "
+        f"{result.converged} closed the loop, {result.on_motion} on the motion; {len(result.assemblies)} "
+        f"assemblies off it ({len(result.isolated)} isolated) in {seconds:.1f} s"
+    )
+    if not result.assemblies:
+        return
+    print("  kind      rank  s_min/s_max  drive [deg]  max dphi [deg]  rms dphi [deg]  gap [mm]  gap [deg]  hits")
+    for a in result.assemblies:
+        print(
+            f"  {a.kind:8s}  {a.rank:4d}  {a.smallest_singular:11.2e}  {np.degrees(a.driver_angle):11.2f}  "
+            f"{np.degrees(a.distance_max):14.2f}  {np.degrees(a.distance_rms):14.2f}  {1e3 * a.gap_translation:8.3f}  "
+            f"{np.degrees(a.gap_rotation):9.3f}  {a.hits:4d}"
+        )
+    print("  (drive: joint 0 at the nearest pose of the motion; gap: largest closure misfit on the straight path)")
+
+
+def _nearby(args: argparse.Namespace) -> int:
+    if not (np.isfinite(args.scale) and args.scale > 0.0 and np.isfinite(args.spread) and args.spread > 0.0):
+        print(f"error: --scale {args.scale} and --spread {args.spread} must be positive numbers", file=sys.stderr)
+        return 2
+    if args.starts < 1 or args.poses < 8:
+        print(f"error: --starts {args.starts} must be >= 1 and --poses {args.poses} >= 8", file=sys.stderr)
+        return 2
+    mechanism = load_model(args.model)
+    loop = loop_from_mechanism(mechanism, scale=args.scale)
+    clock = time.perf_counter()
+    motion = trace_motion(loop, driver=0, n_poses=args.poses, start=regular_start(mechanism, loop))
+    result = nearby_assemblies(motion, starts=args.starts, spread=args.spread, seed=args.seed)
+    seconds = time.perf_counter() - clock
+    _print_nearby(args.model, args.scale, result, seconds)
+    if args.json is not None:
+        summary = {
+            "model": args.model,
+            "scale": args.scale,
+            "driver": 0,
+            "poses": args.poses,
+            "starts": result.starts,
+            "seed": result.seed,
+            "spread_rad": result.spread,
+            "converged": result.converged,
+            "on_motion": result.on_motion,
+            "seconds": seconds,
+            "assemblies": [a.as_dict() for a in result.assemblies],
+        }
+        try:
+            args.json.write_text(json.dumps(summary, indent=2))
+        except OSError as error:
+            problem = f"cannot write --json {args.json} ({error.strerror}); give a file you can write"
+            print(f"error: {problem}", file=sys.stderr)
+            return 2
+        print(f"Wrote {args.json}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m kinematics", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -79,7 +141,17 @@ def main(argv: list[str] | None = None) -> int:
     bennett.add_argument("--alpha3-deg", type=float, default=90.0, help="twist of the base link (paper: 90, 91, 92)")
     bennett.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     bennett.add_argument("--points", type=int, default=720, help="samples of the coupler path")
+    nearby = sub.add_parser("nearby", help="isolated (rigid) assemblies of a Rational Linkages model near its motion")
+    nearby.add_argument("--model", choices=MODELS, required=True, help="Rational Linkages model")
+    nearby.add_argument("--scale", type=float, default=0.1, help="length scale of the model (its unit -> metres)")
+    nearby.add_argument("--starts", type=int, default=200, help="perturbed starts")
+    nearby.add_argument("--spread", type=float, default=1.0, help="perturbation size (rad, standard deviation)")
+    nearby.add_argument("--seed", type=int, default=0, help="seed of the perturbations")
+    nearby.add_argument("--poses", type=int, default=360, help="poses of the traced motion (one revolution of joint 0)")
+    nearby.add_argument("--json", type=Path, default=None, help="write the assemblies to this JSON file")
     args = parser.parse_args(argv)
+    if args.command == "nearby":
+        return _nearby(args)
     problem = _argument_problem(args.alpha3_deg, args.points)
     if problem is not None:
         print(f"error: {problem}", file=sys.stderr)

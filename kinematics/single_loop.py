@@ -53,6 +53,8 @@ __all__ = [
 
 #: Closure tolerance of the corrector, relative to the loop's size (translation) and in rad.
 CLOSURE_TOLERANCE = 1e-13
+#: Singular values of the closure Jacobian (lengths over the loop's size) below this times the largest count as zero.
+RANK_RTOL = 1e-8
 
 
 class LoopFoldError(ValueError):
@@ -155,11 +157,23 @@ class SingleLoop:
         identity when ``phi`` closes the loop.
         """
         phi = self._angles(phi)
+        points, directions = self._axis_arrays
+        # All n rotations of (L1) in one call: the same Rodrigues matrices as rotation_about, a fraction of the time.
+        rotations = Rotation.from_rotvec(phi[:, None] * directions).as_matrix()
+        factors = np.zeros((self.n, 4, 4))
+        factors[:, :3, :3] = rotations
+        factors[:, :3, 3] = points - (rotations @ points[:, :, None])[:, :, 0]
+        factors[:, 3, 3] = 1.0
         transforms = np.empty((self.n + 1, 4, 4))
         transforms[0] = np.eye(4)
-        for i, axis in enumerate(self.axes):
-            transforms[i + 1] = transforms[i] @ rotation_about(axis, phi[i])
+        for i in range(self.n):
+            transforms[i + 1] = transforms[i] @ factors[i]
         return transforms
+
+    @cached_property
+    def _axis_arrays(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Points ``l x m`` and directions ``l`` of the home axes, ``(n, 3)`` each."""
+        return np.array([axis.point for axis in self.axes]), np.array([axis.direction for axis in self.axes])
 
     def link_poses(self, phi: ArrayLike) -> DualQuaternion:
         r"""Eq. (L1) in the paper's algebra: unit dual quaternions :math:`\sigma_0 \dots \sigma_{n-1}`."""
@@ -213,7 +227,7 @@ class SingleLoop:
         jacobian[:3] /= self.scale
         return np.asarray(np.linalg.svd(jacobian, compute_uv=False), dtype=np.float64)
 
-    def mobility(self, phi: ArrayLike | None = None, rtol: float = 1e-8) -> int:
+    def mobility(self, phi: ArrayLike | None = None, rtol: float = RANK_RTOL) -> int:
         """First-order degrees of freedom ``n - rank`` at ``phi`` (default home).
 
         The rank counts singular values above ``rtol`` times the largest (lengths scaled by
@@ -222,27 +236,33 @@ class SingleLoop:
         values = self.singular_values(np.zeros(self.n) if phi is None else phi)
         return self.n - int(np.sum(values > rtol * values[0]))
 
-    def close(self, phi: ArrayLike, driver: int, max_iterations: int = 30) -> NDArray[np.float64]:
+    def close(self, phi: ArrayLike, driver: int | None, max_iterations: int = 30) -> NDArray[np.float64]:
         """Joint angles that close the loop with joint ``driver`` held at ``phi[driver]`` (Gauss-Newton).
 
+        With ``driver=None`` every joint is free and the minimum-norm steps end at a closing pose near
+        ``phi`` (on a mobile loop's motion, or an isolated assembly, ``docs/formulation.md`` (L6)).
         Raises :class:`kinematics.dh.LoopClosureError` if the residual does not fall below
         :data:`CLOSURE_TOLERANCE` (relative to :attr:`scale`).
         """
         phi = self._angles(phi).copy()
         free = np.array([i for i in range(self.n) if i != driver])
         weights = self.residual_weights
+        # With every joint free the Jacobian of a mobile loop is singular: its round-off singular values,
+        # inverted, would throw the pose along the kernel, so they are cut by the rank rule of mobility.
+        rcond = None if driver is not None else RANK_RTOL
         converged = False
         for _ in range(max_iterations):
             transforms = self.link_transforms(phi)  # once per iteration, for the residual and the Jacobian
             residual = weights * _residual(transforms[self.n])
             jacobian = weights[:, None] * self._jacobian(transforms)[:, free]
-            step, *_ = np.linalg.lstsq(jacobian, -residual, rcond=None)
+            step, *_ = np.linalg.lstsq(jacobian, -residual, rcond=rcond)
             phi[free] += step
             if converged:  # one more (quadratically convergent) step puts the residual at round-off
                 return phi
             converged = bool(np.max(np.abs(residual)) <= CLOSURE_TOLERANCE)
+        held = f"with joint {driver} at {np.degrees(phi[driver]):.6g} deg" if driver is not None else "with all free"
         raise LoopClosureError(
-            f"the loop does not close with joint {driver} at {np.degrees(phi[driver]):.6g} deg: residual "
+            f"the loop does not close {held}: residual "
             f"{np.max(np.abs(weights * self.closure_residual(phi))):.3e} after {max_iterations} Gauss-Newton "
             "iterations (the drive may have passed a dead point; take smaller steps)"
         )
