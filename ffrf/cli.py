@@ -298,7 +298,7 @@ def _write_stability(result, out: Path) -> None:
         f"{s['unstable_poses']} unstable pose(s) -> {out / 'stability.json'}"
     )
     for snap in s.get("snaps", []):
-        links = sorted(snap["critical_mode_link_shares"].items(), key=lambda item: -item[1])[:2]
+        links = sorted(snap["critical_mode_body_shares"].items(), key=lambda item: -item[1])[:2]
         jump = (
             f"the linkage jumps to another branch, coupler point {1e3 * snap['coupler_jump_m']:.4g} mm away, "
             f"releasing {1e3 * snap['energy_released_J']:.4g} mJ"
@@ -445,6 +445,12 @@ def _run_scene_file(args: argparse.Namespace) -> int:
         file=sys.stderr,
     )
     metadata = run_scene(scene, out, progress=_progress_printer())
+    for snap in metadata.get("stability", {}).get("snaps", []):
+        released = snap["energy_released_J"]
+        print(
+            f"snap: the equilibrium path folds at t = {snap['time_s']:.6g} s; "
+            + (f"it lands on another branch, releasing {released:.4g} J" if snap["landed"] else "no landing found")
+        )
     print(f"{scene.name}: wall time {metadata['wall_time_s']:.1f} s -> {args.out}")
     return 0
 

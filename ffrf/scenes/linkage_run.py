@@ -41,11 +41,10 @@ from ffrf.reduction.craig_bampton import CraigBamptonBasis
 from ffrf.scenes.assembly import assemble, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.solvers.simulate import MODES, simulate
-from ffrf.solvers.snap_through import SnapThrough
+from ffrf.solvers.snap_through import SnapThrough, snap_summary
 from ffrf.solvers.stability import (
     CriticalPose,
     critical_pose,
-    equilibrium_stability,
     mode_shares,
     stability_along,
     stability_summary,
@@ -276,29 +275,23 @@ def run_linkage(
 
 
 def _snap_report(scene: LinkageScene, snap: SnapThrough) -> dict:
-    """A snap of a linkage (Eq. (S6)) in the user's terms: where (drive angle, time), the driving torque at the
-    fold, the jump of the coupler point and the energy released (``None`` without a landing), the other fold,
-    and the links the critical mode moves (Eq. (B1) at the fold, whose smallest squared frequency is near zero)."""
-    landed = snap.landing_q is not None and snap.landing_multipliers is not None
+    """A snap of a linkage (Eq. (S6)) in the user's terms: :func:`~ffrf.solvers.snap_through.snap_summary` with the
+    drive angle and the driving torque at the fold, the jump of the coupler point and the driving torque after it
+    (``None`` without a landing) and the other fold's drive angle."""
+    summary = snap_summary(scene.system, snap)
+    landed = summary["landed"]
     states = [snap.fold_q] + ([snap.landing_q] if landed else [])
     lams = [snap.fold_multipliers] + ([snap.landing_multipliers] if landed else [])
     at = evaluate_sensors(scene, np.full(len(states), snap.fold_t), np.array(states), None, np.array(lams))
-    critical = equilibrium_stability(scene.system, snap.fold_q, snap.fold_multipliers, snap.fold_t, count=1)
-    shares = mode_shares(scene.system, snap.fold_q, critical.modes[:, 0])
     return {
-        "kind": "limit point",
-        "time_s": snap.fold_t,
+        **summary,
         "drive_angle_deg": float(np.degrees(at["drive_angle"][0])),
         "driving_torque_Nm": float(at["driving_torque"][0]),
-        "landed": landed,
         "driving_torque_after_Nm": float(at["driving_torque"][1]) if landed else None,
         "coupler_jump_m": float(np.linalg.norm(at["coupler_point"][1] - at["coupler_point"][0])) if landed else None,
-        "energy_released_J": snap.energy_released(scene.system),
         "return_drive_angle_deg": None
         if snap.return_t is None
         else float(np.degrees(scene.drive_angle(snap.return_t))),
-        "squared_frequency_at_fold": float(critical.squared_frequencies[0]),
-        "critical_mode_link_shares": {link.name: float(shares[link.index]) for link in scene.links},
     }
 
 

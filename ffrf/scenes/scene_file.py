@@ -23,6 +23,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     rho_inf = 0.9
     outputs = 101
     joint_offsets = "body"            # joint point off its interface centre: "body" (as Exudyn) or "marker" frame
+    stability = false                 # quasi_static only: Eq. (B1) at every output, and the run goes on past folds
+                                      # of the equilibrium path (Eq. (S6)), each snap in the metadata
 
     [[bodies]]
     name = "link"
@@ -111,7 +113,11 @@ joint point of each side, the reaction on side 1 in joint frame 0 and a driven j
 energies, the constraint residual and, with one driven joint, the energy balance) and the coordinates
 ``q``; the sensors again as ``results.csv``; ``metadata.json``; and, when the run starts from a static
 assembly, the assembled state with its stresses as ``assembly.vtu`` (per body in the metadata under
-``assembly``: largest von Mises stress and where, strain energy, joint reactions).
+``assembly``: largest von Mises stress and where, strain energy, joint reactions). With ``stability = true`` the
+three smallest squared frequencies of Eq. (B1) at every output are the sensor ``stability_squared_frequencies`` and
+the metadata's ``stability`` sums them up, with each snap the run went through under ``snaps``
+(:func:`ffrf.solvers.snap_through.snap_summary`: the fold's time, the energy released, the bodies the critical
+mode moves).
 """
 
 from __future__ import annotations
@@ -132,6 +138,7 @@ from ffrf.scenes.assembly import assemble, quasi_static_step, start_state, start
 from ffrf.scenes.builder import Scene, build_scene
 from ffrf.scenes.linkage_file import load_linkage
 from ffrf.solvers.simulate import Run, simulate
+from ffrf.solvers.snap_through import snap_summary
 from ffrf.solvers.stability import stability_along, stability_summary
 
 __all__ = ["SceneError", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
@@ -171,7 +178,8 @@ def sensor_arrays(scene: Scene, q: NDArray, multipliers: NDArray) -> dict[str, N
 
 
 def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> Run:
-    """The scene's dynamic or quasi-static run from ``q0`` (default :func:`start_state`)."""
+    """The scene's dynamic or quasi-static run from ``q0`` (default :func:`start_state`); with ``stability`` a
+    quasi-static run goes on past folds of its equilibrium path (:func:`ffrf.solvers.simulate.simulate`)."""
     s = scene.settings
     q0 = start_state(scene) if q0 is None else q0
     return simulate(
@@ -185,6 +193,7 @@ def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> Ru
         progress=progress,
         max_static_step=quasi_static_step(scene),
         qd0=scene.qd_initial,
+        through_snaps=bool(s.get("stability", False)),
     )
 
 
@@ -214,7 +223,9 @@ def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
     if scene.settings.get("stability", False):
         judged = stability_along(scene.system, run.time, run.q, run.multipliers, count=3)
         sensors["stability_squared_frequencies"] = np.array([s.squared_frequencies for s in judged])
-        metadata["stability"] = stability_summary(sensors["stability_squared_frequencies"], run.time, "time_s")
+        summary = stability_summary(sensors["stability_squared_frequencies"], run.time, "time_s")
+        summary["snaps"] = [snap_summary(scene.system, snap) for snap in run.snaps]
+        metadata["stability"] = summary
     metadata["wall_time_s"] = wallclock.perf_counter() - started
     write_results(directory, {"time": run.time, **sensors}, metadata, coordinates=run.q)
     return metadata

@@ -20,16 +20,18 @@ from numpy.typing import NDArray
 
 from ffrf.errors import StaticDivergence
 from ffrf.solvers.continuation import EquilibriumPath, equilibrium_path, parabola_vertex, path_points, path_speed
-from ffrf.solvers.stability import equilibrium_stability
+from ffrf.solvers.stability import equilibrium_stability, mode_shares
 from ffrf.solvers.static_solver import StaticSolution, quasi_static, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["SnapThrough", "trace_snap", "quasi_static_through_snaps"]
+__all__ = ["SnapThrough", "snap_summary", "trace_snap", "quasi_static_through_snaps"]
 
 log = logging.getLogger(__name__)
 
 #: Steps per arclength of the first trace when a fold is traced again to locate it.
 REFINEMENT = 10
+#: Quarterings of a trace's first step that may be needed to see the path rise in t before its fold.
+MAX_STEP_CUTS = 12
 #: Snaps one quasi-static run may pass before it is stopped.
 MAX_SNAPS = 4
 
@@ -61,6 +63,25 @@ class SnapThrough:
         return held(self.fold_q) - held(self.landing_q)
 
 
+def snap_summary(system: MultibodySystem, snap: SnapThrough) -> dict:
+    """A snap as plain data for a run's metadata: the fold's t (``time_s``), whether it landed, the energy released
+    (J, ``None`` without a landing), the other fold's t, and Eq. (B1) at the fold (its smallest squared frequency,
+    near zero) with each body's share of the critical mode's kinetic energy (which bodies it moves)."""
+    critical = equilibrium_stability(system, snap.fold_q, snap.fold_multipliers, snap.fold_t, count=1)
+    shares = mode_shares(system, snap.fold_q, critical.modes[:, 0])
+    return {
+        "kind": "limit point",
+        "time_s": snap.fold_t,
+        "landed": snap.landing_q is not None and snap.landing_multipliers is not None,
+        "energy_released_J": snap.energy_released(system),
+        "return_time_s": snap.return_t,
+        "squared_frequency_at_fold": float(critical.squared_frequencies[0]),
+        "critical_mode_body_shares": {
+            body.name: float(share) for body, share in zip(system.bodies, shares, strict=True)
+        },
+    }
+
+
 def trace_snap(
     system: MultibodySystem,
     q0: NDArray,
@@ -79,6 +100,7 @@ def trace_snap(
     fold: tuple[float, NDArray, NDArray] | None = None
     return_t = None
     speed = path_speed(system, q0, multipliers0, t0)  # one c for the trace and the refinement: one arclength
+    step = _forward_step(system, q0, multipliers0, t0, direction, step, tolerance, speed)
     for point in path_points(system, q0, multipliers0, t0, direction, step, tolerance, speed=speed):
         points.append(point)
         if len(points) >= max_points:
@@ -101,6 +123,28 @@ def trace_snap(
     if fold is None:
         return None
     return SnapThrough(fold[0], fold[1], fold[2], return_t, None, None, equilibrium_path(points))
+
+
+def _forward_step(
+    system: MultibodySystem,
+    q0: NDArray,
+    multipliers0: NDArray,
+    t0: float,
+    direction: float,
+    step: float,
+    tolerance: float,
+    speed: float,
+) -> float:
+    """``step``, quartered until the path's first point lies ahead in t. A start closer to the fold than one step
+    would otherwise turn back within the first step, before three points can show the turn, and the fold go
+    unseen (a quasi-static run stops just short of it)."""
+    for _ in range(MAX_STEP_CUTS):
+        points = path_points(system, q0, multipliers0, t0, direction, step, tolerance, speed=speed)
+        next(points)  # the start
+        if (next(points)[0] - t0) * direction > 0.0:
+            return step
+        step /= 4.0
+    raise StaticDivergence(f"the path from t = {t0:.6g} turns back within every first step down to {step:.3g}")
 
 
 def _vertex(three: list[tuple[float, NDArray, NDArray, float]]) -> tuple[float, NDArray, NDArray]:

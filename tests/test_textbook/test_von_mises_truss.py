@@ -1,0 +1,70 @@
+"""A von Mises truss of two flexible bars, run from a scene file, against its closed form (issue #20).
+
+Two steel bars 0.1 x 0.1 m, L0 = sqrt(a^2 + h^2) long (a = 1 m, h = 0.05 m), pinned to the ground at their feet
+and to each other at the apex (revolute joints about y on the end faces' centres, which lie on the bars' axes),
+carry a dead load growing at the apex. Pinned at both ends and loaded only there, each bar is a two-force member:
+its frame (attached to the foot face) turns onto the line of the pins and the bar only stretches, by N L0 / (EA)
+exactly (linear elasticity in the frame, the large rotation in the frame). So the FFRF truss has the closed form of
+the textbook truss of axial springs k = EA/L0 (``textbook_fixtures.truss_closed_form``): limit load
+P_max = 2 k (L0 - L*) z* / L*, L* = (L0 a^2)^(1/3), z* = sqrt(L*^2 - a^2). The bars' own Euler load
+pi^2 EI / L0^2 = 1.7e7 N is 6.6 times their largest compression along the path (flat, 2.6e6 N; 1.8e6 N at the
+limit point), so the bars do not buckle first (our linear bodies could not show it: see docs/formulation.md, (B1)).
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+from textbook_fixtures import HALF_SPAN, LOAD_RATE, RISE, truss_closed_form, truss_load, write_truss_scene
+
+from ffrf.cli import main
+from ffrf.scenes.scene_file import load_scene
+
+
+def test_the_bars_axial_stiffness_is_ea_over_l_and_their_euler_load_is_far(tmp_path):
+    """With nu = 0 the uniform axial strain is an exact FE state with rigid end faces (module docstring of
+    ``textbook_fixtures``), and Craig-Bampton's static modes of the apex face contain it: the condensed stiffness
+    along the bar, 1 / (d^T C d) with C the apex face's translational compliance (moment free), is EA/L0
+    (measured 1.1e-14 relative). The bars' Euler load exceeds their largest compression 6.6 times."""
+    c = truss_closed_form()
+    assert c["euler_load"] > 5.0 * max(c["force_flat"], c["force_at_limit"])
+    scene = load_scene(write_truss_scene(tmp_path))
+    for body, side in zip(scene.bodies, (-1.0, 1.0), strict=True):
+        axis = np.array([-side * HALF_SPAN, 0.0, RISE]) / c["length"]
+        compliance = np.linalg.inv(body.reduction.reduced_stiffness)[:3, :3]
+        print("axial stiffness error", 1.0 / (axis @ compliance @ axis) / c["stiffness"] - 1.0)
+        assert 1.0 / (axis @ compliance @ axis) == pytest.approx(c["stiffness"], rel=1e-10)
+
+
+def test_the_scene_file_run_snaps_at_the_limit_load_onto_the_inverted_branch(tmp_path):
+    """``python -m ffrf run truss.toml`` with ``stability = true`` loads the truss to 1.5 P_max: the run stops
+    at the fold, traces the path through it (Eq. (S6)), lands on the inverted branch and goes on. The snap in
+    the metadata is at P_max of the closed form (measured 8.8e-9 relative), Eq. (B1) is near zero there, the
+    strain energy released is the closed form's (1.8e-6), and the apex at the end of the run holds the closed
+    form's equilibrium on the inverted branch: P(z) = P_end for z < -z* (brentq on it; measured 1.4e-13 m)."""
+    c = truss_closed_form()
+    scene = write_truss_scene(tmp_path)
+    assert main(["run", str(scene), "--out", str(tmp_path / "out")]) == 0
+    metadata = json.loads((tmp_path / "out" / "metadata.json").read_text())
+    snaps = metadata["stability"]["snaps"]
+    assert len(snaps) == 1 and snaps[0]["landed"]
+    print("limit load error", snaps[0]["time_s"] * LOAD_RATE / c["limit_load"] - 1.0)
+    assert snaps[0]["time_s"] * LOAD_RATE == pytest.approx(c["limit_load"], rel=1e-3)
+    results = np.load(tmp_path / "out" / "results.npz")
+    first = results["stability_squared_frequencies"][0, 0]
+    assert abs(snaps[0]["squared_frequency_at_fold"]) < 1e-3 * first
+    assert np.all(results["stability_squared_frequencies"][:, 0] > 0.0)  # every output is a stable equilibrium
+    end_load = LOAD_RATE * results["time"][-1]
+    rise = brentq(lambda z: truss_load(z) - end_load, -10.0 * c["critical_rise"], -c["critical_rise"])
+    print("landing rise error", results["apex_point1"][-1, 2] - rise)
+    assert results["apex_point1"][-1, 2] == pytest.approx(rise, abs=1e-9)
+    # energy_released counts the strain energy the bars lose in the jump (the dead load's work in it is not a
+    # potential of ours): k [(L - L0)^2 at z* less at the landing z < -z* under P_max], from the closed form
+    landing = brentq(lambda z: truss_load(z) - c["limit_load"], -10.0 * c["critical_rise"], -c["critical_rise"])
+    stretch = [np.hypot(HALF_SPAN, z) - c["length"] for z in (c["critical_rise"], landing)]
+    released = c["stiffness"] * (stretch[0] ** 2 - stretch[1] ** 2)
+    print("energy released error", snaps[0]["energy_released_J"] / released - 1.0)
+    assert snaps[0]["energy_released_J"] == pytest.approx(released, rel=1e-5)
