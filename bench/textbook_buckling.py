@@ -11,7 +11,7 @@ The geometry, the closed forms and the chain model are ``tests/textbook_fixtures
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/textbook_buckling.py [--segments 1 2 4 8 16] > textbook_buckling.json
+    PYTHONPATH=. .venv/bin/python bench/textbook_buckling.py [--segments 1 2 4 8 16] [--json OUT.json]
 
 Timings are wall-clock on a shared machine (set OPENBLAS_NUM_THREADS=1 there).
 """
@@ -89,6 +89,7 @@ def column(n: int, directory: Path) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--segments", type=int, nargs="+", default=[1, 2, 4, 8, 16])
+    parser.add_argument("--json", type=Path, help="also write the JSON object to this file")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         rows = [column(n, Path(folder)) for n in args.segments]
@@ -99,6 +100,9 @@ def main() -> None:
         for (a, ea), (b, eb) in zip(errors, errors[1:], strict=False)
     ]
     print(json.dumps(out, indent=1))
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(out, indent=1))
 
 
 if __name__ == "__main__":
