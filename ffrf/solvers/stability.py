@@ -47,7 +47,7 @@ class EquilibriumStability:
 
     @property
     def stable(self) -> bool:
-        return bool(self.squared_frequencies[0] > 0.0)
+        return bool(self.squared_frequencies.size == 0 or self.squared_frequencies[0] > 0.0)
 
 
 def _null_space(matrix: NDArray) -> NDArray[np.float64]:
@@ -70,9 +70,12 @@ def equilibrium_stability(
     free = _null_space(jacobian)
     stiffness = free.T @ symmetric @ free
     mass = free.T @ system.mass_matrix(q) @ free
-    values, vectors = eigh(0.5 * (stiffness + stiffness.T), 0.5 * (mass + mass.T))
-    k = min(count, values.size)
-    return EquilibriumStability(values[:k], free @ vectors[:, :k], free.shape[1], asymmetry)
+    k = min(count, free.shape[1])
+    if k == 0:  # no free motion: nothing can vibrate, nothing can buckle
+        return EquilibriumStability(np.zeros(0), np.zeros((n, 0)), 0, asymmetry)
+    # only the k smallest (LAPACK's subset solver): Eq. (B1) at every output is the monitoring's cost
+    values, vectors = eigh(0.5 * (stiffness + stiffness.T), 0.5 * (mass + mass.T), subset_by_index=[0, k - 1])
+    return EquilibriumStability(values, free @ vectors, free.shape[1], asymmetry)
 
 
 def stability_along(
