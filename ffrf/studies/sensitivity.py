@@ -2,14 +2,14 @@ r"""Sensitivities of a study's outputs to its parameters: Sobol indices and stan
 
 **Sobol indices** from the Saltelli design (:func:`ffrf.studies.sampling.saltelli_blocks`: :math:`f_A`,
 :math:`f_B`, :math:`f_{AB}^{(i)}` the outputs of the rows of :math:`A`, :math:`B` and :math:`A_B^{(i)}`,
-:math:`N` each), with the estimators recommended by Saltelli et al. (2010), Table 2:
+:math:`N` each), with the estimators recommended by Saltelli et al. (2010):
 
 .. math::
 
     S_i = \frac{\frac1N \sum_j f_B^{(j)} \left(f_{AB}^{(i)(j)} - f_A^{(j)}\right)}{V},\qquad
     S_{Ti} = \frac{\frac1{2N} \sum_j \left(f_A^{(j)} - f_{AB}^{(i)(j)}\right)^2}{V},
 
-the first-order index (Saltelli et al. 2010, (b)) and the total index (Jansen 1999, (f)), with :math:`V` the
+the first-order index (Saltelli et al. 2010) and the total index (Jansen 1999), with :math:`V` the
 variance of :math:`f_A` and :math:`f_B` together. A sample row :math:`j` with a failed variant in
 :math:`A`, :math:`B` or :math:`A_B^{(i)}` is left out of index :math:`i` (the indices then describe the
 variants that ran).
