@@ -10,17 +10,15 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from dask.distributed import Client, LocalCluster
 
-pytest.importorskip("dask.distributed")
-from dask.distributed import Client, LocalCluster  # noqa: E402
-
-from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options  # noqa: E402
-from ffrf.scenes.linkage_description import BoreError  # noqa: E402
-from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
-from ffrf.studies.report import write_report  # noqa: E402
-from ffrf.studies.runner import read_rows, run_study  # noqa: E402
-from ffrf.studies.spec import study_from_document  # noqa: E402
-from ffrf.studies.variant import OUTPUTS  # noqa: E402
+from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
+from ffrf.scenes.linkage_description import BoreError
+from ffrf.scenes.linkage_run import run_linkage
+from ffrf.studies.report import write_report
+from ffrf.studies.runner import read_rows, run_study
+from ffrf.studies.spec import study_from_document
+from ffrf.studies.variant import OUTPUTS
 
 BASE = {"bennett": "pla", "h": 0.012, "order": 1, "modes": 2, "mode": "quasi_static", "outputs": 9}
 
