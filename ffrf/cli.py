@@ -455,6 +455,65 @@ def _run_scene_file(args: argparse.Namespace) -> int:
     return 0
 
 
+def _configure_study(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("study", type=Path, help="study file (TOML), see ffrf.studies.spec and docs/studies.md")
+    parser.add_argument("--out", type=Path, required=True, help="output folder (rows/*.parquet, report.md)")
+    parser.add_argument(
+        "--scheduler", help="address of a Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)"
+    )
+    parser.add_argument(
+        "--workers", type=_positive_count, help="worker processes of the local cluster (default: cores)"
+    )
+    parser.add_argument("--no-report", action="store_true", help="do not write report.md after the run")
+
+
+def _positive_count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"--workers must be a whole number >= 1, got {text!r}")
+    return value
+
+
+def _run_study(args: argparse.Namespace) -> int:
+    from ffrf.studies.spec import load_study
+
+    study = load_study(args.study)  # checked before any worker starts
+    if args.scheduler is not None and args.workers is not None:
+        raise SceneError("--workers sizes the local cluster; a scheduler (--scheduler) has its own workers")
+    out = _output_folder(args.out)
+    from ffrf.studies.report import write_report
+    from ffrf.studies.runner import run_study
+
+    run = run_study(study, out, scheduler=args.scheduler, workers=args.workers)
+    print(
+        f"{study.name}: {run.design} variants, {run.skipped} finished before, {run.ok} ok and {run.failed} failed "
+        f"now, {run.lost} lost (a rerun runs them); {run.wall_time_s:.1f} s -> {out}"
+    )
+    if not args.no_report:
+        print(f"report: {write_report(out)}")
+    return 1 if run.lost else 0
+
+
+def _configure_study_report(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("folder", type=Path, help="a study's output folder (python -m ffrf study ... --out FOLDER)")
+
+
+def _run_study_report(args: argparse.Namespace) -> int:
+    from ffrf.studies.report import write_report
+
+    if not (args.folder / "study.json").is_file():
+        raise SceneError(f"{args.folder} holds no study (no study.json); give the --out folder of python -m ffrf study")
+    try:
+        path = write_report(args.folder)
+    except FileNotFoundError as error:
+        raise SceneError(str(error)) from error
+    print(f"report: {path}")
+    return 0
+
+
 SUBCOMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None], Callable[[argparse.Namespace], int]]] = {
     "mesh": ("mesh one Bennett link and write .vtu + JSON summary", _configure_mesh, _run_mesh),
     "run": ("run a scene file (TOML) built from your own meshes", _configure_run, _run_scene_file),
@@ -467,6 +526,16 @@ SUBCOMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None], Cal
         "simulate a flexible single-loop linkage of Rational Linkages (4R, 6R) and write its sensors",
         _configure_linkage,
         _run_linkage,
+    ),
+    "study": (
+        "run a tolerance or design study of many linkage variants on Dask (docs/studies.md)",
+        _configure_study,
+        _run_study,
+    ),
+    "study-report": (
+        "write report.md of a study's rows (percentiles, sensitivities)",
+        _configure_study_report,
+        _run_study_report,
     ),
 }
 

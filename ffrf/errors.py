@@ -20,6 +20,7 @@ __all__ = [
     "ReductionError",
     "ExternalFEError",
     "StaticDivergence",
+    "AssemblyDivergence",
     "NewtonDivergence",
     "SingularIterationMatrix",
 ]
@@ -69,6 +70,11 @@ class StaticDivergence(RuntimeError):
         super().__init__(message)
         self.partial = partial
         self.snaps = snaps
+
+
+class AssemblyDivergence(StaticDivergence):
+    """The static assembly (gravity, then closing the joint misfits) found no equilibrium: the linkage as built
+    does not assemble from its start pose (:func:`ffrf.scenes.assembly.assemble`)."""
 
 
 class NewtonDivergence(RuntimeError):

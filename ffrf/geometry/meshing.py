@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -40,7 +41,9 @@ def gmsh_session(model_name: str = "ffrf") -> Iterator[Any]:
         raise MeshError(
             "gmsh is already initialised by someone else; ffrf needs its own session (call gmsh.finalize() first)"
         )
-    gmsh.initialize(readConfigFiles=False)
+    # gmsh installs a SIGINT handler when interruptible, which Python allows only in the main thread; a
+    # worker thread (a Dask task, a thread pool) meshes without it.
+    gmsh.initialize(readConfigFiles=False, interruptible=threading.current_thread() is threading.main_thread())
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.option.setNumber("General.NumThreads", 1)

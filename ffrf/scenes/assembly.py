@@ -15,7 +15,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.errors import StaticDivergence
+from ffrf.errors import AssemblyDivergence, StaticDivergence
 from ffrf.scenes.builder import Scene
 from ffrf.solvers.static_solver import StaticSolution, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
@@ -59,7 +59,7 @@ def assemble(
     except StaticDivergence as error:
         # Name the scene and the continuation step: the solver's own message knows neither.
         gap = float(np.abs(scene.system.constraint_values(q, t)).max())
-        raise StaticDivergence(
+        raise AssemblyDivergence(
             f"static assembly of scene {scene.name!r} ({scene.misfit_degrees:.3g} deg of axis misfit) failed at "
             f"continuation step {k}/{steps} (gravity and a joint gap of {gap:.3g} at the start): {error}. The bodies "
             "must absorb the misfit elastically from the start pose; check the joints' axes (axis0, axis1), or "

@@ -32,12 +32,14 @@ chooses where that offset lives (:func:`ffrf.system.markers.attach_joint_point`)
 
 from __future__ import annotations
 
+from collections.abc import MutableMapping
 from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ffrf.fe.materials import PLA, RIGID, Material
+from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.scenes.assembly import assemble
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, linkage_description
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
@@ -54,6 +56,7 @@ __all__ = [
     "bennett_description",
     "bennett_options",
     "build_bennett",
+    "build_bennett_from_options",
     "assemble",
 ]
 
@@ -178,17 +181,25 @@ def bennett_description(variant: str = "pla", **options) -> dict:
 def build_bennett(variant: str = "pla", **options) -> BennettScene:
     """Build the paper's scene ``variant`` with the one scene builder; ``options``: those of
     :func:`bennett_options` (discretisation, drive, start, gravity, joint offsets)."""
-    linkage_options = bennett_options(variant, **options)
-    scene = build_linkage(_paper_loop(), linkage_options)
+    return build_bennett_from_options(bennett_options(variant, **options), variant)
+
+
+def build_bennett_from_options(
+    options: LinkageOptions, variant: str = "pla", reductions: MutableMapping[str, ModeBasis] | None = None
+) -> BennettScene:
+    """The paper's loop built with any linkage ``options`` (e.g. :func:`bennett_options` of ``variant`` with other
+    bore errors or material, as a study varies them), compared with the motion polynomial; ``reductions``: the
+    content-keyed cache of reduced bases (:func:`ffrf.scenes.linkage_scene.build_linkage`)."""
+    scene = build_linkage(_paper_loop(), options, reductions=reductions)
     settings = dict(
         scene.settings,
         variant=variant,
-        beta=linkage_options.beta,
-        start_angle=-linkage_options.start_angle,
-        gravity=list(linkage_options.gravity),
-        exact_gravity=linkage_options.exact_gravity,
+        beta=options.beta,
+        start_angle=-options.start_angle,
+        gravity=list(options.gravity),
+        exact_gravity=options.exact_gravity,
         alpha3_deg=VARIANTS[variant][1],
-        joint_offsets=linkage_options.joint_offsets,
+        joint_offsets=options.joint_offsets,
     )
     built = {f.name: getattr(scene, f.name) for f in fields(LinkageScene)}
     return BennettScene(**dict(built, settings=settings), variant=variant, linkage=BennettLinkage(PAPER_A, PAPER_ALPHA))

@@ -25,6 +25,7 @@ stays in the bodies. A joint with one ``axis``/``point`` has the same frame on b
 from __future__ import annotations
 
 import logging
+from collections.abc import MutableMapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Self
@@ -164,7 +165,7 @@ def build_scene(
     description: dict,
     base: str | Path = ".",
     where: str = "scene",
-    reductions: dict[str, ModeBasis] | None = None,
+    reductions: MutableMapping[str, ModeBasis] | None = None,
 ) -> Scene:
     """Check and build a scene description; relative file names are resolved against ``base``.
     ``reductions`` (fingerprint -> basis) reuses bases computed from the same M, K, interfaces, kind and number
@@ -287,7 +288,10 @@ def _fe_model(entry: dict, base: Path, where: str) -> tuple[FEModel | ExternalFE
 
 
 def _reduction(
-    fe: FEModel | ExternalFEModel, interfaces: list[InterfaceNodes], entry: dict, reductions: dict[str, ModeBasis]
+    fe: FEModel | ExternalFEModel,
+    interfaces: list[InterfaceNodes],
+    entry: dict,
+    reductions: MutableMapping[str, ModeBasis],
 ) -> ModeBasis:
     """Craig-Bampton on the interfaces (default), or ``reduction = "free_free"``: the lowest ``modes`` elastic
     free-free modes (eqs. (FF-1)-(FF-3)), whose interfaces are only where markers average nodes."""
@@ -306,7 +310,7 @@ def _reduction(
     return reductions[key]
 
 
-def _body(k: int, entry: dict, base: Path, settings: dict, reductions: dict[str, ModeBasis]) -> SceneBody:
+def _body(k: int, entry: dict, base: Path, settings: dict, reductions: MutableMapping[str, ModeBasis]) -> SceneBody:
     name = entry["name"]
     fe, geometry = _fe_model(entry, base, f"body {name!r}")
     interfaces: dict[str, InterfaceNodes] = {}

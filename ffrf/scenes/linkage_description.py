@@ -39,6 +39,7 @@ from kinematics import Line, SingleLoop, common_normal, trace_motion
 from kinematics.quaternion import matrix_to_quaternion
 
 __all__ = [
+    "BORE_ERROR_MODELS",
     "LINKAGE_VARIANTS",
     "TRACKED_FRACTIONS",
     "BoreError",
@@ -52,6 +53,8 @@ __all__ = [
 
 #: Materials of the built-in linkage variants (as the paper's Bennett variants).
 LINKAGE_VARIANTS: dict[str, Material] = {"rigid": RIGID, "pla": PLA}
+#: How a bore error is built (:class:`LinkageOptions`): the as-built link remeshed, or a misfit on the nominal mesh.
+BORE_ERROR_MODELS = ("remesh", "misfit")
 #: Fractions along each moving link, from its first to its second joint point, of its tracked surface nodes.
 TRACKED_FRACTIONS = (0.3, 0.5, 0.7)
 #: Largest driver step (rad) when tracing the rigid motion to the start pose.
@@ -207,7 +210,10 @@ class LinkageOptions:
     scene-file run; ``exact_gravity``, ``joint_offsets``: the scene-file settings of the same names;
     ``attach_points`` ``(n, 2, 3)``: where on each joint's axis links i and i+1 attach (housings centred there,
     e.g. a Rational Linkages design, :func:`kinematics.rational_mechanism.attach_points`; default: both
-    stacked about :func:`joint_points`); the joint point is then their midpoint.
+    stacked about :func:`joint_points`); the joint point is then their midpoint. ``bore_error_model``: how a
+    bore error is built, ``"remesh"`` (the link meshed on its erroneous bore, the as-built part) or ``"misfit"``
+    (the nominal meshes, the error only in the joint's frame and point on that link's side: a joint-frame misfit
+    closed by the assembly, the cheap model of studies, :data:`BORE_ERROR_MODELS`).
     """
 
     material: Material = PLA
@@ -230,6 +236,7 @@ class LinkageOptions:
     exact_gravity: bool = True
     joint_offsets: str = "body"
     attach_points: ArrayLike | None = None
+    bore_error_model: str = "remesh"
 
 
 def checked_tool_link(loop: SingleLoop, options: LinkageOptions) -> int:
@@ -253,11 +260,15 @@ def linkage_description(
     tool = checked_tool_link(loop, o)
     attach = None if o.attach_points is None else np.asarray(o.attach_points, dtype=float)
     points = joint_points(loop) if attach is None else attach.mean(axis=1)
+    if o.bore_error_model not in BORE_ERROR_MODELS:
+        raise ValueError(f"bore_error_model must be one of {BORE_ERROR_MODELS}, got {o.bore_error_model!r}")
     links = _link_axes(loop, points, tuple(o.bore_errors), _seats(loop, attach))
+    # The bodies are meshed on the built bores, or, for the misfit model, on the nominal ones; joints take `links`.
+    meshed = links if o.bore_error_model == "remesh" else _link_axes(loop, points, (), _seats(loop, attach))
     phi = start_pose(loop, o.driver, o.start_angle, o.origin) if start_phi is None else np.asarray(start_phi)
     transforms = loop.link_transforms(phi)
     bodies, sensors = [], []
-    for k, sides in enumerate(links):
+    for k, sides in enumerate(meshed):
         first, second = _link_joints(k, n)
         axes = [
             {

@@ -58,7 +58,7 @@ from kinematics.rational_mechanism import (
     tool_link,
 )
 
-__all__ = ["LINKAGE", "LINKAGE_SCHEMA", "load_linkage"]
+__all__ = ["LINKAGE", "LINKAGE_SCHEMA", "linkage_options", "load_linkage"]
 
 
 def _positive(value: Any) -> str | None:
@@ -204,6 +204,17 @@ def _bore_error(entry: dict, length: float, where: str) -> BoreError:
 def load_linkage(document: dict, base: Path | None = None, where: str = "linkage") -> LinkageScene:
     """Check a linkage file (already parsed) and build its linkage (module docstring)."""
     del base  # a linkage file refers to no other file
+    loop, options, run = linkage_options(document, where)
+    try:
+        scene = build_linkage(loop, options, where=f"{where}, linkage")
+    except LoopFoldError as error:
+        raise SceneError(f"{where}, linkage: the start pose cannot be reached: {error}") from error
+    return replace(scene, settings=dict({k: v for k, v in scene.settings.items() if k != "mode"}, **run))
+
+
+def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop, LinkageOptions, dict]:
+    """Check a linkage file (already parsed) and return its nominal loop, the options it builds the linkage with
+    and its run settings (``mode``, ``outputs``, ``step``, ``rho_inf``, ``stability`` where given)."""
     check_table(document, LINKAGE_SCHEMA, where)
     spec = document["linkage"]
     label = f"{where}, linkage"
@@ -243,34 +254,25 @@ def load_linkage(document: dict, base: Path | None = None, where: str = "linkage
         start = float(origin[driver]) if origin is not None else 0.0
     settings = document.get("scene", {})
     material = Material(**spec["material"]) if "material" in spec else PLA
-    try:
-        scene = build_linkage(
-            loop,
-            LinkageOptions(
-                material=material,
-                name=spec.get("name", settings.get("name", "linkage")),
-                driver=driver,
-                start_angle=start,
-                origin=origin,
-                h=spec.get("h", 6e-3),
-                order=spec.get("order", 2),
-                n_modes=spec.get("modes", 4),
-                beta=settings.get("beta", 0.005),
-                omega=omega,
-                ramp_time=drive.get("ramp_time", 1.0),
-                revolutions=spec.get("revolutions", 1.0),
-                gravity=tuple(settings.get("gravity", (0.0, 0.0, -9.81))),
-                bore_errors=errors,
-                tool_link=tool,
-                exact_gravity=settings.get("exact_gravity", True),
-                joint_offsets=settings.get("joint_offsets", "body"),
-                attach_points=(
-                    attach_points(mechanism, spec.get("scale", 0.1)) if spec.get("design_points", False) else None
-                ),
-            ),
-            where=label,
-        )
-    except LoopFoldError as error:
-        raise SceneError(f"{label}: the start pose cannot be reached: {error}") from error
+    options = LinkageOptions(
+        material=material,
+        name=spec.get("name", settings.get("name", "linkage")),
+        driver=driver,
+        start_angle=start,
+        origin=origin,
+        h=spec.get("h", 6e-3),
+        order=spec.get("order", 2),
+        n_modes=spec.get("modes", 4),
+        beta=settings.get("beta", 0.005),
+        omega=omega,
+        ramp_time=drive.get("ramp_time", 1.0),
+        revolutions=spec.get("revolutions", 1.0),
+        gravity=tuple(settings.get("gravity", (0.0, 0.0, -9.81))),
+        bore_errors=errors,
+        tool_link=tool,
+        exact_gravity=settings.get("exact_gravity", True),
+        joint_offsets=settings.get("joint_offsets", "body"),
+        attach_points=(attach_points(mechanism, spec.get("scale", 0.1)) if spec.get("design_points", False) else None),
+    )
     run = {key: settings[key] for key in ("mode", "outputs", "step", "rho_inf", "stability") if key in settings}
-    return replace(scene, settings=dict({k: v for k, v in scene.settings.items() if k != "mode"}, **run))
+    return loop, options, run

@@ -11,6 +11,7 @@ the same curve (``tests/test_kinematics/test_single_loop.py``).
 
 from __future__ import annotations
 
+from collections.abc import MutableMapping
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -20,6 +21,7 @@ from ffrf.errors import SceneError
 from ffrf.fe.interfaces import boundary_triangles
 from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.output.clearance import Clearance, link_clearance
+from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.scenes.builder import Scene, SceneBody, build_scene
 from ffrf.scenes.linkage_description import (
     BoreError,
@@ -135,10 +137,16 @@ def _check_drive_range(loop: SingleLoop, options: LinkageOptions, start_phi: NDA
         ) from error
 
 
-def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None, where: str | None = None) -> LinkageScene:
+def build_linkage(
+    loop: SingleLoop,
+    options: LinkageOptions | None = None,
+    where: str | None = None,
+    reductions: MutableMapping[str, ModeBasis] | None = None,
+) -> LinkageScene:
     """Build :func:`~ffrf.scenes.linkage_description.linkage_description` of ``loop`` with the one scene builder.
     A drive that turns its joint beyond a dead point of the rigid loop is refused (:class:`ffrf.errors.SceneError`);
-    ``where`` (default the linkage's name) starts every error message."""
+    ``where`` (default the linkage's name) starts every error message; ``reductions``: the content-keyed cache of
+    reduced bases :func:`~ffrf.scenes.builder.build_scene` reuses (default the process's own)."""
     options = LinkageOptions() if options is None else options
     where = options.name if where is None else where
     tool = checked_tool_link(loop, options)
@@ -146,7 +154,7 @@ def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None, where
     description = linkage_description(loop, options, start_phi)
     t_end = float(description["scene"]["t_end"])
     _check_drive_range(loop, options, start_phi, float(CosineRamp(options.omega, options.ramp_time)(t_end)), where)
-    scene = build_scene(description, where=where)
+    scene = build_scene(description, where=where, reductions=reductions)
     angle = next(j.angle for j in scene.joints if j.angle is not None)  # the drive the system runs with
     settings = dict(
         scene.settings,
@@ -159,6 +167,7 @@ def build_linkage(loop: SingleLoop, options: LinkageOptions | None = None, where
         revolutions=options.revolutions,
         material=options.material.name,
         bore_errors=[_plain(e) for e in options.bore_errors],
+        bore_error_model=options.bore_error_model,
     )
     built = {f.name: getattr(scene, f.name) for f in fields(Scene)}
     return LinkageScene(

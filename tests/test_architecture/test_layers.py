@@ -25,9 +25,10 @@ FFRF_LAYERS: dict[str, int] = {
     "solvers": 6,
     "output": 7,
     "scenes": 8,
-    "cli": 9,
-    "__init__": 9,
-    "__main__": 9,
+    "studies": 9,
+    "cli": 10,
+    "__init__": 10,
+    "__main__": 10,
 }
 #: Packages of the project, lowest first.
 PACKAGES: dict[str, int] = {"kinematics": 0, "ffrf": 1, "identification": 2, "validation": 3}

@@ -1,0 +1,207 @@
+"""The analysis of a finished (or partly finished) study: percentiles, distributions, sensitivities, report.md.
+
+:func:`write_report` reads ``DIR/study.json`` and the rows (:func:`ffrf.studies.runner.read_rows`) and writes
+``DIR/report.md`` with ``DIR/figures/*.png`` and the numbers in ``DIR/analysis.json``: per output the
+percentile table of its ok variants, a histogram with the empirical CDF, the standardised regression
+coefficients on all ok rows, the first-order and total Sobol indices of a Saltelli design
+(:mod:`ffrf.studies.sensitivity`), scatter plots of the output against the most influential parameters, and for a
+grid of two or more parameters a contour plot over the first two (the mean over the others).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+from numpy.typing import NDArray
+
+from ffrf.studies.runner import read_rows
+from ffrf.studies.sensitivity import sobol_indices, standardised_regression
+
+__all__ = ["PERCENTILES", "percentile_table", "saltelli_outputs", "analyse", "write_report"]
+
+PERCENTILES = (0, 1, 5, 25, 50, 75, 95, 99, 100)
+#: Scatter plots per output: the parameters with the largest total index (or |SRC|).
+TOP_PARAMETERS = 3
+
+
+def percentile_table(values: NDArray) -> dict[str, float]:
+    """Count, mean, standard deviation and :data:`PERCENTILES` of the finite ``values``."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return {"n": 0}
+    table = {"n": int(v.size), "mean": float(v.mean()), "std": float(v.std(ddof=1)) if v.size > 1 else 0.0}
+    return table | {f"p{p}": float(q) for p, q in zip(PERCENTILES, np.percentile(v, PERCENTILES), strict=True)}
+
+
+def saltelli_outputs(columns: dict[str, NDArray], output: NDArray, d: int, n: int) -> tuple[NDArray, NDArray, NDArray]:
+    """``f_A``, ``f_B`` (``n``) and ``f_AB`` (``n x d``) of a Saltelli design from the rows' ``block`` and
+    ``sample`` columns; NaN where a variant has no row yet or failed."""
+    blocks = ["A", "B"] + [f"AB{i}" for i in range(d)]
+    f = {name: np.full(n, np.nan) for name in blocks}
+    for block, sample, value in zip(columns["block"], columns["sample"], output, strict=True):
+        if block in f and 0 <= sample < n:
+            f[block][sample] = value
+    return f["A"], f["B"], np.column_stack([f[f"AB{i}"] for i in range(d)])
+
+
+def _columns(directory: Path) -> dict[str, NDArray]:
+    table = read_rows(directory)
+    if table is None:
+        raise FileNotFoundError(f"{directory}: no rows yet (run the study first: python -m ffrf study ...)")
+    return {name: np.asarray(table.column(name).to_pylist()) for name in table.column_names}
+
+
+def analyse(directory: str | Path) -> dict:
+    """The numbers of the report (module docstring) as plain data."""
+    directory = Path(directory)
+    study = json.loads((directory / "study.json").read_text())
+    columns = _columns(directory)
+    names = [p["name"] for p in study["parameters"]]
+    ok = columns["status"] == "ok"
+    failures: dict[str, int] = {}
+    for reason in columns["reason"][~ok]:
+        key = str(reason).split(":")[0]
+        failures[key] = failures.get(key, 0) + 1
+    x = np.column_stack([columns[name].astype(float) for name in names])
+    outputs = {}
+    for output in study["outputs"]:
+        y = np.where(ok, columns[output].astype(float), np.nan)
+        regression = standardised_regression(x, y)
+        entry = {
+            "percentiles": percentile_table(y),
+            "src": dict(zip(names, regression.beta.tolist(), strict=True)),
+            "src_r2": regression.r2,
+        }
+        if study["method"] == "saltelli":
+            indices = sobol_indices(*saltelli_outputs(columns, y, len(names), study["samples"]))
+            entry |= {
+                "sobol_first": dict(zip(names, indices.first.tolist(), strict=True)),
+                "sobol_total": dict(zip(names, indices.total.tolist(), strict=True)),
+                "sobol_rows_used": dict(zip(names, indices.used.tolist(), strict=True)),
+            }
+        outputs[output] = entry
+    return {
+        "study": study,
+        "rows": int(len(ok)),
+        "ok": int(ok.sum()),
+        "failed": failures,
+        "assembles": int(np.sum(columns["assembles"] == True)),  # noqa: E712 -- an object array with None
+        "wall_time_s": percentile_table(columns["wall_time_s"].astype(float)),
+        "outputs": outputs,
+    }
+
+
+def _distribution_figure(values: NDArray, name: str, path: Path) -> None:
+    """Histogram and empirical CDF of one output's finite values."""
+    v = np.sort(values[np.isfinite(values)])
+    figure = Figure(figsize=(9, 3.5))
+    hist, ecdf = figure.subplots(1, 2)
+    hist.hist(v, bins=max(5, min(50, int(np.sqrt(v.size)) + 1)))
+    hist.set_xlabel(name)
+    hist.set_ylabel("variants")
+    ecdf.step(v, np.arange(1, v.size + 1) / v.size, where="post")
+    ecdf.set_xlabel(name)
+    ecdf.set_ylabel("empirical CDF")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+
+
+def _scatter_figure(x: dict[str, NDArray], y: NDArray, name: str, path: Path) -> None:
+    """The output against each of the given parameters."""
+    figure = Figure(figsize=(4 * len(x), 3.5))
+    axes = np.atleast_1d(figure.subplots(1, len(x)))
+    for ax, (parameter, values) in zip(axes, x.items(), strict=True):
+        ax.plot(values, y, ".", markersize=3)
+        ax.set_xlabel(parameter)
+        ax.set_ylabel(name)
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+
+
+def _contour_figure(x1: NDArray, x2: NDArray, y: NDArray, labels: tuple[str, str, str], path: Path) -> None:
+    """Contours of the mean of ``y`` over the grid of ``x1`` and ``x2`` (other parameters averaged)."""
+    u1, u2 = np.unique(x1), np.unique(x2)
+    grid = np.full((len(u2), len(u1)), np.nan)
+    for i, a in enumerate(u1):
+        for j, b in enumerate(u2):
+            chosen = y[(x1 == a) & (x2 == b)]
+            chosen = chosen[np.isfinite(chosen)]
+            grid[j, i] = chosen.mean() if chosen.size else np.nan
+    figure = Figure(figsize=(5, 4))
+    ax = figure.subplots()
+    filled = ax.contourf(u1, u2, grid, levels=12)
+    figure.colorbar(filled, ax=ax, label=labels[2])
+    ax.set_xlabel(labels[0])
+    ax.set_ylabel(labels[1])
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+
+
+def _influence(entry: dict, names: list[str]) -> list[str]:
+    """Parameters by influence: total Sobol index where there is one, else |SRC|."""
+    score = entry.get("sobol_total", {n: abs(entry["src"][n]) for n in names})
+    return sorted(names, key=lambda n: -np.nan_to_num(score[n], nan=-1.0))
+
+
+def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+    return ["| " + " | ".join(header) + " |", "|" + " --- |" * len(header)] + [
+        "| " + " | ".join(r) + " |" for r in rows
+    ]
+
+
+def write_report(directory: str | Path) -> Path:
+    """Write ``report.md``, ``analysis.json`` and ``figures/`` into the study folder (module docstring)."""
+    directory = Path(directory)
+    analysis = analyse(directory)
+    (directory / "analysis.json").write_text(json.dumps(analysis, indent=2))
+    figures = directory / "figures"
+    figures.mkdir(exist_ok=True)
+    columns = _columns(directory)
+    study = analysis["study"]
+    names = [p["name"] for p in study["parameters"]]
+    ok = columns["status"] == "ok"
+    lines = [
+        f"# Study {study['name']!r}",
+        "",
+        f"Method {study['method']}, {analysis['rows']} variants with a row, {analysis['ok']} ok, "
+        f"{analysis['assembles']} assembled; failures by reason: {analysis['failed'] or 'none'}. "
+        "Outputs in SI units (`docs/studies.md`).",
+        "",
+        "## Percentiles of the ok variants",
+        "",
+    ]
+    header = ["output", "n"] + [f"p{p}" for p in PERCENTILES]
+    rows = [
+        [o, str(e["percentiles"].get("n", 0))]
+        + [f"{e['percentiles'].get(f'p{p}', float('nan')):.4g}" for p in PERCENTILES]
+        for o, e in analysis["outputs"].items()
+    ]
+    lines += _table(header, rows) + ["", "## Sensitivities", ""]
+    for output, entry in analysis["outputs"].items():
+        lines += [f"### {output}", "", f"Linear regression: R^2 = {entry['src_r2']:.3g}.", ""]
+        header = ["parameter", "SRC"] + (["S_i", "S_Ti"] if "sobol_first" in entry else [])
+        rows = [
+            [n, f"{entry['src'][n]:.3g}"]
+            + ([f"{entry['sobol_first'][n]:.3g}", f"{entry['sobol_total'][n]:.3g}"] if "sobol_first" in entry else [])
+            for n in names
+        ]
+        lines += _table(header, rows) + [""]
+        y = np.where(ok, columns[output].astype(float), np.nan)
+        if np.isfinite(y).sum() < 2:
+            continue
+        _distribution_figure(y, output, figures / f"{output}_distribution.png")
+        top = _influence(entry, names)[:TOP_PARAMETERS]
+        _scatter_figure({n: columns[n].astype(float) for n in top}, y, output, figures / f"{output}_scatter.png")
+        lines += [f"![{output}](figures/{output}_distribution.png)", f"![{output}](figures/{output}_scatter.png)"]
+        if study["method"] == "grid" and len(names) >= 2:
+            x1, x2 = columns[names[0]].astype(float), columns[names[1]].astype(float)
+            _contour_figure(x1, x2, y, (names[0], names[1], output), figures / f"{output}_contour.png")
+            lines.append(f"![{output}](figures/{output}_contour.png)")
+        lines.append("")
+    path = directory / "report.md"
+    path.write_text("\n".join(lines) + "\n")
+    return path

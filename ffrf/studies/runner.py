@@ -1,0 +1,205 @@
+"""Run a study's variants on Dask and keep their rows in Parquet as they complete.
+
+Work units are whole variants (:func:`ffrf.studies.variant.run_variant`). Without a scheduler address the
+runner starts a :class:`dask.distributed.LocalCluster` of one single-threaded worker process per core (or
+``workers``); with ``scheduler = "tcp://host:8786"`` it submits to that cluster, nothing else changed. Rows are
+collected as futures complete (``as_completed``) and written in batches, each a Parquet file
+``DIR/rows/part-*.parquet`` written under a temporary name and renamed (a reader never sees half a file).
+A rerun reads the ids already in ``DIR/rows`` and submits only the others, so a Ctrl-C (the buffer is written
+on the way out) or a killed client loses at most the variants in flight and the rows of the last
+``flush_seconds``. A worker that dies has its variant rerun by the scheduler elsewhere; a variant that could
+not be computed at all (its worker died too often) writes no row, so a rerun tries it again. A variant that
+fails (no assembly, Newton divergence, bad parameters) is a row with its reason.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import time
+import uuid
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from ffrf.studies.sampling import Variant, study_design
+from ffrf.studies.spec import Study
+from ffrf.studies.variant import output_names, row_names, run_variant
+
+__all__ = ["ROWS", "StudyRun", "finished_ids", "pending", "read_rows", "row_schema", "run_study"]
+
+log = logging.getLogger(__name__)
+
+#: The folder of row files under a study's output folder.
+ROWS = "rows"
+
+
+@dataclass(frozen=True)
+class StudyRun:
+    """What one call of :func:`run_study` did: variants in the design, already finished before, run now (ok and
+    failed rows written) and lost (no row: the worker died too often, or the run was interrupted)."""
+
+    design: int
+    skipped: int
+    ok: int
+    failed: int
+    lost: int
+    wall_time_s: float
+
+
+def row_schema(study: Study) -> pa.Schema:
+    """The Arrow schema of a study's rows (:func:`ffrf.studies.variant.row_names`)."""
+    types: dict[str, pa.DataType] = {
+        "id": pa.string(),
+        "block": pa.string(),
+        "sample": pa.int64(),
+        "status": pa.string(),
+        "reason": pa.string(),
+        "assembles": pa.bool_(),
+        "worker": pa.string(),
+    }
+    return pa.schema([(name, types.get(name, pa.float64())) for name in row_names(study)])
+
+
+def read_rows(directory: str | Path) -> pa.Table | None:
+    """Every row written under ``DIR/rows``, each id once (the first written), or ``None`` before any."""
+    parts = sorted((Path(directory) / ROWS).glob("part-*.parquet"))
+    if not parts:
+        return None
+    table = pa.concat_tables([pq.read_table(p) for p in parts], promote_options="default")
+    ids = table.column("id").to_pylist()
+    first: dict[str, int] = {}
+    for k, i in enumerate(ids):
+        first.setdefault(i, k)
+    return table.take(sorted(first.values())) if len(first) < len(ids) else table
+
+
+def finished_ids(directory: str | Path) -> set[str]:
+    """Ids of the variants with a row under ``DIR/rows``."""
+    parts = sorted((Path(directory) / ROWS).glob("part-*.parquet"))
+    return {i for p in parts for i in pq.read_table(p, columns=["id"]).column("id").to_pylist()}
+
+
+def _write_batch(rows: list[dict], schema: pa.Schema, directory: Path) -> None:
+    """One Parquet file of ``rows``, renamed into place once complete."""
+    if not rows:
+        return
+    folder = directory / ROWS
+    folder.mkdir(parents=True, exist_ok=True)
+    name = f"part-{time.strftime('%Y%m%dT%H%M%S')}-{uuid.uuid4().hex[:8]}.parquet"
+    table = pa.Table.from_pylist(rows, schema=schema)
+    partial = folder / f".{name}.tmp"
+    pq.write_table(table, partial)
+    os.replace(partial, folder / name)
+
+
+def _client(scheduler: str | None, workers: int | None) -> tuple[Any, Any]:
+    """A Dask client of the scheduler at ``scheduler``, or of a new local cluster (returned to close it)."""
+    from dask.distributed import Client, LocalCluster
+
+    # Dask logs every worker's start and end at INFO; show them only when the caller asked for INFO (-v).
+    logging.getLogger("distributed").setLevel(max(logging.WARNING, logging.getLogger().getEffectiveLevel()))
+    if scheduler is not None:
+        return Client(scheduler), None
+    cluster = LocalCluster(
+        n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True, dashboard_address=None
+    )
+    return Client(cluster), cluster
+
+
+def _progress(total: int, enabled: bool) -> Any:
+    """A tqdm bar (rate and ETA) on stderr, or a stand-in that counts silently."""
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="variant", disable=not enabled, smoothing=0.05)
+
+
+def _describe(study: Study, directory: Path) -> None:
+    """``DIR/study.json``: what the rows are (the report reads it)."""
+    description = {
+        "name": study.name,
+        "method": study.method,
+        "samples": study.samples,
+        "seed": study.seed,
+        "parameters": [asdict(p) for p in study.parameters],
+        "outputs": list(output_names(study.n_links)),
+        "base": {"bennett": study.base.bennett, "linkage": study.base.linkage, **study.base.overrides},
+        "bore_error_model": study.base.bore_error_model,
+        "fingerprint": study.fingerprint,
+    }
+    (directory / "study.json").write_text(json.dumps(description, indent=2))
+
+
+def pending(study: Study, directory: Path) -> tuple[list[Variant], int, int]:
+    """The variants still to run (each id once), the design's size and how many are finished."""
+    design = study_design(study)
+    done = finished_ids(directory)
+    todo: dict[str, Variant] = {}
+    for variant in design:
+        if variant.id not in done:
+            todo.setdefault(variant.id, variant)
+    return list(todo.values()), len(design), len({v.id for v in design} & done)
+
+
+def run_study(
+    study: Study,
+    directory: str | Path,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    client: Any = None,
+    batch: int = 50,
+    flush_seconds: float = 10.0,
+    progress: bool = True,
+) -> StudyRun:
+    """Run every unfinished variant of ``study`` into ``directory`` (module docstring): on ``client`` if given,
+    else on the scheduler at ``scheduler``, else on a new local cluster of ``workers`` processes."""
+    from dask.distributed import as_completed
+
+    started = time.perf_counter()
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    _describe(study, directory)
+    todo, size, skipped = pending(study, directory)
+    schema = row_schema(study)
+    counts = {"ok": 0, "failed": 0, "lost": 0}
+    if not todo:
+        return StudyRun(size, skipped, 0, 0, 0, time.perf_counter() - started)
+    own = client is None
+    cluster = None
+    if own:
+        client, cluster = _client(scheduler, workers)
+    buffer: list[dict] = []
+    last = time.monotonic()
+    bar = _progress(len(todo), progress)
+    futures: Iterable[Any] = []
+    try:
+        shared = client.scatter(study, broadcast=True)
+        futures = [client.submit(run_variant, shared, v, key=f"variant-{study.fingerprint}-{v.id}") for v in todo]
+        for future in as_completed(futures):
+            if future.status == "finished":
+                row = future.result()
+                buffer.append(row)
+                counts["ok" if row["status"] == "ok" else "failed"] += 1
+            else:  # the scheduler gave up on it (its workers died): no row, a rerun tries again
+                counts["lost"] += 1
+                log.warning("variant %s lost: %s", future.key, future.exception())
+            future.release()
+            bar.update(1)
+            if len(buffer) >= batch or time.monotonic() - last > flush_seconds:
+                _write_batch(buffer, schema, directory)
+                buffer, last = [], time.monotonic()
+    finally:  # also on Ctrl-C: keep what completed, cancel what did not
+        _write_batch(buffer, schema, directory)
+        bar.close()
+        if own:
+            client.cancel(list(futures))
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    lost = counts["lost"] + len(todo) - sum(counts.values())
+    return StudyRun(size, skipped, counts["ok"], counts["failed"], lost, time.perf_counter() - started)

@@ -1,0 +1,231 @@
+r"""One variant of a study: its linkage options, its scene and its row of results (a pure function of the study
+and the parameter values, so that any worker computes the same row).
+
+The row holds the parameters, ``status`` (``"ok"`` or ``"failed"``), ``reason`` (the error message of a failed
+variant), ``assembles`` (whether the static assembly found an equilibrium; empty when the variant failed before),
+the outputs (SI, NaN where not computed): ``max_coupler_deviation_m`` (same drive angle) and
+``max_coupler_distance_to_path_m`` (closest point of the ideal curve), ``max_abs_driving_torque_Nm``,
+``assembly_strain_energy_J`` (all links, assembled state) and ``max_assembly_stress_link{k}_Pa`` (von Mises,
+:mod:`ffrf.output.assembly_stress`), and ``wall_time_s`` (building and running the variant) and ``worker``.
+
+**Cheap bore errors.** With ``bore_error_model = "misfit"`` (a study's default) a bore error is modelled on the
+nominal meshes: the link keeps its nominal mesh and bore interface, and only that link's side of the joint takes
+the erroneous axis and point, a joint-frame misfit that the static assembly closes elastically
+(:class:`ffrf.scenes.linkage_description.LinkageOptions`). The rule: the bore's material is where the nominal
+bore is, so the model is a small-error approximation of the remeshed part (``"remesh"``), good while the bore's
+shift and the twist times the housing length are small against the housing's wall and the element size. Its error
+against remeshing is not measured yet. With the misfit model, variants that differ only in bore errors have the
+same meshes, hence the same reductions, which the worker's cache (:class:`ReductionCache`) keys by content.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import socket
+import time
+from collections import OrderedDict
+from collections.abc import Iterator, MutableMapping
+from dataclasses import replace
+from typing import Any
+
+from ffrf.errors import AssemblyDivergence, FEInputError, NewtonDivergence, StaticDivergence
+from ffrf.reduction.mode_basis import ModeBasis
+from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
+from ffrf.scenes.linkage_description import BoreError, LinkageOptions
+from ffrf.scenes.linkage_file import linkage_options
+from ffrf.scenes.linkage_run import LinkageResult, run_linkage
+from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
+from ffrf.studies.sampling import Variant
+from ffrf.studies.spec import Study
+from ffrf.system.drives import rpm
+
+__all__ = [
+    "ReductionCache",
+    "OUTPUTS",
+    "output_names",
+    "row_names",
+    "variant_options",
+    "build_variant",
+    "run_variant",
+]
+
+log = logging.getLogger(__name__)
+
+#: Outputs of every linkage; the assembly stresses add one column per link (:func:`output_names`).
+OUTPUTS = (
+    "max_coupler_deviation_m",
+    "max_coupler_distance_to_path_m",
+    "max_abs_driving_torque_Nm",
+    "assembly_strain_energy_J",
+)
+#: Reduced bases a worker keeps (a coarse link's basis is kilobytes, the default discretisation's megabytes).
+CACHE_ENTRIES = 64
+
+
+class ReductionCache(MutableMapping[str, ModeBasis]):
+    """Reduced bases by content fingerprint (mesh, material, interfaces, modes:
+    :func:`ffrf.reduction.reduced_io.reduction_fingerprint`), the ``max_entries`` most recently used; ``hits``
+    counts the bases found, ``misses`` those computed."""
+
+    def __init__(self, max_entries: int = CACHE_ENTRIES) -> None:
+        self.max_entries = max_entries
+        self._entries: OrderedDict[str, ModeBasis] = OrderedDict()
+        self.hits = 0
+        self.misses = 0
+
+    def __getitem__(self, key: str) -> ModeBasis:
+        value = self._entries[key]
+        self._entries.move_to_end(key)
+        return value
+
+    def __contains__(self, key: object) -> bool:
+        found = key in self._entries
+        self.hits += found  # the builder asks before it computes (ffrf.scenes.builder._reduction)
+        return found
+
+    def __setitem__(self, key: str, value: ModeBasis) -> None:
+        self.misses += 1
+        self._entries[key] = value
+        self._entries.move_to_end(key)
+        while len(self._entries) > self.max_entries:
+            self._entries.popitem(last=False)
+
+    def __delitem__(self, key: str) -> None:
+        del self._entries[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._entries)
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+
+#: This process's cache: a Dask worker keeps it between the variants it runs.
+_CACHE = ReductionCache()
+
+
+def output_names(n_links: int) -> tuple[str, ...]:
+    """The output columns of a linkage of ``n_links`` links."""
+    return OUTPUTS + tuple(f"max_assembly_stress_link{k}_Pa" for k in range(n_links))
+
+
+def row_names(study: Study) -> tuple[str, ...]:
+    """Every column of a study's rows, in order."""
+    head = ("id", "block", "sample", "status", "reason", "assembles")
+    return head + study.parameter_names + output_names(study.n_links) + ("wall_time_s", "worker")
+
+
+def _base_options(study: Study) -> tuple[Any, LinkageOptions, dict]:
+    """The base's loop (``None`` for the paper's Bennett), its options and run settings, with the overrides."""
+    base = study.base
+    if base.document is not None:
+        loop, options, run = linkage_options(base.document, str(base.linkage))
+    else:
+        loop, options, run = None, bennett_options(base.bennett or "pla"), {}
+    o = base.overrides
+    options = replace(
+        options,
+        h=float(o.get("h", options.h)),
+        order=int(o.get("order", options.order)),
+        n_modes=int(o.get("modes", options.n_modes)),
+        revolutions=float(o.get("revolutions", options.revolutions)),
+        omega=rpm(float(o["rpm"])) if "rpm" in o else options.omega,
+        bore_error_model=base.bore_error_model,
+    )
+    run = {"mode": o.get("mode", run.get("mode", "auto")), "outputs": int(o.get("outputs", run.get("outputs", 241)))}
+    return loop, options, run
+
+
+def _with_bore_errors(errors: tuple[BoreError, ...], twist: dict, offset: dict) -> tuple[BoreError, ...]:
+    """The base's bore errors with the study's twists (rad) and offsets (m) added, bore by bore."""
+    by_bore = {(e.joint, e.link): e for e in errors}
+    for bore in sorted(set(twist) | set(offset)):
+        old = by_bore.get(bore, BoreError(*bore))
+        by_bore[bore] = replace(old, twist=old.twist + twist.get(bore, 0.0), offset=old.offset + offset.get(bore, 0.0))
+    return tuple(by_bore.values())
+
+
+def variant_options(study: Study, values: dict[str, float]) -> tuple[Any, LinkageOptions, dict]:
+    """The loop (``None``: the paper's Bennett), the linkage options and run settings of one variant."""
+    loop, options, run = _base_options(study)
+    material, changes = options.material, dict[str, Any]()
+    twist: dict[tuple[int, int], float] = {}
+    offset: dict[tuple[int, int], float] = {}
+    for p in study.parameters:
+        x = values[p.name]
+        if p.target == "bore_twist_deg":
+            bore = (int(p.joint or 0), int(p.link or 0))
+            twist[bore] = twist.get(bore, 0.0) + math.radians(x)
+        elif p.target == "bore_offset_mm":
+            bore = (int(p.joint or 0), int(p.link or 0))
+            offset[bore] = offset.get(bore, 0.0) + 1e-3 * x
+        elif p.target == "E":
+            material = replace(material, E=x)
+        elif p.target == "rho":
+            material = replace(material, rho=x)
+        elif p.target == "rpm":
+            changes["omega"] = rpm(x)
+        elif p.target == "h":
+            changes["h"] = x
+        elif p.target == "modes":
+            changes["n_modes"] = int(round(x))
+    errors = _with_bore_errors(tuple(options.bore_errors), twist, offset)
+    return loop, replace(options, material=material, bore_errors=errors, **changes), run
+
+
+def build_variant(
+    study: Study, values: dict[str, float], reductions: MutableMapping[str, ModeBasis] | None = None
+) -> tuple[LinkageScene, dict]:
+    """The scene of one variant and its run settings; ``reductions``: the cache of reduced bases (default the
+    process's :class:`ReductionCache`)."""
+    loop, options, run = variant_options(study, values)
+    reductions = _CACHE if reductions is None else reductions
+    if loop is None:
+        return build_bennett_from_options(options, study.base.bennett or "pla", reductions), run
+    return build_linkage(loop, options, where=f"{study.name}, variant", reductions=reductions), run
+
+
+def _outputs(result: LinkageResult | None, n_links: int, path: bool) -> dict[str, float]:
+    """The output columns of a run's result (NaN where not computed: no result, or a path that stopped)."""
+    out = dict.fromkeys(output_names(n_links), math.nan)
+    if result is None:
+        return out
+    if result.assembly is not None:
+        out["assembly_strain_energy_J"] = float(sum(link.strain_energy_j for link in result.assembly.links))
+        for link in result.assembly.links:
+            out[f"max_assembly_stress_link{link.link}_Pa"] = float(link.max_von_mises_pa)
+    if path:
+        summary = result.summary()
+        for name in OUTPUTS[:3]:
+            out[name] = summary[name]
+    return out
+
+
+def run_variant(study: Study, variant: Variant, reductions: MutableMapping[str, ModeBasis] | None = None) -> dict:
+    """Build and run one variant; its row (module docstring). A variant that fails is a row with its reason, never
+    an exception (bad input from the parameters, no assembly, a diverging path, or any other error)."""
+    started = time.perf_counter()
+    row: dict[str, Any] = {"id": variant.id, "block": variant.block, "sample": variant.sample}
+    row |= {"status": "failed", "reason": "", "assembles": None} | dict(variant.values)
+    result, path = None, False
+    try:
+        scene, run = build_variant(study, variant.values, reductions)
+        result = run_linkage(scene, mode=run["mode"], n_outputs=run["outputs"])
+        row |= {"status": "ok", "assembles": True}
+        path = True
+    except AssemblyDivergence as error:
+        row |= {"reason": f"no assembly: {error}", "assembles": False}
+    except (StaticDivergence, NewtonDivergence) as error:
+        result = error.partial  # the run up to where its path stopped, with the assembled state
+        row |= {"reason": f"the run stopped: {error}", "assembles": True}
+    except FEInputError as error:
+        row["reason"] = f"bad input: {error}"
+    except Exception as error:  # noqa: BLE001 -- one variant's failure is its row, never the study's end
+        log.exception("variant %s failed", variant.id)
+        row["reason"] = f"{type(error).__name__}: {error}"
+    row |= _outputs(result, study.n_links, path)
+    row["wall_time_s"] = time.perf_counter() - started
+    row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
+    return row

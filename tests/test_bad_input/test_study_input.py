@@ -1,0 +1,59 @@
+"""Bad study files and study commands are refused with one line naming the key and the fix (exit status 2),
+before any worker starts."""
+
+import pytest
+
+from ffrf.cli import main
+
+GOOD = """
+[study]
+method = "sobol"
+samples = 8
+
+[base]
+bennett = "pla"
+
+[[parameters]]
+name = "twist"
+target = "bore_twist_deg"
+joint = 3
+link = 0
+normal = {mean = 0.0, std = 0.5}
+"""
+
+CASES = {
+    "unknown method": (('method = "sobol"', 'method = "random"'), "'method' must be one of"),
+    "samples not a power of 2": (("samples = 8", "samples = 10"), "use 8 or 16"),
+    "grid without values": (('method = "sobol"', 'method = "grid"'), "a grid study takes values = [...]"),
+    "bore without its link": (("link = 0\n", ""), "give joint = J and link = L"),
+    "bore on a link without that joint": (("link = 0", "link = 2"), "link 2 does not carry joint 3"),
+    "two distributions": (("normal = {", "uniform = {low = 0.0, high = 1.0}\nnormal = {"), "exactly one of uniform"),
+    "no base": (('bennett = "pla"', ""), "give exactly one base"),
+    "parameter named like an output": (('name = "twist"', 'name = "max_coupler_deviation_m"'), "taken by a result"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_bad_study_is_refused_with_a_clear_message(case, tmp_path, capsys):
+    (old, new), message = CASES[case]
+    assert old in GOOD
+    path = tmp_path / "study.toml"
+    path.write_text(GOOD.replace(old, new, 1))
+    assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_zero_workers_are_refused(tmp_path, capsys):
+    path = tmp_path / "study.toml"
+    path.write_text(GOOD)
+    with pytest.raises(SystemExit) as exit_:
+        main(["study", str(path), "--out", str(tmp_path / "out"), "--workers", "0"])
+    assert exit_.value.code == 2
+    assert "--workers must be a whole number >= 1" in capsys.readouterr().err
+
+
+def test_a_report_of_a_folder_without_a_study_is_refused(tmp_path, capsys):
+    assert main(["study-report", str(tmp_path)]) == 2
+    assert "holds no study (no study.json)" in capsys.readouterr().err

@@ -1,0 +1,116 @@
+"""A tiny Bennett study (coarse links: h = 12 mm, P1, 2 modes, 9 quasi-static outputs) through a Dask
+LocalCluster of two worker processes, written to Parquet: every variant is a row, a variant with bad parameters is
+a row with its reason, a rerun skips what is finished, and the rows equal standalone runs of the same scenes."""
+
+import math
+import os
+import threading
+import time
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from dask.distributed import Client, LocalCluster
+
+from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
+from ffrf.scenes.linkage_description import BoreError
+from ffrf.scenes.linkage_run import run_linkage
+from ffrf.studies.report import write_report
+from ffrf.studies.runner import read_rows, run_study
+from ffrf.studies.spec import study_from_document
+from ffrf.studies.variant import OUTPUTS
+
+BASE = {"bennett": "pla", "h": 0.012, "order": 1, "modes": 2, "mode": "quasi_static", "outputs": 9}
+
+
+def _study(twists: list[float], h: list[float]):
+    """A grid over the base's joint-3 bore twist on link 0 (deg) and the element edge (m)."""
+    return study_from_document(
+        {
+            "study": {"name": "tiny", "method": "grid"},
+            "base": BASE,
+            "parameters": [
+                {"name": "twist", "target": "bore_twist_deg", "joint": 3, "link": 0, "values": twists},
+                {"name": "edge", "target": "h", "values": h},
+            ],
+        }
+    )
+
+
+@pytest.fixture(scope="module")
+def client():
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with Client(cluster) as c:
+            yield c
+
+
+def _standalone(twist_deg: float) -> dict:
+    """The same scene built and run without the study: the paper's PLA Bennett, the bore twist as a misfit."""
+    options = replace(
+        bennett_options("pla", h=0.012, order=1, n_modes=2),
+        bore_errors=(BoreError(joint=3, link=0, twist=math.radians(twist_deg)),),
+        bore_error_model="misfit",
+    )
+    return run_linkage(build_bennett_from_options(options), mode="quasi_static", n_outputs=9).summary()
+
+
+def test_a_tiny_study_runs_on_two_workers_resumes_and_equals_standalone_runs(client, tmp_path):
+    """Four variants, two of them with an element edge of 1 m (refused by the scene's checks: rows with the
+    reason), then a rerun with one more twist runs only the new variants; the ok rows equal standalone runs to
+    1e-12 (relative), the same code path on another process."""
+    study = _study([0.0, 0.5], [0.012, 1.0])
+    run = run_study(study, tmp_path, client=client, progress=False)
+    assert (run.design, run.skipped, run.ok, run.failed, run.lost) == (4, 0, 2, 2, 0)
+    table = read_rows(tmp_path).to_pylist()
+    assert len(table) == 4 and len({r["id"] for r in table}) == 4
+    failed = [r for r in table if r["status"] == "failed"]
+    assert all(r["edge"] == 1.0 and r["reason"].startswith("bad input") and "h" in r["reason"] for r in failed)
+    assert all(math.isnan(r["max_coupler_deviation_m"]) for r in failed)
+    for row in (r for r in table if r["status"] == "ok"):
+        assert row["assembles"] is True
+        reference = _standalone(row["twist"])
+        for name in OUTPUTS[:3]:
+            assert row[name] == pytest.approx(reference[name], rel=1e-12, abs=0.0), name
+    twisted = next(r for r in table if r["status"] == "ok" and r["twist"] == 0.5)
+    nominal = next(r for r in table if r["status"] == "ok" and r["twist"] == 0.0)
+    assert twisted["assembly_strain_energy_J"] > 10 * nominal["assembly_strain_energy_J"]
+
+    again = run_study(_study([0.0, 0.5, 1.0], [0.012, 1.0]), tmp_path, client=client, progress=False)
+    assert (again.design, again.skipped, again.ok + again.failed) == (6, 4, 2)
+    assert len(read_rows(tmp_path)) == 6
+    report = write_report(tmp_path).read_text()
+    assert "max_coupler_deviation_m" in report and "contour" in report
+
+
+@pytest.mark.slow
+def test_a_killed_worker_loses_no_row(client, tmp_path):
+    """A worker process killed while the study runs (its nanny restarts it; the scheduler reruns its variant):
+    the study ends with every row, and a rerun finds nothing to do."""
+    study = _study([0.0, 0.25, 0.5, 0.75], [0.012])
+
+    killed: list[str] = []
+
+    def kill_one_worker() -> None:
+        for _ in range(600):  # as soon as a worker runs a variant (within a minute)
+            busy = [w for w, keys in client.processing().items() if keys]
+            if busy:
+                time.sleep(0.5)
+                try:
+                    client.run(os._exit, 1, workers=busy[:1])
+                except Exception:  # noqa: BLE001 -- the worker dies before it answers, as intended
+                    pass
+                killed.append(busy[0])
+                return
+            time.sleep(0.1)
+
+    killer = threading.Thread(target=kill_one_worker)
+    killer.start()
+    run = run_study(study, tmp_path, client=client, progress=False)
+    killer.join()
+    assert killed, "no worker was busy to be killed"
+    rows = read_rows(tmp_path).to_pylist()
+    assert run.lost == 0 and len(rows) == 4 and len({r["id"] for r in rows}) == 4
+    assert all(r["status"] == "ok" for r in rows)
+    rerun = run_study(study, tmp_path, client=client, progress=False)
+    assert (rerun.skipped, rerun.ok + rerun.failed) == (4, 0)
+    assert np.all(np.isfinite([r["max_coupler_deviation_m"] for r in rows]))
