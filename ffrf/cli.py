@@ -11,6 +11,7 @@ import json
 import logging
 import sys
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -418,6 +419,12 @@ def _run_linkage(args: argparse.Namespace) -> int:
 def _configure_run(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", type=Path, help="scene file (TOML), see ffrf.scenes.scene_file")
     parser.add_argument("--out", type=Path, required=True, help="output directory (results.npz, metadata.json)")
+    parser.add_argument(
+        "--stability",
+        action="store_true",
+        help="as stability = true in the scene: judge every equilibrium of a quasi-static run (Eq. (B1)) and go on "
+        "past folds (Eq. (S6)); writes stability.json and stability_critical.vtu",
+    )
 
 
 def _run_scene_file(args: argparse.Namespace) -> int:
@@ -428,6 +435,10 @@ def _run_scene_file(args: argparse.Namespace) -> int:
 
     started = time.perf_counter()
     scene = load_scene(args.scene)
+    if args.stability:
+        if scene.settings.get("mode", "auto" if isinstance(scene, LinkageScene) else "dynamic") == "dynamic":
+            raise SceneError('--stability judges equilibria: set mode = "quasi_static" in the scene file')
+        scene = replace(scene, settings={**scene.settings, "stability": True})
     out = _output_folder(args.out)  # after the scene's checks: a refused scene leaves no folder behind
     if isinstance(scene, LinkageScene):  # a linkage file: reported as the built-in linkages are
         s = scene.settings

@@ -41,10 +41,9 @@ from ffrf.reduction.craig_bampton import CraigBamptonBasis
 from ffrf.scenes.assembly import assemble, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.solvers.simulate import MODES, simulate
-from ffrf.solvers.snap_through import SnapThrough, snap_summary
+from ffrf.solvers.snap_through import SnapThrough, run_critical_pose, snap_summary
 from ffrf.solvers.stability import (
     CriticalPose,
-    critical_pose,
     mode_shares,
     stability_along,
     stability_summary,
@@ -242,13 +241,7 @@ def run_linkage(
         )
         snaps = getattr(run, "snaps", ())
         out.metadata["stability"]["snaps"] = [_snap_report(scene, snap) for snap in snaps]
-        if snaps:
-            out.critical = critical_pose(
-                scene.system, "fold", snaps[0].fold_t, snaps[0].fold_q, snaps[0].fold_multipliers
-            )
-        else:
-            k = int(np.argmin(sensors["stability_squared_frequencies"][:, 0]))
-            out.critical = critical_pose(scene.system, "least stable output", times[k], q[k], lam[k])
+        out.critical = run_critical_pose(scene.system, times, q, lam, sensors["stability_squared_frequencies"], snaps)
         out.metadata["stability"]["critical"] = {
             "where": out.critical.where,
             "time_s": out.critical.t,

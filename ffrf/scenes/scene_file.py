@@ -122,6 +122,7 @@ mode moves).
 
 from __future__ import annotations
 
+import json
 import logging
 import time as wallclock
 import tomllib
@@ -130,7 +131,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.errors import SceneError
+from ffrf.errors import NewtonDivergence, SceneError, StaticDivergence
 from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
 from ffrf.output.sensors import node_sensors, scene_sensors
 from ffrf.output.tables import write_results
@@ -138,8 +139,8 @@ from ffrf.scenes.assembly import assemble, quasi_static_step, start_state, start
 from ffrf.scenes.builder import Scene, build_scene
 from ffrf.scenes.linkage_file import load_linkage
 from ffrf.solvers.simulate import Run, simulate
-from ffrf.solvers.snap_through import snap_summary
-from ffrf.solvers.stability import stability_along, stability_summary
+from ffrf.solvers.snap_through import run_critical_pose, snap_summary
+from ffrf.solvers.stability import mode_shares, stability_along, stability_summary
 
 __all__ = ["SceneError", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
 
@@ -218,14 +219,46 @@ def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
         metadata["assembly"] = stress.as_dict()
         directory.mkdir(parents=True, exist_ok=True)
         write_assembly_vtu(directory / "assembly.vtu", scene, stress)
-    run = simulate_scene(scene, q0, progress=progress)
+    try:
+        run = simulate_scene(scene, q0, progress=progress)
+        stopped = None
+    except (StaticDivergence, NewtonDivergence) as error:  # write what was computed, then say so
+        if error.partial is None or len(error.partial.time) == 0:
+            raise
+        run, stopped = error.partial, error
     sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
     if scene.settings.get("stability", False):
-        judged = stability_along(scene.system, run.time, run.q, run.multipliers, count=3)
-        sensors["stability_squared_frequencies"] = np.array([s.squared_frequencies for s in judged])
-        summary = stability_summary(sensors["stability_squared_frequencies"], run.time, "time_s")
-        summary["snaps"] = [snap_summary(scene.system, snap) for snap in run.snaps]
-        metadata["stability"] = summary
+        metadata["stability"] = _monitor_stability(scene, run, sensors, directory)
     metadata["wall_time_s"] = wallclock.perf_counter() - started
+    if stopped is not None:
+        metadata["stopped"] = {"time_s": float(run.time[-1]), "reason": str(stopped)}
     write_results(directory, {"time": run.time, **sensors}, metadata, coordinates=run.q)
+    if stopped is not None:
+        stopped.args = (f"{stopped} (the results up to t = {run.time[-1]:.6g} s are in {directory})",)
+        raise stopped
     return metadata
+
+
+def _monitor_stability(scene: Scene, run: Run, sensors: dict, directory: Path) -> dict:
+    """Eq. (B1) at every output (the sensor ``stability_squared_frequencies``), the snaps the run went through, and
+    the critical pose: its summary, ``stability.json`` (per output: time, squared frequencies) and
+    ``stability_critical.vtu`` (the pose with its mode)."""
+    judged = stability_along(scene.system, run.time, run.q, run.multipliers, count=3)
+    values = np.array([s.squared_frequencies for s in judged])
+    sensors["stability_squared_frequencies"] = values
+    summary = stability_summary(values, run.time, "time_s")
+    summary["snaps"] = [snap_summary(scene.system, snap) for snap in run.snaps]
+    critical = run_critical_pose(scene.system, run.time, run.q, run.multipliers, values, run.snaps)
+    shares = mode_shares(scene.system, critical.q, critical.mode)
+    summary["critical"] = {
+        "where": critical.where,
+        "time_s": critical.t,
+        "squared_frequency": critical.squared_frequency,
+        "body_shares": {body.name: float(share) for body, share in zip(scene.bodies, shares, strict=True)},
+    }
+    directory.mkdir(parents=True, exist_ok=True)
+    table = {"summary": summary, "time_s": run.time.tolist(), "squared_frequencies_rad2_per_s2": values.tolist()}
+    (directory / "stability.json").write_text(json.dumps(table, indent=1))
+    stress = scene_assembly_stress(scene, critical.q, critical.multipliers)
+    write_assembly_vtu(directory / "stability_critical.vtu", scene, stress, {"critical_mode": critical.mode})
+    return summary

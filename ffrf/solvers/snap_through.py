@@ -20,11 +20,11 @@ from numpy.typing import NDArray
 
 from ffrf.errors import StaticDivergence
 from ffrf.solvers.continuation import EquilibriumPath, equilibrium_path, parabola_vertex, path_points, path_speed
-from ffrf.solvers.stability import equilibrium_stability, mode_shares
+from ffrf.solvers.stability import CriticalPose, critical_pose, equilibrium_stability, mode_shares
 from ffrf.solvers.static_solver import StaticSolution, quasi_static, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["SnapThrough", "snap_summary", "trace_snap", "quasi_static_through_snaps"]
+__all__ = ["SnapThrough", "run_critical_pose", "snap_summary", "trace_snap", "quasi_static_through_snaps"]
 
 log = logging.getLogger(__name__)
 
@@ -255,3 +255,19 @@ def _with_partial(
     error.partial = StaticSolution(np.array(qs), np.array(lams), tuple(counts))
     error.snaps = tuple(snaps)
     return error
+
+
+def run_critical_pose(
+    system: MultibodySystem,
+    times: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+    squared_frequencies: NDArray,
+    snaps: tuple[SnapThrough, ...],
+) -> CriticalPose:
+    """The critical pose of a monitored quasi-static run: its first fold if it snapped, else the output with the
+    smallest squared frequency of Eq. (B1) (``squared_frequencies``, one row per output)."""
+    if snaps:
+        return critical_pose(system, "fold", snaps[0].fold_t, snaps[0].fold_q, snaps[0].fold_multipliers)
+    k = int(np.argmin(squared_frequencies[:, 0]))
+    return critical_pose(system, "least stable output", float(times[k]), q[k], multipliers[k])

@@ -57,6 +57,10 @@ def test_the_scene_file_run_snaps_at_the_limit_load_onto_the_inverted_branch(tmp
     first = results["stability_squared_frequencies"][0, 0]
     assert abs(snaps[0]["squared_frequency_at_fold"]) < 1e-3 * first
     assert np.all(results["stability_squared_frequencies"][:, 0] > 0.0)  # every output is a stable equilibrium
+    table = json.loads((tmp_path / "out" / "stability.json").read_text())
+    assert table["summary"]["critical"]["where"] == "fold"
+    assert table["summary"]["critical"]["time_s"] == pytest.approx(snaps[0]["time_s"], rel=1e-12)
+    assert (tmp_path / "out" / "stability_critical.vtu").is_file()
     end_load = LOAD_RATE * results["time"][-1]
     rise = brentq(lambda z: truss_load(z) - end_load, -10.0 * c["critical_rise"], -c["critical_rise"])
     print("landing rise error", results["apex_point1"][-1, 2] - rise)
@@ -68,3 +72,14 @@ def test_the_scene_file_run_snaps_at_the_limit_load_onto_the_inverted_branch(tmp
     released = c["stiffness"] * (stretch[0] ** 2 - stretch[1] ** 2)
     print("energy released error", snaps[0]["energy_released_J"] / released - 1.0)
     assert snaps[0]["energy_released_J"] == pytest.approx(released, rel=1e-5)
+
+
+def test_run_with_stability_on_a_dynamic_scene_is_refused(tmp_path, capsys):
+    """``python -m ffrf run --stability`` judges equilibria: a scene that runs dynamically is refused in one line."""
+    scene = write_truss_scene(tmp_path)
+    text = scene.read_text().replace('mode = "quasi_static"', 'mode = "dynamic"').replace("stability = true", "")
+    scene.write_text(text)
+    assert main(["run", str(scene), "--stability", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and 'set mode = "quasi_static"' in err
+    assert not (tmp_path / "out").exists()
