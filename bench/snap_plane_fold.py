@@ -67,6 +67,17 @@ def _dynamic_snap_angle(result, snap: dict, fold: np.ndarray, landing: np.ndarra
     return float(angles[beyond[0]]) if beyond.size else None
 
 
+def _kinetic_around(result, t_fold: float) -> dict:
+    """The dynamic run's kinetic energy at the fold and its peak in the 3 s after it (J): the snap turns the
+    released potential energy into motion, which damping then takes."""
+    time_s = result.time
+    kinetic = result.sensors["energy_kinetic"]
+    after = (time_s >= t_fold) & (time_s <= t_fold + 3.0)
+    at_fold = float(np.interp(t_fold, time_s, kinetic))
+    peak = float(kinetic[after].max()) if after.any() else None
+    return {"kinetic_at_fold_J": at_fold, "peak_kinetic_after_fold_J": peak}
+
+
 def _bennett_monitoring_cost(outputs: int) -> dict:
     """The default PLA Bennett scene (no fold): a quasi-static revolution without and with stability monitoring."""
     from ffrf.scenes.bennett_scene import build_bennett
@@ -137,7 +148,10 @@ def main() -> int:
             except Exception as error:  # noqa: BLE001 - a stopped dynamic run is a result here
                 run, stopped = getattr(error, "partial", None), str(error)
             angle = None if run is None else _dynamic_snap_angle(run, snap, fold_point, landing_point)
+            kinetic = {} if run is None else _kinetic_around(run, t_fold)
             dynamic = {
+                **kinetic,
+                "energy_released_by_continuation_J": snap["energy_released_J"],
                 "step_s": args.step,
                 "run_s": time.perf_counter() - started,
                 "stopped": stopped,
