@@ -15,6 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from ffrf.fe.fe_model import FEModel
 from ffrf.fe.interfaces import interface_from_group
@@ -484,7 +485,7 @@ def _positive_count(text: str) -> int:
     except ValueError:
         value = 0
     if value < 1:
-        raise argparse.ArgumentTypeError(f"--workers must be a whole number >= 1, got {text!r}")
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}")
     return value
 
 
@@ -554,6 +555,12 @@ SUBCOMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None], Cal
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m ffrf", description="In-house flexible multibody solver (FFRF)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress")
+    parser.add_argument(
+        "--blas-threads",
+        type=_positive_count,
+        default=1,
+        help="threads of the BLAS library (default 1: our dense matrices are small; bench/blas_threads.py)",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     for name, (help_text, configure, _run) in SUBCOMMANDS.items():
         configure(sub.add_parser(name, help=help_text))
@@ -562,7 +569,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if getattr(args, "stability", False) and getattr(args, "mode", None) == "dynamic":
             raise SceneError("stability is judged at equilibria: run quasi-statically (drop --dynamic)")
-        return SUBCOMMANDS[args.command][2](args)
+        with threadpool_limits(limits=args.blas_threads, user_api="blas"):
+            return SUBCOMMANDS[args.command][2](args)
     except FEInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -1,6 +1,7 @@
 """Command lines fail loudly and briefly: one ``error:`` line and exit status 2 on bad input, no
 traceback; ``python -m validation`` exits 1 when a target is missed, so scripts and CI can rely on it."""
 
+import os
 from types import SimpleNamespace
 
 import pytest
@@ -77,3 +78,27 @@ def test_validation_exit_status_2_when_a_run_fails(tmp_path, monkeypatch, capsys
     monkeypatch.setattr(cli, "validate_bennett", fail)
     assert cli.main(["report", "--variant", "pla", "--out", str(tmp_path)]) == 2
     assert "validation failed: RuntimeError: Newton diverged" in one_line_error(capsys)
+
+
+def test_blas_threads_are_set_for_the_run_and_zero_is_refused(monkeypatch, capsys):
+    """``python -m ffrf --blas-threads N`` runs the command with N BLAS threads (1 by default); 0 is refused."""
+    from threadpoolctl import threadpool_info
+
+    from ffrf import cli
+
+    seen: list[list[int]] = []
+
+    def probe(args):
+        seen.append([pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"])
+        return 0
+
+    monkeypatch.setitem(cli.SUBCOMMANDS, "run", (cli.SUBCOMMANDS["run"][0], cli.SUBCOMMANDS["run"][1], probe))
+    assert cli.main(["run", "x.toml", "--out", "o"]) == 0
+    assert cli.main(["--blas-threads", "2", "run", "x.toml", "--out", "o"]) == 0
+    default = [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+    assert seen[0] and seen[0] == [1] * len(default)
+    assert seen[1] == [min(2, os.cpu_count() or 1)] * len(default)  # OpenBLAS runs at most one thread per core
+    with pytest.raises(SystemExit) as refused:
+        cli.main(["--blas-threads", "0", "run", "x.toml", "--out", "o"])
+    assert refused.value.code == 2
+    assert "argument --blas-threads: must be a whole number >= 1" in capsys.readouterr().err

@@ -51,7 +51,7 @@ def test_zero_workers_are_refused(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
         main(["study", str(path), "--out", str(tmp_path / "out"), "--workers", "0"])
     assert exit_.value.code == 2
-    assert "--workers must be a whole number >= 1" in capsys.readouterr().err
+    assert "argument --workers: must be a whole number >= 1" in capsys.readouterr().err
 
 
 def test_a_report_of_a_folder_without_a_study_is_refused(tmp_path, capsys):

@@ -1,0 +1,72 @@
+"""BLAS threads for our dense linear algebra (issue #22): the default Bennett scene's quasi-static revolution and a
+5 s dynamic window (4 ms steps) with 1 and with 2 OpenBLAS threads, in one process (threadpoolctl), warm kernels,
+best of ``--repeat``. Our matrices are small (108 coordinates on the default scene): a second thread mostly waits,
+and on a busy machine OpenBLAS's spinning threads slowed small solves a hundredfold. ``python -m ffrf`` uses
+``--blas-threads`` (default 1).
+
+Usage::
+
+    PYTHONPATH=. .venv/bin/python bench/blas_threads.py --json out/blas_threads.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+
+from threadpoolctl import threadpool_limits
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
+from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
+
+
+def best_times(scene, repeat: int) -> dict[str, float]:
+    """Best wall times (s) of a quasi-static revolution (241 outputs) and of 5 s of dynamic run at 4 ms steps."""
+    quasi_static, dynamic = [], []
+    for _ in range(repeat):
+        started = time.perf_counter()
+        run_linkage(scene, "quasi_static", 241)
+        quasi_static.append(time.perf_counter() - started)
+        started = time.perf_counter()
+        run_linkage(scene, "dynamic", 101, t_end=5.0, step=4e-3)
+        dynamic.append(time.perf_counter() - started)
+    return {"quasi_static_revolution_s": min(quasi_static), "dynamic_5s_s": min(dynamic)}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--json", type=Path, required=True)
+    args = parser.parse_args()
+    warnings.simplefilter("ignore")
+    scene = build_bennett("pla")
+    run_linkage(scene, "quasi_static", 5, t_end=0.5)  # compile and warm the kernels outside the timings
+    run_linkage(scene, "dynamic", 5, t_end=0.05, step=4e-3)
+    rows = {}
+    for threads in (1, 2, 1, 2):  # alternated, so that a change of the machine's load touches both
+        with threadpool_limits(limits=threads, user_api="blas"):
+            times = best_times(scene, args.repeat)
+        row = rows.setdefault(f"threads_{threads}", times)
+        rows[f"threads_{threads}"] = {key: min(row[key], value) for key, value in times.items()}
+    report = {
+        "scene": "default PLA Bennett (6 mm P2, 4 modes per link)",
+        "n_coordinates": scene.system.n_coordinates,
+        **rows,
+        "two_over_one": {key: rows["threads_2"][key] / rows["threads_1"][key] for key in rows["threads_1"]},
+    }
+    print(json.dumps(report, indent=1))
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(report, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
