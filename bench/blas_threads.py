@@ -2,7 +2,7 @@
 5 s dynamic window (4 ms steps) with 1 and with 2 OpenBLAS threads, in one process (threadpoolctl), warm kernels,
 best of ``--repeat``; then again with ``--busy`` processes spinning beside it (another program using the cores).
 Our dense matrices are small (the default scene has 74 coordinates): a second BLAS thread gains nothing when the
-machine is quiet and its spinning waits cost most when it is busy. ``python -m ffrf`` uses ``--blas-threads``
+machine is quiet and costs when it is busy. ``python -m ffrf`` uses ``--blas-threads``
 (default 1).
 
 Usage::
@@ -59,7 +59,9 @@ def measure(repeat: int) -> dict:
             times = best_times(scene, repeat)
         row = rows.setdefault(f"threads_{threads}", times)
         rows[f"threads_{threads}"] = {key: min(row[key], value) for key, value in times.items()}
-    rows["two_over_one"] = {key: rows["threads_2"][key] / rows["threads_1"][key] for key in rows["threads_1"]}
+    rows["two_over_one"] = {  # ratios: the keys lose their unit suffix
+        key.removesuffix("_s"): rows["threads_2"][key] / rows["threads_1"][key] for key in rows["threads_1"]
+    }
     return rows
 
 
