@@ -1,7 +1,7 @@
 """BLAS threads for our dense linear algebra (issue #22): the default Bennett scene's quasi-static revolution and a
 5 s dynamic window (4 ms steps) with 1 and with 2 OpenBLAS threads, in one process (threadpoolctl), warm kernels,
 best of ``--repeat``; then again with ``--busy`` processes spinning beside it (another program using the cores).
-Our dense matrices are small (the default scene has 74 coordinates): a second BLAS thread gains nothing when the
+Our dense matrices are small (the default scene has 74 coordinates): a second BLAS thread changes little when the
 machine is quiet and costs when it is busy. ``python -m ffrf`` uses ``--blas-threads``
 (default 1).
 
