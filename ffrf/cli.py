@@ -526,7 +526,46 @@ def _run_study_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _configure_warmup(parser: argparse.ArgumentParser) -> None:
+    """No options: what it compiles is what a default run uses."""
+
+
+def _run_warmup(args: argparse.Namespace) -> int:
+    """Compile the numba kernels a run uses, once after install (numba caches them on disk, next to the sources):
+    a coarse Bennett scene through a few quasi-static equilibria and dynamic steps. Kernels do not depend on the
+    mesh or the number of modes, so the default scene's runs then load them."""
+    import time
+
+    from ffrf.scenes.bennett_scene import build_bennett
+    from ffrf.scenes.linkage_run import run_linkage
+
+    print(
+        "Compiling the solver's kernels (once after install; later runs load them from numba's cache)", file=sys.stderr
+    )
+    started = time.perf_counter()
+    scene = build_bennett("pla", h=0.012, order=1, n_modes=2)
+    steps = (
+        (
+            "quasi-static and stability kernels",
+            lambda: run_linkage(scene, "quasi_static", 3, t_end=0.2, stability=True),
+        ),
+        ("dynamic kernels", lambda: run_linkage(scene, "dynamic", 3, t_end=0.02, step=4e-3)),
+    )
+    for k, (name, step) in enumerate(steps, start=1):
+        began = time.perf_counter()
+        print(f"  [{k}/{len(steps)}] {name} ...", end="", file=sys.stderr, flush=True)
+        step()
+        print(f" {time.perf_counter() - began:.1f} s", file=sys.stderr)
+    print(f"kernels ready in {time.perf_counter() - started:.1f} s", file=sys.stderr)
+    return 0
+
+
 SUBCOMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None], Callable[[argparse.Namespace], int]]] = {
+    "warmup": (
+        "compile the solver's kernels once after install (the main job's first step)",
+        _configure_warmup,
+        _run_warmup,
+    ),
     "mesh": ("mesh one Bennett link and write .vtu + JSON summary", _configure_mesh, _run_mesh),
     "run": ("run a scene file (TOML) built from your own meshes", _configure_run, _run_scene_file),
     "bennett": (

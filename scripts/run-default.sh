@@ -7,6 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-venv.sh
+.venv/bin/python -m ffrf warmup  # compiles the kernels once after install (cached afterwards)
 .venv/bin/python -m kinematics bennett --out out/kinematics
 .venv/bin/python -m ffrf bennett --variant pla --out out/pla "$@"
 .venv/bin/python -m identification --result out/pla --out out/pla/identified

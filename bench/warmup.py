@@ -1,0 +1,56 @@
+"""First-run compilation (issue #22): ``python -m ffrf warmup`` and the main job's Bennett run, each as a fresh
+process with numba's cache in a fresh folder (cold: every kernel compiles) and again (warm: loaded from the cache),
+and the main run after a cold warmup (does the warmup cover what the main job compiles?).
+
+Usage::
+
+    PYTHONPATH=. .venv/bin/python bench/warmup.py --json out/warmup.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+WARMUP = [sys.executable, "-m", "ffrf", "warmup"]
+
+
+def timed(command: list[str], cache: Path, out: Path) -> float:
+    """Wall time (s) of ``command`` in a fresh process with numba's cache in ``cache``."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT))
+    started = time.perf_counter()
+    subprocess.run(command, cwd=ROOT, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return time.perf_counter() - started
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", type=Path, required=True)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as folder:
+        base = Path(folder)
+        main_run = [sys.executable, "-m", "ffrf", "bennett", "--variant", "pla", "--out", str(base / "out")]
+        report = {
+            "main_job_command": "python -m ffrf bennett --variant pla",
+            "main_cold_s": timed(main_run, base / "cache_a", base),
+            "main_warm_s": timed(main_run, base / "cache_a", base),
+            "warmup_cold_s": timed(WARMUP, base / "cache_b", base),
+            "warmup_warm_s": timed(WARMUP, base / "cache_b", base),
+            "main_after_warmup_s": timed(main_run, base / "cache_b", base),
+            "cpu_count": os.cpu_count(),
+        }
+    print(json.dumps(report, indent=1))
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(report, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
