@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 WARMUP = [sys.executable, "-m", "ffrf", "warmup"]
 
 
-def timed(command: list[str], cache: Path, out: Path) -> float:
+def timed(command: list[str], cache: Path) -> float:
     """Wall time (s) of ``command`` in a fresh process with numba's cache in ``cache``."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT))
     started = time.perf_counter()
@@ -39,11 +39,11 @@ def main() -> int:
         main_run = [sys.executable, "-m", "ffrf", "bennett", "--variant", "pla", "--out", str(base / "out")]
         report = {
             "main_job_command": "python -m ffrf bennett --variant pla",
-            "main_cold_s": timed(main_run, base / "cache_a", base),
-            "main_warm_s": timed(main_run, base / "cache_a", base),
-            "warmup_cold_s": timed(WARMUP, base / "cache_b", base),
-            "warmup_warm_s": timed(WARMUP, base / "cache_b", base),
-            "main_after_warmup_s": timed(main_run, base / "cache_b", base),
+            "main_cold_s": timed(main_run, base / "cache_a"),
+            "main_warm_s": timed(main_run, base / "cache_a"),
+            "warmup_cold_s": timed(WARMUP, base / "cache_b"),
+            "warmup_warm_s": timed(WARMUP, base / "cache_b"),
+            "main_after_warmup_s": timed(main_run, base / "cache_b"),
             "cpu_count": os.cpu_count(),
         }
     print(json.dumps(report, indent=1))

@@ -75,3 +75,14 @@ def test_paper_axes_agree_with_kinematics_dh():
     for ours, theirs in zip(PAPER_AXES, bennett_axes(90.0), strict=True):
         np.testing.assert_allclose(theirs.point, ours.point, atol=1e-12)
         np.testing.assert_allclose(theirs.direction, ours.direction, atol=1e-12)
+
+
+def test_warmup_compiles_the_kernels_and_says_so(capsys):
+    """``python -m ffrf warmup`` (the main job's first step) runs a coarse scene through the kernels a run uses and
+    reports each step; the main job after it compiles nothing more (bench/warmup.py: as fast as a warm run)."""
+    from ffrf.cli import main
+
+    assert main(["warmup"]) == 0
+    err = capsys.readouterr().err
+    assert "[1/2] quasi-static and stability kernels" in err and "[2/2] dynamic kernels" in err
+    assert "kernels ready in" in err
