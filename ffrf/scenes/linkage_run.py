@@ -44,7 +44,6 @@ from ffrf.solvers.simulate import MODES, simulate
 from ffrf.solvers.snap_through import SnapThrough, run_critical_pose, snap_summary
 from ffrf.solvers.stability import (
     CriticalPose,
-    mode_shares,
     stability_along,
     stability_summary,
 )
@@ -243,17 +242,8 @@ def run_linkage(
         out.metadata["stability"]["snaps"] = [_snap_report(scene, snap) for snap in snaps]
         out.critical = run_critical_pose(scene.system, times, q, lam, sensors["stability_squared_frequencies"], snaps)
         out.metadata["stability"]["critical"] = {
-            "where": out.critical.where,
-            "time_s": out.critical.t,
+            **out.critical.summary(scene.system, shares="link_shares"),
             "drive_angle_deg": float(np.degrees(scene.drive_angle(out.critical.t))),
-            "squared_frequency": out.critical.squared_frequency,
-            "link_shares": dict(
-                zip(
-                    [link.name for link in scene.links],
-                    mode_shares(scene.system, out.critical.q, out.critical.mode).tolist(),
-                    strict=True,
-                )
-            ),
         }
     if stopped is not None:
         out.metadata["stopped"] = {

@@ -140,7 +140,7 @@ from ffrf.scenes.builder import Scene, build_scene
 from ffrf.scenes.linkage_file import load_linkage
 from ffrf.solvers.simulate import Run, simulate
 from ffrf.solvers.snap_through import run_critical_pose, snap_summary
-from ffrf.solvers.stability import mode_shares, stability_along, stability_summary
+from ffrf.solvers.stability import stability_along, stability_summary
 
 __all__ = ["SceneError", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
 
@@ -249,13 +249,7 @@ def _monitor_stability(scene: Scene, run: Run, sensors: dict, directory: Path) -
     summary = stability_summary(values, run.time, "time_s")
     summary["snaps"] = [snap_summary(scene.system, snap) for snap in run.snaps]
     critical = run_critical_pose(scene.system, run.time, run.q, run.multipliers, values, run.snaps)
-    shares = mode_shares(scene.system, critical.q, critical.mode)
-    summary["critical"] = {
-        "where": critical.where,
-        "time_s": critical.t,
-        "squared_frequency": critical.squared_frequency,
-        "body_shares": {body.name: float(share) for body, share in zip(scene.bodies, shares, strict=True)},
-    }
+    summary["critical"] = critical.summary(scene.system)
     directory.mkdir(parents=True, exist_ok=True)
     table = {"summary": summary, "time_s": run.time.tolist(), "squared_frequencies_rad2_per_s2": values.tolist()}
     (directory / "stability.json").write_text(json.dumps(table, indent=1))

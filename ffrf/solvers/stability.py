@@ -99,7 +99,7 @@ def stability_summary(squared_frequencies: NDArray, along: NDArray, name: str) -
     # through Eq. (S6), between outputs of positive mu): a sign change between two outputs is a branch point.
     changes = [
         {
-            f"{name}": float(along[j] + (along[j + 1] - along[j]) * lowest[j] / (lowest[j] - lowest[j + 1])),
+            name: float(along[j] + (along[j + 1] - along[j]) * lowest[j] / (lowest[j] - lowest[j + 1])),
             "kind": "branch point (bifurcation): the path goes on through it",
             "stability": "lost" if lowest[j] > 0.0 else "regained",
         }
@@ -141,6 +141,17 @@ class CriticalPose:
     multipliers: NDArray[np.float64]
     squared_frequency: float
     mode: NDArray[np.float64]
+
+    def summary(self, system: MultibodySystem, shares: str = "body_shares") -> dict:
+        """Plain data for a run's metadata: where, ``time_s``, the squared frequency, and under ``shares`` each body's
+        share of the mode's kinetic energy (:func:`mode_shares`)."""
+        weights = mode_shares(system, self.q, self.mode)
+        return {
+            "where": self.where,
+            "time_s": self.t,
+            "squared_frequency": self.squared_frequency,
+            shares: {body.name: float(w) for body, w in zip(system.bodies, weights, strict=True)},
+        }
 
 
 def critical_pose(system: MultibodySystem, where: str, t: float, q: NDArray, multipliers: NDArray) -> CriticalPose:
