@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import itertools
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +34,7 @@ from ffrf.errors import GeometryError
 from ffrf.geometry.joint_axes import Axis, common_normal_feet
 from ffrf.mesh.tet_mesh import MAX_LINK_EXTENT_M, TetMesh
 
-__all__ = ["LinkDesign", "LinkGeometry", "build_link", "mesh_link"]
+__all__ = ["LINK_DESIGN_FIELDS", "LinkDesign", "LinkGeometry", "build_link", "mesh_link"]
 
 logger = logging.getLogger(__name__)
 
@@ -72,6 +72,10 @@ class LinkDesign:
     def housing_offset(self) -> float:
         """s = housing_length/2 + axial_gap/2: distance of a housing centre from its joint point."""
         return 0.5 * (self.housing_length + self.axial_gap)
+
+
+#: The names of :class:`LinkDesign`'s dimensions, in order (scene files' ``design`` table).
+LINK_DESIGN_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(LinkDesign))
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 
 from ffrf.body.flexible_body import FlexibleBody
 from ffrf.body.modal_moments import modal_moments
-from ffrf.errors import ReductionError, SceneError
+from ffrf.errors import GeometryError, ReductionError, SceneError
 from ffrf.fe.external_model import ExternalFEModel
 from ffrf.fe.fe_model import FEModel
 from ffrf.fe.interfaces import (
@@ -50,7 +50,7 @@ from ffrf.fe.interfaces import (
 from ffrf.fe.materials import Material
 from ffrf.fe.node_selection import nodes_in_plane, surface_triangles
 from ffrf.geometry.joint_axes import Axis, bennett_axes, common_normal_feet, paper_link_axes
-from ffrf.geometry.link_geometry import LinkGeometry, mesh_link
+from ffrf.geometry.link_geometry import LinkDesign, LinkGeometry, mesh_link
 from ffrf.geometry.meshing import mesh_stl
 from ffrf.mesh.tet_mesh import TetMesh, read_mesh
 from ffrf.reduction.craig_bampton import craig_bampton
@@ -209,6 +209,14 @@ def build_scene(
 _REDUCTIONS: dict[str, ModeBasis] = {}
 
 
+def _link_design(spec: dict, where: str) -> LinkDesign:
+    """The parametric link's dimensions: the defaults with the spec's ``design`` table (m)."""
+    try:
+        return LinkDesign(**spec.get("design", {}))
+    except GeometryError as error:
+        raise SceneError(f"{where}, parametric design: {error}") from error
+
+
 def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | None]:
     if "mesh" in entry:
         path = base / entry["mesh"]
@@ -219,10 +227,17 @@ def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | 
         return read_mesh(path, unit=entry.get("unit")), None
     spec = entry["parametric"]
     h = float(spec.get("h", 6e-3))
+    design = _link_design(spec, where)
     if "link" in spec:  # the paper's link k
         first, second, names = paper_link_axes(spec["link"], bennett_axes(float(spec.get("alpha3_deg", 90.0))))
         return mesh_link(
-            first, second, h=h, names=names, mount=spec.get("mount", spec["link"] == 0), name=entry["name"]
+            first,
+            second,
+            h=h,
+            design=design,
+            names=names,
+            mount=spec.get("mount", spec["link"] == 0),
+            name=entry["name"],
         )
     a, b = spec["axes"]
     joint_points = None
@@ -235,6 +250,7 @@ def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | 
         (a["point"], a["direction"]),
         (b["point"], b["direction"]),
         h=h,
+        design=design,
         names=(a["name"], b["name"]),
         mount=spec.get("mount", False),
         name=entry["name"],

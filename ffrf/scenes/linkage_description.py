@@ -25,7 +25,7 @@ rotation of side 1 against side 0 (Eq. (J3)), which is :math:`\varphi_i` of Eq. 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -64,16 +64,18 @@ _TRACE_STEP = np.radians(2.0)
 @dataclass(frozen=True)
 class BoreError:
     """A bore made off its axis: joint ``joint``'s axis as link ``link`` carries it, turned by ``twist``
-    (rad) about the link's common normal (which changes the link's DH twist by ``twist``) and moved by
-    ``offset`` (m) along that normal, away from the link's other axis (which changes its DH length); or,
-    with ``axis``, the bore on that line (as measured on a part), its joint point the nearest point of
-    ``axis`` to the nominal one."""
+    (rad) about the link's common normal (which changes the link's DH twist by ``twist``), moved by
+    ``offset`` (m) along that normal, away from the link's other axis (which changes its DH length), and its
+    seat moved by ``axial`` (m) along the bore's own axis (which changes the joint's DH offset d); or, with
+    ``axis``, the bore on that line (as measured on a part), its joint point the nearest point of ``axis``
+    to the nominal one."""
 
     joint: int
     link: int
     twist: float = 0.0
     offset: float = 0.0
     axis: Line | None = None
+    axial: float = 0.0
 
 
 def _link_joints(k: int, n: int) -> tuple[int, int]:
@@ -103,9 +105,10 @@ class _Side(NamedTuple):
 
 def _erroneous_side(side: _Side, other: Line, error: BoreError) -> _Side:
     """``side`` (carried with ``other`` by one link) turned about their common normal and moved along it, or
-    put on the measured ``error.axis``."""
+    put on the measured ``error.axis``; then moved by ``error.axial`` along its axis."""
     if error.axis is not None:
-        return _Side(error.axis, error.axis.project(side.point), error.axis.project(side.seat))
+        shift = error.axial * error.axis.direction
+        return _Side(error.axis, error.axis.project(side.point) + shift, error.axis.project(side.seat) + shift)
     normal = common_normal(other, side.axis)
     direction = normal.unit
     if direction is None:
@@ -113,21 +116,23 @@ def _erroneous_side(side: _Side, other: Line, error: BoreError) -> _Side:
     rotation = Rotation.from_rotvec(error.twist * direction).as_matrix()
     foot = normal.foot1
 
+    axis = rotation @ side.axis.direction
+
     def moved(point: NDArray) -> NDArray:
-        return foot + rotation @ (point - foot) + error.offset * direction
+        return foot + rotation @ (point - foot) + error.offset * direction + error.axial * axis
 
     moved_point = moved(side.point)
-    return _Side(Line.from_point_direction(moved_point, rotation @ side.axis.direction), moved_point, moved(side.seat))
+    return _Side(Line.from_point_direction(moved_point, axis), moved_point, moved(side.seat))
 
 
-def _seats(loop: SingleLoop, attach: NDArray | None) -> NDArray[np.float64] | None:
+def _seats(loop: SingleLoop, attach: NDArray | None, design: LinkDesign) -> NDArray[np.float64] | None:
     """Seats ``(n, 2, 3)`` of the links at each joint (link i, link i+1) for housings centred on ``attach``."""
     if attach is None:
         return None
     attach = np.asarray(attach, dtype=float)
     if attach.shape != (loop.n, 2, 3):
         raise ValueError(f"attach_points must be (n, 2, 3) = ({loop.n}, 2, 3), got {attach.shape}")
-    offset = LinkDesign().housing_offset
+    offset = design.housing_offset
     seats = np.empty_like(attach)
     for i, axis in enumerate(loop.axes):
         # Link i carries h_i as its second axis (housing at seat - s l), link i+1 as its first (seat + s l).
@@ -213,7 +218,8 @@ class LinkageOptions:
     stacked about :func:`joint_points`); the joint point is then their midpoint. ``bore_error_model``: how a
     bore error is built, ``"remesh"`` (the link meshed on its erroneous bore, the as-built part) or ``"misfit"``
     (the nominal meshes, the error only in the joint's frame and point on that link's side: a joint-frame misfit
-    closed by the assembly, the cheap model of studies, :data:`BORE_ERROR_MODELS`).
+    closed by the assembly, the cheap model of studies, :data:`BORE_ERROR_MODELS`). ``design``: the parametric
+    links' dimensions (arm section, housings; :class:`~ffrf.geometry.link_geometry.LinkDesign`).
     """
 
     material: Material = PLA
@@ -237,6 +243,7 @@ class LinkageOptions:
     joint_offsets: str = "body"
     attach_points: ArrayLike | None = None
     bore_error_model: str = "remesh"
+    design: LinkDesign = LinkDesign()
 
 
 def checked_tool_link(loop: SingleLoop, options: LinkageOptions) -> int:
@@ -262,9 +269,11 @@ def linkage_description(
     points = joint_points(loop) if attach is None else attach.mean(axis=1)
     if o.bore_error_model not in BORE_ERROR_MODELS:
         raise ValueError(f"bore_error_model must be one of {BORE_ERROR_MODELS}, got {o.bore_error_model!r}")
-    links = _link_axes(loop, points, tuple(o.bore_errors), _seats(loop, attach))
+    seats = _seats(loop, attach, o.design)
+    links = _link_axes(loop, points, tuple(o.bore_errors), seats)
     # The bodies are meshed on the built bores, or, for the misfit model, on the nominal ones; joints take `links`.
-    meshed = links if o.bore_error_model == "remesh" else _link_axes(loop, points, (), _seats(loop, attach))
+    meshed = links if o.bore_error_model == "remesh" else _link_axes(loop, points, (), seats)
+    design = {} if o.design == LinkDesign() else asdict(o.design)  # a default design stays out of the scene
     phi = start_pose(loop, o.driver, o.start_angle, o.origin) if start_phi is None else np.asarray(start_phi)
     transforms = loop.link_transforms(phi)
     bodies, sensors = [], []
@@ -283,7 +292,7 @@ def linkage_description(
         bodies.append(
             {
                 "name": f"link{k}",
-                "parametric": {"axes": axes, "h": o.h, "mount": k == 0},
+                "parametric": {"axes": axes, "h": o.h, "mount": k == 0} | ({"design": design} if design else {}),
                 "material": {"E": o.material.E, "nu": o.material.nu, "rho": o.material.rho, "name": o.material.name},
                 "order": o.order,
                 "modes": o.n_modes,
@@ -295,7 +304,7 @@ def linkage_description(
             }
         )
         if k > 0:
-            course = arm_waypoints([sides[0].seat, sides[1].seat], [sides[0].axis, sides[1].axis])
+            course = arm_waypoints([sides[0].seat, sides[1].seat], [sides[0].axis, sides[1].axis], o.design)
             sensors += [
                 {"name": f"link{k}_node{j}", "body": f"link{k}", "point": _vector(_along(course, f)), "surface": True}
                 for j, f in enumerate(TRACKED_FRACTIONS)

@@ -20,8 +20,10 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
     h = 0.006                          # tetrahedron edge (m), order = 2, modes = 4
     drive = {rpm = 1.0, ramp_time = 1.0}
     revolutions = 1.0
-    bore_errors = [{joint = 5, link = 0, twist_deg = 1.0, offset = 0.2}]   # as built (offset in unit), or
-                                       # the measured bore: {joint, link, point = [...], direction = [...]}
+    link_design = {arm_width = 16, arm_thickness = 12}   # the links' dimensions (in unit; LinkDesign)
+    bore_errors = [{joint = 5, link = 0, twist_deg = 1.0, offset = 0.2, axial = 0.1}]   # as built (offset
+                                       # along the normal, axial along the bore, in unit), or the measured
+                                       # bore: {joint, link, point = [...], direction = [...], axial = ...}
 
     [scene]                            # gravity, beta, mode, outputs, step, rho_inf, joint_offsets, ...
 
@@ -42,11 +44,12 @@ from typing import Any
 
 import numpy as np
 
-from ffrf.errors import SceneError
+from ffrf.errors import GeometryError, SceneError
 from ffrf.fe.materials import PLA, Material
+from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
-from ffrf.scenes.scene_schema import MATERIAL, PARAMETRIC_H_RANGE, SETTINGS, Key, check_table
+from ffrf.scenes.scene_schema import LINK_DESIGN, MATERIAL, PARAMETRIC_H_RANGE, SETTINGS, Key, check_table
 from ffrf.system.drives import rpm
 from kinematics import Line, LoopClosureError, LoopFoldError, SingleLoop, explain_mobility
 from kinematics.rational_mechanism import (
@@ -113,6 +116,7 @@ BORE_ERROR = {
     "link": Key("integer", True, _non_negative),
     "twist_deg": Key("number"),
     "offset": Key("number"),
+    "axial": Key("number"),
     "point": Key("vector3"),
     "direction": Key("vector3", False, _nonzero_vector),
 }
@@ -139,6 +143,7 @@ LINKAGE = {
     "drive": Key("table", keys=DRIVE),
     "revolutions": Key("number", False, _positive),
     "bore_errors": Key("tables", keys=BORE_ERROR),
+    "link_design": Key("table", keys=LINK_DESIGN),
 }
 #: A linkage file: ``[linkage]`` and optional ``[scene]`` settings (no bodies, joints or sensors of its own).
 LINKAGE_SCHEMA = {"linkage": Key("table", True, keys=LINKAGE), "scene": Key("table", keys=SETTINGS)}
@@ -198,7 +203,7 @@ def _bore_error(entry: dict, length: float, where: str) -> BoreError:
         raise SceneError(f"{where}: give either twist_deg/offset or the bore's axis (point, direction), not both")
     axis = Line.from_point_direction(length * np.asarray(entry["point"]), entry["direction"]) if measured else None
     twist, offset = math.radians(entry.get("twist_deg", 0.0)), length * entry.get("offset", 0.0)
-    return BoreError(entry["joint"], entry["link"], twist, offset, axis)
+    return BoreError(entry["joint"], entry["link"], twist, offset, axis, length * entry.get("axial", 0.0))
 
 
 def load_linkage(document: dict, base: Path | None = None, where: str = "linkage") -> LinkageScene:
@@ -254,6 +259,10 @@ def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop,
         start = float(origin[driver]) if origin is not None else 0.0
     settings = document.get("scene", {})
     material = Material(**spec["material"]) if "material" in spec else PLA
+    try:
+        design = LinkDesign(**{key: length * value for key, value in spec.get("link_design", {}).items()})
+    except GeometryError as error:
+        raise SceneError(f"{label}, link_design: {error}") from error
     options = LinkageOptions(
         material=material,
         name=spec.get("name", settings.get("name", "linkage")),
@@ -269,6 +278,7 @@ def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop,
         revolutions=spec.get("revolutions", 1.0),
         gravity=tuple(settings.get("gravity", (0.0, 0.0, -9.81))),
         bore_errors=errors,
+        design=design,
         tool_link=tool,
         exact_gravity=settings.get("exact_gravity", True),
         joint_offsets=settings.get("joint_offsets", "body"),

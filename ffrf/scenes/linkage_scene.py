@@ -120,7 +120,14 @@ def _plain(error: BoreError) -> dict:
     axis = (
         None if error.axis is None else {"point": error.axis.point.tolist(), "direction": error.axis.direction.tolist()}
     )
-    return {"joint": error.joint, "link": error.link, "twist": error.twist, "offset": error.offset, "axis": axis}
+    return {
+        "joint": error.joint,
+        "link": error.link,
+        "twist": error.twist,
+        "offset": error.offset,
+        "axial": error.axial,
+        "axis": axis,
+    }
 
 
 def _check_drive_range(loop: SingleLoop, options: LinkageOptions, start_phi: NDArray, turn: float, where: str) -> None:

@@ -33,7 +33,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
                                       # or a link on any two skew axes (housings at the joint points,
                                       # default the feet of their common normal; cranked arm otherwise):
                                       # parametric = {axes = [{name = "a", point = [...], direction = [...],
-                                      #   joint_point = [...]}, {name = "b", ...}], h = 0.006, mount = false}
+                                      #   joint_point = [...]}, {name = "b", ...}], h = 0.006, mount = false,
+                                      #   design = {arm_width = 0.016, arm_thickness = 0.012}}  (m, LinkDesign)
     unit = "mm"                       # optional, scales the mesh to metres
     material = {E = 1.2e9, nu = 0.33, rho = 450.0}
     order = 2                         # default 2: linear tetrahedra are too stiff in bending

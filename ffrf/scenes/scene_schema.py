@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from ffrf.errors import SceneError
+from ffrf.geometry.link_geometry import LINK_DESIGN_FIELDS
 from ffrf.scenes.scene_forces import ELASTIC, FORCE_TYPES, check_force
 from ffrf.scenes.scene_matrices import MATRIX_FILES, MATRIX_FORMATS, is_abaqus_input
 from ffrf.scenes.schema_keys import (
@@ -58,8 +59,11 @@ LINK_AXIS = {
     "direction": Key("vector3", True, nonzero_vector),
     "joint_point": Key("vector3"),
 }
+#: The parametric link's dimensions (m), :class:`ffrf.geometry.link_geometry.LinkDesign`; the rest keep defaults.
+LINK_DESIGN = {name: Key("number", False, positive) for name in LINK_DESIGN_FIELDS}
 PARAMETRIC = {
     "link": Key("integer", False, one_of((0, 1, 2, 3))),
+    "design": Key("table", keys=LINK_DESIGN),
     "alpha3_deg": Key("number"),
     "axes": Key("tables", keys=LINK_AXIS),
     "mount": Key("boolean"),

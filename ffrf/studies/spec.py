@@ -26,11 +26,13 @@ r"""Study files (TOML): a base linkage, the parameters a study varies and how it
                                        # sampled study picks one of them with equal probability)
 
 A parameter's value sets its target in the variant: a bore's twist about its link's common normal (deg, which
-changes that link's DH twist alpha) or its offset along it (mm, the DH length a), added to any error the base
-already has on that bore (:class:`ffrf.scenes.linkage_description.BoreError`); the links' ``E`` (Pa) or ``rho``
-(kg/m^3); the drive's ``rpm``; the element edge ``h`` (m) or the fixed-interface ``modes`` per link (rounded to
-an integer). :func:`load_study` checks a file before anything runs: a misspelt key, a wrong type or an impossible
-value is one :class:`~ffrf.errors.SceneError` line naming the key, where it is and the fix.
+changes that link's DH twist alpha), its offset along it (mm, the DH length a) or its seat's shift along the
+bore's own axis (mm, the joint's DH offset d), added to any error the base already has on that bore
+(:class:`ffrf.scenes.linkage_description.BoreError`); every link's arm section, ``arm_width_mm`` and
+``arm_thickness_mm`` (:class:`ffrf.geometry.link_geometry.LinkDesign`; the meshes change); the links' ``E``
+(Pa) or ``rho`` (kg/m^3); the drive's ``rpm``; the element edge ``h`` (m) or the fixed-interface ``modes`` per
+link (rounded to an integer). :func:`load_study` checks a file before anything runs: a misspelt key, a wrong
+type or an impossible value is one :class:`~ffrf.errors.SceneError` line naming the key, where it is and the fix.
 """
 
 from __future__ import annotations
@@ -56,13 +58,16 @@ METHODS = ("grid", "monte_carlo", "lhs", "sobol", "saltelli")
 TARGETS = {
     "bore_twist_deg": "deg",
     "bore_offset_mm": "mm",
+    "bore_axial_mm": "mm",
+    "arm_width_mm": "mm",
+    "arm_thickness_mm": "mm",
     "E": "Pa",
     "rho": "kg/m^3",
     "rpm": "rev/min",
     "h": "m",
     "modes": "",
 }
-BORE_TARGETS = ("bore_twist_deg", "bore_offset_mm")
+BORE_TARGETS = ("bore_twist_deg", "bore_offset_mm", "bore_axial_mm")
 RUN_MODES = ("auto", "quasi_static", "dynamic")
 #: Column names of a study's rows that a parameter may not take (:mod:`ffrf.studies.variant`).
 RESERVED = ("id", "block", "sample", "status", "reason", "assembles", "wall_time_s", "worker")

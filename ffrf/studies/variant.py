@@ -138,29 +138,40 @@ def _base_options(study: Study) -> tuple[Any, LinkageOptions, dict]:
     return loop, options, run
 
 
-def _with_bore_errors(errors: tuple[BoreError, ...], twist: dict, offset: dict) -> tuple[BoreError, ...]:
-    """The base's bore errors with the study's twists (rad) and offsets (m) added, bore by bore."""
+#: A bore target's field of :class:`BoreError` and its factor from the parameter's unit to SI.
+BORE_FIELDS = {
+    "bore_twist_deg": ("twist", math.radians(1.0)),
+    "bore_offset_mm": ("offset", 1e-3),
+    "bore_axial_mm": ("axial", 1e-3),
+}
+#: A section target's field of :class:`LinkDesign` (m from mm).
+DESIGN_FIELDS = {"arm_width_mm": "arm_width", "arm_thickness_mm": "arm_thickness"}
+
+
+def _with_bore_errors(
+    errors: tuple[BoreError, ...], added: dict[tuple[int, int], dict[str, float]]
+) -> tuple[BoreError, ...]:
+    """The base's bore errors with the study's (SI, by bore and :class:`BoreError` field) added, bore by bore."""
     by_bore = {(e.joint, e.link): e for e in errors}
-    for bore in sorted(set(twist) | set(offset)):
+    for bore in sorted(added):
         old = by_bore.get(bore, BoreError(*bore))
-        by_bore[bore] = replace(old, twist=old.twist + twist.get(bore, 0.0), offset=old.offset + offset.get(bore, 0.0))
+        by_bore[bore] = replace(old, **{name: getattr(old, name) + x for name, x in added[bore].items()})
     return tuple(by_bore.values())
 
 
 def variant_options(study: Study, values: dict[str, float]) -> tuple[Any, LinkageOptions, dict]:
     """The loop (``None``: the paper's Bennett), the linkage options and run settings of one variant."""
     loop, options, run = _base_options(study)
-    material, changes = options.material, dict[str, Any]()
-    twist: dict[tuple[int, int], float] = {}
-    offset: dict[tuple[int, int], float] = {}
+    material, design, changes = options.material, options.design, dict[str, Any]()
+    added: dict[tuple[int, int], dict[str, float]] = {}
     for p in study.parameters:
         x = values[p.name]
-        if p.target == "bore_twist_deg":
-            bore = (int(p.joint or 0), int(p.link or 0))
-            twist[bore] = twist.get(bore, 0.0) + math.radians(x)
-        elif p.target == "bore_offset_mm":
-            bore = (int(p.joint or 0), int(p.link or 0))
-            offset[bore] = offset.get(bore, 0.0) + 1e-3 * x
+        if p.target in BORE_FIELDS:
+            name, factor = BORE_FIELDS[p.target]
+            bore = added.setdefault((int(p.joint or 0), int(p.link or 0)), {})
+            bore[name] = bore.get(name, 0.0) + factor * x
+        elif p.target in DESIGN_FIELDS:
+            design = replace(design, **{DESIGN_FIELDS[p.target]: 1e-3 * x})
         elif p.target == "E":
             material = replace(material, E=x)
         elif p.target == "rho":
@@ -171,8 +182,8 @@ def variant_options(study: Study, values: dict[str, float]) -> tuple[Any, Linkag
             changes["h"] = x
         elif p.target == "modes":
             changes["n_modes"] = int(round(x))
-    errors = _with_bore_errors(tuple(options.bore_errors), twist, offset)
-    return loop, replace(options, material=material, bore_errors=errors, **changes), run
+    errors = _with_bore_errors(tuple(options.bore_errors), added)
+    return loop, replace(options, material=material, design=design, bore_errors=errors, **changes), run
 
 
 def build_variant(

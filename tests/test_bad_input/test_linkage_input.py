@@ -87,6 +87,12 @@ LINKAGE_CASES = {
         CRANK_ROCKER,
         ["the run turns joint 3 by 363 deg", "cannot turn further", "drive another joint"],
     ),
+    "negative link design": ("driver = 3", "driver = 3\nlink_design = {arm_width = -16}", ["'arm_width'", "> 0"]),
+    "bore wider than its housing": (
+        "driver = 3",
+        "driver = 3\nlink_design = {bore_radius = 20}",
+        ["link_design: LinkDesign: bore radius 0.02 m must be smaller than the housing outer radius 0.016 m"],
+    ),
     "nan in a DH table": ("a = [110, 220, 110, 220]", "a = [110, nan, 110, 220]", ["'a' must be finite"]),
 }
 

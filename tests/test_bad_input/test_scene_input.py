@@ -264,6 +264,10 @@ PARAMETRIC_CASES = {
         {"axes": [dict(AXIS_A, joint_point=[0.0, 0.01, 0.0]), AXIS_B], "h": 0.012},
         "joint point [0.0, 0.01, 0.0] of interface 'a' is 0.01 m off its axis",
     ),
+    "link design in millimetres": (
+        {"axes": [AXIS_A, AXIS_B], "design": {"arm_width": 16.0}},
+        "parametric design: LinkDesign.arm_width=16.0 m: suspicious units, did you pass millimetres?",
+    ),
 }
 
 

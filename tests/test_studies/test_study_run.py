@@ -157,3 +157,28 @@ def test_twenty_random_variants_equal_standalone_runs_of_their_scenes(client, tm
         reference = run_linkage(build_bennett_from_options(options), mode="quasi_static", n_outputs=9).summary()
         for name in OUTPUTS[:3]:
             assert row[name] == pytest.approx(reference[name], rel=1e-12, abs=0.0), (name, row["id"])
+
+
+def test_dh_offset_and_section_parameters_set_the_bore_and_the_links_design():
+    """``bore_axial_mm`` adds to the bore's seat shift along its axis (m, DH offset d), ``arm_width_mm`` and
+    ``arm_thickness_mm`` set every link's arm section (m); the bore's other errors stay."""
+    from ffrf.studies.variant import variant_options
+
+    study = study_from_document(
+        {
+            "study": {"name": "section", "method": "grid"},
+            "base": BASE,
+            "parameters": [
+                {"name": "d3", "target": "bore_axial_mm", "joint": 3, "link": 0, "values": [0.2]},
+                {"name": "twist", "target": "bore_twist_deg", "joint": 3, "link": 0, "values": [1.0]},
+                {"name": "width", "target": "arm_width_mm", "values": [20.0]},
+                {"name": "thickness", "target": "arm_thickness_mm", "values": [9.0]},
+            ],
+        }
+    )
+    _, options, _ = variant_options(study, {"d3": 0.2, "twist": 1.0, "width": 20.0, "thickness": 9.0})
+    (bore,) = options.bore_errors
+    assert (bore.joint, bore.link) == (3, 0)
+    assert bore.axial == pytest.approx(2e-4, rel=1e-15) and bore.twist == pytest.approx(math.radians(1.0))
+    assert options.design.arm_width == pytest.approx(0.020) and options.design.arm_thickness == pytest.approx(0.009)
+    assert options.design.housing_length == bennett_options("pla").design.housing_length
