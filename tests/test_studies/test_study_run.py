@@ -182,3 +182,47 @@ def test_dh_offset_and_section_parameters_set_the_bore_and_the_links_design():
     assert bore.axial == pytest.approx(2e-4, rel=1e-15) and bore.twist == pytest.approx(math.radians(1.0))
     assert options.design.arm_width == pytest.approx(0.020) and options.design.arm_thickness == pytest.approx(0.009)
     assert options.design.housing_length == bennett_options("pla").design.housing_length
+
+
+def test_a_study_runs_on_a_separate_scheduler_given_by_its_address(tmp_path):
+    """``--scheduler tcp://...`` and nothing else: a scheduler and a worker started as their own processes (as on a
+    cluster, from the same environment), the study's rows equal a local run's outputs."""
+    import json
+    import subprocess
+    import sys
+
+    from ffrf.cli import main
+
+    scheduler_file = tmp_path / "scheduler.json"
+    dask = [sys.executable, "-m", "dask"]
+    scheduler = subprocess.Popen([*dask, "scheduler", "--port", "0", "--scheduler-file", str(scheduler_file)])
+    worker = None
+    try:
+        for _ in range(600):
+            if scheduler_file.exists() and scheduler_file.stat().st_size:
+                break
+            time.sleep(0.1)
+        address = json.loads(scheduler_file.read_text())["address"]
+        assert address.startswith("tcp://")
+        worker = subprocess.Popen(
+            [*dask, "worker", address, "--nthreads", "1", "--nworkers", "1", "--no-dashboard"],
+            env=dict(os.environ, OPENBLAS_NUM_THREADS="1"),
+        )
+        path = tmp_path / "study.toml"
+        path.write_text(
+            "[study]\nname = 'remote'\nmethod = 'grid'\n[base]\nbennett = 'pla'\nh = 0.012\norder = 1\nmodes = 2\n"
+            "mode = 'quasi_static'\noutputs = 9\n[[parameters]]\nname = 'twist'\ntarget = 'bore_twist_deg'\n"
+            "joint = 3\nlink = 0\nvalues = [0.0, 1.0]\n"
+        )
+        assert main(["study", str(path), "--out", str(tmp_path / "out"), "--scheduler", address, "--no-report"]) == 0
+    finally:
+        for process in (worker, scheduler):
+            if process is not None:
+                process.terminate()
+                process.wait(timeout=60)
+    rows = sorted(read_rows(tmp_path / "out").to_pylist(), key=lambda row: row["twist"])
+    assert [row["status"] for row in rows] == ["ok", "ok"]
+    assert len({row["worker"] for row in rows}) == 1  # the one remote worker ran both
+    for row in rows:
+        expected = _standalone(row["twist"])
+        assert abs(row["max_coupler_deviation_m"] - expected["max_coupler_deviation_m"]) < 1e-12
