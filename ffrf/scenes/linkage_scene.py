@@ -11,7 +11,6 @@ the same curve (``tests/test_kinematics/test_single_loop.py``).
 
 from __future__ import annotations
 
-from collections.abc import MutableMapping
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -21,7 +20,6 @@ from ffrf.errors import SceneError
 from ffrf.fe.interfaces import boundary_triangles
 from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.output.clearance import Clearance, link_clearance
-from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.scenes.builder import Scene, SceneBody, build_scene
 from ffrf.scenes.linkage_description import (
     BoreError,
@@ -32,6 +30,7 @@ from ffrf.scenes.linkage_description import (
     linkage_description,
     start_pose,
 )
+from ffrf.scenes.scene_cache import PROCESS_CACHE, SceneCache, content_key
 from ffrf.system.drives import CosineRamp
 from kinematics import LoopFoldError, SingleLoop, follow_driver, trace_motion
 
@@ -137,24 +136,56 @@ def _check_drive_range(loop: SingleLoop, options: LinkageOptions, start_phi: NDA
         ) from error
 
 
+def _loop_content(loop: SingleLoop) -> list:
+    """What the rigid loop's motion depends on: its axes' Pluecker coordinates (for :func:`content_key`)."""
+    return [(axis.direction, axis.moment) for axis in loop.axes]
+
+
+def _cached_start(loop: SingleLoop, options: LinkageOptions, cache: SceneCache) -> NDArray[np.float64]:
+    """:func:`~ffrf.scenes.linkage_description.start_pose` of the options, once per loop, driver, angle and origin."""
+    origin = None if options.origin is None else np.asarray(options.origin, dtype=float)
+    key = content_key("start pose", _loop_content(loop), options.driver, options.start_angle, origin)
+    start = cache.rigid_motions.get_or_compute(
+        key, lambda: start_pose(loop, options.driver, options.start_angle, options.origin)
+    )
+    return np.array(start)
+
+
+def _cached_range_check(
+    loop: SingleLoop, options: LinkageOptions, start_phi: NDArray, turn: float, where: str, cache: SceneCache
+) -> None:
+    """:func:`_check_drive_range`, passed once per loop, driver, start and turn (a refused range is not kept)."""
+
+    def check() -> bool:
+        _check_drive_range(loop, options, start_phi, turn, where)
+        return True
+
+    cache.rigid_motions.get_or_compute(
+        content_key("drive range", _loop_content(loop), options.driver, start_phi, turn), check
+    )
+
+
 def build_linkage(
     loop: SingleLoop,
     options: LinkageOptions | None = None,
     where: str | None = None,
-    reductions: MutableMapping[str, ModeBasis] | None = None,
+    cache: SceneCache | None = None,
 ) -> LinkageScene:
     """Build :func:`~ffrf.scenes.linkage_description.linkage_description` of ``loop`` with the one scene builder.
     A drive that turns its joint beyond a dead point of the rigid loop is refused (:class:`ffrf.errors.SceneError`);
-    ``where`` (default the linkage's name) starts every error message; ``reductions``: the content-keyed cache of
-    reduced bases :func:`~ffrf.scenes.builder.build_scene` reuses (default the process's own)."""
+    ``where`` (default the linkage's name) starts every error message; ``cache``: the content-keyed
+    :class:`~ffrf.scenes.scene_cache.SceneCache` of the rigid loop's start and range and of what
+    :func:`~ffrf.scenes.builder.build_scene` builds (default the process's own)."""
     options = LinkageOptions() if options is None else options
     where = options.name if where is None else where
+    cache = PROCESS_CACHE if cache is None else cache
     tool = checked_tool_link(loop, options)
-    start_phi = start_pose(loop, options.driver, options.start_angle, options.origin)
+    start_phi = _cached_start(loop, options, cache)
     description = linkage_description(loop, options, start_phi)
     t_end = float(description["scene"]["t_end"])
-    _check_drive_range(loop, options, start_phi, float(CosineRamp(options.omega, options.ramp_time)(t_end)), where)
-    scene = build_scene(description, where=where, reductions=reductions)
+    turn = float(CosineRamp(options.omega, options.ramp_time)(t_end))
+    _cached_range_check(loop, options, start_phi, turn, where, cache)
+    scene = build_scene(description, where=where, cache=cache)
     angle = next(j.angle for j in scene.joints if j.angle is not None)  # the drive the system runs with
     settings = dict(
         scene.settings,
