@@ -101,9 +101,14 @@ class BennettScene(LinkageScene):
 
     def ideal_coupler_points(self, drive_angles: ArrayLike) -> NDArray[np.float64]:
         """Coupler point of the ideal linkage at the given drive angles, from the motion polynomial."""
-        linkage = self.linkage
-        t = linkage.parameter_from_joint(linkage.home_theta[3] - np.asarray(drive_angles), joint=3)
-        return linkage.coupler_pose(t).act(linkage.coupler_point())
+        angles = np.asarray(drive_angles, dtype=float)
+
+        def points() -> NDArray[np.float64]:
+            linkage = self.linkage
+            t = linkage.parameter_from_joint(linkage.home_theta[3] - angles, joint=3)
+            return linkage.coupler_pose(t).act(linkage.coupler_point())
+
+        return self._kept(("motion polynomial", self.linkage.a, self.linkage.alpha), angles, points)
 
     def ideal_coupler_curve(self, n: int = 4000) -> NDArray[np.float64]:
         """``n`` points of the ideal coupler curve over one revolution from the start (motion polynomial)."""

@@ -29,7 +29,7 @@ import logging
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
-from typing import Self
+from typing import NamedTuple, Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -320,16 +320,24 @@ def _fe_model(entry: dict, base: Path, where: str) -> tuple[FEModel | ExternalFE
     return FEModel.from_tet_mesh(mesh, material, entry.get("order", 2)), geometry
 
 
-def _reduction(
-    meshed: MeshedBody, entry: dict, reductions: LRUCache[tuple[ModeBasis, ModalMoments]]
-) -> tuple[ModeBasis, ModalMoments]:
+class Reduced(NamedTuple):
+    """What a body's reduction makes, kept together by its fingerprint: the basis, its modal moments (Eq. (F4))
+    and a rigid marker per interface (Eqs. (K1)-(K2), as built for the body that first had them)."""
+
+    basis: ModeBasis
+    moments: ModalMoments
+    markers: dict[str, BodyMarker]
+
+
+def _reduction(k: int, meshed: MeshedBody, entry: dict, reductions: LRUCache[Reduced]) -> Reduced:
     """Craig-Bampton on the interfaces (default), or ``reduction = "free_free"``: the lowest ``modes`` elastic
     free-free modes (eqs. (FF-1)-(FF-3)), whose interfaces are only where markers average nodes; with the basis's
-    modal moments (Eq. (F4)). ``reductions``: both by fingerprint (:meth:`MeshedBody.reduction_key`)."""
+    modal moments and markers. ``reductions``: all three by fingerprint (:meth:`MeshedBody.reduction_key`)."""
     n_modes = int(entry.get("modes", 4))
     kind = entry.get("reduction", "craig_bampton")
+    name = entry["name"]
 
-    def reduce() -> tuple[ModeBasis, ModalMoments]:
+    def reduce() -> Reduced:
         fe = meshed.fe
         if kind == "craig_bampton":
             basis: ModeBasis = craig_bampton(fe, list(meshed.interfaces.values()), n_modes)
@@ -337,8 +345,12 @@ def _reduction(
             try:
                 basis = free_free_basis(fe, n_modes)
             except ReductionError as error:  # a supported model (boundary conditions in K), too few DOFs, ...
-                raise SceneError(f'body {entry["name"]!r}, reduction = "free_free": {error}') from error
-        return basis, modal_moments(fe.nodes, fe.mass, basis.basis)
+                raise SceneError(f'body {name!r}, reduction = "free_free": {error}') from error
+        markers = {
+            n: rigid_interface_marker(k, fe.nodes, basis.basis, itf.nodes, itf.weights, name=f"{name}:{n}")
+            for n, itf in meshed.interfaces.items()
+        }
+        return Reduced(basis, modal_moments(fe.nodes, fe.mass, basis.basis), markers)
 
     return reductions.get_or_compute(meshed.reduction_key(n_modes, kind), reduce)
 
@@ -377,8 +389,7 @@ def _new_meshed(entry: dict, base: Path) -> MeshedBody:
 def _body(k: int, entry: dict, meshed: MeshedBody, settings: dict, cache: SceneCache) -> SceneBody:
     name = entry["name"]
     fe, interfaces = meshed.fe, meshed.interfaces
-    reduction, moments = _reduction(meshed, entry, cache.reductions)
-    basis = reduction.basis
+    reduction, moments, kept = _reduction(k, meshed, entry, cache.reductions)
     body = FlexibleBody(
         name,
         moments,
@@ -386,10 +397,7 @@ def _body(k: int, entry: dict, meshed: MeshedBody, settings: dict, cache: SceneC
         reduction.reduced_damping(float(settings.get("beta", 0.0)), float(settings.get("alpha", 0.0))),
         settings.get("exact_gravity", True),
     )
-    markers = {
-        n: rigid_interface_marker(k, fe.nodes, basis, itf.nodes, itf.weights, name=f"{name}:{n}")
-        for n, itf in interfaces.items()
-    }
+    markers = {n: replace(marker, body=k, name=f"{name}:{n}") for n, marker in kept.items()}
     log.info("body %s: %d nodes, %d modes (%s)", name, fe.nodes.shape[0], reduction.n_modes, reduction.summary())
     return SceneBody(k, name, fe, dict(interfaces), reduction, body, markers, meshed.geometry)
 

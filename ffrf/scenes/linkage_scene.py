@@ -11,7 +11,10 @@ the same curve (``tests/test_kinematics/test_single_loop.py``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, fields
+from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -42,7 +45,8 @@ class LinkageScene(Scene):
     """A built linkage (as built: every bore error in place) with its nominal ``loop``, the ``driver``
     joint, its ``drive`` (ramp from ``start_angle``, rad, the driven joint's prescribed angle), the
     rigid loop's joint rotations ``start_phi`` at the start, the run's end ``t_end`` and the ``tool_link``
-    whose joint points' mean is the coupler point."""
+    whose joint points' mean is the coupler point; ``cache``: where its ideal (rigid) coupler path is kept by
+    content (:class:`~ffrf.scenes.scene_cache.SceneCache`, the one it was built with)."""
 
     loop: SingleLoop
     driver: int
@@ -51,6 +55,7 @@ class LinkageScene(Scene):
     start_phi: NDArray[np.float64]
     t_end: float
     tool_link: int
+    cache: SceneCache
 
     @property
     def links(self) -> tuple[SceneBody, ...]:
@@ -60,7 +65,7 @@ class LinkageScene(Scene):
     def gravity(self) -> NDArray[np.float64]:
         return self.system.gravity
 
-    @property
+    @cached_property
     def link_length(self) -> float:
         """Largest distance between the two joint points of one link (m)."""
         points = joint_points(self.loop)
@@ -86,9 +91,19 @@ class LinkageScene(Scene):
 
     def ideal_coupler_points(self, drive_angles: ArrayLike) -> NDArray[np.float64]:
         """The coupler point of the rigid nominal loop with the driven joint at ``drive_angles`` (in order)."""
-        phi = drive_sign(self.driver, self.loop.n) * np.asarray(drive_angles, dtype=float)
+        angles = np.asarray(drive_angles, dtype=float)
+        return self._kept("ideal coupler points", angles, lambda: self._rigid_coupler_points(angles))
+
+    def _rigid_coupler_points(self, angles: NDArray[np.float64]) -> NDArray[np.float64]:
+        phi = drive_sign(self.driver, self.loop.n) * angles
         motion = follow_driver(self.loop, self.driver, phi, start=self.start_phi)
         return motion.path(self.tool_link, self.home_coupler_point())
+
+    def _kept(self, what: Any, argument: Any, compute: Callable[[], NDArray[np.float64]]) -> NDArray[np.float64]:
+        """``compute()`` (a copy), computed once per ``what``, ``argument`` and this linkage's nominal loop, driver,
+        start and tool link: every variant of a study has the same ideal path."""
+        key = content_key(what, _loop_content(self.loop), self.driver, self.start_phi, self.tool_link, argument)
+        return np.array(self.cache.rigid_motions.get_or_compute(key, compute))
 
     def clearance(self, n_poses: int = 72, contact: float = 1e-3) -> Clearance:
         """Clearance of every pair of links along one revolution of the rigid nominal motion from the start,
@@ -109,9 +124,13 @@ class LinkageScene(Scene):
 
     def ideal_coupler_curve(self, n: int = 720) -> NDArray[np.float64]:
         """``n`` points of the ideal coupler curve over one revolution of the driver from the start."""
-        sign = drive_sign(self.driver, self.loop.n)
-        motion = trace_motion(self.loop, self.driver, n_poses=n, revolution=sign * 2 * np.pi, start=self.start_phi)
-        return motion.path(self.tool_link, self.home_coupler_point())
+
+        def curve() -> NDArray[np.float64]:
+            sign = drive_sign(self.driver, self.loop.n)
+            motion = trace_motion(self.loop, self.driver, n_poses=n, revolution=sign * 2 * np.pi, start=self.start_phi)
+            return motion.path(self.tool_link, self.home_coupler_point())
+
+        return self._kept("ideal coupler curve", n, curve)
 
 
 def _plain(error: BoreError) -> dict:
@@ -210,4 +229,5 @@ def build_linkage(
         start_phi=start_phi,
         t_end=t_end,
         tool_link=tool,
+        cache=cache,
     )

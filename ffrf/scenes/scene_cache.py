@@ -10,10 +10,13 @@ identity or name, so a hit returns what the uncached path would compute, to the 
   (:class:`ffrf.scenes.builder.MeshedBody`), keyed by the body's description without what does not enter them
   (pose, start velocity, modes, reduction kind) and the content of the files it reads
   (:func:`ffrf.scenes.builder.build_scene`);
-* ``reductions``: reduced bases by :func:`ffrf.reduction.reduced_io.reduction_fingerprint` (nodes, M, K,
-  interfaces, modes);
+* ``reductions``: reduced bases with their modal moments and interface markers
+  (:class:`ffrf.scenes.builder.Reduced`) by :func:`ffrf.reduction.reduced_io.reduction_fingerprint` (nodes, M,
+  K, interfaces, modes);
 * ``rigid_motions``: the rigid loop's start pose and the drive's range checked along it
-  (:func:`ffrf.scenes.linkage_scene.build_linkage`), keyed by the loop's axes, the driver and the angles.
+  (:func:`ffrf.scenes.linkage_scene.build_linkage`) and the ideal coupler path a run is compared with
+  (:meth:`ffrf.scenes.linkage_scene.LinkageScene.ideal_coupler_points`), keyed by the loop's axes, the driver, the
+  start and the angles.
 
 Every process has one, :data:`PROCESS_CACHE`, which the builders use unless given another (a Dask worker keeps
 it between the variants it runs); ``SceneCache(enabled=False)`` builds everything afresh.

@@ -9,7 +9,11 @@ A rerun reads the ids already in ``DIR/rows`` and submits only the others, so a 
 on the way out) or a killed client loses at most the variants in flight and the rows of the last
 ``flush_seconds``. A worker that dies has its variant rerun by the scheduler elsewhere; a variant that could
 not be computed at all (its worker died too often) writes no row, so a rerun tries it again. A variant that
-fails (no assembly, Newton divergence, bad parameters) is a row with its reason.
+fails (no assembly, Newton divergence, bad parameters) is a row with its reason. A folder that holds another
+study's rows (another name, base or parameter columns in its ``study.json``) is refused before anything runs.
+
+A worker keeps its scene cache (:data:`ffrf.scenes.scene_cache.PROCESS_CACHE`) between the variants it runs, and
+its allocator is kept from returning every large array to the system (:func:`_allocator_for_variants`).
 """
 
 from __future__ import annotations

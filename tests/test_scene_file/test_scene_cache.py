@@ -17,7 +17,9 @@ from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_option
 from ffrf.scenes.builder import build_scene
 from ffrf.scenes.linkage_description import BoreError
 from ffrf.scenes.linkage_run import PATH_SENSORS, run_linkage
+from ffrf.scenes.linkage_scene import build_linkage
 from ffrf.scenes.scene_cache import LRUCache, SceneCache, content_key
+from kinematics import BennettLinkage, SingleLoop
 
 #: Coarse links (h = 12 mm, P1, 2 modes): the cache does not care about the discretisation.
 COARSE = {"h": 0.012, "order": 1, "n_modes": 2}
@@ -105,3 +107,23 @@ def test_the_path_sensors_equal_those_of_a_whole_evaluation():
         np.testing.assert_array_equal(path.sensors[name], whole.sensors[name], err_msg=name)
     assert path.summary() == {name: whole.summary()[name] for name in path.summary()}
     assert len(path.summary()) == 3 and "energy_balance_relative" in whole.summary()
+
+
+def test_the_ideal_coupler_path_is_traced_once_per_loop_and_equals_a_fresh_trace():
+    """Every variant of a study shares the nominal loop, so the rigid path it is compared with (traced by
+    continuation for a linkage that has no motion polynomial) comes from the cache after the first variant."""
+    loop = SingleLoop(BennettLinkage.paper().axes)
+    cache = SceneCache()
+    first = build_linkage(loop, _options(0.3), cache=cache)
+    second = build_linkage(loop, _options(-0.2), cache=cache)
+    fresh = build_linkage(loop, _options(-0.2), cache=SceneCache(enabled=False))
+    angles = second.drive_angle(0.0) + np.linspace(0.0, 1.0, 7)
+    for scene in (first, second):
+        scene.ideal_coupler_points(angles)
+        scene.ideal_coupler_curve(36)
+    assert cache.stats()["rigid_motions"]["hits"] == 2 + 2  # start pose and range, then points and curve
+    np.testing.assert_array_equal(second.ideal_coupler_points(angles), fresh.ideal_coupler_points(angles))
+    np.testing.assert_array_equal(second.ideal_coupler_curve(36), fresh.ideal_coupler_curve(36))
+    kept = second.ideal_coupler_curve(36)
+    kept[:] = 0.0  # a caller's changes stay its own
+    assert np.any(second.ideal_coupler_curve(36) != 0.0)
