@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -141,20 +143,27 @@ class FEModel:
         (n_tets, 4, 3, 3), for nodal ``displacement`` (N, 3) or (3N,): scikit-fem's gradients of
         the P1 or P2 field evaluated at the reference element's corners. For P1 the four are equal;
         for P2 the strain is linear in each straight-sided element, so its extremes are at corners."""
-        from skfem import Basis, MeshTet
-
         u = np.asarray(displacement, dtype=float).reshape(-1)
         if u.shape[0] != self.n_dofs:
             raise FEInputError(
                 f"{self.mesh.name}: displacement of length {u.shape[0]} does not match {self.n_dofs} DOFs"
             )
+        basis, permutation = self._corner_basis
+        field_dofs = np.empty(basis.N)
+        field_dofs[permutation] = u
+        gradient = np.moveaxis(np.asarray(basis.interpolate(field_dofs).grad), (2, 3), (0, 1))  # H_ij = du_i/dx_j
+        return 0.5 * (gradient + np.swapaxes(gradient, -1, -2))
+
+    @cached_property
+    def _corner_basis(self) -> tuple[Any, NDArray[np.int64]]:
+        """scikit-fem's basis of the model's field with the reference element's corners as quadrature points, and
+        the permutation from our DOF layout to its own (built once per model: every strain evaluation uses it)."""
+        from skfem import Basis, MeshTet
+
         sk_mesh = MeshTet(np.ascontiguousarray(self.mesh.points.T), np.ascontiguousarray(self.mesh.tets.T))
         corners = np.array([[0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
         basis = Basis(sk_mesh, _vector_element(self.order), quadrature=(corners, np.full(4, 1.0 / 24.0)))
-        field_dofs = np.empty(basis.N)
-        field_dofs[_node_dof_permutation(basis, len(self.mesh.points), len(self.edges))] = u
-        gradient = np.moveaxis(np.asarray(basis.interpolate(field_dofs).grad), (2, 3), (0, 1))  # H_ij = du_i/dx_j
-        return 0.5 * (gradient + np.swapaxes(gradient, -1, -2))
+        return basis, _node_dof_permutation(basis, len(self.mesh.points), len(self.edges))
 
     def interleaved(self, values: ArrayLike) -> NDArray[np.float64]:
         """Reshape a DOF vector (3N,) into nodal vectors (N, 3)."""

@@ -18,6 +18,8 @@ For every output row, and for any scene built by :mod:`ffrf.scenes.builder` (duc
 
 from __future__ import annotations
 
+from collections.abc import Collection
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -29,7 +31,7 @@ from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
 from ffrf.system.reactions import joint_poses, joint_reactions
 
-__all__ = ["relative_angle", "joint_rows", "node_sensors", "scene_sensors"]
+__all__ = ["relative_angle", "joint_rows", "node_sensors", "scene_sensors", "path_sensors"]
 
 
 def relative_angle(poses: tuple) -> float:
@@ -43,30 +45,41 @@ def _marker_joints(system: MultibodySystem) -> list[tuple[int, MarkerJoint]]:
 
 
 def joint_rows(
-    system: MultibodySystem, time: NDArray, q: NDArray, multipliers: NDArray, qd: NDArray | None = None
+    system: MultibodySystem,
+    time: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+    qd: NDArray | None = None,
+    only: Collection[str] | None = None,
 ) -> dict[str, NDArray]:
     """Per joint ``J``: ``J_angle``, ``J_reaction`` (rows x 6), ``J_torque`` (driven joints), the joint
     points of side 0 and side 1 ``J_point0``, ``J_point1`` (world; equal where the joint holds), plus
-    energies and ``constraint_residual``; rows = ``q``'s rows."""
+    energies and ``constraint_residual``; rows = ``q``'s rows. ``only``: just the angles, points and torques of the
+    joints so named (no reactions, energies or residual), each value as the whole evaluation gives it."""
     model = newton_model(system)  # its constraint values: the fast path's kernel when supported
-    joints = _marker_joints(system)
-    rows: dict[str, list] = {k: [] for k in ("energy_kinetic", "energy_strain", "energy_potential")}
-    rows["constraint_residual"] = []
+    joints = [(k, j) for k, j in _marker_joints(system) if only is None or j.name in only]
+    rows: dict[str, list] = {}
+    if only is None:
+        rows = {k: [] for k in ("energy_kinetic", "energy_strain", "energy_potential", "constraint_residual")}
     for _, joint in joints:
-        for kind in ("angle", "reaction", "point0", "point1") + (("torque",) if joint.angle is not None else ()):
+        kinds = ("angle", "reaction", "point0", "point1") if only is None else ("angle", "point0", "point1")
+        for kind in kinds + (("torque",) if joint.angle is not None else ()):
             rows[f"{joint.name}_{kind}"] = []
     for row, t in enumerate(time):
         qq = q[row]
         poses = {j.name: joint_poses(j, [qq[system.block(i)] for i in j.bodies]) for _, j in joints}
-        reactions = joint_reactions(system, qq, multipliers[row], float(t), poses)
         for k, joint in joints:
             rows[f"{joint.name}_angle"].append(relative_angle(poses[joint.name]))
             rows[f"{joint.name}_point0"].append(poses[joint.name][0])
             rows[f"{joint.name}_point1"].append(poses[joint.name][2])
-            reaction = reactions[joint.name]
-            rows[f"{joint.name}_reaction"].append(np.concatenate([reaction.force_local, reaction.torque_local]))
             if joint.angle is not None:  # the angle equation is the joint's last row
                 rows[f"{joint.name}_torque"].append(multipliers[row, int(system.rows[k + 1]) - 1])
+        if only is not None:
+            continue
+        reactions = joint_reactions(system, qq, multipliers[row], float(t), poses)
+        for _, joint in joints:
+            reaction = reactions[joint.name]
+            rows[f"{joint.name}_reaction"].append(np.concatenate([reaction.force_local, reaction.torque_local]))
         energies = system.energies(qq, np.zeros_like(qq) if qd is None else qd[row], float(t))
         for kind, value in energies.items():  # kinetic, strain, potential; elements with force elements
             rows.setdefault(f"energy_{kind}", []).append(value)
@@ -90,12 +103,31 @@ def scene_sensors(
     ``driving_torque`` and the energy balance."""
     system = scene.system
     out = {**node_sensors(scene, q), **joint_rows(system, time, q, multipliers, qd)}
+    out |= _joint_sensors_and_drive(scene, time, out)
+    if "drive_angle" in out:
+        out.update(energy_balance(system, time, out, qd, q))
+    return out
+
+
+def path_sensors(scene, time: NDArray, q: NDArray, multipliers: NDArray) -> dict[str, NDArray]:
+    """Of :func:`scene_sensors`, only the joint-point sensors (the mean of joint points on one body) and, with
+    exactly one driven joint, ``drive_angle`` and ``driving_torque``: the same values, without the node sensors,
+    the reactions, the energies and the other joints."""
+    needed = {joint for parts in scene.joint_sensors.values() for joint, _ in parts}
+    needed |= {j.name for _, j in _marker_joints(scene.system) if j.angle is not None}
+    out = joint_rows(scene.system, time, q, multipliers, only=needed)
+    return _joint_sensors_and_drive(scene, time, out)
+
+
+def _joint_sensors_and_drive(scene, time: NDArray, rows: dict[str, NDArray]) -> dict[str, NDArray]:
+    """The joint-point sensors from the joints' points in ``rows`` (:func:`joint_rows`) and, with exactly one driven
+    joint, ``drive_angle`` (its prescribed angle at each time) and ``driving_torque``."""
+    out = {}
     for name, parts in scene.joint_sensors.items():  # the mean of joint points on one body
-        out[name] = np.mean([out[f"{joint}_point{side}"] for joint, side in parts], axis=0)
-    driven = [(j, j.angle) for _, j in _marker_joints(system) if j.angle is not None]
+        out[name] = np.mean([rows[f"{joint}_point{side}"] for joint, side in parts], axis=0)
+    driven = [(j, j.angle) for _, j in _marker_joints(scene.system) if j.angle is not None]
     if len(driven) == 1:
         joint, angle = driven[0]
         out["drive_angle"] = np.array([angle(float(t)) for t in time])
-        out["driving_torque"] = out[f"{joint.name}_torque"]
-        out.update(energy_balance(system, time, out, qd, q))
+        out["driving_torque"] = rows[f"{joint.name}_torque"]
     return out

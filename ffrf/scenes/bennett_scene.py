@@ -32,17 +32,16 @@ chooses where that offset lives (:func:`ffrf.system.markers.attach_joint_point`)
 
 from __future__ import annotations
 
-from collections.abc import MutableMapping
 from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ffrf.fe.materials import PLA, RIGID, Material
-from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.scenes.assembly import assemble
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, linkage_description
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
+from ffrf.scenes.scene_cache import SceneCache
 from ffrf.system.drives import rpm
 from ffrf.system.markers import JOINT_OFFSETS
 from ffrf.system.multibody import MultibodySystem
@@ -102,9 +101,14 @@ class BennettScene(LinkageScene):
 
     def ideal_coupler_points(self, drive_angles: ArrayLike) -> NDArray[np.float64]:
         """Coupler point of the ideal linkage at the given drive angles, from the motion polynomial."""
-        linkage = self.linkage
-        t = linkage.parameter_from_joint(linkage.home_theta[3] - np.asarray(drive_angles), joint=3)
-        return linkage.coupler_pose(t).act(linkage.coupler_point())
+        angles = np.asarray(drive_angles, dtype=float)
+
+        def points() -> NDArray[np.float64]:
+            linkage = self.linkage
+            t = linkage.parameter_from_joint(linkage.home_theta[3] - angles, joint=3)
+            return linkage.coupler_pose(t).act(linkage.coupler_point())
+
+        return self._kept(("motion polynomial", self.linkage.a, self.linkage.alpha), angles, points)
 
     def ideal_coupler_curve(self, n: int = 4000) -> NDArray[np.float64]:
         """``n`` points of the ideal coupler curve over one revolution from the start (motion polynomial)."""
@@ -185,12 +189,12 @@ def build_bennett(variant: str = "pla", **options) -> BennettScene:
 
 
 def build_bennett_from_options(
-    options: LinkageOptions, variant: str = "pla", reductions: MutableMapping[str, ModeBasis] | None = None
+    options: LinkageOptions, variant: str = "pla", cache: SceneCache | None = None
 ) -> BennettScene:
     """The paper's loop built with any linkage ``options`` (e.g. :func:`bennett_options` of ``variant`` with other
-    bore errors or material, as a study varies them), compared with the motion polynomial; ``reductions``: the
-    content-keyed cache of reduced bases (:func:`ffrf.scenes.linkage_scene.build_linkage`)."""
-    scene = build_linkage(_paper_loop(), options, reductions=reductions)
+    bore errors or material, as a study varies them), compared with the motion polynomial; ``cache``: the
+    content-keyed :class:`~ffrf.scenes.scene_cache.SceneCache` (:func:`ffrf.scenes.linkage_scene.build_linkage`)."""
+    scene = build_linkage(_paper_loop(), options, cache=cache)
     settings = dict(
         scene.settings,
         variant=variant,

@@ -24,17 +24,18 @@ stays in the bodies. A joint with one ``axis``/``point`` has the same frame on b
 
 from __future__ import annotations
 
+import hashlib
 import logging
-from collections.abc import MutableMapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
-from typing import Self
+from typing import NamedTuple, Self
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.body.flexible_body import FlexibleBody
-from ffrf.body.modal_moments import modal_moments
+from ffrf.body.modal_moments import ModalMoments, modal_moments
 from ffrf.errors import GeometryError, ReductionError, SceneError
 from ffrf.fe.external_model import ExternalFEModel
 from ffrf.fe.fe_model import FEModel
@@ -57,19 +58,51 @@ from ffrf.reduction.craig_bampton import craig_bampton
 from ffrf.reduction.free_free import free_free_basis
 from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.reduction.reduced_io import reduction_fingerprint
+from ffrf.scenes.scene_cache import PROCESS_CACHE, LRUCache, SceneCache, content_key
 from ffrf.scenes.scene_forces import build_forces
 from ffrf.scenes.scene_joints import JointGeometry, joint_constraint, joint_geometry
-from ffrf.scenes.scene_matrices import NODE_TOLERANCE, matrices_interface, matrices_model
+from ffrf.scenes.scene_matrices import MATRIX_FILES, NODE_TOLERANCE, matrices_interface, matrices_model
 from ffrf.scenes.scene_schema import check_scene
 from ffrf.system.markers import BodyMarker, rigid_interface_marker
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["SceneBody", "JointGeometry", "Scene", "build_scene"]
+__all__ = ["MeshedBody", "SceneBody", "JointGeometry", "Scene", "build_scene"]
 
 log = logging.getLogger(__name__)
 
 #: A sensor point farther than this fraction of its body's bounding-box diagonal from every node is a mistake.
 SENSOR_REACH = 0.1
+#: Keys of a body's description that do not enter its FE model and interfaces (:func:`_meshed_key`).
+NOT_MESHED = ("pose", "velocity", "modes", "reduction")
+
+
+@dataclass(frozen=True, eq=False)
+class MeshedBody:
+    """What a body's description makes before its reduction: the FE model (ours from a mesh, or another
+    program's matrices), its interfaces by name and the parametric link's geometry (``None`` for a mesh file or
+    matrices); :meth:`reduction_key` remembers the reduction fingerprints computed on it."""
+
+    fe: FEModel | ExternalFEModel
+    interfaces: dict[str, InterfaceNodes]
+    geometry: LinkGeometry | None
+    _keys: dict[tuple[int, str], str] = field(default_factory=dict, repr=False)
+
+    def reduction_key(self, n_modes: int, reduction: str) -> str:
+        """:func:`~ffrf.reduction.reduced_io.reduction_fingerprint` of this model, its interfaces, ``n_modes`` and
+        the reduction kind (``craig_bampton`` or ``free_free``), computed once per object."""
+        if (n_modes, reduction) not in self._keys:
+            options = {} if reduction == "craig_bampton" else {"reduction": reduction}
+            interfaces = list(self.interfaces.values())
+            self._keys[n_modes, reduction] = reduction_fingerprint(self.fe, interfaces, n_modes, **options)
+        return self._keys[n_modes, reduction]
+
+    @cached_property
+    def surface_nodes(self) -> NDArray[np.int64] | None:
+        """The nodes on the body's surface: of our mesh's boundary triangles, or of the external model's elements
+        (``None`` for matrices without elements)."""
+        if isinstance(self.fe, FEModel):
+            return np.unique(boundary_triangles(self.fe.mesh))
+        return np.unique(surface_triangles(self.fe.elements)) if self.fe.elements else None
 
 
 @dataclass(frozen=True, eq=False)
@@ -165,16 +198,18 @@ def build_scene(
     description: dict,
     base: str | Path = ".",
     where: str = "scene",
-    reductions: MutableMapping[str, ModeBasis] | None = None,
+    cache: SceneCache | None = None,
 ) -> Scene:
-    """Check and build a scene description; relative file names are resolved against ``base``.
-    ``reductions`` (fingerprint -> basis) reuses bases computed from the same M, K, interfaces, kind and number
-    of modes (:func:`~ffrf.reduction.reduced_io.reduction_fingerprint`)."""
+    """Check and build a scene description; relative file names are resolved against ``base``. ``cache``
+    (default the process's, :data:`ffrf.scenes.scene_cache.PROCESS_CACHE`) reuses the FE models and interfaces of
+    bodies with the same description and files, and the bases reduced from the same M, K, interfaces, kind and
+    number of modes (:func:`~ffrf.reduction.reduced_io.reduction_fingerprint`)."""
     check_scene(description, where)
     base = Path(base)
     settings = dict(description.get("scene", {}))
-    reductions = _REDUCTIONS if reductions is None else reductions
-    bodies = tuple(_body(k, entry, base, settings, reductions) for k, entry in enumerate(description["bodies"]))
+    cache = PROCESS_CACHE if cache is None else cache
+    meshed = [_meshed(entry, base, cache) for entry in description["bodies"]]
+    bodies = tuple(_body(k, entry, meshed[k], settings, cache) for k, entry in enumerate(description["bodies"]))
     index = {b.name: b.index for b in bodies}
     joints = tuple(joint_geometry(spec, index, bodies) for spec in description.get("joints", []))
     offsets = settings.get("joint_offsets", "body")
@@ -192,7 +227,9 @@ def build_scene(
         q_initial[block.start + 3 : block.start + 7] = pose.get("euler_parameters", [1.0, 0.0, 0.0, 0.0])
     specs = description.get("sensors", [])
     sensors = {
-        s["name"]: (index[s["body"]], _sensor_node(s, bodies[index[s["body"]]])) for s in specs if "joints" not in s
+        s["name"]: (index[s["body"]], _sensor_node(s, bodies[index[s["body"]]], meshed[index[s["body"]]]))
+        for s in specs
+        if "joints" not in s
     }
     by_name = {j.name: j for j in joints}
     joint_sensors = {
@@ -203,10 +240,6 @@ def build_scene(
     return Scene(
         settings.get("name", where), description, bodies, joints, system, q_initial, sensors, joint_sensors, settings
     )
-
-
-#: Reductions built in this process, by content (see :func:`build_scene`).
-_REDUCTIONS: dict[str, ModeBasis] = {}
 
 
 def _link_design(spec: dict, where: str) -> LinkDesign:
@@ -303,66 +336,89 @@ def _fe_model(entry: dict, base: Path, where: str) -> tuple[FEModel | ExternalFE
     return FEModel.from_tet_mesh(mesh, material, entry.get("order", 2)), geometry
 
 
-def _reduction(
-    fe: FEModel | ExternalFEModel,
-    interfaces: list[InterfaceNodes],
-    entry: dict,
-    reductions: MutableMapping[str, ModeBasis],
-) -> ModeBasis:
+class Reduced(NamedTuple):
+    """What a body's reduction makes, kept together by its fingerprint: the basis, its modal moments (Eq. (F4))
+    and a rigid marker per interface (Eqs. (K1)-(K2), as built for the body that first had them)."""
+
+    basis: ModeBasis
+    moments: ModalMoments
+    markers: dict[str, BodyMarker]
+
+
+def _reduction(k: int, meshed: MeshedBody, entry: dict, reductions: LRUCache[Reduced]) -> Reduced:
     """Craig-Bampton on the interfaces (default), or ``reduction = "free_free"``: the lowest ``modes`` elastic
-    free-free modes (eqs. (FF-1)-(FF-3)), whose interfaces are only where markers average nodes."""
+    free-free modes (eqs. (FF-1)-(FF-3)), whose interfaces are only where markers average nodes; with the basis's
+    modal moments and markers. ``reductions``: all three by fingerprint (:meth:`MeshedBody.reduction_key`)."""
     n_modes = int(entry.get("modes", 4))
-    if entry.get("reduction", "craig_bampton") == "craig_bampton":
-        key = reduction_fingerprint(fe, interfaces, n_modes)
-        if key not in reductions:
-            reductions[key] = craig_bampton(fe, interfaces, n_modes)
-        return reductions[key]
-    key = reduction_fingerprint(fe, interfaces, n_modes, reduction="free_free")
-    if key not in reductions:
-        try:
-            reductions[key] = free_free_basis(fe, n_modes)
-        except ReductionError as error:  # a supported model (boundary conditions in K), too few DOFs, ...
-            raise SceneError(f'body {entry["name"]!r}, reduction = "free_free": {error}') from error
-    return reductions[key]
-
-
-def _body(k: int, entry: dict, base: Path, settings: dict, reductions: MutableMapping[str, ModeBasis]) -> SceneBody:
+    kind = entry.get("reduction", "craig_bampton")
     name = entry["name"]
-    fe, geometry = _fe_model(entry, base, f"body {name!r}")
+
+    def reduce() -> Reduced:
+        fe = meshed.fe
+        if kind == "craig_bampton":
+            basis: ModeBasis = craig_bampton(fe, list(meshed.interfaces.values()), n_modes)
+        else:
+            try:
+                basis = free_free_basis(fe, n_modes)
+            except ReductionError as error:  # a supported model (boundary conditions in K), too few DOFs, ...
+                raise SceneError(f'body {name!r}, reduction = "free_free": {error}') from error
+        markers = {
+            n: rigid_interface_marker(k, fe.nodes, basis.basis, itf.nodes, itf.weights, name=f"{name}:{n}")
+            for n, itf in meshed.interfaces.items()
+        }
+        return Reduced(basis, modal_moments(fe.nodes, fe.mass, basis.basis), markers)
+
+    return reductions.get_or_compute(meshed.reduction_key(n_modes, kind), reduce)
+
+
+def _file_digest(path: Path) -> str | None:
+    """SHA-256 of a file's bytes (``None`` if it does not exist: building it then raises the error)."""
+    return hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else None
+
+
+def _meshed_key(entry: dict, base: Path) -> str:
+    """The content key of a body's FE model and interfaces: its description without :data:`NOT_MESHED` and the
+    digests of the files it reads (mesh, matrices, node files)."""
+    names = [entry["mesh"]] if "mesh" in entry else []
+    if "matrices" in entry:
+        names += [entry["matrices"][key] for key in MATRIX_FILES[entry["matrices"]["format"]]]
+    names += [spec["nodes_file"] for spec in entry["interfaces"] if "nodes_file" in spec]
+    described = {key: value for key, value in entry.items() if key not in NOT_MESHED}
+    return content_key("meshed body", described, {name: _file_digest(base / name) for name in names})
+
+
+def _meshed(entry: dict, base: Path, cache: SceneCache) -> MeshedBody:
+    """The body's FE model, interfaces and geometry: from ``cache``, else built (and kept)."""
+    return cache.fe_models.get_or_compute(_meshed_key(entry, base), lambda: _new_meshed(entry, base))
+
+
+def _new_meshed(entry: dict, base: Path) -> MeshedBody:
+    """The body's FE model, interfaces and geometry, built afresh."""
+    fe, geometry = _fe_model(entry, base, f"body {entry['name']!r}")
     interfaces: dict[str, InterfaceNodes] = {}
     for spec in entry["interfaces"]:
         interface = _interface(fe, spec, base)
         interfaces[interface.name] = interface
-    reduction = _reduction(fe, list(interfaces.values()), entry, reductions)
-    basis = reduction.basis
+    return MeshedBody(fe, interfaces, geometry)
+
+
+def _body(k: int, entry: dict, meshed: MeshedBody, settings: dict, cache: SceneCache) -> SceneBody:
+    name = entry["name"]
+    fe, interfaces = meshed.fe, meshed.interfaces
+    reduction, moments, kept = _reduction(k, meshed, entry, cache.reductions)
     body = FlexibleBody(
         name,
-        modal_moments(fe.nodes, fe.mass, basis),
+        moments,
         reduction.reduced_stiffness,
         reduction.reduced_damping(float(settings.get("beta", 0.0)), float(settings.get("alpha", 0.0))),
         settings.get("exact_gravity", True),
     )
-    markers = {
-        n: rigid_interface_marker(k, fe.nodes, basis, itf.nodes, itf.weights, name=f"{name}:{n}")
-        for n, itf in interfaces.items()
-    }
+    markers = {n: replace(marker, body=k, name=f"{name}:{n}") for n, marker in kept.items()}
     log.info("body %s: %d nodes, %d modes (%s)", name, fe.nodes.shape[0], reduction.n_modes, reduction.summary())
-    return SceneBody(k, name, fe, interfaces, reduction, body, markers, geometry)
+    return SceneBody(k, name, fe, dict(interfaces), reduction, body, markers, meshed.geometry)
 
 
-def _surface_nodes(body: SceneBody, sensor: str) -> NDArray[np.int64]:
-    """The nodes on the body's surface: of our mesh's boundary triangles, or of the external model's elements."""
-    if isinstance(body.fe, FEModel):
-        return np.unique(boundary_triangles(body.fe.mesh))
-    if not body.fe.elements:
-        raise SceneError(
-            f"sensor {sensor!r}: body {body.name!r} is given by matrices without elements, so it has no surface; "
-            "remove surface = true or give node = index"
-        )
-    return np.unique(surface_triangles(body.fe.elements))
-
-
-def _sensor_node(spec: dict, body: SceneBody) -> int:
+def _sensor_node(spec: dict, body: SceneBody, meshed: MeshedBody) -> int:
     """The node a sensor reads: given, or the node (a surface node with ``surface = true``) nearest
     to its point, which must lie on the body."""
     nodes = body.fe.nodes
@@ -373,7 +429,13 @@ def _sensor_node(spec: dict, body: SceneBody) -> int:
                 f"has nodes 0 to {len(nodes) - 1}"
             )
         return spec["node"]
-    candidates = _surface_nodes(body, spec["name"]) if spec.get("surface", False) else np.arange(len(nodes))
+    surface = meshed.surface_nodes if spec.get("surface", False) else np.arange(len(nodes))
+    if surface is None:
+        raise SceneError(
+            f"sensor {spec['name']!r}: body {body.name!r} is given by matrices without elements, so it has no "
+            "surface; remove surface = true or give node = index"
+        )
+    candidates = surface
     distances = np.linalg.norm(nodes[candidates] - np.asarray(spec["point"], dtype=float), axis=1)
     size = float(np.linalg.norm(np.ptp(nodes, axis=0)))
     if distances.min() > SENSOR_REACH * size:

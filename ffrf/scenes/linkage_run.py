@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 
 from ffrf.errors import NewtonDivergence, StaticDivergence
 from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
-from ffrf.output.sensors import scene_sensors
+from ffrf.output.sensors import path_sensors, scene_sensors
 from ffrf.output.tables import write_results as write_tables
 from ffrf.reduction.craig_bampton import CraigBamptonBasis
 from ffrf.scenes.assembly import assemble, quasi_static_step
@@ -53,6 +53,8 @@ __all__ = [
     "LinkageResult",
     "run_linkage",
     "evaluate_sensors",
+    "PATH_SENSORS",
+    "SENSOR_SETS",
     "choose_mode",
     "inertia_number",
     "write_results",
@@ -74,18 +76,33 @@ class LinkageResult:
     critical: CriticalPose | None = None  # with stability: the fold, or the least stable output
 
     def summary(self) -> dict[str, float]:
+        """The largest coupler deviation (same drive angle), distance to the ideal path, |driving torque|, and,
+        when their sensors were evaluated (``sensors="all"``), constraint residual and relative energy balance."""
         s = self.sensors
-        return {
+        out = {
             "max_coupler_deviation_m": float(np.max(np.linalg.norm(s["coupler_deviation"], axis=1))),
             "max_coupler_distance_to_path_m": float(np.max(s["coupler_distance_to_path"])),
             "max_abs_driving_torque_Nm": float(np.max(np.abs(s["driving_torque"]))),
-            "max_constraint_residual": float(np.max(s["constraint_residual"])),
-            "energy_balance_relative": float(
-                np.max(np.abs(s["energy_balance_residual"])) / max(np.max(np.abs(s["energy_drive_work"])), 1e-300)
-            ),
         }
+        if "constraint_residual" in s:
+            out["max_constraint_residual"] = float(np.max(s["constraint_residual"]))
+            out["energy_balance_relative"] = float(
+                np.max(np.abs(s["energy_balance_residual"])) / max(np.max(np.abs(s["energy_drive_work"])), 1e-300)
+            )
+        return out
 
 
+#: What :func:`run_linkage` evaluates: every sensor, or only the coupler's path and the drive's (:data:`PATH_SENSORS`).
+SENSOR_SETS = ("all", "path")
+#: The sensors of ``sensors="path"``: what :meth:`LinkageResult.summary` reads of the path (a study's row).
+PATH_SENSORS = (
+    "drive_angle",
+    "driving_torque",
+    "coupler_point",
+    "coupler_ideal",
+    "coupler_deviation",
+    "coupler_distance_to_path",
+)
 #: Largest inertia number (:func:`inertia_number`) for which quasi-static is chosen.
 INERTIA_LIMIT = 0.01
 
@@ -139,15 +156,21 @@ def _distance_to_polyline(points: NDArray, curve: NDArray) -> NDArray[np.float64
 
 
 def evaluate_sensors(
-    scene: LinkageScene, time: NDArray, q: NDArray, qd: NDArray | None, multipliers: NDArray
+    scene: LinkageScene, time: NDArray, q: NDArray, qd: NDArray | None, multipliers: NDArray, which: str = "all"
 ) -> dict[str, NDArray]:
-    """All sensors of the module docstring at every output row: the scene sensors of any run
-    (:func:`ffrf.output.sensors.scene_sensors`) and the Bennett ones built from them."""
-    out = scene_sensors(scene, time, q, multipliers, qd)
-    joints = _joints(scene)
-    out["joint_angles"] = np.column_stack([out[f"{j.name}_angle"] for j in joints])
-    names = [c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)]
-    out["joint_reactions"] = np.stack([out[f"{name}_reaction"] for name in names], axis=1)
+    """The sensors of the module docstring at every output row: with ``which="all"`` every one, the scene sensors of
+    any run (:func:`ffrf.output.sensors.scene_sensors`) and the linkage ones built from them; with ``"path"`` only
+    those of :data:`PATH_SENSORS` (:func:`ffrf.output.sensors.path_sensors`), the same values."""
+    if which not in SENSOR_SETS:
+        raise ValueError(f"which must be one of {SENSOR_SETS}, got {which!r}")
+    if which == "all":
+        out = scene_sensors(scene, time, q, multipliers, qd)
+        joints = _joints(scene)
+        out["joint_angles"] = np.column_stack([out[f"{j.name}_angle"] for j in joints])
+        names = [c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)]
+        out["joint_reactions"] = np.stack([out[f"{name}_reaction"] for name in names], axis=1)
+    else:
+        out = {name: value for name, value in path_sensors(scene, time, q, multipliers).items() if name in PATH_SENSORS}
     ideal = scene.ideal_coupler_points(out["drive_angle"])
     out["coupler_ideal"] = ideal
     out["coupler_deviation"] = out["coupler_point"] - ideal
@@ -165,6 +188,7 @@ def run_linkage(
     progress: Callable[[float, float], None] | None = None,
     t_end: float | None = None,
     stability: bool = False,
+    sensors: str = "all",
 ) -> LinkageResult:
     """Assemble (static, with misalignment continuation), then run over the drive's ramp and
     revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
@@ -173,7 +197,11 @@ def run_linkage(
     (:class:`ffrf.errors.StaticDivergence` or :class:`ffrf.errors.NewtonDivergence`) with ``partial``, the
     :class:`LinkageResult` up to its last output (its metadata's ``stopped`` says where and why), when there is one.
     With ``stability`` (quasi-static runs) every equilibrium's three smallest squared frequencies of Eq. (B1) are
-    the sensor ``stability_squared_frequencies`` (rad^2/s^2) and the metadata's ``stability`` sums them up."""
+    the sensor ``stability_squared_frequencies`` (rad^2/s^2) and the metadata's ``stability`` sums them up.
+    ``sensors``: ``"all"``, or ``"path"`` for only the coupler's path and the drive's (:data:`PATH_SENSORS`, what a
+    study's row reads; the same values, without the reactions, energies and tracked nodes)."""
+    if sensors not in SENSOR_SETS:
+        raise ValueError(f"sensors must be one of {SENSOR_SETS}, got {sensors!r}")
     chosen, ratio = choose_mode(scene)
     mode = chosen if mode == "auto" else mode
     if mode not in MODES:
@@ -205,9 +233,9 @@ def run_linkage(
         run, stopped = error.partial, error
     times, q, qd, lam = run.time, run.q, run.qd, run.multipliers
     solved = wallclock.perf_counter()
-    sensors = evaluate_sensors(scene, times, q, qd, lam)
+    values = evaluate_sensors(scene, times, q, qd, lam, sensors)
     if stability:
-        sensors["stability_squared_frequencies"] = np.array(
+        values["stability_squared_frequencies"] = np.array(
             [s.squared_frequencies for s in stability_along(scene.system, times, q, lam, count=3)]
         )
     metadata = dict(
@@ -232,15 +260,15 @@ def run_linkage(
         modes_per_link=[link.reduction.n_modes for link in scene.links],
         assembly=stress.as_dict(),
     )
-    out = LinkageResult(times, sensors, q, metadata, stress)
+    out = LinkageResult(times, values, q, metadata, stress)
     out.metadata["summary"] = out.summary()
     if stability:
         out.metadata["stability"] = stability_summary(
-            sensors["stability_squared_frequencies"], np.degrees(sensors["drive_angle"]), "drive_angle_deg"
+            values["stability_squared_frequencies"], np.degrees(values["drive_angle"]), "drive_angle_deg"
         )
         snaps = getattr(run, "snaps", ())
         out.metadata["stability"]["snaps"] = [_snap_report(scene, snap) for snap in snaps]
-        out.critical = run_critical_pose(scene.system, times, q, lam, sensors["stability_squared_frequencies"], snaps)
+        out.critical = run_critical_pose(scene.system, times, q, lam, values["stability_squared_frequencies"], snaps)
         out.metadata["stability"]["critical"] = {
             **out.critical.summary(scene.system, shares="link_shares"),
             "drive_angle_deg": float(np.degrees(scene.drive_angle(out.critical.t))),

@@ -11,8 +11,10 @@ the same curve (``tests/test_kinematics/test_single_loop.py``).
 
 from __future__ import annotations
 
-from collections.abc import MutableMapping
+from collections.abc import Callable
 from dataclasses import dataclass, fields
+from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -21,7 +23,6 @@ from ffrf.errors import SceneError
 from ffrf.fe.interfaces import boundary_triangles
 from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.output.clearance import Clearance, link_clearance
-from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.scenes.builder import Scene, SceneBody, build_scene
 from ffrf.scenes.linkage_description import (
     BoreError,
@@ -32,6 +33,7 @@ from ffrf.scenes.linkage_description import (
     linkage_description,
     start_pose,
 )
+from ffrf.scenes.scene_cache import PROCESS_CACHE, SceneCache, content_key
 from ffrf.system.drives import CosineRamp
 from kinematics import LoopFoldError, SingleLoop, follow_driver, trace_motion
 
@@ -43,7 +45,8 @@ class LinkageScene(Scene):
     """A built linkage (as built: every bore error in place) with its nominal ``loop``, the ``driver``
     joint, its ``drive`` (ramp from ``start_angle``, rad, the driven joint's prescribed angle), the
     rigid loop's joint rotations ``start_phi`` at the start, the run's end ``t_end`` and the ``tool_link``
-    whose joint points' mean is the coupler point."""
+    whose joint points' mean is the coupler point; ``cache``: where its ideal (rigid) coupler path is kept by
+    content (:class:`~ffrf.scenes.scene_cache.SceneCache`, the one it was built with)."""
 
     loop: SingleLoop
     driver: int
@@ -52,6 +55,7 @@ class LinkageScene(Scene):
     start_phi: NDArray[np.float64]
     t_end: float
     tool_link: int
+    cache: SceneCache
 
     @property
     def links(self) -> tuple[SceneBody, ...]:
@@ -61,7 +65,7 @@ class LinkageScene(Scene):
     def gravity(self) -> NDArray[np.float64]:
         return self.system.gravity
 
-    @property
+    @cached_property
     def link_length(self) -> float:
         """Largest distance between the two joint points of one link (m)."""
         points = joint_points(self.loop)
@@ -87,9 +91,19 @@ class LinkageScene(Scene):
 
     def ideal_coupler_points(self, drive_angles: ArrayLike) -> NDArray[np.float64]:
         """The coupler point of the rigid nominal loop with the driven joint at ``drive_angles`` (in order)."""
-        phi = drive_sign(self.driver, self.loop.n) * np.asarray(drive_angles, dtype=float)
+        angles = np.asarray(drive_angles, dtype=float)
+        return self._kept("ideal coupler points", angles, lambda: self._rigid_coupler_points(angles))
+
+    def _rigid_coupler_points(self, angles: NDArray[np.float64]) -> NDArray[np.float64]:
+        phi = drive_sign(self.driver, self.loop.n) * angles
         motion = follow_driver(self.loop, self.driver, phi, start=self.start_phi)
         return motion.path(self.tool_link, self.home_coupler_point())
+
+    def _kept(self, what: Any, argument: Any, compute: Callable[[], NDArray[np.float64]]) -> NDArray[np.float64]:
+        """``compute()`` (a copy), computed once per ``what``, ``argument`` and this linkage's nominal loop, driver,
+        start and tool link: every variant of a study has the same ideal path."""
+        key = content_key(what, _loop_content(self.loop), self.driver, self.start_phi, self.tool_link, argument)
+        return np.array(self.cache.rigid_motions.get_or_compute(key, compute))
 
     def clearance(self, n_poses: int = 72, contact: float = 1e-3) -> Clearance:
         """Clearance of every pair of links along one revolution of the rigid nominal motion from the start,
@@ -110,9 +124,13 @@ class LinkageScene(Scene):
 
     def ideal_coupler_curve(self, n: int = 720) -> NDArray[np.float64]:
         """``n`` points of the ideal coupler curve over one revolution of the driver from the start."""
-        sign = drive_sign(self.driver, self.loop.n)
-        motion = trace_motion(self.loop, self.driver, n_poses=n, revolution=sign * 2 * np.pi, start=self.start_phi)
-        return motion.path(self.tool_link, self.home_coupler_point())
+
+        def curve() -> NDArray[np.float64]:
+            sign = drive_sign(self.driver, self.loop.n)
+            motion = trace_motion(self.loop, self.driver, n_poses=n, revolution=sign * 2 * np.pi, start=self.start_phi)
+            return motion.path(self.tool_link, self.home_coupler_point())
+
+        return self._kept("ideal coupler curve", n, curve)
 
 
 def _plain(error: BoreError) -> dict:
@@ -144,24 +162,56 @@ def _check_drive_range(loop: SingleLoop, options: LinkageOptions, start_phi: NDA
         ) from error
 
 
+def _loop_content(loop: SingleLoop) -> list:
+    """What the rigid loop's motion depends on: its axes' Pluecker coordinates (for :func:`content_key`)."""
+    return [(axis.direction, axis.moment) for axis in loop.axes]
+
+
+def _cached_start(loop: SingleLoop, options: LinkageOptions, cache: SceneCache) -> NDArray[np.float64]:
+    """:func:`~ffrf.scenes.linkage_description.start_pose` of the options, once per loop, driver, angle and origin."""
+    origin = None if options.origin is None else np.asarray(options.origin, dtype=float)
+    key = content_key("start pose", _loop_content(loop), options.driver, options.start_angle, origin)
+    start = cache.rigid_motions.get_or_compute(
+        key, lambda: start_pose(loop, options.driver, options.start_angle, options.origin)
+    )
+    return np.array(start)
+
+
+def _cached_range_check(
+    loop: SingleLoop, options: LinkageOptions, start_phi: NDArray, turn: float, where: str, cache: SceneCache
+) -> None:
+    """:func:`_check_drive_range`, passed once per loop, driver, start and turn (a refused range is not kept)."""
+
+    def check() -> bool:
+        _check_drive_range(loop, options, start_phi, turn, where)
+        return True
+
+    cache.rigid_motions.get_or_compute(
+        content_key("drive range", _loop_content(loop), options.driver, start_phi, turn), check
+    )
+
+
 def build_linkage(
     loop: SingleLoop,
     options: LinkageOptions | None = None,
     where: str | None = None,
-    reductions: MutableMapping[str, ModeBasis] | None = None,
+    cache: SceneCache | None = None,
 ) -> LinkageScene:
     """Build :func:`~ffrf.scenes.linkage_description.linkage_description` of ``loop`` with the one scene builder.
     A drive that turns its joint beyond a dead point of the rigid loop is refused (:class:`ffrf.errors.SceneError`);
-    ``where`` (default the linkage's name) starts every error message; ``reductions``: the content-keyed cache of
-    reduced bases :func:`~ffrf.scenes.builder.build_scene` reuses (default the process's own)."""
+    ``where`` (default the linkage's name) starts every error message; ``cache``: the content-keyed
+    :class:`~ffrf.scenes.scene_cache.SceneCache` of the rigid loop's start and range and of what
+    :func:`~ffrf.scenes.builder.build_scene` builds (default the process's own)."""
     options = LinkageOptions() if options is None else options
     where = options.name if where is None else where
+    cache = PROCESS_CACHE if cache is None else cache
     tool = checked_tool_link(loop, options)
-    start_phi = start_pose(loop, options.driver, options.start_angle, options.origin)
+    start_phi = _cached_start(loop, options, cache)
     description = linkage_description(loop, options, start_phi)
     t_end = float(description["scene"]["t_end"])
-    _check_drive_range(loop, options, start_phi, float(CosineRamp(options.omega, options.ramp_time)(t_end)), where)
-    scene = build_scene(description, where=where, reductions=reductions)
+    turn = float(CosineRamp(options.omega, options.ramp_time)(t_end))
+    _cached_range_check(loop, options, start_phi, turn, where, cache)
+    scene = build_scene(description, where=where, cache=cache)
     angle = next(j.angle for j in scene.joints if j.angle is not None)  # the drive the system runs with
     settings = dict(
         scene.settings,
@@ -186,4 +236,5 @@ def build_linkage(
         start_phi=start_phi,
         t_end=t_end,
         tool_link=tool,
+        cache=cache,
     )

@@ -23,6 +23,8 @@ from ffrf.system.system_kernels import system_residual
 
 __all__ = [
     "lu_solve",
+    "static_rhs",
+    "static_update",
     "alpha_iterations",
     "should_refactor",
     "CONVERGED",
@@ -33,6 +35,8 @@ __all__ = [
 ]
 
 CONVERGED, REFACTOR, NOT_FINITE, EXHAUSTED = 0, 1, 2, 3
+#: Machine epsilon of float64.
+EPS = float(np.finfo(np.float64).eps)
 # A poorly contracting increment already within this factor of the tolerance is one or two
 # cheap iterations from convergence: refactoring then costs more than it saves.
 NEAR_TOLERANCE = 100.0
@@ -102,6 +106,59 @@ def _max_abs(x: np.ndarray, start: int, stop: int) -> float:
     for i in range(start, stop):
         out = max(out, abs(x[i]))
     return out
+
+
+@njit(cache=True)
+def _max_abs_nan(x: np.ndarray, start: int, stop: int) -> float:
+    """``np.abs(x[start:stop]).max(initial=0.0)``, NaN if any entry is NaN (as numpy's)."""
+    out = 0.0
+    for i in range(start, stop):
+        value = abs(x[i])
+        if value != value:
+            return value
+        if value > out:
+            out = value
+    return out
+
+
+@njit(cache=True)
+def static_rhs(residual: np.ndarray, gap: np.ndarray) -> tuple[np.ndarray, bool]:
+    """The right-hand side ``-[r; g]`` of a static Newton step (Eq. (S1)) and whether ``r`` and ``g`` are finite."""
+    n, k = residual.shape[0], gap.shape[0]
+    out = np.empty(n + k)
+    finite = True
+    for i in range(n):
+        out[i] = -residual[i]
+        finite = finite and np.isfinite(residual[i])
+    for i in range(k):
+        out[n + i] = -gap[i]
+        finite = finite and np.isfinite(gap[i])
+    return out, finite
+
+
+@njit(cache=True)
+def static_update(q: np.ndarray, lam: np.ndarray, delta: np.ndarray, gap: np.ndarray, tolerance: float):
+    r"""One static Newton update (:func:`ffrf.solvers.static_solver._newton`): ``q + delta[:n]``, ``lam + delta[n:]``,
+    the increment ``max |delta[:n]|`` and the convergence test: the increment within ``tolerance`` of
+    ``max(1, max |q|)``, ``max |g| <= tolerance``, and the multiplier step within ``tolerance`` of
+    ``max(1, max |lam|)`` or the increment at round-off (``1e3 eps`` of that scale). The same arithmetic as numpy's
+    elementwise sums and maxima (NaN propagates), in one call instead of a dozen."""
+    n, k = q.shape[0], lam.shape[0]
+    q_new = np.empty(n)
+    lam_new = np.empty(k)
+    for i in range(n):
+        q_new[i] = q[i] + delta[i]
+    for i in range(k):
+        lam_new[i] = lam[i] + delta[n + i]
+    increment = _max_abs_nan(delta, 0, n)
+    scale = _max_abs_nan(q_new, 0, n)
+    scale = scale if scale > 1.0 else 1.0  # Python's max(1.0, x): 1.0 unless x > 1 (so also for NaN)
+    converged = False
+    if increment <= tolerance * scale and _max_abs_nan(gap, 0, k) <= tolerance:
+        multipliers = _max_abs_nan(lam_new, 0, k)
+        multipliers = multipliers if multipliers > 1.0 else 1.0
+        converged = _max_abs_nan(delta, n, n + k) <= tolerance * multipliers or increment <= 1e3 * EPS * scale
+    return q_new, lam_new, increment, converged
 
 
 @njit(cache=True)

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 from ffrf.errors import StaticDivergence
 from ffrf.numerics.rank_revealing import FactoredMatrix, factor
 from ffrf.solvers.common import extrapolation_weights
+from ffrf.solvers.newton_kernels import static_rhs, static_update
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import PackedSystem, newton_model
 
@@ -143,30 +144,23 @@ def _newton(
     refactor_above = 1.0 if secant else 0.5
     for iteration in range(1, max_iterations + 1):
         residual, gap = model.residual(q, zeros, zeros, lam, t)
-        if not (np.all(np.isfinite(residual)) and np.all(np.isfinite(gap))):
+        rhs, finite = static_rhs(residual, gap)
+        if not finite:
             raise StaticDivergence(f"NaN in the static residual (iteration {iteration}); check the model and the start")
         if tangent is None:
             tangent = _factor_tangent(model, q, lam, t)
             free_motions = max(free_motions, tangent.rank_deficiency)
             updates = None
-        delta = tangent.solve(-np.concatenate([residual, gap]))
+        delta = tangent.solve(rhs)
         if secant and tangent.factors is not None:  # a pseudo-inverse (singular tangent) is used as is
             if updates is None:
                 updates = _Secant(1.0 / tangent.cols**2)
             delta = updates.step(delta)
-        q = q + delta[:n]
-        lam = lam + delta[n:]
-        increment = np.abs(delta[:n]).max()
-        increments.append(increment)
-        scale = max(1.0, np.abs(q).max())
-        multipliers_settled = np.abs(delta[n:]).max(initial=0.0) <= tolerance * max(1.0, np.abs(lam).max(initial=0.0))
         # Multipliers of (nearly) redundant constraints, as in near-rigid closed loops, are fixed only to
         # round-off; once the positions stop changing at machine precision, further iterations cannot help.
-        if (
-            increment <= tolerance * scale
-            and np.abs(gap).max() <= tolerance
-            and (multipliers_settled or increment <= 1e3 * np.finfo(float).eps * scale)
-        ):
+        q, lam, increment, converged = static_update(q, lam, delta, gap, tolerance)
+        increments.append(increment)
+        if converged:
             return q, lam, iteration, tangent
         if increment > refactor_above * previous:
             tangent = None

@@ -13,9 +13,10 @@ nominal meshes: the link keeps its nominal mesh and bore interface, and only tha
 the erroneous axis and point, a joint-frame misfit that the static assembly closes elastically
 (:class:`ffrf.scenes.linkage_description.LinkageOptions`). The rule: the bore's material is where the nominal
 bore is, so the model is a small-error approximation of the remeshed part (``"remesh"``), good while the bore's
-shift and the twist times the housing length are small against the housing's wall and the element size. Its error
-against remeshing is not measured yet. With the misfit model, variants that differ only in bore errors have the
-same meshes, hence the same reductions, which the worker's cache (:class:`ReductionCache`) keys by content.
+shift and the twist times the housing length are small against the housing's wall and the element size
+(``docs/studies.md`` gives its error against remeshing). With the misfit model, variants that differ only in bore
+errors have the same meshes, FE matrices, reductions and rigid start, which the worker's
+:class:`~ffrf.scenes.scene_cache.SceneCache` keeps by content: such a variant pays only for its assembly and path.
 """
 
 from __future__ import annotations
@@ -25,24 +26,21 @@ import math
 import os
 import socket
 import time
-from collections import OrderedDict
-from collections.abc import Iterator, MutableMapping
 from dataclasses import replace
 from typing import Any
 
 from ffrf.errors import AssemblyDivergence, FEInputError, NewtonDivergence, StaticDivergence
-from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions
 from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_run import LinkageResult, run_linkage
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
+from ffrf.scenes.scene_cache import SceneCache
 from ffrf.studies.sampling import Variant
 from ffrf.studies.spec import Study
 from ffrf.system.drives import rpm
 
 __all__ = [
-    "ReductionCache",
     "OUTPUTS",
     "output_names",
     "row_names",
@@ -60,50 +58,6 @@ OUTPUTS = (
     "max_abs_driving_torque_Nm",
     "assembly_strain_energy_J",
 )
-#: Reduced bases a worker keeps (a coarse link's basis is kilobytes, the default discretisation's megabytes).
-CACHE_ENTRIES = 64
-
-
-class ReductionCache(MutableMapping[str, ModeBasis]):
-    """Reduced bases by content fingerprint (mesh, material, interfaces, modes:
-    :func:`ffrf.reduction.reduced_io.reduction_fingerprint`), the ``max_entries`` most recently used; ``hits``
-    counts the bases found, ``misses`` those computed."""
-
-    def __init__(self, max_entries: int = CACHE_ENTRIES) -> None:
-        self.max_entries = max_entries
-        self._entries: OrderedDict[str, ModeBasis] = OrderedDict()
-        self.hits = 0
-        self.misses = 0
-
-    def __getitem__(self, key: str) -> ModeBasis:
-        value = self._entries[key]
-        self._entries.move_to_end(key)
-        return value
-
-    def __contains__(self, key: object) -> bool:
-        found = key in self._entries
-        self.hits += found  # the builder asks before it computes (ffrf.scenes.builder._reduction)
-        return found
-
-    def __setitem__(self, key: str, value: ModeBasis) -> None:
-        self.misses += 1
-        self._entries[key] = value
-        self._entries.move_to_end(key)
-        while len(self._entries) > self.max_entries:
-            self._entries.popitem(last=False)
-
-    def __delitem__(self, key: str) -> None:
-        del self._entries[key]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._entries)
-
-    def __len__(self) -> int:
-        return len(self._entries)
-
-
-#: This process's cache: a Dask worker keeps it between the variants it runs.
-_CACHE = ReductionCache()
 
 
 def output_names(n_links: int) -> tuple[str, ...]:
@@ -186,16 +140,13 @@ def variant_options(study: Study, values: dict[str, float]) -> tuple[Any, Linkag
     return loop, replace(options, material=material, design=design, bore_errors=errors, **changes), run
 
 
-def build_variant(
-    study: Study, values: dict[str, float], reductions: MutableMapping[str, ModeBasis] | None = None
-) -> tuple[LinkageScene, dict]:
-    """The scene of one variant and its run settings; ``reductions``: the cache of reduced bases (default the
-    process's :class:`ReductionCache`)."""
+def build_variant(study: Study, values: dict[str, float], cache: SceneCache | None = None) -> tuple[LinkageScene, dict]:
+    """The scene of one variant and its run settings; ``cache``: what earlier builds computed, by content (default
+    the process's :data:`~ffrf.scenes.scene_cache.PROCESS_CACHE`, which a Dask worker keeps between variants)."""
     loop, options, run = variant_options(study, values)
-    reductions = _CACHE if reductions is None else reductions
     if loop is None:
-        return build_bennett_from_options(options, study.base.bennett or "pla", reductions), run
-    return build_linkage(loop, options, where=f"{study.name}, variant", reductions=reductions), run
+        return build_bennett_from_options(options, study.base.bennett or "pla", cache), run
+    return build_linkage(loop, options, where=f"{study.name}, variant", cache=cache), run
 
 
 def _outputs(result: LinkageResult | None, n_links: int, path: bool) -> dict[str, float]:
@@ -214,7 +165,7 @@ def _outputs(result: LinkageResult | None, n_links: int, path: bool) -> dict[str
     return out
 
 
-def run_variant(study: Study, variant: Variant, reductions: MutableMapping[str, ModeBasis] | None = None) -> dict:
+def run_variant(study: Study, variant: Variant, cache: SceneCache | None = None) -> dict:
     """Build and run one variant; its row (module docstring). A variant that fails is a row with its reason, never
     an exception (bad input from the parameters, no assembly, a diverging path, or any other error)."""
     started = time.perf_counter()
@@ -222,8 +173,8 @@ def run_variant(study: Study, variant: Variant, reductions: MutableMapping[str, 
     row |= {"status": "failed", "reason": "", "assembles": None} | dict(variant.values)
     result, path = None, False
     try:
-        scene, run = build_variant(study, variant.values, reductions)
-        result = run_linkage(scene, mode=run["mode"], n_outputs=run["outputs"])
+        scene, run = build_variant(study, variant.values, cache)
+        result = run_linkage(scene, mode=run["mode"], n_outputs=run["outputs"], sensors="path")
         row |= {"status": "ok", "assembles": True}
         path = True
     except AssemblyDivergence as error:

@@ -57,3 +57,28 @@ def test_zero_workers_are_refused(tmp_path, capsys):
 def test_a_report_of_a_folder_without_a_study_is_refused(tmp_path, capsys):
     assert main(["study-report", str(tmp_path)]) == 2
     assert "holds no study (no study.json)" in capsys.readouterr().err
+
+
+def test_an_out_folder_of_another_study_is_refused(tmp_path, capsys):
+    """A folder whose study.json is another study's (here another name and base) would mix its rows with this
+    study's: refused before anything runs, naming the fix; the same study, or more samples of it, is accepted."""
+    import json
+
+    from ffrf.studies.runner import _check_same_study, _description
+    from ffrf.studies.spec import load_study
+
+    first, second = tmp_path / "first.toml", tmp_path / "second.toml"
+    first.write_text(GOOD)
+    second.write_text(GOOD.replace('bennett = "pla"', 'bennett = "pla1"').replace("[study]", '[study]\nname = "other"'))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "study.json").write_text(json.dumps(_description(load_study(first))))
+    (out / "rows").mkdir()
+    assert main(["study", str(second), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "holds the rows of another study" in err and "another output folder (--out), or delete" in err, err
+    assert len(err.strip().splitlines()) == 1
+    assert json.loads((out / "study.json").read_text())["name"] == "study"  # untouched
+    _check_same_study(load_study(first), out)  # its own folder
+    first.write_text(GOOD.replace("samples = 8", "samples = 16"))
+    _check_same_study(load_study(first), out)  # more samples of the same study

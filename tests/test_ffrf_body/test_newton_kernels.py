@@ -8,7 +8,7 @@ import scipy.linalg
 from ffrf.scenes.bennett_scene import assemble, build_bennett
 from ffrf.solvers.common import consistent_accelerations
 from ffrf.solvers.generalized_alpha import AlphaParameters, _Newton, _State, _step
-from ffrf.solvers.newton_kernels import lu_solve
+from ffrf.solvers.newton_kernels import lu_solve, static_rhs, static_update
 from ffrf.system.packed_system import pack_system
 
 
@@ -69,3 +69,48 @@ def test_non_finite_residual_is_reported(bennett):
     state.qd[0] = np.nan
     new, count, diagnostics = _step(_Newton(packed, par, 1e-10, 12, True), state, 1e-3, 1e-3)
     assert new is None and count == 1 and "NaN" in diagnostics
+
+
+def _numpy_update(q, lam, delta, gap, tolerance):
+    """The static Newton update as numpy expressions (what ffrf.solvers.static_solver._newton did before the kernel)."""
+    n = q.shape[0]
+    q_new, lam_new = q + delta[:n], lam + delta[n:]
+    increment = np.abs(delta[:n]).max()
+    scale = max(1.0, np.abs(q_new).max())
+    settled = np.abs(delta[n:]).max(initial=0.0) <= tolerance * max(1.0, np.abs(lam_new).max(initial=0.0))
+    converged = bool(
+        increment <= tolerance * scale
+        and np.abs(gap).max() <= tolerance
+        and (settled or increment <= 1e3 * np.finfo(float).eps * scale)
+    )
+    return q_new, lam_new, increment, converged
+
+
+@pytest.mark.parametrize("case", ["far", "converged", "positions only", "round-off", "nan"])
+def test_the_static_update_kernel_equals_its_numpy_expressions_bit_for_bit(case):
+    """static_rhs and static_update: the same numbers as numpy's elementwise sums and maxima, to the bit, and the
+    same verdict, in each branch of the convergence test (and a NaN increment, which numpy propagates)."""
+    rng = np.random.default_rng(11)
+    n, k = 30, 12  # a system always has constraints: at least each body's Euler normalisation
+    q, lam = rng.standard_normal(n) * 3.0, rng.standard_normal(k) * 50.0
+    scale = {"far": 1e-3, "converged": 1e-13, "positions only": 1e-11, "round-off": 1e-14}
+    delta = rng.standard_normal(n + k) * scale.get(case, 1e-3)
+    gap = rng.standard_normal(k) * (1e-12 if case != "far" else 1e-3)
+    if case == "positions only":
+        delta[n:] *= 1e4  # the multipliers still move, the positions do not: not converged
+    if case == "round-off":
+        delta[n:] *= 1e8
+        q *= 100.0
+    if case == "nan":
+        delta[3] = np.nan
+    expected = _numpy_update(q, lam, delta, gap, 1e-10)
+    got = static_update(q, lam, delta, gap, 1e-10)
+    np.testing.assert_array_equal(got[0], expected[0])
+    np.testing.assert_array_equal(got[1], expected[1])
+    assert got[2] == expected[2] or (np.isnan(got[2]) and np.isnan(expected[2]))
+    assert got[3] == expected[3] == (case in ("converged", "round-off"))
+    residual = rng.standard_normal(n)
+    residual[0] = np.nan if case == "nan" else residual[0]
+    rhs, finite = static_rhs(residual, gap)
+    np.testing.assert_array_equal(rhs, -np.concatenate([residual, gap]))
+    assert finite == bool(np.all(np.isfinite(residual)) and np.all(np.isfinite(gap)))
