@@ -178,10 +178,13 @@ def _progress_printer():
     return show
 
 
-def _run_and_report(scene, out: Path, label: str, started: float, options: dict, paper: str = "") -> int:
+def _run_and_report(
+    scene, out: Path, label: str, started: float, options: dict, paper: str = "", then: Callable | None = None
+) -> int:
     """Run a built linkage scene (:mod:`ffrf.scenes.linkage_run`) and write what ``bennett`` and ``linkage`` write.
 
-    ``options``: ``mode`` (``auto``, ``quasi_static``, ``dynamic``), ``outputs``, ``step`` (s), ``vtk_every``."""
+    ``options``: ``mode`` (``auto``, ``quasi_static``, ``dynamic``), ``outputs``, ``step`` (s), ``vtk_every``;
+    ``then(result)``: more to do with a run that did not stop (``linkage --reach``)."""
     import time
 
     from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
@@ -275,6 +278,8 @@ def _run_and_report(scene, out: Path, label: str, started: float, options: dict,
             file=sys.stderr,
         )
         return 1
+    if then is not None:
+        then(result)
     return 0
 
 
@@ -380,6 +385,18 @@ def _configure_linkage(parser: argparse.ArgumentParser) -> None:
         metavar="JOINT:LINK:TWIST_DEG[:OFFSET_MM]",
         help="as built: joint JOINT's bore on link LINK turned about the link's common normal (repeatable)",
     )
+    parser.add_argument(
+        "--reach",
+        action="store_true",
+        help="after the run: the energy barrier from the motion to each isolated assembly of the rigid loop, by the "
+        "string method (docs/stability.md; minutes per assembly); writes reach.json",
+    )
+    parser.add_argument(
+        "--reach-images",
+        type=_count_at_least(3),
+        default=21,
+        help="images of the string between the motion and an assembly, both ends included (default 21)",
+    )
     _configure_linkage_run(parser)
 
 
@@ -390,6 +407,12 @@ def _run_linkage(args: argparse.Namespace) -> int:
     from ffrf.scenes.linkage_file import load_linkage
 
     started = time.perf_counter()
+    if args.reach and args.bore_error:
+        raise SceneError(
+            "--reach measures the nominal linkage (the isolated assemblies are the nominal loop's): drop --bore-error"
+        )
+    if args.reach and args.variant == "rigid":
+        raise SceneError("--reach measures strain energy, which rigid links do not store: use --variant pla")
     _output_folder(args.out)
     material = LINKAGE_VARIANTS[args.variant]
     document = {  # the linkage file these options stand for (ffrf.scenes.linkage_file)
@@ -414,7 +437,65 @@ def _run_linkage(args: argparse.Namespace) -> int:
     )
     scene = load_linkage(document, where="python -m ffrf linkage")
     (args.out / "linkage.json").write_text(json.dumps(document, indent=2))
-    return _run_and_report(scene, args.out, f"{args.model} {args.variant}", started, _options(args))
+    then = (lambda result: _write_reach(scene, result, args.out, args.reach_images)) if args.reach else None
+    return _run_and_report(scene, args.out, f"{args.model} {args.variant}", started, _options(args), then=then)
+
+
+def _write_reach(scene, result, out: Path, images: int) -> None:
+    """``reach.json``: per isolated assembly of the nominal loop, the energy barrier from the motion
+    (:func:`ffrf.scenes.linkage_reach.reach_isolated`) against the drive's work of ``result`` and PLA's strength."""
+    import time
+
+    from ffrf.fe.materials import PLA_TENSILE_STRENGTH
+    from ffrf.scenes.linkage_reach import ReachOptions, drive_work, isolated_assemblies, reach_isolated
+
+    started = time.perf_counter()
+    work = drive_work(result.sensors["driving_torque"], result.sensors["drive_angle"])
+    nearby = isolated_assemblies(scene)
+    print(
+        f"reach: {len(nearby.isolated)} isolated assemblies of the rigid loop near its motion; the string method "
+        f"({images} images) to each ...",
+        file=sys.stderr,
+    )
+
+    def show(iteration: int, residual: float) -> None:
+        if iteration % 100 == 0:
+            print(f"\r  iteration {iteration}, residual {residual:.2e} N m", end="", file=sys.stderr, flush=True)
+
+    reaches = reach_isolated(
+        scene,
+        result.assembly.q,
+        nearby.isolated,
+        work["work_J"],
+        PLA_TENSILE_STRENGTH,
+        ReachOptions(images=images),
+        show,
+    )
+    print(file=sys.stderr)
+    table = {
+        "model": scene.name,
+        "drive": {**work, "compared_with": "work_J: the drive's work over the run's last revolution where it drives"},
+        "strength_pa": PLA_TENSILE_STRENGTH,
+        "strength_source": "PLA at break, NatureWorks Ingeo 4043D data sheet (ffrf.fe.materials.PLA_TENSILE_STRENGTH)",
+        "nearby": {
+            "starts": nearby.starts,
+            "converged": nearby.converged,
+            "on_motion": nearby.on_motion,
+            "isolated": len(nearby.isolated),
+        },
+        "assemblies": [r.as_dict() for r in reaches],
+        "seconds": time.perf_counter() - started,
+    }
+    (out / "reach.json").write_text(json.dumps(table, indent=1))
+    for k, r in enumerate(reaches):
+        print(
+            f"reach of isolated assembly {k} ({np.degrees(r.assembly.distance_rms):.3g} deg RMS from the motion): "
+            f"barrier {1e3 * r.barrier:.4g} mJ (straight path {1e3 * r.straight_barrier:.4g} mJ), "
+            f"{r.work_ratio:.3g} of the drive's work over a revolution, {1e3 * work['work_J']:.4g} mJ: {r.verdict}; "
+            f"largest von Mises stress on the way {1e-6 * r.peak_stress:.3g} MPa, {r.stress_ratio:.3g} of PLA's "
+            f"strength" + ("" if r.path.converged else f" (string not converged: residual {r.path.residual:.2e} N m)")
+        )
+    print(f"-> {out / 'reach.json'}")
 
 
 def _configure_run(parser: argparse.ArgumentParser) -> None:
@@ -479,14 +560,22 @@ def _configure_study(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-report", action="store_true", help="do not write report.md after the run")
 
 
-def _positive_count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}")
-    return value
+def _count_at_least(smallest: int) -> Callable[[str], int]:
+    """An argparse type: a whole number >= ``smallest``."""
+
+    def count(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = smallest - 1
+        if value < smallest:
+            raise argparse.ArgumentTypeError(f"must be a whole number >= {smallest}, got {text!r}")
+        return value
+
+    return count
+
+
+_positive_count = _count_at_least(1)
 
 
 def _run_study(args: argparse.Namespace) -> int:

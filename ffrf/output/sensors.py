@@ -24,20 +24,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.body.flexible_body import node_positions
-from ffrf.numerics.small_linalg import cross3
 from ffrf.output.energy_balance import energy_balance
 from ffrf.system.joints import MarkerJoint
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
-from ffrf.system.reactions import joint_poses, joint_reactions
+from ffrf.system.reactions import driving_torques, joint_poses, joint_reactions, relative_angle
 
 __all__ = ["relative_angle", "joint_rows", "node_sensors", "scene_sensors", "path_sensors"]
-
-
-def relative_angle(poses: tuple) -> float:
-    """Rotation of side 1 against side 0 about z0 (rad), from :func:`ffrf.system.reactions.joint_poses`."""
-    _, axes0, _, axes1 = poses
-    return float(np.arctan2(cross3(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0]))
 
 
 def _marker_joints(system: MultibodySystem) -> list[tuple[int, MarkerJoint]]:
@@ -68,12 +61,13 @@ def joint_rows(
     for row, t in enumerate(time):
         qq = q[row]
         poses = {j.name: joint_poses(j, [qq[system.block(i)] for i in j.bodies]) for _, j in joints}
-        for k, joint in joints:
+        torques = driving_torques(system, multipliers[row])
+        for _, joint in joints:
             rows[f"{joint.name}_angle"].append(relative_angle(poses[joint.name]))
             rows[f"{joint.name}_point0"].append(poses[joint.name][0])
             rows[f"{joint.name}_point1"].append(poses[joint.name][2])
-            if joint.angle is not None:  # the angle equation is the joint's last row
-                rows[f"{joint.name}_torque"].append(multipliers[row, int(system.rows[k + 1]) - 1])
+            if joint.angle is not None:
+                rows[f"{joint.name}_torque"].append(torques[joint.name])
         if only is not None:
             continue
         reactions = joint_reactions(system, qq, multipliers[row], float(t), poses)

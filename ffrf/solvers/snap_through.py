@@ -5,9 +5,10 @@ the equilibrium path the path turns back in t, so no nearby equilibrium exists b
 drive or a dead load taken past the fold makes the structure jump, at that t, to an equilibrium of another
 branch. Continuation (Eq. (S5)) follows the path through the fold, back along the unstable branch to the other
 fold, where it turns forward again; where it passes the first fold's t once more lies the landing equilibrium.
-The jump happens at fixed t, so the drive does no work in it: the potential energy the structure holds at the
-fold (strain, gravity, force elements) less that at the landing is what the jump releases, as kinetic energy that
-damping then dissipates.
+The jump happens at fixed t, so the drive does no work in it and a load that depends on time alone is a dead load
+in it: the potential energy the structure holds at the fold (strain, gravity, force elements, and such loads'
+potential -F.x) less that at the landing is what the jump releases, as kinetic energy that damping then
+dissipates.
 """
 
 from __future__ import annotations
@@ -51,16 +52,12 @@ class SnapThrough:
     path: EquilibriumPath
 
     def energy_released(self, system: MultibodySystem) -> float | None:
-        """Potential energy at the fold less that at the landing (J): strain, gravity and force elements."""
+        """Potential energy at the fold less that at the landing (J): strain, gravity, force elements and the dead
+        loads at the fold's t, whose work in the jump it includes
+        (:meth:`~ffrf.system.multibody.MultibodySystem.potential_energy`)."""
         if self.landing_q is None:
             return None
-        zero = np.zeros_like(self.fold_q)
-
-        def held(q: NDArray) -> float:
-            energies = system.energies(q, zero, self.fold_t)
-            return energies["strain"] + energies["potential"] + energies.get("elements", 0.0)
-
-        return held(self.fold_q) - held(self.landing_q)
+        return system.potential_energy(self.fold_q, self.fold_t) - system.potential_energy(self.landing_q, self.fold_t)
 
 
 def snap_summary(system: MultibodySystem, snap: SnapThrough) -> dict:

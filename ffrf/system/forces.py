@@ -71,6 +71,12 @@ class ForceElement:
         """Energy stored in the element (J); zero for loads and drives."""
         return 0.0
 
+    def load_potential(self, blocks: list[NDArray], t: float) -> float:
+        """Potential of the element's load at fixed ``t`` (J), whose decrease is the load's work in a motion at that
+        ``t`` (a snap's jump, Eq. (S6)); zero for elements whose load has none (springs store theirs in
+        :meth:`potential_energy`; drives, follower and state-dependent loads are not conservative)."""
+        return 0.0
+
 
 def marker_jacobians(marker: BodyMarker | GroundFrame, q: NDArray | None) -> tuple[NDArray, NDArray, Any, Any]:
     r"""Point, axes (columns) and Eq. (E4)'s Jacobians :math:`G_p = \partial r/\partial q` and
@@ -232,6 +238,16 @@ class MarkerLoad(ForceElement):
     @property
     def complex_safe(self) -> bool:
         return not (_takes_state(self.force) or _takes_state(self.torque))
+
+    def load_potential(self, blocks, t):
+        r""":math:`-F(t)\cdot x` (x the marker point) for a world force that is constant or a function of time alone: at
+        fixed t it is a dead load, whose work in any motion is the fall of this potential. A force in the marker's
+        axes turns with it and one that reads the state is not conservative, and a torque's work depends on the
+        path of the rotation: they have none (0)."""
+        if self.force is None or self.frame != "world" or _takes_state(self.force):
+            return 0.0
+        point = joint_side(self.marker, blocks[0], np.eye(3), np.zeros(3))[0]
+        return -float(np.real(_vector(self.force, t) @ point))
 
     def forces(self, blocks, velocities, t):
         point, axes, g_point, g_omega = marker_jacobians(self.marker, blocks[0])

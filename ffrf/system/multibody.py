@@ -180,6 +180,16 @@ class MultibodySystem:
             out["elements"] = sum(e.potential_energy(self._blocks(e.bodies, q, qd)[0], t) for e in self.forces)
         return out
 
+    def potential_energy(self, q, t: float = 0.0) -> float:
+        r"""Energy an equilibrium holds at fixed t (J): strain, gravity, the force elements' stored energy (Eq. (E2))
+        and the potential :math:`-F(t)\cdot x` of every load that is conservative at fixed t (a world force that
+        depends on time alone, :meth:`~ffrf.system.forces.ForceElement.load_potential`). It is the V of a snap's
+        jump (Eq. (S6)) and of a forced joint configuration (Eq. (S7))."""
+        zero = np.zeros_like(q)
+        energies = self.energies(q, zero, t)
+        loads = sum(e.load_potential(self._blocks(e.bodies, q, zero)[0], t) for e in self.forces)
+        return energies["strain"] + energies["potential"] + energies.get("elements", 0.0) + loads
+
     def rigid_velocity(
         self,
         q: NDArray,

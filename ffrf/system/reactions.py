@@ -15,7 +15,8 @@ virtual displacement :math:`\delta p_1` and rotation :math:`\delta\varphi_1` of 
 Side 0 feels the opposite wrench at the same point (actio = reactio; the joint point is
 common to both sides when the constraints hold). For a driven revolute the torque about
 :math:`z_0` is :math:`-\lambda_5\,z_0\cdot(y_1\times x_0') = \lambda_5` when the frames are
-aligned: the driving torque applied to side 1.
+aligned: the driving torque applied to side 1. It is also the derivative of the equilibrium's potential energy by
+the prescribed angle (``docs/formulation.md``, Eq. (S8)).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from ffrf.numerics.small_linalg import cross3
 from ffrf.system.joints import MarkerJoint, joint_pose
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["JointReaction", "joint_poses", "joint_reaction", "joint_reactions"]
+__all__ = ["JointReaction", "driving_torques", "joint_poses", "joint_reaction", "joint_reactions", "relative_angle"]
 
 
 @dataclass(frozen=True)
@@ -56,6 +57,12 @@ def joint_poses(joint: MarkerJoint, blocks: list[NDArray]) -> tuple[NDArray, NDA
     p0, axes0 = joint_pose(joint.marker0, q0, joint.rotation0, joint.offset0)
     p1, axes1 = joint_pose(joint.marker1, q1, joint.rotation1, joint.offset1)
     return p0, axes0, p1, axes1
+
+
+def relative_angle(poses: tuple) -> float:
+    """Rotation of side 1 against side 0 about z0 (rad), from :func:`joint_poses`."""
+    _, axes0, _, axes1 = poses
+    return float(np.arctan2(cross3(axes0[:, 0], axes1[:, 0]) @ axes0[:, 2], axes0[:, 0] @ axes1[:, 0]))
 
 
 def joint_reaction(
@@ -99,3 +106,13 @@ def joint_reactions(
             known = None if poses is None else poses.get(c.name)
             out[c.name] = joint_reaction(c, [q[system.block(i)] for i in c.bodies], lam, t, known)
     return out
+
+
+def driving_torques(system: MultibodySystem, multipliers: NDArray) -> dict[str, float]:
+    """Per joint with a prescribed angle (Eq. (J3)), by name: the multiplier of its angle equation, its last row, which
+    is the torque about z0 applied to side 1 (module docstring) and dV/d(angle) of the equilibrium (Eq. (S8))."""
+    return {
+        c.name: float(multipliers[int(system.rows[k + 1]) - 1])
+        for k, c in enumerate(system.all_constraints)
+        if isinstance(c, MarkerJoint) and c.angle is not None
+    }

@@ -5,6 +5,7 @@ torque and under a motor's torque-speed curve, a body hanging from a bushing, a 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from body_fixtures import bar_model
 from pendulum_fixtures import pendulum
 
@@ -278,3 +279,29 @@ def test_a_state_dependent_drag_load_damps_a_mass_on_a_spring_as_the_closed_form
     damped, t = omega * np.sqrt(1.0 - zeta**2), result.time
     exact = np.exp(-zeta * omega * t) * (np.cos(damped * t) + zeta / np.sqrt(1.0 - zeta**2) * np.sin(damped * t))
     assert np.max(np.abs(result.q[:, 0] / 1e-3 - exact)) < 1e-4  # the damper's own run: 3.1e-6
+
+
+def test_a_dead_load_on_a_spring_holds_its_closed_form_potential_energy():
+    """A rigid bar held at its centre c by a spring k, loaded there by F along x, no gravity: at the equilibrium
+    x = F/k the potential energy (MultibodySystem.potential_energy) is the spring's 1/2 k x^2 plus the dead load's
+    -F (c_x + x) (its marker's world point), also for a force that depends on time alone, at that time. The same
+    force in the marker's axes (a follower load) or as a function of the state has no potential: only the
+    spring's energy is left."""
+    body, model, _ = _rigid_bar()
+    k, force = 18.0, 0.09
+    centre = model.center_of_mass
+    marker = frame_marker(0, 0, centre, "centre")
+    spring = _translational_spring(body, centre, k)
+    loads = {
+        "world": MarkerLoad((0,), "load", marker, force=[force, 0.0, 0.0]),
+        "in time": MarkerLoad((0,), "load", marker, force=lambda t: [force * t, 0.0, 0.0]),
+        "marker": MarkerLoad((0,), "load", marker, force=[force, 0.0, 0.0], frame="marker"),
+        "state": MarkerLoad((0,), "load", marker, force=lambda t, x, v: [force, 0.0, 0.0]),
+    }
+    for kind, load in loads.items():
+        system = MultibodySystem((body,), (), forces=(spring, load))
+        solution = static_equilibrium(system, system.initial_state(), t=1.0)
+        stretch = solution.q[0]  # the frame's x, and the marker's move from the spring's ground point
+        assert stretch == pytest.approx(force / k, rel=1e-9)
+        dead = -force * (centre[0] + stretch) if kind in ("world", "in time") else 0.0
+        assert system.potential_energy(solution.q, 1.0) == pytest.approx(0.5 * k * stretch**2 + dead, rel=1e-12)
