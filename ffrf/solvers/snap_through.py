@@ -178,6 +178,36 @@ def _landing(system: MultibodySystem, before: tuple, after: tuple, t: float, tol
     return solution.q, solution.multipliers
 
 
+def bridge(
+    system: MultibodySystem,
+    q0: NDArray,
+    multipliers0: NDArray,
+    t0: float,
+    t_target: float,
+    step: float,
+    max_points: int = 600,
+    tolerance: float = 1e-10,
+) -> tuple[NDArray, NDArray] | None:
+    """The equilibrium at ``t_target`` reached from ``(q0, multipliers0)`` at ``t0`` by pseudo-arclength continuation
+    (Eq. (S5), first arclength ``step``) across a stretch the quasi-static steps cannot follow (the path turns
+    sharply within a step, as near a singular pose of the rigid loop); ``None`` if the path turns back in t first
+    (a fold: :func:`trace_snap` follows it) or takes more than ``max_points`` points."""
+    direction = 1.0 if t_target >= t0 else -1.0
+    speed = path_speed(system, q0, multipliers0, t0)
+    step = _forward_step(system, q0, multipliers0, t0, direction, step, tolerance, speed)
+    previous = None
+    for k, point in enumerate(path_points(system, q0, multipliers0, t0, direction, step, tolerance, speed=speed)):
+        if previous is not None:
+            if (point[0] - previous[0]) * direction <= 0.0:
+                return None
+            if (point[0] - t_target) * direction >= 0.0:
+                return _landing(system, previous, point, t_target, tolerance)
+        if k >= max_points:
+            return None
+        previous = point
+    return None
+
+
 def quasi_static_through_snaps(
     system: MultibodySystem,
     q0: NDArray,
@@ -214,6 +244,17 @@ def quasi_static_through_snaps(
         if not qs or len(snaps) >= max_snaps:
             raise _with_partial(stop, qs, lams, counts, snaps)
         reached = times[len(qs) - 1]
+        remaining = times[len(qs) :]
+        crossed = None
+        if remaining.size:  # a sharp stretch of the path without a fold: bridged to the next output
+            crossed = bridge(system, qs[-1], lams[-1], float(reached), float(remaining[0]), step=spacing / 8.0)
+        if crossed is not None:
+            log.info("quasi-static path bridged by continuation from t = %.6g to %.6g s", reached, remaining[0])
+            qs.append(crossed[0])
+            lams.append(crossed[1])
+            counts.append(0)
+            start, todo, landed = crossed[0], remaining, True
+            continue
         snap = trace_snap(system, qs[-1], lams[-1], float(reached), float(times[-1]), step=spacing)
         if snap is None:
             raise _with_partial(stop, qs, lams, counts, snaps)

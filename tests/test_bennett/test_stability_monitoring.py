@@ -70,3 +70,42 @@ def test_stability_of_a_dynamic_run_is_refused(tmp_path, capsys):
     assert code == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "stability is judged at equilibria" in err
+
+
+#: One print of the paper's PLA Bennett with every bore off (joint, link, twist deg, offset mm), drawn by the
+#: 2000-print study (examples/study_bennett_pla_2000.toml): near the pose where all four joints pass 180 deg its
+#: equilibrium path turns within one quasi-static step, and plain quasi-static steps stop there (at 15.76 s).
+SHARP_PRINT = (
+    (0, 0, 0.4342, -0.0363),
+    (0, 1, 0.0822, 0.0057),
+    (1, 1, 1.2655, -0.0748),
+    (1, 2, 0.0821, 0.1031),
+    (2, 2, 0.5452, 0.0104),
+    (2, 3, 0.0705, -0.1099),
+    (3, 0, -0.148, -0.1165),
+    (3, 3, -0.5407, 0.0244),
+)
+
+
+def test_a_sharp_turn_of_the_path_without_a_fold_is_bridged_onto_the_branch_the_dynamics_follow():
+    """``stability`` runs bridge a stretch the quasi-static steps cannot follow by continuation (Eq. (S5)): the run
+    completes with no snap, and the bridged equilibrium is the one Newton finds from the state of a dynamic run of
+    the same print at that time (an independent path to it: the linkage at 1 rpm stays near equilibrium)."""
+    from dataclasses import replace
+
+    from ffrf.errors import StaticDivergence
+    from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
+    from ffrf.scenes.linkage_description import BoreError
+    from ffrf.solvers.static_solver import static_equilibrium
+
+    errors = tuple(BoreError(j, k, np.radians(twist), 1e-3 * offset) for j, k, twist, offset in SHARP_PRINT)
+    scene = build_bennett_from_options(replace(bennett_options("pla"), bore_errors=errors, bore_error_model="misfit"))
+    with pytest.raises(StaticDivergence) as stopped:
+        run_linkage(scene, "quasi_static", 121)
+    t_stop = float(stopped.value.partial.time[-1])
+    bridged = run_linkage(scene, "quasi_static", 121, stability=True)
+    assert bridged.metadata["stability"]["snaps"] == [] and bridged.time[-1] == pytest.approx(scene.t_end)
+    row = int(np.searchsorted(bridged.time, t_stop)) + 1  # the first output after the stop: bridged
+    dynamic = run_linkage(scene, "dynamic", 121, step=5e-3, t_end=float(bridged.time[row]))
+    from_dynamics = static_equilibrium(scene.system, dynamic.q[-1], float(bridged.time[row]))
+    assert np.max(np.abs(from_dynamics.q - bridged.q[row])) < 1e-8
