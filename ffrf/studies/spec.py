@@ -89,6 +89,7 @@ _BASE = {
     "revolutions": Key("number", False, positive),
     "rpm": Key("number", False, positive),
     "bore_error_model": Key("string", False, one_of(BORE_ERROR_MODELS)),
+    "stability": Key("boolean"),
 }
 _UNIFORM = {"low": Key("number", True), "high": Key("number", True)}
 _NORMAL = {"mean": Key("number", True), "std": Key("number", True, positive)}
@@ -152,6 +153,11 @@ class Study:
     def parameter_names(self) -> tuple[str, ...]:
         return tuple(p.name for p in self.parameters)
 
+    @property
+    def stability(self) -> bool:
+        """Whether variants run with stability monitoring (quasi-static, snaps followed: ``docs/stability.md``)."""
+        return bool(self.base.overrides.get("stability", False))
+
 
 def _distribution(entry: dict, where: str, method: str) -> tuple[str, tuple[float, ...]]:
     """The one distribution a parameter gives, checked against the method."""
@@ -209,8 +215,10 @@ def _base(table: dict, directory: Path, where: str) -> Base:
             raise SceneError(f"{where}: cannot read the linkage file {path} ({error})") from error
         if "linkage" not in document:
             raise SceneError(f"{where}: {path} has no [linkage] table; a study's base is a linkage file")
-    keys = ("h", "order", "modes", "mode", "outputs", "revolutions", "rpm")
+    keys = ("h", "order", "modes", "mode", "outputs", "revolutions", "rpm", "stability")
     overrides = {key: table[key] for key in keys if key in table}
+    if overrides.get("stability") and overrides.get("mode") == "dynamic":
+        raise SceneError(f'{where}: stability is judged at equilibria: drop mode = "dynamic" or stability = true')
     return Base(
         table.get("bennett"), table.get("linkage"), document, overrides, table.get("bore_error_model", "misfit")
     )

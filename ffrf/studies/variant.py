@@ -60,15 +60,21 @@ OUTPUTS = (
 )
 
 
-def output_names(n_links: int) -> tuple[str, ...]:
-    """The output columns of a linkage of ``n_links`` links."""
-    return OUTPUTS + tuple(f"max_assembly_stress_link{k}_Pa" for k in range(n_links))
+#: Outputs of a study with stability monitoring: the snaps of the path, the energy they release (J, summed) and the
+#: lowest vibration frequency over the equilibria (Hz; NaN where one is unstable).
+STABILITY_OUTPUTS = ("snaps", "snap_energy_released_J", "min_frequency_hz")
+
+
+def output_names(n_links: int, stability: bool = False) -> tuple[str, ...]:
+    """The output columns of a linkage of ``n_links`` links (and of its stability, if monitored)."""
+    stresses = tuple(f"max_assembly_stress_link{k}_Pa" for k in range(n_links))
+    return OUTPUTS + stresses + (STABILITY_OUTPUTS if stability else ())
 
 
 def row_names(study: Study) -> tuple[str, ...]:
     """Every column of a study's rows, in order."""
     head = ("id", "block", "sample", "status", "reason", "assembles")
-    return head + study.parameter_names + output_names(study.n_links) + ("wall_time_s", "worker")
+    return head + study.parameter_names + output_names(study.n_links, study.stability) + ("wall_time_s", "worker")
 
 
 def _base_options(study: Study) -> tuple[Any, LinkageOptions, dict]:
@@ -149,11 +155,19 @@ def build_variant(study: Study, values: dict[str, float], cache: SceneCache | No
     return build_linkage(loop, options, where=f"{study.name}, variant", cache=cache), run
 
 
-def _outputs(result: LinkageResult | None, n_links: int, path: bool) -> dict[str, float]:
-    """The output columns of a run's result (NaN where not computed: no result, or a path that stopped)."""
-    out = dict.fromkeys(output_names(n_links), math.nan)
+def _outputs(result: LinkageResult | None, n_links: int, path: bool, stability: bool = False) -> dict[str, float]:
+    """The output columns of a run's result (NaN where not computed: no result, or a path that stopped; the snaps
+    of a path that stopped count those before the stop)."""
+    out = dict.fromkeys(output_names(n_links, stability), math.nan)
     if result is None:
         return out
+    monitored = result.metadata.get("stability")
+    if stability and monitored:
+        snaps = monitored.get("snaps", [])
+        out["snaps"] = float(len(snaps))
+        out["snap_energy_released_J"] = float(sum(snap.get("energy_released_J") or 0.0 for snap in snaps))
+        lowest = monitored.get("min_frequency_hz")
+        out["min_frequency_hz"] = math.nan if lowest is None else float(lowest)
     if result.assembly is not None:
         out["assembly_strain_energy_J"] = float(sum(link.strain_energy_j for link in result.assembly.links))
         for link in result.assembly.links:
@@ -174,7 +188,9 @@ def run_variant(study: Study, variant: Variant, cache: SceneCache | None = None)
     result, path = None, False
     try:
         scene, run = build_variant(study, variant.values, cache)
-        result = run_linkage(scene, mode=run["mode"], n_outputs=run["outputs"], sensors="path")
+        stability = study.stability
+        mode = "quasi_static" if stability else run["mode"]
+        result = run_linkage(scene, mode=mode, n_outputs=run["outputs"], sensors="path", stability=stability)
         row |= {"status": "ok", "assembles": True}
         path = True
     except AssemblyDivergence as error:
@@ -187,7 +203,7 @@ def run_variant(study: Study, variant: Variant, cache: SceneCache | None = None)
     except Exception as error:  # noqa: BLE001 -- one variant's failure is its row, never the study's end
         log.exception("variant %s failed", variant.id)
         row["reason"] = f"{type(error).__name__}: {error}"
-    row |= _outputs(result, study.n_links, path)
+    row |= _outputs(result, study.n_links, path, study.stability)
     row["wall_time_s"] = time.perf_counter() - started
     row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
     return row

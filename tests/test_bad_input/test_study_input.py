@@ -29,6 +29,10 @@ CASES = {
     "bore on a link without that joint": (("link = 0", "link = 2"), "link 2 does not carry joint 3"),
     "two distributions": (("normal = {", "uniform = {low = 0.0, high = 1.0}\nnormal = {"), "exactly one of uniform"),
     "no base": (('bennett = "pla"', ""), "give exactly one base"),
+    "stability of a dynamic study": (
+        ('bennett = "pla"', 'bennett = "pla"\nmode = "dynamic"\nstability = true'),
+        "stability is judged at equilibria",
+    ),
     "parameter named like an output": (('name = "twist"', 'name = "max_coupler_deviation_m"'), "taken by a result"),
 }
 

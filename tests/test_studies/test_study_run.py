@@ -226,3 +226,26 @@ def test_a_study_runs_on_a_separate_scheduler_given_by_its_address(tmp_path):
     for row in rows:
         expected = _standalone(row["twist"])
         assert abs(row["max_coupler_deviation_m"] - expected["max_coupler_deviation_m"]) < 1e-12
+
+
+def test_a_study_with_stability_monitoring_reports_what_a_standalone_stability_run_finds(tmp_path):
+    """``stability = true`` in the base: each row's snaps, released energy and lowest frequency are those of the same
+    scene run alone with stability monitoring (the nominal and a 1 deg print of the coarse Bennett: stable, no snap)."""
+    study = study_from_document(
+        {
+            "study": {"name": "stable", "method": "grid"},
+            "base": dict(BASE, stability=True),
+            "parameters": [{"name": "twist", "target": "bore_twist_deg", "joint": 3, "link": 0, "values": [0.0, 1.0]}],
+        }
+    )
+    run_study(study, tmp_path / "out", workers=1, progress=False)
+    for row in read_rows(tmp_path / "out").to_pylist():
+        options = replace(
+            bennett_options("pla", h=0.012, order=1, n_modes=2),
+            bore_errors=(BoreError(joint=3, link=0, twist=math.radians(row["twist"])),),
+            bore_error_model="misfit",
+        )
+        alone = run_linkage(build_bennett_from_options(options), mode="quasi_static", n_outputs=9, stability=True)
+        assert row["status"] == "ok" and row["snaps"] == 0 and row["snap_energy_released_J"] == 0
+        assert row["min_frequency_hz"] > 1.0
+        assert abs(row["min_frequency_hz"] - alone.metadata["stability"]["min_frequency_hz"]) < 1e-9
