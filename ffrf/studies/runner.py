@@ -118,9 +118,8 @@ def _allocator_for_variants() -> None:
 
     Set in the environment, a trim threshold also pins the mmap threshold at 128 KiB (glibc stops adapting it), so
     every array above 128 KiB is mapped afresh and unmapped when freed, and the heap above 64 KiB of free memory is
-    returned at once: a variant's arrays are then page-faulted in again and again. Measured with the default
-    discretisation, one worker: 2.7 million minor page faults and 5.3 s of system time per variant whose scene is
-    built afresh (11.5 s against 4.8 s in one process), 0.48 s against 0.34 s per variant from the scene cache.
+    returned at once: a variant's arrays are then page-faulted in again and again (measured by
+    ``bench/study_speed.py``: ``docs/studies.md``, "Speed").
     :func:`_client` starts its local workers without the variable; a worker of another cluster that has it gets
     glibc's thresholds set here as a long-running process reaches them (:data:`MMAP_THRESHOLD`,
     :data:`TRIM_THRESHOLD`), once per process; elsewhere (no glibc) nothing is done."""
