@@ -13,7 +13,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import json
 import multiprocessing
 import sys
 import time
@@ -25,6 +24,8 @@ from threadpoolctl import threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
+
+from bench_report import write_report  # noqa: E402
 
 from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
 from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
@@ -81,9 +82,7 @@ def main() -> int:
     finally:
         for process in neighbours:
             process.terminate()
-    print(json.dumps(report, indent=1))
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(report, indent=1))
+    write_report(report, args.json)
     return 0
 
 

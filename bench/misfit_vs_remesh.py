@@ -14,7 +14,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 import warnings
@@ -26,6 +25,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
+
+from bench_report import write_report  # noqa: E402
 
 from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options  # noqa: E402
 from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
@@ -68,9 +69,7 @@ def main() -> int:
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     report = compare(args.h, args.order, args.modes, args.outputs)
-    print(json.dumps(report, indent=1))
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(report, indent=1))
+    write_report(report, args.json)
     return 0
 
 

@@ -33,6 +33,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from bench_report import write_report  # noqa: E402
+
 from ffrf.errors import StaticDivergence  # noqa: E402
 from ffrf.scenes.linkage_description import LinkageOptions  # noqa: E402
 from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
@@ -171,8 +173,7 @@ def main() -> int:
         "dynamic": dynamic,
         "fold_change_between_meshes_deg": float(np.ptp(folds)) if len(folds) > 1 else None,
     }
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(report, indent=1))
+    write_report(report, args.json, echo=False)
     return 0
 
 

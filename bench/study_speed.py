@@ -34,7 +34,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import resource
 import statistics
@@ -42,6 +41,8 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+from bench_report import write_report  # noqa: E402
 
 from ffrf.errors import StaticDivergence
 from ffrf.scenes.linkage_run import run_linkage
@@ -339,9 +340,7 @@ def main() -> int:
             "per_variant_needed_s": (TARGET_S - two["start_s"] - two["first_variant_s"]) / VARIANTS,
         }
 
-    print(json.dumps(report, indent=1))
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(report, indent=1))
+    write_report(report, args.json)
     return 0
 
 

@@ -10,13 +10,14 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from bench_report import write_report  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 WARMUP = [sys.executable, "-m", "ffrf", "warmup"]
@@ -46,9 +47,7 @@ def main() -> int:
             "main_after_warmup_s": timed(main_run, base / "cache_b"),
             "cpu_count": os.cpu_count(),
         }
-    print(json.dumps(report, indent=1))
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(report, indent=1))
+    write_report(report, args.json)
     return 0
 
 
