@@ -20,20 +20,50 @@ from ffrf.scenes.builder import Scene
 from ffrf.solvers.static_solver import StaticSolution, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["assemble", "quasi_static_step", "start_state", "starts_static", "MAX_DRIVE_STEP", "STEPS_PER_DEGREE"]
+__all__ = [
+    "assemble",
+    "dynamic_step",
+    "quasi_static_step",
+    "start_state",
+    "starts_static",
+    "DRIVE_ANGLE_PER_STEP",
+    "MAX_DRIVE_STEP",
+    "MAX_DYNAMIC_STEP",
+    "STEPS_PER_DEGREE",
+]
 
 #: Continuation steps of :func:`assemble` per degree of the largest axis misfit.
 STEPS_PER_DEGREE = 4
 #: Largest turn of a drive (rad) between two equilibria of a quasi-static run. Longer steps let Newton land on
 #: another assembly branch: the PLA collisions_free_6r (P1, 12 mm) fails at 15 deg and passes at 7.5 deg.
 MAX_DRIVE_STEP = math.radians(3.0)
+#: Turn of the fastest drive per generalized-alpha step of a dynamic run without a step of its own, and the longest
+#: such step (s): 0.06 deg is 10 ms at 1 rpm, where the default Bennett's coupler path over a revolution is within
+#: 1.2e-10 m of 4 ms steps' (``bench/dynamic_step_rule.py``, ``docs/speed_vs_error.md``); 10 ms is the longest step
+#: that sweep and the Exudyn twins checked.
+DRIVE_ANGLE_PER_STEP = math.radians(0.06)
+MAX_DYNAMIC_STEP = 1e-2
+
+
+def _fastest_drive_speed(scene: Scene) -> float | None:
+    """The largest full speed (rad/s) of ``scene``'s drives; ``None`` without a drive."""
+    speeds = [abs(j.angle.ramp.omega) for j in scene.joints if j.angle is not None]
+    return max(speeds) if speeds else None
 
 
 def quasi_static_step(scene: Scene) -> float | None:
     """Time (s) in which the fastest drive of ``scene`` turns :data:`MAX_DRIVE_STEP` at full speed; ``None``
     without a drive. Quasi-static runs insert equilibria so that no step is longer."""
-    speeds = [abs(j.angle.ramp.omega) for j in scene.joints if j.angle is not None]
-    return MAX_DRIVE_STEP / max(speeds) if speeds else None
+    speed = _fastest_drive_speed(scene)
+    return None if speed is None else MAX_DRIVE_STEP / speed
+
+
+def dynamic_step(scene: Scene) -> float:
+    """The generalized-alpha step (s) of a dynamic run of ``scene`` that names none: the time in which its fastest
+    drive turns :data:`DRIVE_ANGLE_PER_STEP` at full speed, at most :data:`MAX_DYNAMIC_STEP` (which a scene without a
+    drive takes)."""
+    speed = _fastest_drive_speed(scene)
+    return MAX_DYNAMIC_STEP if speed is None else min(MAX_DYNAMIC_STEP, DRIVE_ANGLE_PER_STEP / speed)
 
 
 def assemble(

@@ -38,9 +38,9 @@ from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
 from ffrf.output.sensors import path_sensors, scene_sensors
 from ffrf.output.tables import write_results as write_tables
 from ffrf.reduction.craig_bampton import CraigBamptonBasis
-from ffrf.scenes.assembly import assemble, quasi_static_step
+from ffrf.scenes.assembly import assemble, dynamic_step, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
-from ffrf.solvers.simulate import MODES, simulate
+from ffrf.solvers.simulate import MODES, Run, simulate
 from ffrf.solvers.snap_through import SnapThrough, run_critical_pose, snap_summary
 from ffrf.solvers.stability import (
     CriticalPose,
@@ -183,7 +183,7 @@ def run_linkage(
     scene: LinkageScene,
     mode: str = "auto",
     n_outputs: int = 241,
-    step: float = 1e-3,
+    step: float | None = None,
     rho_inf: float = 0.9,
     progress: Callable[[float, float], None] | None = None,
     t_end: float | None = None,
@@ -192,7 +192,8 @@ def run_linkage(
 ) -> LinkageResult:
     """Assemble (static, with misalignment continuation), then run over the drive's ramp and
     revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
-    generalized-alpha with ``step`` (s) starting from the assembled state at rest. ``t_end``
+    generalized-alpha with ``step`` (s; default :func:`ffrf.scenes.assembly.dynamic_step`, 10 ms at 1 rpm) starting
+    from the assembled state at rest. ``t_end``
     shortens the run (default: the scene's ramp plus revolutions). A run that stops raises the solver's error
     (:class:`ffrf.errors.StaticDivergence` or :class:`ffrf.errors.NewtonDivergence`) with ``partial``, the
     :class:`LinkageResult` up to its last output (its metadata's ``stopped`` says where and why), when there is one.
@@ -213,6 +214,7 @@ def run_linkage(
     stress = scene_assembly_stress(scene, assembly.q, assembly.multipliers)
     assembled = wallclock.perf_counter()
     t_end = scene.t_end if t_end is None else float(t_end)
+    step = dynamic_step(scene) if step is None else float(step)
     try:
         run = simulate(
             scene.system,
@@ -247,6 +249,7 @@ def run_linkage(
         n_outputs=len(times),
         joint_reaction_names=[c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)],
         step=step if mode == "dynamic" else None,
+        step_error_estimate=_step_error_summary(run, step),
         rho_inf=rho_inf if mode == "dynamic" else None,
         timings_s={
             "assembly": assembled - started,
@@ -283,6 +286,22 @@ def run_linkage(
         stopped.partial = out
         raise stopped
     return out
+
+
+def _step_error_summary(run: Run, step: float) -> dict | None:
+    """The local error estimates of a dynamic run's steps of length ``step`` (Eq. (G5), bodies' positions): the
+    largest, when, and the median; ``None`` for a quasi-static run. The largest is usually in the first steps,
+    while the numerical damping removes the start's high-frequency accelerations, and bounds the path's error
+    loosely; the median is the steady motion's (``docs/speed_vs_error.md``)."""
+    errors = run.position_errors
+    if errors is None or errors.size == 0:
+        return None
+    largest = int(np.argmax(errors))
+    return {
+        "largest_m": float(errors[largest]),
+        "largest_at_s": (largest + 1) * step,
+        "median_m": float(np.median(errors)),
+    }
 
 
 def _snap_report(scene: LinkageScene, snap: SnapThrough) -> dict:

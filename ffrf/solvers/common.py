@@ -30,6 +30,9 @@ class IntegrationResult:
     wall_time: float
     complete: bool = True
     step_sizes: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))  # one per accepted step
+    #: Local error estimate (Eq. (G5)) of the bodies' reference positions, the largest of each accepted step (m);
+    #: empty from an integrator without one.
+    position_errors: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
 
 
 def consistent_accelerations(system: MultibodySystem, q, qd, t: float = 0.0):

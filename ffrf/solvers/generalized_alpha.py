@@ -48,13 +48,18 @@ from ffrf.errors import NewtonDivergence, SingularIterationMatrix
 from ffrf.numerics.rank_revealing import WELL_CONDITIONED, factor
 from ffrf.solvers.common import IntegrationResult, consistent_accelerations, extrapolation_weights
 from ffrf.solvers.newton_kernels import CONVERGED, EXHAUSTED, NOT_FINITE, REFACTOR, alpha_iterations, should_refactor
-from ffrf.solvers.step_control import StepControl
+from ffrf.solvers.step_control import StepControl, local_error
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import PackedSystem, contiguous, newton_model
 
 __all__ = ["AlphaParameters", "generalized_alpha", "precision_floor"]
 
 log = logging.getLogger(__name__)
+
+#: Degree of the polynomial that extrapolates Newton's start from the last accepted steps (Eq. (G6)). Measured on
+#: the default Bennett scene's revolution at 10 ms steps: 4.22 iterations per step with the line (degree 1),
+#: 3.78 with the parabola, and 124 against 71 factorisations.
+PREDICTOR_DEGREE = 2
 
 
 @dataclass(frozen=True)
@@ -191,19 +196,29 @@ def _fast_iterations(
     return EXHAUSTED, used, increment, gap_max
 
 
-def _predicted_unknowns(state: _State, h: float, before: tuple | None) -> tuple[NDArray, NDArray]:
-    """Eq. (G6): Newton's start for ``(qdd, lambda)`` at the end of a step of length ``h``, the
-    linear extrapolation from the state and ``before = (qdd, lambda, h)`` of the accepted step that
-    led to it. Without ``before``, or after a much shorter step (one cut to land on an output, whose
-    difference quotient would amplify Newton's tolerance), the state's own values."""
-    if before is None or not 0.0 < h / before[2] <= 2.0:
+def _predicted_unknowns(state: _State, h: float, before: tuple[tuple, ...]) -> tuple[NDArray, NDArray]:
+    """Eq. (G6): Newton's start for ``(qdd, lambda)`` at the end of a step of length ``h``, extrapolated from the
+    state and ``before``, the ``(qdd, lambda, h)`` of the accepted steps that led to it (most recent last): the
+    parabola through the last three values, the line through two, or the state's own values without any. The
+    extrapolation stops at a step more than twice shorter than the one after it (one cut to land on an output,
+    whose difference quotients would amplify Newton's tolerance)."""
+    times, values = [0.0], [(state.qdd, state.lam)]
+    step = h
+    for qdd_before, lam_before, h_before in reversed(before[-PREDICTOR_DEGREE:]):
+        if not 0.0 < step / h_before <= 2.0:
+            break
+        times.append(times[-1] - h_before)
+        values.append((qdd_before, lam_before))
+        step = h_before
+    if len(times) == 1:
         return state.qdd.copy(), state.lam.copy()
-    qdd_before, lam_before, h_before = before
-    weights = extrapolation_weights(np.array([-h_before, 0.0]), h)  # the line through both steps' values
-    return weights[0] * qdd_before + weights[1] * state.qdd, weights[0] * lam_before + weights[1] * state.lam
+    weights = extrapolation_weights(np.array(times), h)
+    qdd = sum(w * v[0] for w, v in zip(weights, values, strict=True))
+    lam = sum(w * v[1] for w, v in zip(weights, values, strict=True))
+    return qdd, lam
 
 
-def _step(newton: _Newton, state: _State, t: float, h: float, before: tuple | None = None):
+def _step(newton: _Newton, state: _State, t: float, h: float, before: tuple[tuple, ...] = ()):
     """One generalized-alpha step of length ``h`` to time ``t`` (Eqs. (G2), (G3)), Newton starting
     from the prediction (G6) with ``before`` (a retry starts from the state's own values). Returns
     the new state and the Newton iterations, or ``(None, iterations, diagnostics)`` if Newton failed."""
@@ -226,7 +241,7 @@ def _step(newton: _Newton, state: _State, t: float, h: float, before: tuple | No
         return _State(q_base + h * h * par.beta * accel, qd_base + h * par.gamma * accel, qdd_new, accel, lam_new)
 
     for attempt in range(2 if newton.modified else 1):
-        qdd_new, lam_new = _predicted_unknowns(state, h, before if attempt == 0 else None)
+        qdd_new, lam_new = _predicted_unknowns(state, h, before if attempt == 0 else ())
         if isinstance(model, PackedSystem):
             status, used, increment, gap_max = _fast_iterations(
                 newton,
@@ -281,6 +296,12 @@ def _step(newton: _Newton, state: _State, t: float, h: float, before: tuple | No
             f"largest constraint residual {np.abs(gap).max():.3e}, last acceleration increment {increment:.3e}"
         )
     return None, total, diagnostics
+
+
+def _position_error(par: AlphaParameters, h: float, new: _State, old: _State, positions: NDArray) -> float:
+    """The largest local error estimate (Eq. (G5)) of a step of length ``h`` from ``old`` to ``new`` among the
+    coordinates ``positions``."""
+    return float(np.abs(local_error(par.beta, h, new.qdd[positions], old.qdd[positions])).max(initial=0.0))
 
 
 def precision_floor(par: AlphaParameters, h: float, q: NDArray, qd: NDArray) -> float:
@@ -357,7 +378,7 @@ def generalized_alpha(
         raise ValueError(f"initial state must have {n} coordinates, got {q.shape} and {qd.shape}")
     qdd, lam = consistent_accelerations(system, q, qd, 0.0)
     state = _State(q, qd, qdd, qdd.copy(), lam)
-    before = None  # (qdd, lambda, h) of the accepted step before ``state``, for Newton's start (G6)
+    before: tuple[tuple, ...] = ()  # (qdd, lambda, h) of the accepted steps before ``state``, for Newton's start (G6)
     history: dict[str, list] = {
         "time": [0.0],
         "q": [q.copy()],
@@ -367,6 +388,8 @@ def generalized_alpha(
     }
     iterations: list[int] = []
     step_sizes: list[float] = []
+    positions = np.concatenate([np.arange(s, s + 3) for s in system.offsets[:-1]])  # each body's R (m)
+    position_errors: list[float] = []
     started = wallclock.perf_counter()
 
     def record(t: float, s: _State) -> None:
@@ -385,6 +408,7 @@ def generalized_alpha(
             wallclock.perf_counter() - started,
             complete,
             np.array(step_sizes),
+            np.array(position_errors),
         )
 
     def guarded_step(t_new: float, h_new: float):
@@ -403,7 +427,8 @@ def generalized_alpha(
                     + _failure_advice(newton, state, h, "reduce the step size or check the constraints"),
                     result(False),
                 )
-            before = (state.qdd, state.lam, h)
+            before = (*before, (state.qdd, state.lam, h))[-PREDICTOR_DEGREE:]
+            position_errors.append(_position_error(par, h, new, state, positions))
             state = new
             iterations.append(count)
             step_sizes.append(h)
@@ -435,7 +460,8 @@ def generalized_alpha(
             trial = max(step_control.min_step, 0.5 * h_try if new is None else step_control.next_step(h_try, ratio))
             continue
         t = target if landing else t + h_try
-        before = (state.qdd, state.lam, h_try)
+        before = (*before, (state.qdd, state.lam, h_try))[-PREDICTOR_DEGREE:]
+        position_errors.append(_position_error(par, h_try, new, state, positions))
         state = new
         iterations.append(count)
         step_sizes.append(h_try)

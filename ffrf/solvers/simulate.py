@@ -26,13 +26,15 @@ MODES = ("quasi_static", "dynamic")
 @dataclass(frozen=True)
 class Run:
     """Output times and coordinates, velocities (``None`` for quasi-static runs) and multipliers, and the snaps a
-    quasi-static run went through (:func:`ffrf.solvers.snap_through.quasi_static_through_snaps`)."""
+    quasi-static run went through (:func:`ffrf.solvers.snap_through.quasi_static_through_snaps`); of a dynamic run,
+    the steps' local error estimates of the bodies' positions (m, Eq. (G5), the largest of each step)."""
 
     time: NDArray[np.float64]
     q: NDArray[np.float64]
     qd: NDArray[np.float64] | None
     multipliers: NDArray[np.float64]
     snaps: tuple[SnapThrough, ...] = ()
+    position_errors: NDArray[np.float64] | None = None
 
 
 def output_stride(t_end: float, step: float, outputs: int) -> int:
@@ -88,7 +90,7 @@ def simulate(
             )
         except NewtonDivergence as error:
             done = error.partial
-            error.partial = Run(done.time, done.q, done.qd, done.multipliers)
+            error.partial = Run(done.time, done.q, done.qd, done.multipliers, (), done.position_errors)
             raise
-        return Run(result.time, result.q, result.qd, result.multipliers)
+        return Run(result.time, result.q, result.qd, result.multipliers, (), result.position_errors)
     raise ValueError(f"run mode {mode!r}: use one of {list(MODES)}")

@@ -7,7 +7,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["StepControl"]
+__all__ = ["StepControl", "local_error"]
+
+
+def local_error(beta: float, h: float, qdd_new: NDArray, qdd_old: NDArray) -> NDArray:
+    r"""Eq. (G5): the local error estimate :math:`e = (\beta - \tfrac16)h^2(\ddot q_{n+1} - \ddot q_n)` of the
+    positions after a step of length ``h`` (each coordinate in its own unit)."""
+    return (beta - 1.0 / 6.0) * h * h * (qdd_new - qdd_old)
 
 
 @dataclass(frozen=True)
@@ -35,7 +41,7 @@ class StepControl:
     max_step: float = float("inf")
 
     def error_ratio(self, beta: float, h: float, qdd_new: NDArray, qdd_old: NDArray, q: NDArray) -> float:
-        error = (beta - 1.0 / 6.0) * h * h * (qdd_new - qdd_old)
+        error = local_error(beta, h, qdd_new, qdd_old)
         return float(np.max(np.abs(error) / (self.atol + self.rtol * np.abs(q))))
 
     def next_step(self, h: float, ratio: float) -> float:

@@ -105,3 +105,22 @@ def test_paper_deviation_table():
         "2.305",
     ]
     assert paper_max_coupler_deviation("scene.toml") == ""
+
+
+def test_a_dynamic_run_steps_by_drive_angle_and_reports_its_local_error_estimate():
+    """Without a step of its own a dynamic run turns the drive 0.06 deg per step, at most 10 ms: 10 ms at 1 rpm and
+    at 0.5 rpm, 5 ms at 2 rpm. The run reports the local error estimate of Eq. (G5), which is O(h^3): half the step
+    divides its median over the run by about eight."""
+    from ffrf.scenes.assembly import dynamic_step
+    from ffrf.system.drives import rpm
+
+    scenes = {speed: build_bennett("pla", omega=rpm(speed), **COARSE) for speed in (0.5, 1.0, 2.0)}
+    assert dynamic_step(scenes[1.0]) == pytest.approx(0.01, rel=1e-12)
+    assert dynamic_step(scenes[0.5]) == 0.01
+    assert dynamic_step(scenes[2.0]) == pytest.approx(0.005, rel=1e-12)
+    default = run_linkage(scenes[2.0], mode="dynamic", n_outputs=7, t_end=1.5)
+    assert default.metadata["step"] == pytest.approx(0.005, rel=1e-12)
+    halved = run_linkage(scenes[2.0], mode="dynamic", n_outputs=7, t_end=1.5, step=0.0025)
+    estimate, finer = default.metadata["step_error_estimate"], halved.metadata["step_error_estimate"]
+    assert 5.0 < estimate["median_m"] / finer["median_m"] < 11.0
+    assert estimate["largest_m"] >= estimate["median_m"] > 0.0

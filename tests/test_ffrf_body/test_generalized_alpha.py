@@ -77,22 +77,39 @@ def test_flexible_pendulum_is_second_order_and_keeps_its_constraints():
     np.testing.assert_allclose(full.q[-1], results[1e-3].q[50], atol=1e-12)
 
 
-def test_newton_start_extrapolates_linear_histories_exactly():
-    """Eq. (G6): unknowns that are linear in time are predicted exactly, also across unequal steps."""
+def test_newton_start_extrapolates_quadratic_histories_exactly():
+    """Eq. (G6): unknowns quadratic in time are predicted exactly from two earlier steps, also across unequal
+    steps; from one earlier step a linear history is; a step cut short stops the extrapolation there."""
     import sys
 
     module = sys.modules["ffrf.solvers.generalized_alpha"]
-    a, b = np.array([1.0, -2.0, 0.5]), np.array([3.0, 0.25, -1.0])
-    t_before, t_now, h = 0.3, 0.35, 0.02
-    state = module._State(None, None, a + b * t_now, None, 2 * a - b * t_now)
-    qdd, lam = module._predicted_unknowns(state, h, (a + b * t_before, 2 * a - b * t_before, t_now - t_before))
-    np.testing.assert_allclose(qdd, a + b * (t_now + h), rtol=1e-14)
-    np.testing.assert_allclose(lam, 2 * a - b * (t_now + h), rtol=1e-14)
-    same_qdd, _ = module._predicted_unknowns(state, h, None)
+    a, b, c = np.array([1.0, -2.0, 0.5]), np.array([3.0, 0.25, -1.0]), np.array([-4.0, 7.0, 0.125])
+
+    def quadratic(t):
+        return a + b * t + c * t * t, 2 * a - b * t + 3 * c * t * t
+
+    t_first, t_before, t_now, h = 0.27, 0.3, 0.35, 0.04
+    state = module._State(None, None, quadratic(t_now)[0], None, quadratic(t_now)[1])
+    history = ((*quadratic(t_first), t_before - t_first), (*quadratic(t_before), t_now - t_before))
+    qdd, lam = module._predicted_unknowns(state, h, history)
+    np.testing.assert_allclose(qdd, quadratic(t_now + h)[0], rtol=1e-12)
+    np.testing.assert_allclose(lam, quadratic(t_now + h)[1], rtol=1e-12)
+
+    def linear(t):
+        return a + b * t, 2 * a - b * t
+
+    state = module._State(None, None, linear(t_now)[0], None, linear(t_now)[1])
+    qdd, lam = module._predicted_unknowns(state, h, ((*linear(t_before), t_now - t_before),))
+    np.testing.assert_allclose(qdd, linear(t_now + h)[0], rtol=1e-14)
+    np.testing.assert_allclose(lam, linear(t_now + h)[1], rtol=1e-14)
+    same_qdd, _ = module._predicted_unknowns(state, h, ())
     np.testing.assert_array_equal(same_qdd, state.qdd)
     # after a step more than twice shorter (cut to land on an output) nothing is extrapolated
-    short = (a + b * (t_now - 1e-6), 2 * a - b * (t_now - 1e-6), 1e-6)
-    np.testing.assert_array_equal(module._predicted_unknowns(state, h, short)[0], state.qdd)
+    short = (*linear(t_now - 1e-6), 1e-6)
+    np.testing.assert_array_equal(module._predicted_unknowns(state, h, (short,))[0], state.qdd)
+    # a cut step further back ends the history there: the line through the last two values
+    history = ((*linear(t_before - 1e-6), 1e-6), (*linear(t_before), t_now - t_before))
+    np.testing.assert_allclose(module._predicted_unknowns(state, h, history)[0], linear(t_now + h)[0], rtol=1e-14)
 
 
 def test_a_tolerance_below_round_off_is_named_as_such_and_the_floor_is_where_newton_stalls():
