@@ -1,6 +1,8 @@
 """First-run compilation (issue #22): ``python -m ffrf warmup`` and the main job's Bennett run, each as a fresh
 process with numba's cache in a fresh folder (cold: every kernel compiles) and again (warm: loaded from the cache),
-and the main run after a cold warmup (does the warmup cover what the main job compiles?).
+and the main run after a cold warmup (does the warmup cover what the main job compiles?). Each numba cache folder
+has a scene cache folder of its own (``FFRF_CACHE_DIR``), empty at first as on a fresh install: a warm run also
+reads its meshes, FE models and reductions from disk.
 
 Usage::
 
@@ -24,8 +26,8 @@ WARMUP = [sys.executable, "-m", "ffrf", "warmup"]
 
 
 def timed(command: list[str], cache: Path) -> float:
-    """Wall time (s) of ``command`` in a fresh process with numba's cache in ``cache``."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT))
+    """Wall time (s) of ``command`` in a fresh process, numba's cache in ``cache``, the scene cache next to it."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), FFRF_CACHE_DIR=f"{cache}_scenes", PYTHONPATH=str(ROOT))
     started = time.perf_counter()
     subprocess.run(command, cwd=ROOT, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return time.perf_counter() - started

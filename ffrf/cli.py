@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import replace
@@ -23,6 +24,7 @@ from ffrf.fe.materials import PLA
 from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
 from ffrf.geometry.link_geometry import LinkDesign, mesh_link
 from ffrf.mesh.tet_mesh import quality_summary, write_vtu
+from ffrf.scenes.scene_cache import CACHE_DIR_VARIABLE
 
 from .errors import FEInputError, NewtonDivergence, SceneError, StaticDivergence
 
@@ -700,10 +702,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=1,
         help="threads of the BLAS library (default 1: our dense matrices are small; bench/blas_threads.py)",
     )
+    parser.add_argument(
+        "--no-cache",
+        action="store_true",
+        help=f"build meshes, FE models and reductions afresh, not from the disk cache (as {CACHE_DIR_VARIABLE}=off)",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     for name, (help_text, configure, _run) in SUBCOMMANDS.items():
         configure(sub.add_parser(name, help=help_text))
     args = parser.parse_args(argv)
+    if args.no_cache:  # in the environment: every scene cache reads it, also those of the workers a study starts
+        os.environ[CACHE_DIR_VARIABLE] = "off"
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING)
     try:
         if getattr(args, "stability", False) and getattr(args, "mode", None) == "dynamic":

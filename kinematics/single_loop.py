@@ -66,6 +66,14 @@ def _residual(product: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.concatenate([product[:3, 3], Rotation.from_matrix(product[:3, :3]).as_rotvec()])
 
 
+def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a x b`` of two 3-vectors with ``np.cross``'s products and differences in its order (the same bits), without
+    its handling of general shapes, which took half the time of tracing a rigid loop's motion."""
+    a0, a1, a2 = a.tolist()
+    b0, b1, b2 = b.tolist()
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
 def rotation_about(line: Line, angle: float) -> NDArray[np.float64]:
     r"""4x4 matrix of the rotation :math:`R(\varphi)` about ``line`` by ``angle`` (Rodrigues)."""
     rotation = Rotation.from_rotvec(angle * line.direction).as_matrix()
@@ -216,8 +224,8 @@ class SingleLoop:
         for i, axis in enumerate(self.axes):
             rotation, shift = transforms[i][:3, :3], transforms[i][:3, 3]
             direction = rotation @ axis.direction
-            moment = np.cross(rotation @ axis.point + shift, direction)
-            jacobian[:3, i] = np.cross(direction, translation) + moment
+            moment = _cross(rotation @ axis.point + shift, direction)
+            jacobian[:3, i] = _cross(direction, translation) + moment
             jacobian[3:, i] = direction
         return jacobian
 

@@ -186,15 +186,39 @@ def _node_dof_permutation(basis, n_vertices: int, n_edges: int) -> NDArray[np.in
     return perm
 
 
-def _vector_element(order: int):
-    from skfem import ElementTetP1, ElementTetP2, ElementVector
+def _scalar_element(order: int):
+    from skfem import ElementTetP1, ElementTetP2
 
-    return ElementVector(ElementTetP1() if order == 1 else ElementTetP2())
+    return ElementTetP1() if order == 1 else ElementTetP2()
+
+
+def _vector_element(order: int):
+    from skfem import ElementVector
+
+    return ElementVector(_scalar_element(order))
+
+
+def _vector_mass(mesh: Any, order: int, rho: float, n_vertices: int, n_edges: int) -> sp.csr_matrix:
+    r"""The consistent mass :math:`M_{3a+i,\,3b+j} = \delta_{ij} \int \rho\, \phi_a \phi_b` in our DOF layout, from the
+    scalar form: a ninth of the vector form's local pairs, and the same bits (the vector form's other two
+    components add exact zeros), without its explicit zeros between components."""
+    from skfem import Basis, BilinearForm, asm
+
+    @BilinearForm
+    def mass_form(u, v, w):
+        return rho * (u * v)  # as rho * dot(u, v) of the vector form rounds
+
+    basis = Basis(mesh, _scalar_element(order), intorder=2 * order)  # degree 2k integrand: exact
+    scalar = asm(mass_form, basis).tocsr()
+    blocks = [basis.nodal_dofs.T] + ([basis.edge_dofs.T] if n_edges else [])
+    perm = np.concatenate(blocks).reshape(-1)  # perm[node] = scikit-fem's scalar DOF
+    if len(perm) != basis.N or len(perm) != n_vertices + n_edges:
+        raise RuntimeError(f"unexpected scikit-fem scalar DOF layout: {len(perm)} node DOFs vs {basis.N} in total")
+    return sp.csr_matrix(sp.kron(scalar[perm][:, perm], sp.identity(3), format="csr"))
 
 
 def _assemble(mesh: TetMesh, material: Material, order: int):
-    from skfem import Basis, BilinearForm, MeshTet, asm
-    from skfem.helpers import dot
+    from skfem import Basis, MeshTet, asm
     from skfem.models.elasticity import lame_parameters, linear_elasticity
 
     sk_mesh = MeshTet(np.ascontiguousarray(mesh.points.T), np.ascontiguousarray(mesh.tets.T))
@@ -202,17 +226,9 @@ def _assemble(mesh: TetMesh, material: Material, order: int):
     # On straight-sided tets the strain of a P_k field is of degree k-1, so the
     # stiffness integrand has degree 2(k-1) and the mass integrand degree 2k:
     # these quadrature orders are exact (and 4x cheaper than one order for both).
-    basis = Basis(sk_mesh, element, intorder=2 * order)
-    stiffness_basis = Basis(sk_mesh, element, intorder=max(2 * (order - 1), 1))
-    rho = material.rho
-
-    @BilinearForm
-    def mass_form(u, v, w):
-        return rho * dot(u, v)
-
+    basis = Basis(sk_mesh, element, intorder=max(2 * (order - 1), 1))
     lam, mu = lame_parameters(material.E, material.nu)
-    stiffness = asm(linear_elasticity(lam, mu), stiffness_basis)
-    mass = asm(mass_form, basis)
+    stiffness = asm(linear_elasticity(lam, mu), basis)
 
     edges = sk_mesh.edges.T.astype(np.int64) if order == 2 else np.zeros((0, 2), dtype=np.int64)
     if not np.array_equal(sk_mesh.p.T, mesh.points):
@@ -227,5 +243,5 @@ def _assemble(mesh: TetMesh, material: Material, order: int):
         )
     if not np.array_equal(perm, np.arange(len(perm))):
         stiffness = stiffness[perm][:, perm]
-        mass = mass[perm][:, perm]
-    return nodes, sp.csr_matrix(mass), sp.csr_matrix(stiffness), edges
+    mass = _vector_mass(sk_mesh, order, material.rho, len(mesh.points), len(edges))
+    return nodes, mass, sp.csr_matrix(stiffness), edges

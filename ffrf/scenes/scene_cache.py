@@ -20,20 +20,52 @@ identity or name, so a hit returns what the uncached path would compute, to the 
 
 Every process has one, :data:`PROCESS_CACHE`, which the builders use unless given another (a Dask worker keeps
 it between the variants it runs); ``SceneCache(enabled=False)`` builds everything afresh.
+
+**On disk, between processes.** A value computed afresh is also written to a folder (:func:`cache_directory`:
+``$FFRF_CACHE_DIR``, else ``$XDG_CACHE_HOME/ffrf``, else ``~/.cache/ffrf``; ``FFRF_CACHE_DIR=off`` keeps nothing
+on disk) by :class:`DiskStore`, and a later process with the same content reads it back instead of meshing,
+assembling and reducing again. A file's name is the SHA-256 of :data:`DISK_FORMAT`, :func:`code_version` (the
+solver's sources and the versions of the libraries that compute the values: a changed code computes afresh), the
+map's name and the content key; the file holds a header with the SHA-256 of its payload, so a truncated or
+corrupt file is detected, deleted with a one-line warning and recomputed. The payload is a pickle, which is exact
+for arrays and floats (a hit is, bit for bit, what the computation gives) and trusted as numba's cache is: the
+folder is the user's own. Writes are atomic (a temporary file, then :func:`os.replace`), so processes running
+side by side never read a partial file; the folder is kept under :data:`DISK_BYTES` by deleting the files least
+recently used.
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
+import importlib.metadata
+import importlib.util
 import json
+import logging
+import os
+import pickle
+import sys
+import tempfile
 from collections import OrderedDict
 from collections.abc import Callable, Iterator, MutableMapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
 
-__all__ = ["LRUCache", "SceneCache", "PROCESS_CACHE", "content_key"]
+__all__ = [
+    "CACHE_DIR_VARIABLE",
+    "DiskStore",
+    "LRUCache",
+    "SceneCache",
+    "PROCESS_CACHE",
+    "cache_directory",
+    "code_version",
+    "content_key",
+]
+
+log = logging.getLogger(__name__)
 
 V = TypeVar("V")
 
@@ -43,25 +75,162 @@ FE_ENTRIES = 16
 REDUCTION_ENTRIES = 64
 MOTION_ENTRIES = 64
 
+#: The environment variable that moves the disk cache (a folder) or turns it off (``off``, ``none``, ``0``).
+CACHE_DIR_VARIABLE = "FFRF_CACHE_DIR"
+_OFF = ("off", "none", "0", "false", "no")
+#: Bump when what a disk file holds, or how, changes: every older file is then ignored.
+DISK_FORMAT = "ffrf-scene-cache-1"
+#: Bytes of files the disk cache keeps: the default scene writes about 60 MB (four FE models and their bases).
+DISK_BYTES = 2 * 1024**3
+#: The packages whose sources compute the cached values, and the libraries whose versions can change them.
+_SOURCES = ("ffrf", "kinematics")
+_LIBRARIES = ("numpy", "scipy", "scikit-fem", "gmsh", "numba")
+_MISSING = object()
+
+
+def cache_directory() -> Path | None:
+    """The disk cache's folder: ``$FFRF_CACHE_DIR`` (``None`` if it says ``off``), else ``$XDG_CACHE_HOME/ffrf``,
+    else ``~/.cache/ffrf``; read at each use, so a test or a ``--no-cache`` run can change it."""
+    value = os.environ.get(CACHE_DIR_VARIABLE, "").strip()
+    if value.lower() in _OFF:
+        return None
+    if value:
+        return Path(value).expanduser()
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "ffrf"
+
+
+@functools.cache
+def code_version() -> str:
+    """SHA-256 (hex) of the Python version, the versions of :data:`_LIBRARIES` and the bytes of every source file
+    of :data:`_SOURCES`: what, besides a value's input, decides its bits (a disk file of other code is not read)."""
+    digest = hashlib.sha256(sys.version.encode())
+    for library in _LIBRARIES:
+        try:
+            digest.update(f"{library}={importlib.metadata.version(library)};".encode())
+        except importlib.metadata.PackageNotFoundError:
+            digest.update(f"{library}=none;".encode())
+    for package in _SOURCES:
+        spec = importlib.util.find_spec(package)
+        root = Path(next(iter(spec.submodule_search_locations or []))) if spec else Path(package)
+        for path in sorted(root.rglob("*.py")):
+            digest.update(path.relative_to(root).as_posix().encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+@dataclass(frozen=True)
+class DiskStore:
+    """One map's values in :func:`cache_directory`, a file per content key (module docstring): ``load`` gives
+    :data:`_MISSING` when there is no readable file, ``save`` writes one atomically; neither ever raises for the
+    cache's sake (a broken file or a read-only folder is a warning, and the value is computed)."""
+
+    name: str
+
+    def path(self, key: str) -> Path | None:
+        """The file of ``key`` (``None`` when the disk cache is off)."""
+        folder = cache_directory()
+        if folder is None:
+            return None
+        name = hashlib.sha256(f"{DISK_FORMAT};{code_version()};{self.name};{key}".encode()).hexdigest()
+        return folder / f"{self.name}-{name}.pkl"
+
+    def load(self, key: str) -> Any:
+        """The value stored under ``key``, else :data:`_MISSING` (a corrupt file is deleted with a warning)."""
+        path = self.path(key)
+        if path is None or not path.is_file():
+            return _MISSING
+        try:
+            value = _unpacked(path.read_bytes())
+            os.utime(path)  # recently used: the last to be evicted
+            return value
+        except Exception as error:  # noqa: BLE001 -- whatever a broken file raises, the run recomputes
+            log.warning("scene cache: %s is unreadable (%s); recomputing it", path, error)
+            path.unlink(missing_ok=True)
+            return _MISSING
+
+    def save(self, key: str, value: Any) -> None:
+        """Write ``value`` under ``key`` (temporary file, then :func:`os.replace`), then evict beyond
+        :data:`DISK_BYTES`; a folder that cannot be written is a warning."""
+        path = self.path(key)
+        if path is None:
+            return
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            handle, temporary = tempfile.mkstemp(prefix=".tmp-", dir=path.parent)
+            try:
+                with os.fdopen(handle, "wb") as stream:
+                    stream.write(_packed(value))
+                os.replace(temporary, path)
+            except BaseException:
+                Path(temporary).unlink(missing_ok=True)
+                raise
+            _evict(path.parent, DISK_BYTES)
+        except OSError as error:
+            log.warning("scene cache: cannot write %s (%s); continuing without it", path, error)
+
+
+def _packed(value: Any) -> bytes:
+    """The bytes of a disk file: :data:`DISK_FORMAT`, the payload's SHA-256, the payload (a pickle)."""
+    payload = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
+    return f"{DISK_FORMAT}\n{hashlib.sha256(payload).hexdigest()}\n".encode() + payload
+
+
+def _unpacked(data: bytes) -> Any:
+    """The value of :func:`_packed` bytes; ``ValueError`` if the header or the checksum does not match."""
+    head, _, rest = data.partition(b"\n")
+    digest, _, payload = rest.partition(b"\n")
+    if head.decode(errors="replace") != DISK_FORMAT:
+        raise ValueError(f"format {head[:40]!r}, expected {DISK_FORMAT!r}")
+    if hashlib.sha256(payload).hexdigest() != digest.decode(errors="replace"):
+        raise ValueError("checksum mismatch: truncated or corrupt")
+    return pickle.loads(payload)
+
+
+def _evict(folder: Path, max_bytes: int) -> None:
+    """Delete the least recently used cache files of ``folder`` until the rest fit in ``max_bytes``."""
+    files = []
+    for path in folder.glob("*.pkl"):
+        try:
+            status = path.stat()
+        except FileNotFoundError:  # another process evicted it
+            continue
+        files.append((status.st_mtime, status.st_size, path))
+    total = sum(size for _, size, _ in files)
+    for _, size, path in sorted(files, key=lambda f: f[0]):
+        if total <= max_bytes:
+            break
+        path.unlink(missing_ok=True)
+        total -= size
+
 
 class LRUCache(MutableMapping[str, V]):
-    """Values by content key, the ``max_entries`` most recently used; ``hits`` counts the values found by
-    :meth:`get_or_compute`, ``misses`` those it computed. ``max_entries = 0`` keeps nothing."""
+    """Values by content key, the ``max_entries`` most recently used, and, with ``disk``, every value computed
+    also on disk for later processes; ``hits`` counts the values :meth:`get_or_compute` found in memory,
+    ``disk_hits`` those it read from disk, ``misses`` those it computed. ``max_entries = 0`` keeps nothing."""
 
-    def __init__(self, max_entries: int) -> None:
+    def __init__(self, max_entries: int, disk: DiskStore | None = None) -> None:
         self.max_entries = max_entries
+        self.disk = disk
         self._entries: OrderedDict[str, V] = OrderedDict()
         self.hits = 0
+        self.disk_hits = 0
         self.misses = 0
 
     def get_or_compute(self, key: str, compute: Callable[[], V]) -> V:
-        """The value under ``key``, else ``compute()``, kept under ``key``."""
+        """The value under ``key`` in memory, else on disk, else ``compute()`` (then also written to disk), kept
+        under ``key``."""
         if key in self._entries:
             self.hits += 1
             self._entries.move_to_end(key)
             return self._entries[key]
-        self.misses += 1
-        value = compute()
+        value: Any = self.disk.load(key) if self.disk is not None else _MISSING
+        if value is _MISSING:
+            self.misses += 1
+            value = compute()
+            if self.disk is not None:
+                self.disk.save(key, value)
+        else:
+            self.disk_hits += 1
         self[key] = value
         return value
 
@@ -88,26 +257,31 @@ class LRUCache(MutableMapping[str, V]):
 
 @dataclass
 class SceneCache:
-    """The content-keyed maps of a scene's build (module docstring); ``enabled=False`` keeps nothing."""
+    """The content-keyed maps of a scene's build (module docstring); ``enabled=False`` keeps nothing,
+    ``persistent=False`` keeps them in memory only (``FFRF_CACHE_DIR=off`` does so for every cache)."""
 
     enabled: bool = True
+    persistent: bool = True
     fe_models: LRUCache[Any] = field(init=False)
     reductions: LRUCache[Any] = field(init=False)
     rigid_motions: LRUCache[Any] = field(init=False)
 
     def __post_init__(self) -> None:
-        on = self.enabled
-        self.fe_models = LRUCache(FE_ENTRIES if on else 0)
-        self.reductions = LRUCache(REDUCTION_ENTRIES if on else 0)
-        self.rigid_motions = LRUCache(MOTION_ENTRIES if on else 0)
+        on, disk = self.enabled, self.enabled and self.persistent
+        self.fe_models = LRUCache(FE_ENTRIES if on else 0, DiskStore("fe_models") if disk else None)
+        self.reductions = LRUCache(REDUCTION_ENTRIES if on else 0, DiskStore("reductions") if disk else None)
+        self.rigid_motions = LRUCache(MOTION_ENTRIES if on else 0, DiskStore("rigid_motions") if disk else None)
 
     def stats(self) -> dict[str, dict[str, int]]:
-        """Hits, misses and entries of each map."""
+        """Hits (in memory), disk hits, misses and entries of each map."""
         maps = {"fe_models": self.fe_models, "reductions": self.reductions, "rigid_motions": self.rigid_motions}
-        return {name: {"hits": m.hits, "misses": m.misses, "entries": len(m)} for name, m in maps.items()}
+        return {
+            name: {"hits": m.hits, "disk_hits": m.disk_hits, "misses": m.misses, "entries": len(m)}
+            for name, m in maps.items()
+        }
 
     def clear(self) -> None:
-        """Forget every entry and count."""
+        """Forget every entry and count in memory (the disk files stay)."""
         self.__post_init__()
 
 

@@ -56,7 +56,7 @@ def test_a_variant_built_from_a_warm_cache_equals_one_built_afresh():
     cache = SceneCache()
     first = build_bennett_from_options(_options(0.3), cache=cache)
     warm = build_bennett_from_options(_options(-0.4), cache=cache)
-    assert cache.stats()["fe_models"] == {"hits": 4, "misses": 4, "entries": 4}
+    assert cache.stats()["fe_models"] == {"hits": 4, "disk_hits": 0, "misses": 4, "entries": 4}
     assert cache.stats()["reductions"]["hits"] == 4 and cache.stats()["rigid_motions"]["hits"] == 2
     assert all(a.fe is b.fe and a.reduction is b.reduction for a, b in zip(first.bodies, warm.bodies, strict=True))
     cold = build_bennett_from_options(_options(-0.4), cache=SceneCache(enabled=False))
@@ -93,7 +93,7 @@ def test_a_mesh_file_rewritten_under_the_same_name_is_read_again(tmp_path):
     meshio.write(tmp_path / "bar.vtu", meshio.Mesh(2.0 * mesh.points, mesh.cells))
     after = build_scene(description, tmp_path, cache=cache)
     np.testing.assert_array_equal(after.bodies[0].fe.nodes, 2.0 * before.bodies[0].fe.nodes)
-    assert cache.stats()["fe_models"] == {"hits": 1, "misses": 2, "entries": 2}
+    assert cache.stats()["fe_models"] == {"hits": 1, "disk_hits": 0, "misses": 2, "entries": 2}
 
 
 def test_the_path_sensors_equal_those_of_a_whole_evaluation():
