@@ -10,6 +10,9 @@ matrix (Python refactors and calls again), or after ``max_iterations``; the test
 and their order are those of the Python loop, which stays the reference
 (``tests/test_ffrf_body/test_newton_kernels.py``).
 
+:func:`static_iterations` does the same for the static Newton iterations of
+:func:`ffrf.solvers.static_solver._newton` (Eq. (S1)) with kept factors of the equilibrated tangent.
+
 :func:`lu_solve` is LAPACK's ``getrs`` (no transpose) as plain loops on the factors of
 ``scipy.linalg.lu_factor``: for ~100 unknowns a BLAS call from numba costs more than the work.
 """
@@ -25,6 +28,7 @@ __all__ = [
     "lu_solve",
     "static_rhs",
     "static_update",
+    "static_iterations",
     "alpha_iterations",
     "should_refactor",
     "CONVERGED",
@@ -159,6 +163,41 @@ def static_update(q: np.ndarray, lam: np.ndarray, delta: np.ndarray, gap: np.nda
         multipliers = multipliers if multipliers > 1.0 else 1.0
         converged = _max_abs_nan(delta, n, n + k) <= tolerance * multipliers or increment <= 1e3 * EPS * scale
     return q_new, lam_new, increment, converged
+
+
+@njit(cache=True)
+def static_iterations(
+    bodies, joints, gravity, phi, rows, cols, lu, piv, q, lam, tolerance, refactor_above, previous, increments, done
+):
+    r"""Static Newton iterations (Eq. (S1)) with fixed LU factors ``(lu, piv)`` of the tangent equilibrated by
+    ``rows`` and ``cols`` (:class:`ffrf.numerics.rank_revealing.FactoredMatrix`): residual, solve, update and the
+    convergence test of :func:`static_update`, as :func:`ffrf.solvers.static_solver._newton` does them one by one.
+
+    ``increments[done:]`` receives each iteration's ``max |dq|``; ``previous`` is the increment before this call
+    (``inf`` at the start). Returns ``(status, iterations, q, lam, gap)``: ``CONVERGED``, ``REFACTOR`` (an
+    increment above ``refactor_above`` times the one before: factor at the returned ``(q, lam)`` and call again),
+    ``NOT_FINITE`` (the residual at the returned state is not finite; that iteration counted, nothing updated) or
+    ``EXHAUSTED`` (``increments`` full); ``gap`` is the last constraint residual's ``max |g|``."""
+    n = q.shape[0]
+    zeros = np.zeros(n)
+    gap_max = np.inf
+    for iteration in range(done, increments.shape[0]):
+        residual, gap = system_residual(bodies, joints, q, zeros, zeros, lam, gravity, phi)
+        rhs, finite = static_rhs(residual, gap)
+        if not finite:
+            return NOT_FINITE, iteration + 1 - done, q, lam, gap_max
+        delta = lu_solve(lu, piv, rows * rhs)
+        for i in range(delta.shape[0]):
+            delta[i] *= cols[i]
+        q, lam, increment, converged = static_update(q, lam, delta, gap, tolerance)
+        increments[iteration] = increment
+        gap_max = _max_abs_nan(gap, 0, gap.shape[0])
+        if converged:
+            return CONVERGED, iteration + 1 - done, q, lam, gap_max
+        if increment > refactor_above * previous:
+            return REFACTOR, iteration + 1 - done, q, lam, gap_max
+        previous = increment
+    return EXHAUSTED, increments.shape[0] - done, q, lam, gap_max
 
 
 @njit(cache=True)

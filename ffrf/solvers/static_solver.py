@@ -29,9 +29,9 @@ from numpy.typing import NDArray
 from ffrf.errors import StaticDivergence
 from ffrf.numerics.rank_revealing import FactoredMatrix, factor
 from ffrf.solvers.common import extrapolation_weights
-from ffrf.solvers.newton_kernels import static_rhs, static_update
+from ffrf.solvers.newton_kernels import CONVERGED, NOT_FINITE, REFACTOR, static_iterations, static_rhs, static_update
 from ffrf.system.multibody import MultibodySystem
-from ffrf.system.packed_system import PackedSystem, newton_model
+from ffrf.system.packed_system import PackedSystem, contiguous, newton_model
 
 __all__ = ["StaticDivergence", "StaticSolution", "quasi_static", "refined_times", "static_equilibrium"]
 
@@ -119,6 +119,17 @@ def _not_converged(increments: list[float], gap: float, tolerance: float, advice
     )
 
 
+def _static_rhs(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float, iteration: int):
+    """Eq. (S1)'s right-hand side ``-[r; g]`` at ``(q, lam)`` and ``g``; a residual that is not finite stops
+    Newton at ``iteration``."""
+    zeros = np.zeros(model.n_coordinates)
+    residual, gap = model.residual(q, zeros, zeros, lam, t)
+    rhs, finite = static_rhs(residual, gap)
+    if not finite:
+        raise StaticDivergence(f"NaN in the static residual (iteration {iteration}); check the model and the start")
+    return rhs, gap
+
+
 def _newton(
     model: MultibodySystem | PackedSystem,
     q: NDArray,
@@ -134,23 +145,55 @@ def _newton(
     Newton and refactors whenever an iteration contracts the increment by less than a half.
     ``secant``: Broyden-update the kept tangent (Eq. (S3)) and refactor only when an increment
     grows (a secant step need not contract monotonically). ``advice`` ends the error message
-    when Newton diverges or stalls."""
-    n = model.n_coordinates
-    zeros = np.zeros(n)
+    when Newton diverges or stalls. On the fast path the iterations between factorisations of a regular tangent
+    run in one kernel (:func:`ffrf.solvers.newton_kernels.static_iterations`, the same steps and tests)."""
     previous = np.inf
-    increments = []
+    increments = np.empty(max_iterations)
     free_motions = 0
     updates = None
     refactor_above = 1.0 if secant else 0.5
-    for iteration in range(1, max_iterations + 1):
-        residual, gap = model.residual(q, zeros, zeros, lam, t)
-        rhs, finite = static_rhs(residual, gap)
-        if not finite:
-            raise StaticDivergence(f"NaN in the static residual (iteration {iteration}); check the model and the start")
-        if tangent is None:
+    gap_max = np.inf
+    iteration = 0
+    while iteration < max_iterations:
+        rhs = None
+        if tangent is None:  # a tangent is factored only where the residual is finite
+            rhs, gap = _static_rhs(model, q, lam, t, iteration + 1)
             tangent = _factor_tangent(model, q, lam, t)
             free_motions = max(free_motions, tangent.rank_deficiency)
             updates = None
+        if isinstance(model, PackedSystem) and not secant and tangent.factors is not None:
+            lu, pivots = tangent.factors
+            status, used, q, lam, gap_max = static_iterations(
+                model.bodies,
+                model.joints,
+                model.gravity,
+                model.phi(t),
+                tangent.rows,
+                tangent.cols,
+                lu,
+                pivots,
+                contiguous(q),
+                contiguous(lam),
+                float(tolerance),
+                refactor_above,
+                float(previous),
+                increments,
+                iteration,
+            )
+            iteration += used
+            if status == NOT_FINITE:
+                raise StaticDivergence(
+                    f"NaN in the static residual (iteration {iteration}); check the model and the start"
+                )
+            if status == CONVERGED:
+                return q, lam, iteration, tangent
+            if status == REFACTOR:
+                tangent = None
+            previous = increments[iteration - 1]
+            continue
+        iteration += 1
+        if rhs is None:
+            rhs, gap = _static_rhs(model, q, lam, t, iteration)
         delta = tangent.solve(rhs)
         if secant and tangent.factors is not None:  # a pseudo-inverse (singular tangent) is used as is
             if updates is None:
@@ -159,7 +202,8 @@ def _newton(
         # Multipliers of (nearly) redundant constraints, as in near-rigid closed loops, are fixed only to
         # round-off; once the positions stop changing at machine precision, further iterations cannot help.
         q, lam, increment, converged = static_update(q, lam, delta, gap, tolerance)
-        increments.append(increment)
+        increments[iteration - 1] = increment
+        gap_max = float(np.abs(gap).max())
         if converged:
             return q, lam, iteration, tangent
         if increment > refactor_above * previous:
@@ -170,7 +214,7 @@ def _newton(
             f"the static tangent is singular ({free_motions} free motion(s)) and Newton found no equilibrium: the "
             "system is a mechanism or a body is not held; prescribe the drive or add the missing support"
         )
-    raise _not_converged(increments, float(np.abs(gap).max()), tolerance, advice)
+    raise _not_converged(list(increments), gap_max, tolerance, advice)
 
 
 def static_equilibrium(
