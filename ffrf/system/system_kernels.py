@@ -49,6 +49,11 @@ __all__ = [
 
 EULER, MARKER_JOINT = 0, 1
 
+# Flags and start indices go to the inner kernels as np.bool_ / np.int64 values, never as Python
+# literals: numba types a literal argument as Literal[bool](True) and compiles the callee once per
+# value, and _constraints with _marker_joint is the costliest kernel to compile (issue #22). The
+# branches it keeps cost nothing at run time.
+
 
 @njit(cache=True)
 def _moments(buffers, starts, b, m):
@@ -132,7 +137,7 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
     side1 = _side_data(joints[6], j)
     p0, axes0, dp0_side, da0_side = _side(b0, *side0, q, offsets)
     p1, axes1, dp1_side, da1_side = _side(b1, *side1, q, offsets)
-    dp0, da0 = _pad(dp0_side, da0_side, 0, total)
+    dp0, da0 = _pad(dp0_side, da0_side, np.int64(0), total)
     dp1, da1 = _pad(dp1_side, da1_side, n0, total)
     values = np.empty(size)
     rows = np.zeros((size, total))
@@ -247,7 +252,7 @@ def _body_residuals(bodies, q, qd, qdd, gravity):
 @njit(cache=True)
 def system_residual(bodies, joints, q, qd, qdd, lam, gravity, phi):
     r"""Eq. (G1): ``M qdd - Q + C_q^T lambda`` (n) and ``g`` (k)."""
-    values, _, forces, _ = _constraints(joints, bodies[0], q, phi, lam, False, False, q.shape[0])
+    values, _, forces, _ = _constraints(joints, bodies[0], q, phi, lam, np.bool_(False), np.bool_(False), q.shape[0])
     return _body_residuals(bodies, q, qd, qdd, gravity) + forces, values
 
 
@@ -255,13 +260,13 @@ def system_residual(bodies, joints, q, qd, qdd, lam, gravity, phi):
 def system_jacobian(bodies, joints, q, phi):
     """``C_q`` (k x n)."""
     lam = np.zeros(joints[3][-1])
-    return _constraints(joints, bodies[0], q, phi, lam, True, False, q.shape[0])[1]
+    return _constraints(joints, bodies[0], q, phi, lam, np.bool_(True), np.bool_(False), q.shape[0])[1]
 
 
 @njit(cache=True)
 def system_hessian(bodies, joints, q, lam, phi):
     r"""Eq. (FP4): :math:`H = \partial(C_q^T\lambda)/\partial q` (n x n)."""
-    return _constraints(joints, bodies[0], q, phi, lam, False, True, q.shape[0])[3]
+    return _constraints(joints, bodies[0], q, phi, lam, np.bool_(False), np.bool_(True), q.shape[0])[3]
 
 
 @njit(cache=True)
@@ -297,7 +302,7 @@ def system_iteration_matrix(bodies, joints, q, qd, qdd, lam, gravity, phi, mass_
     r"""Eq. (FP6): ``[[c M + beta' (K_t + H) + gamma' D_t, C_q^T], [C_q, 0]]`` in one pass;
     ``c = 1`` for generalized-alpha (Eq. (G3)), ``c = 0, beta' = 1, gamma' = 0`` for statics (Eq. (S1))."""
     n = q.shape[0]
-    _, jacobian, _, hessian = _constraints(joints, bodies[0], q, phi, lam, True, True, n)
+    _, jacobian, _, hessian = _constraints(joints, bodies[0], q, phi, lam, np.bool_(True), np.bool_(True), n)
     k = jacobian.shape[0]
     jac_q, jac_qd = system_body_tangents(bodies, q, qd, qdd, gravity, gamma_p != 0.0)
     out = np.zeros((n + k, n + k))
