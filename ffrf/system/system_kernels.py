@@ -49,13 +49,17 @@ __all__ = [
 
 EULER, MARKER_JOINT = 0, 1
 
+# The thin helpers, and the body blocks system_iteration_matrix calls, are inlined at numba's level
+# (inline="always"): a kernel compiled on its own re-optimises in LLVM everything it calls, once more
+# per level of calls, and that is most of a cold start (issue #22, bench/compile_times.py).
+#
 # Flags and start indices go to the inner kernels as np.bool_ / np.int64 values, never as Python
 # literals: numba types a literal argument as Literal[bool](True) and compiles the callee once per
 # value, and _constraints with _marker_joint is the costliest kernel to compile (issue #22). The
 # branches it keeps cost nothing at run time.
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _moments(buffers, starts, b, m):
     """Body ``b``'s ``s0, s1, x2, c, d, mred, kred, dred`` (``m`` modes) as views of the flat buffers."""
 
@@ -74,7 +78,7 @@ def _moments(buffers, starts, b, m):
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _side_data(side, j):
     """Point, P, Theta, rotation and offset of joint ``j``'s ``side`` (layout in the module docstring)."""
     point, rotation, offset, modes, rotation_modes, starts = side
@@ -88,7 +92,7 @@ def _side_data(side, j):
     )
 
 
-@njit(cache=True)
+@njit(cache=True)  # not inlined: numba cannot inline a call with *args
 def _side(body, point, modes, rotation_modes, rotation, offset, q, offsets):
     """Joint point, axes, dp/dq and d axes/dq of one side of a joint (no columns on the ground, ``body < 0``)."""
     if body < 0:
@@ -96,7 +100,7 @@ def _side(body, point, modes, rotation_modes, rotation, offset, q, offsets):
     return marker_frame(q[offsets[body] : offsets[body + 1]], point, modes, rotation_modes, rotation, offset)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _pad(d_point, d_axes, start, total):
     """Side derivatives as columns ``start:`` of the joint's coordinates ``[q_0, q_1]`` (``total`` of them)."""
     n = d_point.shape[1]
@@ -107,7 +111,7 @@ def _pad(d_point, d_axes, start, total):
     return out_point, out_axes
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _joint_coordinates(joints, j, offsets):
     """Global indices of the joint's coordinates ``[q_0, q_1]`` and ``n_0``."""
     b0, b1 = joints[1][j], joints[2][j]
@@ -192,7 +196,7 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
     return values, rows, hessian, index
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _euler(joints, j, q, offsets):
     """Eq. (R2) normalisation p.p - 1 of body ``joints[2][j]``: value and its Jacobian on ``p``."""
     start = offsets[joints[2][j]] + 3
@@ -237,7 +241,7 @@ def _constraints(joints, offsets, q, phi, lam, want_jacobian, want_hessian, n):
     return values, jacobian, forces, hessian
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _body_residuals(bodies, q, qd, qdd, gravity):
     """Eqs. (F8)-(F11) of every body: ``M qdd - Q``."""
     offsets = bodies[0]
@@ -269,7 +273,7 @@ def system_hessian(bodies, joints, q, lam, phi):
     return _constraints(joints, bodies[0], q, phi, lam, np.bool_(False), np.bool_(True), q.shape[0])[3]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def system_body_tangents(bodies, q, qd, qdd, gravity, velocity=True):
     """Block-diagonal exact ``d(M qdd - Q)/dq`` and ``d(M qdd - Q)/dqd`` (zero with ``velocity=False``)."""
     offsets = bodies[0]
@@ -284,7 +288,7 @@ def system_body_tangents(bodies, q, qd, qdd, gravity, velocity=True):
     return jac_q, jac_qd
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def system_mass_matrix(bodies, q):
     """Block-diagonal Eq. (F8)."""
     offsets = bodies[0]
