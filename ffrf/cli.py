@@ -633,9 +633,10 @@ def _configure_warmup(parser: argparse.ArgumentParser) -> None:
 
 
 def _run_warmup(args: argparse.Namespace) -> int:
-    """Compile the numba kernels a run uses, once after install (numba caches them on disk, next to the sources):
-    a coarse Bennett scene through a few quasi-static equilibria and dynamic steps. Kernels do not depend on the
-    mesh or the number of modes, so the default scene's runs then load them."""
+    """Compile the numba kernels the main job uses, once after install (numba caches them on disk, next to the
+    sources): a coarse Bennett scene through a few quasi-static equilibria. Kernels do not depend on the mesh or the
+    number of modes, so the default scene's runs then load them. The dynamic solver's kernels (``--dynamic``, the
+    validation's dynamic window) are left to their first use: the main job never calls them (issue #22)."""
     import time
 
     from ffrf.scenes.bennett_scene import build_bennett
@@ -651,7 +652,6 @@ def _run_warmup(args: argparse.Namespace) -> int:
             "quasi-static and stability kernels",
             lambda: run_linkage(scene, "quasi_static", 3, t_end=0.2, stability=True),
         ),
-        ("dynamic kernels", lambda: run_linkage(scene, "dynamic", 3, t_end=0.02, step=4e-3)),
     )
     for k, (name, step) in enumerate(steps, start=1):
         began = time.perf_counter()

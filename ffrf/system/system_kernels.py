@@ -49,8 +49,17 @@ __all__ = [
 
 EULER, MARKER_JOINT = 0, 1
 
+# The thin helpers, and the body blocks system_iteration_matrix calls, are inlined at numba's level
+# (inline="always"): a kernel compiled on its own re-optimises in LLVM everything it calls, once more
+# per level of calls, and that is most of a cold start (issue #22, bench/compile_times.py).
+#
+# Flags and start indices go to the inner kernels as np.bool_ / np.int64 values, never as Python
+# literals: numba types a literal argument as Literal[bool](True) and compiles the callee once per
+# value, and _constraints with _marker_joint is the costliest kernel to compile (issue #22). The
+# branches it keeps cost nothing at run time.
 
-@njit(cache=True)
+
+@njit(cache=True, inline="always")
 def _moments(buffers, starts, b, m):
     """Body ``b``'s ``s0, s1, x2, c, d, mred, kred, dred`` (``m`` modes) as views of the flat buffers."""
 
@@ -69,7 +78,7 @@ def _moments(buffers, starts, b, m):
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _side_data(side, j):
     """Point, P, Theta, rotation and offset of joint ``j``'s ``side`` (layout in the module docstring)."""
     point, rotation, offset, modes, rotation_modes, starts = side
@@ -83,7 +92,7 @@ def _side_data(side, j):
     )
 
 
-@njit(cache=True)
+@njit(cache=True)  # not inlined: numba cannot inline a call with *args
 def _side(body, point, modes, rotation_modes, rotation, offset, q, offsets):
     """Joint point, axes, dp/dq and d axes/dq of one side of a joint (no columns on the ground, ``body < 0``)."""
     if body < 0:
@@ -91,7 +100,7 @@ def _side(body, point, modes, rotation_modes, rotation, offset, q, offsets):
     return marker_frame(q[offsets[body] : offsets[body + 1]], point, modes, rotation_modes, rotation, offset)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _pad(d_point, d_axes, start, total):
     """Side derivatives as columns ``start:`` of the joint's coordinates ``[q_0, q_1]`` (``total`` of them)."""
     n = d_point.shape[1]
@@ -102,7 +111,7 @@ def _pad(d_point, d_axes, start, total):
     return out_point, out_axes
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _joint_coordinates(joints, j, offsets):
     """Global indices of the joint's coordinates ``[q_0, q_1]`` and ``n_0``."""
     b0, b1 = joints[1][j], joints[2][j]
@@ -132,7 +141,7 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
     side1 = _side_data(joints[6], j)
     p0, axes0, dp0_side, da0_side = _side(b0, *side0, q, offsets)
     p1, axes1, dp1_side, da1_side = _side(b1, *side1, q, offsets)
-    dp0, da0 = _pad(dp0_side, da0_side, 0, total)
+    dp0, da0 = _pad(dp0_side, da0_side, np.int64(0), total)
     dp1, da1 = _pad(dp1_side, da1_side, n0, total)
     values = np.empty(size)
     rows = np.zeros((size, total))
@@ -187,7 +196,7 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
     return values, rows, hessian, index
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _euler(joints, j, q, offsets):
     """Eq. (R2) normalisation p.p - 1 of body ``joints[2][j]``: value and its Jacobian on ``p``."""
     start = offsets[joints[2][j]] + 3
@@ -232,7 +241,7 @@ def _constraints(joints, offsets, q, phi, lam, want_jacobian, want_hessian, n):
     return values, jacobian, forces, hessian
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _body_residuals(bodies, q, qd, qdd, gravity):
     """Eqs. (F8)-(F11) of every body: ``M qdd - Q``."""
     offsets = bodies[0]
@@ -247,7 +256,7 @@ def _body_residuals(bodies, q, qd, qdd, gravity):
 @njit(cache=True)
 def system_residual(bodies, joints, q, qd, qdd, lam, gravity, phi):
     r"""Eq. (G1): ``M qdd - Q + C_q^T lambda`` (n) and ``g`` (k)."""
-    values, _, forces, _ = _constraints(joints, bodies[0], q, phi, lam, False, False, q.shape[0])
+    values, _, forces, _ = _constraints(joints, bodies[0], q, phi, lam, np.bool_(False), np.bool_(False), q.shape[0])
     return _body_residuals(bodies, q, qd, qdd, gravity) + forces, values
 
 
@@ -255,16 +264,16 @@ def system_residual(bodies, joints, q, qd, qdd, lam, gravity, phi):
 def system_jacobian(bodies, joints, q, phi):
     """``C_q`` (k x n)."""
     lam = np.zeros(joints[3][-1])
-    return _constraints(joints, bodies[0], q, phi, lam, True, False, q.shape[0])[1]
+    return _constraints(joints, bodies[0], q, phi, lam, np.bool_(True), np.bool_(False), q.shape[0])[1]
 
 
 @njit(cache=True)
 def system_hessian(bodies, joints, q, lam, phi):
     r"""Eq. (FP4): :math:`H = \partial(C_q^T\lambda)/\partial q` (n x n)."""
-    return _constraints(joints, bodies[0], q, phi, lam, False, True, q.shape[0])[3]
+    return _constraints(joints, bodies[0], q, phi, lam, np.bool_(False), np.bool_(True), q.shape[0])[3]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def system_body_tangents(bodies, q, qd, qdd, gravity, velocity=True):
     """Block-diagonal exact ``d(M qdd - Q)/dq`` and ``d(M qdd - Q)/dqd`` (zero with ``velocity=False``)."""
     offsets = bodies[0]
@@ -279,7 +288,7 @@ def system_body_tangents(bodies, q, qd, qdd, gravity, velocity=True):
     return jac_q, jac_qd
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def system_mass_matrix(bodies, q):
     """Block-diagonal Eq. (F8)."""
     offsets = bodies[0]
@@ -297,7 +306,7 @@ def system_iteration_matrix(bodies, joints, q, qd, qdd, lam, gravity, phi, mass_
     r"""Eq. (FP6): ``[[c M + beta' (K_t + H) + gamma' D_t, C_q^T], [C_q, 0]]`` in one pass;
     ``c = 1`` for generalized-alpha (Eq. (G3)), ``c = 0, beta' = 1, gamma' = 0`` for statics (Eq. (S1))."""
     n = q.shape[0]
-    _, jacobian, _, hessian = _constraints(joints, bodies[0], q, phi, lam, True, True, n)
+    _, jacobian, _, hessian = _constraints(joints, bodies[0], q, phi, lam, np.bool_(True), np.bool_(True), n)
     k = jacobian.shape[0]
     jac_q, jac_qd = system_body_tangents(bodies, q, qd, qdd, gravity, gamma_p != 0.0)
     out = np.zeros((n + k, n + k))
