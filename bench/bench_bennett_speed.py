@@ -6,7 +6,8 @@ For each path: generalized-alpha from the assembled state at rest (``--t-dynamic
 ``--outputs`` equilibria, as ``python -m ffrf bennett --quasi-static``) in s and Newton
 iterations per pose; the fast path's quasi-static run is also timed without the predictor and
 secant updates (``predictor_order=0, secant=False``: plain modified Newton from the previous
-equilibrium, Eqs. (S2), (S3) of ``docs/formulation.md``). Kernels are warm (numba cache);
+equilibrium, Eqs. (S2), (S3) of ``docs/formulation.md``) and with the quadratic predictor instead of the
+default quartic one. Kernels are warm (numba cache);
 ``--cold`` also times the fast path's first calls in a fresh process with an empty numba cache
 (compilation: residual, iteration matrix, one generalized-alpha step and one quasi-static pose).
 
@@ -73,7 +74,9 @@ def main() -> None:
     parser.add_argument("--modes", type=int, default=4, help="fixed-interface modes per link")
     parser.add_argument("--t-dynamic", type=float, default=0.3, help="dynamic run length (s)")
     parser.add_argument("--step", type=float, default=1e-3, help="generalized-alpha step (s)")
-    parser.add_argument("--outputs", type=int, default=241, help="quasi-static equilibria over the revolution")
+    parser.add_argument(
+        "--outputs", type=int, default=361, help="quasi-static equilibria over the ramp and revolution (1 deg apart)"
+    )
     parser.add_argument("--skip-quasi-static", action="store_true")
     parser.add_argument("--cold", action="store_true", help="also time numba compilation with an empty cache")
     parser.add_argument("--blas-threads", type=int, default=1)
@@ -146,6 +149,7 @@ def main() -> None:
         variants = {
             "reference": dict(fast_path=False),
             "fast, plain modified Newton": dict(predictor_order=0, secant=False),
+            "fast, quadratic predictor": dict(predictor_order=2),
             "fast": dict(),
         }
         solutions, seconds = {}, {}

@@ -360,7 +360,7 @@ def quasi_static(
     progress=None,
     *,
     fast_path: bool = True,
-    predictor_order: int = 2,
+    predictor_order: int = 4,
     secant: bool = False,
     max_step: float | None = None,
 ) -> StaticSolution:
