@@ -17,6 +17,13 @@ The equations are derived in ``docs/formulation.md``.
 This package never imports Exudyn.
 """
 
+import os
+
+# LLVM at optimisation level 2 instead of numba's default 3, unless the user chose one: it is most of the first
+# run's compilation, which level 2 cuts by about a quarter with our kernels as fast as before
+# (``bench/compile_times.py``, ``docs/speed_vs_error.md``). Read by numba when it is first imported.
+os.environ.setdefault("NUMBA_OPT", "2")
+
 from ffrf.body.flexible_body import FlexibleBody
 
 # Floating frame of reference bodies, constraints, joints and solvers.
