@@ -87,15 +87,17 @@ def _available_gib() -> float:
 
 
 def _measured_child(kind: str, *arguments: str) -> dict:
-    """``--child kind arguments`` in a new process: its JSON report plus its exit code, peak and wall time."""
+    """``--child kind arguments`` in a new process: its JSON report plus its exit code and wall time. Its peak is the
+    report's ``peak_rss_mb`` (:class:`memory_probe.StagePeaks`): ``ru_maxrss`` would only hold the peak since the last
+    reset of ``VmHWM``, which the kernel also uses for it."""
     with tempfile.TemporaryDirectory(prefix="ffrf-memory-") as folder:
         out = Path(folder) / "child.json"
         command = [sys.executable, __file__, "--child", kind, str(out), *arguments]
-        code, peak, wall = run_child(command, env=_environment(), cwd=ROOT, log=Path(folder) / "log.txt")
+        code, _, wall = run_child(command, env=_environment(), cwd=ROOT, log=Path(folder) / "log.txt")
         if code != 0:
             raise RuntimeError(f"{kind} {arguments} exited with {code}:\n{(Path(folder) / 'log.txt').read_text()}")
         report = json.loads(out.read_text())
-    return dict(report, exit_code=code, child_peak_rss_mb=peak, wall_s=wall)
+    return dict(report, exit_code=code, wall_s=wall)
 
 
 # --------------------------------------------------------------------------------------------
@@ -431,7 +433,7 @@ def main() -> int:
             "exit_code": code,
             "peak_rss_mb": peak,
             "wall_s": wall,
-            "staged_peak_rss_mb": staged["child_peak_rss_mb"],
+            "staged_peak_rss_mb": staged["peak_rss_mb"],
             "imported_rss_mb": staged["imported_rss_mb"],
             "setup_peak_rss_mb": staged["stages"]["build_bennett"]["peak_rss_mb"],
             "run_peak_rss_mb": staged["stages"]["run_linkage"]["peak_rss_mb"],
@@ -440,13 +442,15 @@ def main() -> int:
             "stages": staged["stages"],
         }
     report["allocations"] = _measured_child("allocations", str(args.dynamic_end), str(args.static_end))
+    write_report(report, args.json, echo=False)
     report["meshes"] = []
     for spec in args.meshes:
         order, h = spec.split(",")
         measured = _measured_child("scene", order, h, str(args.short_run))
         measured["peak_stage"] = _peak_stage(measured["stages"], SETUP_STAGES + RUN_STAGES[1:])
         report["meshes"].append(measured)
-        print(f"P{order} h = {h}: peak {measured['child_peak_rss_mb']:.0f} MiB ({measured['peak_stage']})", flush=True)
+        write_report(report, args.json, echo=False)  # an interrupted sweep keeps the meshes measured so far
+        print(f"P{order} h = {h}: peak {measured['peak_rss_mb']:.0f} MiB ({measured['peak_stage']})", flush=True)
     report["load_average_end"] = _load()
     write_report(report, args.json)
     return 0

@@ -7,7 +7,8 @@ or tracked per stage; a child process's peak; and numba's count of its runtime a
 * :class:`StagePeaks`: the same mark per stage, the stages being functions wrapped in place (nested stages
   each get their own peak, the enclosing ones keep theirs).
 * :func:`run_child`: a command in a new process and its peak resident set (``ru_maxrss`` of ``wait4``: the child
-  and the processes it waited for).
+  and the processes it waited for; Linux takes it from the same mark, so a child that resets ``VmHWM`` reports only
+  the peak since its last reset).
 * :func:`nrt_counts`: numba's runtime (NRT) counts of allocations and frees, i.e. every array made inside a
   jitted function (``np.empty``, ``np.zeros``, ``copy()``, array expressions); counting switched on on first use.
 """
