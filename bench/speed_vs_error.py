@@ -55,7 +55,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import ctypes
 import itertools
 import json
 import sys
@@ -66,8 +65,11 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+for _folder in (ROOT, ROOT / "bench"):  # the solver and, when loaded by path, bench/memory_probe.py
+    if str(_folder) not in sys.path:
+        sys.path.insert(0, str(_folder))
+
+from memory_probe import memory_start, memory_stop  # noqa: E402
 
 QS_POINTS = [f"1,{h},{m}" for h in (0.006, 0.004, 0.003) for m in (2, 8)] + [f"2,0.006,{m}" for m in (4, 8)]
 _STEPS = (0.004, 0.002, 0.001, 0.0005)
@@ -82,36 +84,6 @@ DYN_POINTS = (  # cheap first, so that an interrupted sweep still covers every a
 )
 DYN_QS_POINTS = ["1,0.004,8", "2,0.006,8"]
 THRESHOLDS_M = (1e-3, 1e-4, 1e-5, 1e-6)
-
-
-# --------------------------------------------------------------------------------------------
-# Memory: the process's resident high-water mark, reset per measured part
-# --------------------------------------------------------------------------------------------
-
-
-def _status_mb(field: str) -> float:
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith(field + ":"):
-            return float(line.split()[1]) / 1024.0
-    return float("nan")
-
-
-def _memory_start() -> float:
-    """Return freed heap to the system, reset VmHWM to the current RSS; returns that RSS (MiB)."""
-    try:
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except OSError:  # not glibc: the rise is then measured over a possibly inflated start
-        pass
-    try:
-        Path("/proc/self/clear_refs").write_text("5")
-    except OSError:
-        pass
-    return _status_mb("VmRSS")
-
-
-def _memory_stop(start_mb: float) -> dict:
-    peak = _status_mb("VmHWM")
-    return {"peak_mem_mb": peak - start_mb, "peak_rss_mb": peak}
 
 
 # --------------------------------------------------------------------------------------------
@@ -154,7 +126,7 @@ def _exudyn_assembled(scene) -> tuple:
     assembled start, assembly s, perf_counter at the assembly's start)``."""
     from validation.exudyn_bennett import assemble_exudyn_bennett
 
-    mem = _memory_start()
+    mem = memory_start()
     bases, setup = _exudyn_setup(scene)
     started = time.perf_counter()
     start = assemble_exudyn_bennett(scene, bases)
@@ -168,7 +140,7 @@ def run_quasi_static(
     from ffrf.scenes.linkage_run import run_linkage
 
     out = {}
-    mem = _memory_start()
+    mem = memory_start()
     scene, setup = _scene(order, h, modes, scene_cache)
     result = run_linkage(scene, mode="quasi_static", n_outputs=len(times), t_end=float(times[-1]))
     timings = result.metadata["timings_s"]
@@ -176,7 +148,7 @@ def run_quasi_static(
         "setup_s": setup,
         "integration_s": timings["assembly"] + timings["solve"],
         "assembly_s": timings["assembly"],
-        **_memory_stop(mem),
+        **memory_stop(mem),
         "time": result.time,
         "coupler": result.sensors["coupler_point"],
         "torque": result.sensors["driving_torque"],
@@ -192,7 +164,7 @@ def run_quasi_static(
             "setup_s": setup + trajectory.setup_time,
             "integration_s": solve - trajectory.setup_time,
             "assembly_s": assembly,
-            **_memory_stop(mem),
+            **memory_stop(mem),
             "time": trajectory.time,
             "coupler": trajectory.coupler,
             "torque": trajectory.torque,
@@ -216,7 +188,7 @@ def run_dynamic(
 
     out = {}
     times = step * np.arange(int(round(t_end / step)) + 1)
-    mem = _memory_start()
+    mem = memory_start()
     scene, setup = _scene(order, h, modes, scene_cache)
     started = time.perf_counter()
     q0 = assemble(scene).q
@@ -226,7 +198,7 @@ def run_dynamic(
         "setup_s": setup,
         "integration_s": assembly + run.solve_s,
         "assembly_s": assembly,
-        **_memory_stop(mem),
+        **memory_stop(mem),
         "time": run.time,
         "coupler": run.coupler,
         "torque": run.torque,
@@ -240,7 +212,7 @@ def run_dynamic(
             "setup_s": setup + trajectory.setup_time,
             "integration_s": assembly + trajectory.integration_time,
             "assembly_s": assembly,
-            **_memory_stop(mem),
+            **memory_stop(mem),
             "time": trajectory.time,
             "coupler": trajectory.coupler,
             "torque": trajectory.torque,
