@@ -183,12 +183,12 @@ def body_jacobians(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred
     ``velocity=False`` leaves ``df/dqd`` zero: statics does not use it, and its columns are the
     expensive ones (a complex velocity switches on ``M`` and ``Q_v`` in every evaluation)."""
     n = q.shape[0]
-    jac_q = np.empty((n, n))
+    jac_q = np.zeros((n, n))
     jac_qd = np.zeros((n, n))
     qc = q.astype(np.complex128)
     qdc = qd.astype(np.complex128)
     qddc = qdd.astype(np.complex128)
-    for k in range(n):
+    for k in range(3, n):  # the residual depends on neither R nor dR/dt (Eqs. (F8)-(F11)): their columns are zero
         qc[k] += 1j * _COMPLEX_STEP
         jac_q[:, k] = (
             body_residual(qc, qdc, qddc, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity).imag
