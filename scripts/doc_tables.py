@@ -536,4 +536,73 @@ def table_speed_vs_error_dynamic() -> str:
     return "\n".join(lines + ["", _source("speed_vs_error_dynamic")])
 
 
+PREDICTORS = {1: "line", 2: "parabola", 3: "cubic"}
+
+
+def table_dynamic_step_rule() -> str:
+    """A dynamic revolution at each step against 2 ms steps (``bench/dynamic_step_rule.py``)."""
+    data = _results("dynamic_step_rule")
+    lines = _header(
+        "step (ms)",
+        "Newton's start",
+        "Newton tolerance",
+        "coupler error (m)",
+        "torque error",
+        "iterations per step",
+        "factorisations",
+        "ms per step",
+        "local estimate median / largest (m)",
+    )
+    for r in data["runs"]:
+        lines.append(
+            _row(
+                [
+                    f"{1e3 * r['step_s']:g}",
+                    PREDICTORS[r["predictor_polynomial_order"]],
+                    f"{r.get('newton_tolerance', 1e-10):.0e}",
+                    _e(r["coupler_error_m"]),
+                    _e(r["torque_error_rel"]),
+                    f"{r['iterations_per_step']:.2f}",
+                    r["factorisations"],
+                    f"{r['ms_per_step']:.2f}",
+                    f"{_e(r['estimate_median_m'])} / {_e(r['estimate_largest_m'])}",
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("dynamic_step_rule")])
+
+
+def table_iteration_cost() -> str:
+    """A Newton iteration's pieces against the modes per link (``bench/iteration_cost.py``)."""
+    rows = _results("iteration_cost")["rows"]
+    lines = _header(
+        "modes per link",
+        "unknowns",
+        "residual: bodies + constraints (us)",
+        "back-substitution (us)",
+        "iteration matrix (ms)",
+        "LU (us)",
+        "iterations per step",
+        "per iteration (us)",
+        "per step (ms)",
+    )
+    for r in rows.values():
+        lines.append(
+            _row(
+                [
+                    r["modes_per_link"],
+                    r["unknowns"],
+                    f"{r['residual_us']:.0f}: {r['body_terms_us']:.0f} + {r['constraint_terms_us']:.0f}",
+                    f"{r['back_substitution_us']:.0f}",
+                    f"{1e-3 * r['iteration_matrix_us']:.1f}",
+                    f"{r['factorisation_us']:.0f}",
+                    f"{r['iterations_per_step']:.2f}",
+                    f"{r['us_per_iteration']:.0f}",
+                    f"{r['ms_per_step']:.2f}",
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("iteration_cost")])
+
+
 TABLES = {name[len("table_") :]: function for name, function in list(globals().items()) if name.startswith("table_")}

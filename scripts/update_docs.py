@@ -60,6 +60,8 @@ UNITS: dict[str, tuple[str, float]] = {
     "%": ("ratio", 1e-2),
     "Hz": ("frequency", 1.0),
     "rad^2/s^2": ("squared frequency", 1.0),
+    "MiB": ("memory", 1.0),
+    "GiB": ("memory", 1024.0),
 }
 #: Unit suffix of a key in a result file -> unit.
 KEY_SUFFIXES = {
@@ -82,6 +84,7 @@ KEY_SUFFIXES = {
     "_deg": "deg",
     "_percent": "%",
     "_hz": "Hz",
+    "_mb": "MiB",
 }
 LINK = re.compile(r"\[(?P<text>[^\[\]]+)\]\((?P<path>[^()\s#]*results/[^()\s#]+\.json)#(?P<pointer>/[^()\s]*)\)")
 NUMBER = re.compile(r"^(?P<number>[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?)\s?(?P<unit>.*)$")

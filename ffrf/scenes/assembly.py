@@ -39,7 +39,7 @@ STEPS_PER_DEGREE = 4
 MAX_DRIVE_STEP = math.radians(3.0)
 #: Turn of the fastest drive per generalized-alpha step of a dynamic run without a step of its own, and the longest
 #: such step (s): 0.06 deg is 10 ms at 1 rpm, where the default Bennett's coupler path over a revolution is within
-#: 1.2e-10 m of 4 ms steps' (``bench/dynamic_step_rule.py``, ``docs/speed_vs_error.md``); 10 ms is the longest step
+#: 1.4e-10 m of 2 ms steps' (``bench/dynamic_step_rule.py``, ``docs/speed_vs_error.md``); 10 ms is the longest step
 #: that sweep and the Exudyn twins checked.
 DRIVE_ANGLE_PER_STEP = math.radians(0.06)
 MAX_DYNAMIC_STEP = 1e-2
