@@ -605,4 +605,55 @@ def table_iteration_cost() -> str:
     return "\n".join(lines + ["", _source("iteration_cost")])
 
 
+def table_speed() -> str:
+    """The README's speed table: ours, Exudyn where it does the same, and the target (several benchmarks)."""
+    revolution, paper = _results("full_revolution"), _results("full_revolution_paper")
+    quasi, setup, compiled = _results("bennett_speed"), _results("setup_speed"), _results("compile_times")
+    quasi_static_s = quasi["quasi_static"]["fast"]["wall_s"]
+    iteration = _results("iteration_cost")["rows"]["4"]
+    memory = _results("memory")
+    lines = _header("default scene (P2, 6 mm, 4 modes) unless said", "ours", "Exudyn", "Exudyn / ours", "target")
+    for label, run in (
+        ("dynamic revolution, 6100 steps of 10 ms", revolution),
+        ("the same at the paper's P1 4 mm, 32 modes", paper),
+    ):
+        lines.append(
+            _row(
+                [
+                    label,
+                    f"{run['ffrf']['solve_s']:.1f} s",
+                    f"{run['exudyn']['solve_s']:.0f} s",
+                    f"{run['ratio_integration']:.0f}x",
+                    "3 s" if run is revolution else "10 s, 25x",
+                ]
+            )
+        )
+    lines += [
+        _row(["quasi-static revolution, 361 poses", f"{quasi_static_s:.2f} s", "", "", "0.25 s"]),
+        _row(
+            [
+                "Newton iteration: residual + back-substitution + Python",
+                f"{iteration['us_per_iteration']:.0f} us",
+                "",
+                "",
+                "3x arithmetic + back-substitution",
+            ]
+        ),
+        _row(
+            [
+                "set-up: first / from the disk cache",
+                f"{setup['cold_no_cache_build_s']:.1f} s / {setup['warm_build_s']:.2f} s",
+                f"{revolution['exudyn']['setup_s']:.1f} s (its reduction on our matrices)",
+                "",
+                "3 s",
+            ]
+        ),
+        _row(["first run: compiling (`python -m ffrf warmup`)", f"{compiled['command_s']:.0f} s", "", "", "60 s"]),
+        _row(["peak memory of the main job", f"{memory['main_job']['peak_rss_mb']:.0f} MiB", "", "", ""]),
+    ]
+    names = ("full_revolution", "full_revolution_paper", "bennett_speed", "iteration_cost", "setup_speed")
+    names += ("compile_times", "memory")
+    return "\n".join(lines + ["", "Source: " + ", ".join(f"[`{n}.json`](docs/results/{n}.json)" for n in names)])
+
+
 TABLES = {name[len("table_") :]: function for name, function in list(globals().items()) if name.startswith("table_")}
