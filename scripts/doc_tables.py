@@ -636,7 +636,7 @@ def table_speed() -> str:
                 f"{iteration['us_per_iteration']:.0f} us",
                 "",
                 "",
-                "3x arithmetic + back-substitution",
+                "about 57 us: 3x (arithmetic + back-substitution)",
             ]
         ),
         _row(
