@@ -29,6 +29,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from bench_report import write_report  # noqa: E402
+from full_revolution import count_factorisations  # noqa: E402
 
 import ffrf.solvers.generalized_alpha as alpha  # noqa: E402
 from ffrf.scenes.assembly import assemble  # noqa: E402
@@ -39,40 +40,31 @@ from ffrf.scenes.linkage_run import evaluate_sensors  # noqa: E402
 OUTPUT_INTERVAL = 0.08
 
 
-class _CountingFactorisations:
-    """Counts the factorisations of the iteration matrix while in the ``with`` block."""
-
-    def __enter__(self):
-        self.count = 0
-        self._original = alpha._factor_iteration_matrix
-
-        def counted(*args):
-            self.count += 1
-            return self._original(*args)
-
-        alpha._factor_iteration_matrix = counted
-        return self
-
-    def __exit__(self, *exc):
-        alpha._factor_iteration_matrix = self._original
-
-
-def run(scene, q0, step: float, predictor_degree: int = alpha.PREDICTOR_DEGREE, tolerance: float = 1e-10) -> dict:
-    """One dynamic run at ``step`` (s) with Newton to ``tolerance``: its path sensors and statistics."""
+def run(
+    scene,
+    q0,
+    factorisations: dict,
+    step: float,
+    predictor_degree: int = alpha.PREDICTOR_DEGREE,
+    tolerance: float = 1e-10,
+) -> dict:
+    """One dynamic run at ``step`` (s) with Newton to ``tolerance``: its path sensors and statistics
+    (``factorisations``: the counter of :func:`full_revolution.count_factorisations`)."""
     kept, alpha.PREDICTOR_DEGREE = alpha.PREDICTOR_DEGREE, predictor_degree
     try:
-        with _CountingFactorisations() as factorisations:
-            started = time.perf_counter()
-            result = alpha.generalized_alpha(
-                scene.system,
-                q0,
-                np.zeros_like(q0),
-                scene.t_end,
-                step,
-                tolerance=tolerance,
-                output_every=round(OUTPUT_INTERVAL / step),
-            )
-            wall = time.perf_counter() - started
+        factored_before = factorisations["n"]
+        started = time.perf_counter()
+        result = alpha.generalized_alpha(
+            scene.system,
+            q0,
+            np.zeros_like(q0),
+            scene.t_end,
+            step,
+            tolerance=tolerance,
+            output_every=round(OUTPUT_INTERVAL / step),
+        )
+        wall = time.perf_counter() - started
+        factored = factorisations["n"] - factored_before
     finally:
         alpha.PREDICTOR_DEGREE = kept
     sensors = evaluate_sensors(scene, result.time, result.q, result.qd, result.multipliers, "path")
@@ -84,7 +76,7 @@ def run(scene, q0, step: float, predictor_degree: int = alpha.PREDICTOR_DEGREE, 
             "newton_tolerance": tolerance,
             "steps": len(result.newton_iterations),
             "iterations_per_step": float(result.newton_iterations.mean()),
-            "factorisations": factorisations.count,
+            "factorisations": factored,
             "wall_s": wall,
             "ms_per_step": 1e3 * wall / len(result.newton_iterations),
             "estimate_median_m": float(np.median(result.position_errors)),
@@ -114,12 +106,13 @@ def main() -> int:
     scene = build_bennett("pla")
     q0 = assemble(scene).q
     alpha.generalized_alpha(scene.system, q0, np.zeros_like(q0), 0.1, 1e-2)  # compile or load the kernels first
-    reference = run(scene, q0, args.reference)
+    factorisations = count_factorisations()
+    reference = run(scene, q0, factorisations, args.reference)
     rows = []
     settings = [(step, alpha.PREDICTOR_DEGREE, 1e-10) for step in args.steps] + [(1e-2, 1, 1e-10)]
     settings += [(1e-2, alpha.PREDICTOR_DEGREE, tolerance) for tolerance in args.tolerances]
     for step, degree, tolerance in settings:
-        measured = run(scene, q0, step, degree, tolerance)
+        measured = run(scene, q0, factorisations, step, degree, tolerance)
         rows.append({**measured["row"], **errors(measured["sensors"], reference["sensors"])})
         print(rows[-1], flush=True)
     report = {

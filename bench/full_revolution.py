@@ -32,8 +32,9 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 
-def _count_factorisations():
-    """Wrap the generalized-alpha module's factorisation so that its calls are counted."""
+def count_factorisations() -> dict[str, int]:
+    """Wrap the generalized-alpha module's factorisation so that its calls are counted in the returned ``{"n": ...}``
+    (from now on, in this process; also used by ``bench/dynamic_step_rule.py``)."""
     module = importlib.import_module("ffrf.solvers.generalized_alpha")
     original = module._factor_iteration_matrix
     counter = {"n": 0}
@@ -61,7 +62,7 @@ def main(argv: list[str] | None = None) -> dict:
     from bench.speed_vs_error import run_dynamic
     from ffrf.scenes.bennett_scene import build_bennett
 
-    counter = _count_factorisations()
+    counter = count_factorisations()
     t_end = args.t_end if args.t_end is not None else build_bennett("pla", h=6e-3, order=1, n_modes=2).t_end
     print(f"t_end {t_end:.3f} s, {int(round(t_end / args.step))} steps of {args.step} s", flush=True)
     out = run_dynamic(args.order, args.h, args.modes, args.step, args.rho_inf, t_end, not args.no_exudyn)

@@ -38,25 +38,15 @@ from typing import Any
 
 import numpy as np
 from bench_report import write_report
+from memory_probe import SETUP_STAGES as BUILD_STAGES
 from memory_probe import StagePeaks, count_allocations, nrt_counts, run_child, status_mb, stop_counting
 from numba import njit
 
 ROOT = Path(__file__).resolve().parents[1]
 MAIN_JOB = ["-m", "ffrf", "bennett", "--variant", "pla"]
 
-#: (module, function, stage): the set-up's stages (the functions the build calls, as bench/setup_speed.py times them)
-SETUP_STAGES = (
-    ("ffrf.scenes.bennett_scene", "build_bennett", "build_bennett"),
-    ("ffrf.scenes.builder", "_mesh", "gmsh_mesh"),
-    ("ffrf.fe.fe_model", "_assemble", "fe_assembly"),
-    ("ffrf.scenes.builder", "craig_bampton", "craig_bampton"),
-    ("ffrf.reduction.craig_bampton", "factorize_spd", "factorize_k_ii"),
-    ("ffrf.numerics.eigen", "shift_invert_eigsh", "lanczos"),
-    ("ffrf.numerics.eigen", "count_eigenvalues_below", "sturm_count"),
-    ("ffrf.scenes.builder", "modal_moments", "modal_moments"),
-    ("ffrf.scenes.linkage_scene", "start_pose", "rigid_start_pose"),
-    ("ffrf.scenes.linkage_scene", "_check_drive_range", "rigid_drive_range"),
-)
+#: (module, function, stage): the build and its stages
+SETUP_STAGES = (("ffrf.scenes.bennett_scene", "build_bennett", "build_bennett"), *BUILD_STAGES)
 #: ... and the run's: static assembly, its stresses, the solver, the sensors, the files
 RUN_STAGES = (
     ("ffrf.scenes.linkage_run", "run_linkage", "run_linkage"),

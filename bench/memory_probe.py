@@ -24,6 +24,20 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+#: (module, function, stage): the functions whose calls make the stages of a scene's set-up (``bench/setup_speed.py``
+#: times them, ``bench/memory.py`` takes their memory peaks).
+SETUP_STAGES = (
+    ("ffrf.scenes.builder", "_mesh", "gmsh_mesh"),
+    ("ffrf.fe.fe_model", "_assemble", "fe_assembly"),
+    ("ffrf.scenes.builder", "craig_bampton", "craig_bampton"),
+    ("ffrf.reduction.craig_bampton", "factorize_spd", "factorize_k_ii"),
+    ("ffrf.numerics.eigen", "shift_invert_eigsh", "lanczos"),
+    ("ffrf.numerics.eigen", "count_eigenvalues_below", "sturm_count"),
+    ("ffrf.scenes.builder", "modal_moments", "modal_moments"),
+    ("ffrf.scenes.linkage_scene", "start_pose", "rigid_start_pose"),
+    ("ffrf.scenes.linkage_scene", "_check_drive_range", "rigid_drive_range"),
+)
+
 MIB = 1024.0
 
 

@@ -27,21 +27,12 @@ from collections import defaultdict
 from pathlib import Path
 
 from bench_report import write_report  # noqa: E402
+from memory_probe import SETUP_STAGES  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: (module, function, stage): the functions whose time makes the stages of a cold build.
-STAGES = (
-    ("ffrf.scenes.builder", "_mesh", "gmsh_mesh_s"),
-    ("ffrf.fe.fe_model", "_assemble", "fe_assembly_s"),
-    ("ffrf.scenes.builder", "craig_bampton", "craig_bampton_s"),
-    ("ffrf.reduction.craig_bampton", "factorize_spd", "factorize_k_ii_s"),
-    ("ffrf.numerics.eigen", "shift_invert_eigsh", "lanczos_s"),
-    ("ffrf.numerics.eigen", "count_eigenvalues_below", "sturm_count_s"),
-    ("ffrf.scenes.builder", "modal_moments", "modal_moments_s"),
-    ("ffrf.scenes.linkage_scene", "start_pose", "rigid_start_pose_s"),
-    ("ffrf.scenes.linkage_scene", "_check_drive_range", "rigid_drive_range_s"),
-)
+#: (module, function, stage): the functions whose time makes the stages of a cold build (keys in s).
+STAGES = tuple((module, name, f"{stage}_s") for module, name, stage in SETUP_STAGES)
 
 
 def _timed_stages() -> dict[str, float]:
