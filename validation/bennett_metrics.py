@@ -7,13 +7,11 @@ against issue 7's targets.
 from __future__ import annotations
 
 import platform
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-if TYPE_CHECKING:
-    from .bennett_validation import SolverRun
+from .solver_run import SolverRun
 
 __all__ = ["TARGETS", "SCALE_FLOOR_M", "bennett_metrics"]
 
@@ -70,7 +68,7 @@ def _constraint_residual(system, run: SolverRun) -> float:
 
 def bennett_metrics(settings, production, equivalent, modes, qs, dyn, ideal, exudyn_version: str) -> dict:
     """The metrics of one variant's runs (:func:`validation.bennett_validation.validate_bennett`):
-    ``qs``/``dyn`` the quasi-static and dynamic :class:`validation.bennett_validation.SolverRun` s
+    ``qs``/``dyn`` the quasi-static and dynamic :class:`validation.solver_run.SolverRun` s
     by label, ``ideal`` the ideal coupler points at the quasi-static rows, ``modes`` the mode
     comparisons; with the checks against :data:`TARGETS` and the verdict ``passed``."""
     deviation = {label: float(np.linalg.norm(run.coupler - ideal, axis=1).max()) for label, run in qs.items()}

@@ -31,10 +31,12 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+
+from .solver_run import SolverRun
 
 __all__ = [
     "ValidationSettings",
@@ -64,22 +66,6 @@ class ValidationSettings:
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
-
-
-@dataclass
-class SolverRun:
-    """One solver's run on one system: rows at ``time``; sensors in SI."""
-
-    label: str
-    time: NDArray[np.float64]
-    drive_angle: NDArray[np.float64]
-    q: NDArray[np.float64]  # our layout and basis
-    coupler: NDArray[np.float64]  # (n, 3)
-    tracked: NDArray[np.float64]  # (n, 9, 3): links 1..3, three nodes each
-    torque: NDArray[np.float64]  # (n,) N m
-    setup_s: float
-    solve_s: float
-    extra: dict = field(default_factory=dict)
 
 
 @dataclass

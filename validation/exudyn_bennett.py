@@ -60,8 +60,8 @@ __all__ = [
 
 
 def bennett_bodies(scene) -> list:
-    """The scene's links as :class:`validation.exudyn_twin.TwinBody` s."""
-    from .exudyn_twin import TwinBody
+    """The scene's links as :class:`validation.twin_bases.TwinBody` s."""
+    from .twin_bases import TwinBody
 
     return [
         TwinBody(f"link{link.index}", link.fe, link.interfaces, link.markers, link.reduction) for link in scene.links

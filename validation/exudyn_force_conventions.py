@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -46,8 +46,7 @@ from ffrf.system.forces import ForceElement, MarkerLoad, marker_jacobians, tange
 from ffrf.system.joints import GroundFrame, exp_so3_tangent
 from ffrf.system.markers import BodyMarker
 
-if TYPE_CHECKING:
-    from .single_body_forces import BushingSpring
+from .force_specs import BushingSpring
 
 __all__ = [
     "ExudynMarkerLoad",
@@ -125,7 +124,7 @@ class ExudynRigidBodySpringDamper(ForceElement):
     def diagonal(
         cls, name: str, marker0: GroundFrame, marker1: BodyMarker, spec: BushingSpring
     ) -> ExudynRigidBodySpringDamper:
-        """The element of a :class:`validation.single_body_forces.BushingSpring` (diagonal, offset in translation)."""
+        """The element of a :class:`validation.force_specs.BushingSpring` (diagonal, offset in translation)."""
         offset = np.r_[np.asarray(spec.offset, dtype=float), np.zeros(3)]
         return cls((marker1.body,), name, marker0, marker1, np.diag(spec.stiffness), np.diag(spec.damping), offset)
 

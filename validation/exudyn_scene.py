@@ -52,10 +52,10 @@ class SceneValidation:
 
 
 def scene_bodies(scene) -> list:
-    """The scene's bodies as :class:`validation.exudyn_twin.TwinBody` s (markers on every interface)."""
+    """The scene's bodies as :class:`validation.twin_bases.TwinBody` s (markers on every interface)."""
     from ffrf.system.markers import rigid_interface_marker
 
-    from .exudyn_twin import TwinBody
+    from .twin_bases import TwinBody
 
     out = []
     for k, body in enumerate(scene.bodies):

@@ -46,13 +46,11 @@ from .exudyn_items import (
     add_mesh_node_sensor,
     add_torque_sensor,
 )
-from .twin_bases import TwinBasis
+from .twin_bases import TwinBasis, TwinBody
 
 if TYPE_CHECKING:
     import exudyn as exu
 
-    from ffrf.fe.fe_model import FEModel
-    from ffrf.reduction.craig_bampton import CraigBamptonBasis
 
 __all__ = [
     "TwinBody",
@@ -64,19 +62,6 @@ __all__ = [
     "joint_key",
     "q_from_twin",
 ]
-
-
-@dataclass(frozen=True, eq=False)
-class TwinBody:
-    """What the twin needs of one of our bodies. ``markers``: our interface markers by interface
-    name (their points are the interfaces' weighted centres); ``reduction``: our
-    :class:`ffrf.reduction.craig_bampton.CraigBamptonBasis`, interfaces in its order."""
-
-    name: str
-    fe: FEModel  # .nodes (N, 3), .mass, .stiffness
-    interfaces: dict
-    markers: dict
-    reduction: CraigBamptonBasis
 
 
 @dataclass

@@ -1,6 +1,6 @@
 """Figures of a Bennett cross-validation (matplotlib, Agg): each function writes one PNG.
 
-Every function takes plain arrays or :class:`validation.bennett_validation.SolverRun` s and a
+Every function takes plain arrays or :class:`validation.solver_run.SolverRun` s and a
 path, and returns the path; the data drawn are exactly the arrays given (no smoothing).
 """
 

@@ -11,15 +11,12 @@ Scene 2, :func:`free_body_scene`: the bar spinning freely, no gravity, elastical
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .force_specs import ForceSpec
 from .reduced_body import ReducedBody, static_deflection, tip_node
-
-if TYPE_CHECKING:
-    from .single_body_forces import ForceSpec
 
 __all__ = ["Hinge", "Scene", "pendulum_scene", "free_body_scene"]
 

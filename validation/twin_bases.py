@@ -1,4 +1,4 @@
-"""The mode basis of each body in an Exudyn twin: Exudyn's own Craig-Bampton modes on our
+"""What the Exudyn twin needs of each of our bodies (:class:`TwinBody`) and its mode basis: Exudyn's own Craig-Bampton modes on our
 nodes, M, K, interface node sets and weights (:func:`validation.modes.exudyn_hcb`), or ours, and
 the maps between the two bases' modal coordinates (both span the same space, to 1e-13).
 """
@@ -7,18 +7,28 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.errors import SceneError
+from ffrf.fe.fe_model import FEModel
 from ffrf.reduction.craig_bampton import CraigBamptonBasis
 
-if TYPE_CHECKING:
-    from .exudyn_twin import TwinBody
+__all__ = ["TwinBody", "TwinBasis", "twin_bases", "to_twin_layout"]
 
-__all__ = ["TwinBasis", "twin_bases", "to_twin_layout"]
+
+@dataclass(frozen=True, eq=False)
+class TwinBody:
+    """What the twin needs of one of our bodies. ``markers``: our interface markers by interface
+    name (their points are the interfaces' weighted centres); ``reduction``: our
+    :class:`ffrf.reduction.craig_bampton.CraigBamptonBasis`, interfaces in its order."""
+
+    name: str
+    fe: FEModel  # .nodes (N, 3), .mass, .stiffness
+    interfaces: dict
+    markers: dict
+    reduction: CraigBamptonBasis
 
 
 @dataclass(frozen=True)

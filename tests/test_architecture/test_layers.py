@@ -116,3 +116,77 @@ def test_the_layer_check_sees_a_violation(tmp_path):
     imported = {m for _, m in _imports(probe, package="ffrf.mesh")}
     assert {"ffrf.scenes.scene_file", "ffrf.solvers.static_solver"} <= imported
     assert all(FFRF_LAYERS[_layer(m)] > FFRF_LAYERS["mesh"] for m in imported if m.startswith("ffrf."))
+
+
+def _module_name(path: Path, root: Path) -> str:
+    parts = path.relative_to(root).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _import_graph(root: Path, packages: list[str]) -> dict[str, set[str]]:
+    """Module -> the project's modules it imports (at any depth: inside functions and ``TYPE_CHECKING`` blocks
+    too). A submodule's import of its own package's ``__init__`` is not an edge: the package imports its parts."""
+    files = {_module_name(p, root): p for package in packages for p in sorted((root / package).rglob("*.py"))}
+    graph: dict[str, set[str]] = {}
+    for name, path in files.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        edges = set()
+        for _, module in _imports(path, package=package):
+            while module and module not in files:  # "ffrf.x.y.Name" -> the module "ffrf.x.y"
+                module = module.rpartition(".")[0]
+            if module and module != name and not name.startswith(module + "."):
+                edges.add(module)
+        graph[name] = edges
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_import_cycle_in_any_package():
+    """No two modules of the project import each other, directly or around a circle, even through an import
+    inside a function or under ``TYPE_CHECKING`` (which would only hide the circle)."""
+    cycles = _cycles(_import_graph(ROOT, sorted(PACKAGES)))
+    assert not cycles, f"import cycles: {cycles}; move what both sides need into a module below them"
+
+
+def test_the_cycle_check_sees_a_cycle(tmp_path):
+    """The check itself can fail: a circle closed by an import inside a function and one closed under
+    ``TYPE_CHECKING`` are both found; a submodule importing its own package is not a circle."""
+    package = tmp_path / "pkg"
+    package.mkdir()
+    (package / "__init__.py").write_text("from . import a\n")
+    (package / "a.py").write_text("import pkg\nfrom pkg.b import g\n")
+    (package / "b.py").write_text("def g():\n    from pkg.c import h\n")
+    (package / "c.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .a import x\n")
+    (package / "d.py").write_text("from pkg import a\n")
+    assert _cycles(_import_graph(tmp_path, ["pkg"])) == [["pkg.a", "pkg.b", "pkg.c"]]

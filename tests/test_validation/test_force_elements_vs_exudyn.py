@@ -19,7 +19,7 @@ import pytest
 from validation_fixtures import bar, max_difference
 
 from validation.exudyn_ffrf import TrajectoryResult, run_exudyn, run_ffrf
-from validation.single_body_forces import BushingSpring, CartesianSpring, HingeTorque, InterfaceLoad
+from validation.force_specs import BushingSpring, CartesianSpring, HingeTorque, InterfaceLoad
 from validation.single_body_scenes import Scene, free_body_scene, pendulum_scene
 
 #: Round-off agreement (after aligning definitions where they differ): tracked nodes and frame origin (m), Euler
