@@ -1,4 +1,5 @@
-"""Example 1: the paper's Bennett linkage from its DH table.
+"""Example 1: the paper's Bennett linkage from its DH table
+========================================================
 
 Problem: given a = (110, 220, 110, 220) mm and alpha = (150, 90, 150, 90) deg, find the joint
 axes, the configuration curve and the coupler's motion polynomial, and check that the DH chain

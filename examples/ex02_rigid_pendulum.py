@@ -1,4 +1,5 @@
-"""Example 2: a bar released horizontally on a hinge (the solver's smallest complete scene).
+"""Example 2: a bar released horizontally on a hinge (the solver's smallest complete scene)
+========================================================================================
 
 Problem: a PLA bar 200 x 20 x 10 mm hangs on a hinge through the centre of one end face
 (axis y, gravity -z) and is released from rest, horizontal. With no elastic modes it is a

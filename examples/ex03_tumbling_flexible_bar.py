@@ -1,4 +1,5 @@
-"""Example 3: a flexible bar tumbling in free flight keeps its momentum exactly.
+"""Example 3: a flexible bar tumbling in free flight keeps its momentum exactly
+============================================================================
 
 Problem: a soft bar 200 x 20 x 10 mm (E = 100 MPa, 450 kg/m^3) is thrown with 0.1 m/s and
 spun at (0.5, 1, 5) rad/s about its body axes, its elastic modes set ringing. Nothing acts on

@@ -1,4 +1,5 @@
-"""Example 4: the paper's flexible Bennett linkage as a library call, with two checks of statics.
+"""Example 4: the paper's flexible Bennett linkage as a library call, with two checks of statics
+=============================================================================================
 
 Problem: four PLA links (the paper's parametric geometry), base clamped at its mounting face,
 joint 3 driven by the cosine ramp to 1 rpm and one revolution, gravity. At 1 rpm the motion is

@@ -1,4 +1,5 @@
-"""Example 5: any single-loop linkage, as built: a 6R of Rational Linkages with a misaligned bore.
+"""Example 5: any single-loop linkage, as built: a 6R of Rational Linkages with a misaligned bore
+==============================================================================================
 
 Problem: the collisions-free 6R of ``rational_linkages.models`` scaled to about 100 mm, six PLA links on
 its axes, the base clamped, joint 0 driven by the cosine ramp to 1 rpm and one revolution, gravity; the

@@ -91,7 +91,7 @@ def _link_points(trajectories: Mapping[int, ArrayLike], link: int, n: int) -> ND
 def identify_loop_axes(
     trajectories: Mapping[int, ArrayLike], n: int, tool_link: int
 ) -> tuple[list[Line], dict[str, LinkAxisFit]]:
-    r"""The unoriented axes ``[h0 .. h_{n-1}]`` of an nR loop and their fits, from links 1 .. n-1.
+    r"""The unoriented axes ``[h_0, ..., h_{n-1}]`` of an nR loop and their fits, from links 1 .. n-1.
 
     Branch A runs base -> link 1 -> ... -> ``tool_link`` and gives :math:`h_0 \dots h_{m-1}`
     (``m = tool_link``); branch B runs base -> link n-1 -> ... -> ``tool_link`` and gives

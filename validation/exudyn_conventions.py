@@ -15,7 +15,7 @@ which Exudyn cannot express; the twin then applies ``o`` in the body frame and r
 velocity ``A (omega_bar + T(theta) theta_dot)``; the exact derivative of its own orientation
 ``A exp(theta~)`` is ``A (omega_bar + exp(theta~) T(theta) theta_dot)``. So Exudyn's reaction
 ``C_q^T lambda`` is not the gradient of its constraint equations when a non-frame interface
-rotates elastically (O(|theta|) relative in the modal columns of the rotation rows; |theta| up
+rotates elastically (O(``|theta|``) relative in the modal columns of the rotation rows; ``|theta|`` up
 to 3e-4 here). ``exudyn_convention_system(..., exudyn_jacobian=True)`` reproduces it in our
 solver (a :class:`ffrf.system.joints.MarkerJoint` subclass, same equations); then both solvers agree
 to round-off.

@@ -49,7 +49,7 @@ from .exudyn_items import (
 )
 from .exudyn_solvers import check_output_times, dynamic_settings, solve_dynamic
 from .single_body_forces import add_exudyn_force_items, ffrf_force_elements
-from .single_body_scenes import Hinge, Scene
+from .single_body_scenes import Hinge, SingleBodyScene
 
 if TYPE_CHECKING:
     from ffrf.system.constraints import Constraint
@@ -67,7 +67,7 @@ class TrajectoryResult:
     position : (n, 3) frame origin R (world).
     euler : (n, 4) Euler parameters of the frame (scalar first).
     zeta : (n, m) modal coordinates.
-    tracked : (n, k, 3) world positions of ``Scene.tracked_nodes``.
+    tracked : (n, k, 3) world positions of ``SingleBodyScene.tracked_nodes``.
     setup_time, integration_time : wall times (s).
     newton_iterations : total Newton iterations (or -1 if unknown).
     solver : text label, with the Exudyn version for Exudyn runs.
@@ -94,7 +94,7 @@ class TrajectoryResult:
 # --------------------------------------------------------------------------------------------
 
 
-def _add_exudyn_hinge(mbs, scene: Scene, hinge: Hinge, body_object: int) -> tuple[int, int]:
+def _add_exudyn_hinge(mbs, scene: SingleBodyScene, hinge: Hinge, body_object: int) -> tuple[int, int]:
     """Interface marker on bore 0 (our weights) + ground marker + GenericJoint (free rz) for
     ``hinge``, the hinge of ``scene``; returns the (ground, body) markers, joint frames."""
     body = scene.body
@@ -107,7 +107,10 @@ def _add_exudyn_hinge(mbs, scene: Scene, hinge: Hinge, body_object: int) -> tupl
 
 
 def run_exudyn(
-    scene: Scene, modified_newton: bool = False, relative_tolerance: float = 1e-12, absolute_tolerance: float = 1e-12
+    scene: SingleBodyScene,
+    modified_newton: bool = False,
+    relative_tolerance: float = 1e-12,
+    absolute_tolerance: float = 1e-12,
 ) -> TrajectoryResult:
     """Build the Exudyn twin of ``scene``, integrate it and return plain arrays.
 
@@ -177,7 +180,7 @@ def run_exudyn(
 # --------------------------------------------------------------------------------------------
 
 
-def ffrf_system(scene: Scene, exact_gravity: bool = False, exudyn_definitions: bool = False):
+def ffrf_system(scene: SingleBodyScene, exact_gravity: bool = False, exudyn_definitions: bool = False):
     """Our :class:`ffrf.system.multibody.MultibodySystem` of ``scene`` and its initial state (q0, qd0).
 
     ``exact_gravity=False`` (default) is Exudyn's simplified gravity moment; True keeps the
@@ -224,7 +227,7 @@ def ffrf_system(scene: Scene, exact_gravity: bool = False, exudyn_definitions: b
 
 
 def run_ffrf(
-    scene: Scene,
+    scene: SingleBodyScene,
     tolerance: float = 1e-12,
     exact_gravity: bool = False,
     modified_newton: bool | None = None,

@@ -53,7 +53,7 @@ def _turn_deg(run) -> NDArray[np.float64]:
 
 
 def coupler_deviation_figure(runs: dict, ideal: NDArray, path: Path, title: str = "") -> Path:
-    """|coupler point - ideal coupler point| (mm) at the same drive angle, per run."""
+    """``|coupler point - ideal coupler point|`` (mm) at the same drive angle, per run."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 3.6))
     for label, run in runs.items():
@@ -67,7 +67,7 @@ def coupler_deviation_figure(runs: dict, ideal: NDArray, path: Path, title: str 
 
 
 def difference_figure(a, b, path: Path, title: str = "") -> Path:
-    """|a - b| (m, log scale) over the drive angle: coupler point and the nine tracked nodes."""
+    """``|a - b|`` (m, log scale) over the drive angle: coupler point and the nine tracked nodes."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 3.6))
     x = _turn_deg(a)
@@ -154,7 +154,7 @@ def coupler_path_figure(runs: dict, ideal: NDArray, path: Path, magnify: float =
 def series_difference_figure(
     time: NDArray, pairs: dict[str, tuple[NDArray, NDArray]], path: Path, title: str = ""
 ) -> Path:
-    """|a - b| (m, log scale) over time for named pairs of (n, 3) position series."""
+    """``|a - b|`` (m, log scale) over time for named pairs of (n, 3) position series."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 3.6))
     for name, (a, b) in pairs.items():

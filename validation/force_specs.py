@@ -1,6 +1,7 @@
-r"""The force elements and loads of the single-body scenes (:class:`validation.single_body_scenes.Scene`) as plain,
-solver-neutral data: what each element is, in the units and axes both solvers read. Their translations into our
-elements and Exudyn's items are :mod:`validation.single_body_forces`.
+r"""The force elements and loads of the single-body scenes
+(:class:`validation.single_body_scenes.SingleBodyScene`) as plain, solver-neutral data: what each element is, in
+the units and axes both solvers read. Their translations into our elements and Exudyn's items are
+:mod:`validation.single_body_forces`.
 """
 
 from __future__ import annotations
@@ -67,7 +68,7 @@ class BushingSpring:
 
 @dataclass(frozen=True)
 class HingeTorque:
-    """Torque on the body about the hinge axis (needs ``Scene.hinge``), positive about the axis:
+    """Torque on the body about the hinge axis (needs ``SingleBodyScene.hinge``), positive about the axis:
     tau = torque - stiffness (phi - offset) - damping phi_dot (a motor curve with ``stiffness = 0``)."""
 
     torque: float = 0.0

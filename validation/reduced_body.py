@@ -66,7 +66,7 @@ class ReducedBody:
         return self.frame_weights @ self.nodes[self.frame_nodes]
 
     def max_mode_on_frame_interface(self) -> float:
-        """Largest |Psi| entry on the frame-interface DOFs (0 for the RBE2 reference condition)."""
+        """Largest ``|Psi|`` entry on the frame-interface DOFs (0 for the RBE2 reference condition)."""
         dofs = (3 * self.frame_nodes[:, None] + np.arange(3)).ravel()
         return float(np.abs(self.basis[dofs]).max())
 

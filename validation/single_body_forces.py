@@ -30,7 +30,7 @@ from .force_specs import BushingSpring, CartesianSpring, InterfaceLoad
 if TYPE_CHECKING:
     from ffrf.system.forces import ForceElement
 
-    from .single_body_scenes import Scene
+    from .single_body_scenes import SingleBodyScene
 
 __all__ = [
     "add_exudyn_force_items",
@@ -38,7 +38,7 @@ __all__ = [
 ]
 
 
-def _interface(scene: Scene, interface: str) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+def _interface(scene: SingleBodyScene, interface: str) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     body = scene.body
     return (body.frame_nodes, body.frame_weights) if interface == "frame" else (body.tip_nodes, body.tip_weights)
 
@@ -48,7 +48,7 @@ def _symmetric(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
     return 0.5 * (matrix + matrix.T)
 
 
-def _ground_frame(scene: Scene) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _ground_frame(scene: SingleBodyScene) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """World point and axes of the frame interface at t = 0 (the bushing's and the hinge's ground side)."""
     rotation = scene.rotation0()
     return np.asarray(scene.position, dtype=float) + rotation @ scene.body.frame_center, rotation
@@ -59,7 +59,7 @@ def _ground_frame(scene: Scene) -> tuple[NDArray[np.float64], NDArray[np.float64
 # --------------------------------------------------------------------------------------------
 
 
-def ffrf_force_elements(scene: Scene, exudyn_definitions: bool = False) -> tuple[ForceElement, ...]:
+def ffrf_force_elements(scene: SingleBodyScene, exudyn_definitions: bool = False) -> tuple[ForceElement, ...]:
     """Our force elements of ``scene.forces`` (body 0); ``exudyn_definitions``: Exudyn's definitions where
     they differ from ours (:mod:`validation.exudyn_force_conventions`)."""
     from ffrf.system.forces import JointTorque, MarkerLoad, spring_damper
@@ -118,7 +118,9 @@ def ffrf_force_elements(scene: Scene, exudyn_definitions: bool = False) -> tuple
 # --------------------------------------------------------------------------------------------
 
 
-def add_exudyn_force_items(mbs, scene: Scene, body_object: int, hinge_markers: tuple[int, int] | None) -> None:
+def add_exudyn_force_items(
+    mbs, scene: SingleBodyScene, body_object: int, hinge_markers: tuple[int, int] | None
+) -> None:
     """Exudyn's items of ``scene.forces`` on FFRF object ``body_object``; ``hinge_markers``: the hinge's
     (ground, body) markers, joint frames with z along the axis."""
     from .exudyn_items import (

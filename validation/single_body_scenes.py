@@ -1,4 +1,4 @@
-r"""The single-body scenes of the Exudyn cross-checks, solver neutral: a :class:`Scene` is one
+r"""The single-body scenes of the Exudyn cross-checks, solver neutral: a :class:`SingleBodyScene` is one
 :class:`validation.reduced_body.ReducedBody` with gravity, Rayleigh damping, its initial state, an
 optional revolute joint to ground at the frame interface (:class:`Hinge`) and force elements and loads
 (:mod:`validation.single_body_forces`).
@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from .force_specs import ForceSpec
 from .reduced_body import ReducedBody, static_deflection, tip_node
 
-__all__ = ["Hinge", "Scene", "pendulum_scene", "free_body_scene"]
+__all__ = ["Hinge", "SingleBodyScene", "pendulum_scene", "free_body_scene"]
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class Hinge:
 
 
 @dataclass(frozen=True, eq=False)
-class Scene:
+class SingleBodyScene:
     """One body, its initial state, loads and an optional hinge; all in SI units.
 
     ``euler0`` is the initial (= Exudyn reference) rotation of the frame as unit Euler
@@ -95,7 +95,7 @@ class Scene:
             raise ValueError(f"t_end={self.t_end} is not a whole number of steps h={self.step}")
         return n
 
-    def with_step(self, step: float) -> Scene:
+    def with_step(self, step: float) -> SingleBodyScene:
         return replace(self, step=step)
 
 
@@ -106,10 +106,10 @@ def pendulum_scene(
     beta: float = 0.0,
     rho_inf: float = 0.8,
     axis: tuple[float, float, float] = (0.0, 1.0, 0.0),
-) -> Scene:
+) -> SingleBodyScene:
     """Scene 1: hinged at bore 0 about ``axis``, released from horizontal at rest, g = -9.81 e_z."""
     corner = int(np.argmax(body.nodes @ np.array([1.0, 1e-3, 1e-6])))  # an outer tip corner
-    return Scene(
+    return SingleBodyScene(
         body,
         (tip_node(body), corner),
         gravity=(0.0, 0.0, -9.81),
@@ -128,7 +128,7 @@ def free_body_scene(
     rho_inf: float = 0.8,
     tip_force: tuple[float, float, float] = (0.0, 1e-2, 1e-2),
     tilted: bool = False,
-) -> Scene:
+) -> SingleBodyScene:
     """Scene 2: no gravity, no constraints, omega_bar = (1, 2, 30) rad/s, v = (0.1, 0, 0) m/s.
 
     The elastic excitation zeta0 is the static deflection under a small ``tip_force`` (10 mN:
@@ -146,7 +146,7 @@ def free_body_scene(
         p = np.r_[np.cos(half), np.sin(half) * axis]
         euler0 = (float(p[0]), float(p[1]), float(p[2]), float(p[3]))
     corner = int(np.argmax(body.nodes @ np.array([1.0, 1e-3, 1e-6])))
-    return Scene(
+    return SingleBodyScene(
         body,
         (tip_node(body), corner),
         velocity=(0.1, 0.0, 0.0),

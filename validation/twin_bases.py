@@ -1,6 +1,6 @@
-"""What the Exudyn twin needs of each of our bodies (:class:`TwinBody`) and its mode basis: Exudyn's own Craig-Bampton modes on our
-nodes, M, K, interface node sets and weights (:func:`validation.modes.exudyn_hcb`), or ours, and
-the maps between the two bases' modal coordinates (both span the same space, to 1e-13).
+"""What the Exudyn twin needs of each of our bodies (:class:`TwinBody`) and its mode basis: Exudyn's own
+Craig-Bampton modes on our nodes, M, K, interface node sets and weights (:func:`validation.modes.exudyn_hcb`), or
+ours, and the maps between the two bases' modal coordinates (both span the same space, to 1e-13).
 """
 
 from __future__ import annotations

@@ -87,7 +87,7 @@ def common_normal_feet(axis_a: Axis, axis_b: Axis) -> NDArray[np.float64]:
     """Feet of the common normal of two skew lines, shape (2, 3).
 
     Closest points p_a + t_a d_a, p_b + t_b d_b from the stationarity of
-    |(p_a + t_a d_a) - (p_b + t_b d_b)|^2 (e.g. Eberly, 3D Game Engine Design, sec. 14.1).
+    ``|(p_a + t_a d_a) - (p_b + t_b d_b)|^2`` (e.g. Eberly, 3D Game Engine Design, sec. 14.1).
     """
     w0 = axis_a.point - axis_b.point
     b = float(axis_a.direction @ axis_b.direction)

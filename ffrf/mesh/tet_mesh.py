@@ -178,7 +178,7 @@ def oriented(mesh: TetMesh) -> TetMesh:
 def mesh_quality(points: ArrayLike, tets: ArrayLike) -> NDArray[np.float64]:
     """Mean-ratio quality of each tetrahedron.
 
-    q = 12 (3 |V|)^(2/3) / sum of squared edge lengths, which is 1 for a regular
+    q = 12 (3 ``|V|``)^(2/3) / sum of squared edge lengths, which is 1 for a regular
     tetrahedron and tends to 0 for flat ones (Liu & Joe, "Relationship between
     tetrahedron shape measures", BIT 34 (1994), eq. for eta).
     """

@@ -48,7 +48,7 @@ def rank_tolerance(n: int) -> float:
 
 
 def equilibration(matrix: NDArray) -> tuple[NDArray, NDArray]:
-    """Row and column scalings 1/sqrt(max |a|) (one Ruiz pass; zero rows and columns keep 1)."""
+    """Row and column scalings 1/sqrt(max ``|a|``) (one Ruiz pass; zero rows and columns keep 1)."""
     magnitude = np.abs(matrix)
     row_max, col_max = magnitude.max(axis=1), magnitude.max(axis=0)
     rows = 1.0 / np.sqrt(np.where(row_max > 0, row_max, 1.0))

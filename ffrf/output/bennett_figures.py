@@ -10,7 +10,7 @@ Entry points (all return ``(fig, ax)``, a bare matplotlib ``Figure`` rendered wi
 
 * :func:`plot_over_drive_angle` ``(series: {label: (angle_rad, values)}, ylabel, path=None)``:
   the generic plot; values are drawn as given (already in display units);
-* :func:`plot_coupler_deviation` ``(runs, path=None, extra=None)``: |coupler_deviation| in mm;
+* :func:`plot_coupler_deviation` ``(runs, path=None, extra=None)``: ``|coupler_deviation|`` in mm;
 * :func:`plot_driving_torque` ``(runs, path=None, extra=None, magnitude=True)``: N mm, the
   magnitude as in the paper ("joint torque magnitude at joint 3") or signed.
 
@@ -79,7 +79,7 @@ def _angle_from_start(sensors: Mapping[str, NDArray]) -> NDArray[np.float64]:
 
 
 def coupler_deviation_series(run: Run) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """(drive angle since start in rad, |coupler point - ideal point at the same drive angle| in mm)."""
+    """(drive angle since start in rad, ``|coupler point - ideal point at the same drive angle|`` in mm)."""
     sensors = run_sensors(run)
     return _angle_from_start(sensors), 1e3 * np.linalg.norm(sensors["coupler_deviation"], axis=1)
 

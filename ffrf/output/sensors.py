@@ -12,7 +12,7 @@ For every output row, and for any scene built by :mod:`ffrf.scenes.builder` (duc
   point on each side (world, m);
 * ``energy_kinetic``, ``energy_strain``, ``energy_potential`` (J), ``energy_elements`` (stored in force
   elements, when there are any) and ``constraint_residual``
-  (largest |g|), and with exactly one driven joint its work and the energy balance
+  (largest ``|g|``), and with exactly one driven joint its work and the energy balance
   (:mod:`ffrf.output.energy_balance`).
 """
 

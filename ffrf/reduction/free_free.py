@@ -52,7 +52,7 @@ class FreeFreeBasis(ReducedMatrices):
     frequencies_hz : (m,) their frequencies omega / (2 pi).
     reduced_mass, reduced_stiffness : (m, m) Psi^T M Psi (= I) and Psi^T K Psi (= diag omega^2), symmetrised.
     rigid_body_eigenvalues : (n_rigid,) omega^2 of the left-out modes (round-off, ~0).
-    reference_residual : max |R_hat^T M Psi| over the M-normalised rigid modes R_hat: how exactly
+    reference_residual : max ``|R_hat^T M Psi|`` over the M-normalised rigid modes R_hat: how exactly
         the reference conditions (FF-3) hold (round-off).
     mode_labels : one text label per column, e.g. ``"free-free 1 (123.4 Hz)"``.
     reference : "mean_axis" (eq. (FF-3)), as for Craig-Bampton with ``reference="mean_axis"``.

@@ -145,7 +145,7 @@ def drive_work(driving_torque: NDArray, drive_angle: NDArray) -> dict[str, float
     puts into the linkage over its last revolution: ``work_J``, the work it does where it drives rather than brakes
     (trapezoids of torque times angle that are positive; its net work over a quasi-static revolution is the change of
     potential energy, about zero), the reference of :attr:`Reach.verdict`; and ``max_torque_work_J``, 2 pi times the
-    largest |torque| of that revolution, what the drive would deliver at that torque throughout."""
+    largest ``|torque|`` of that revolution, what the drive would deliver at that torque throughout."""
     torque, angle = np.asarray(driving_torque, dtype=float), np.asarray(drive_angle, dtype=float)
     last = np.abs(angle - angle[-1]) <= 2.0 * np.pi + 1e-12
     torque, angle = torque[last], angle[last]

@@ -6,7 +6,7 @@ for the Bennett linkage link 3 about h3 relative to the base), ``driving_torque`
 driven joint's side 1 about its axis), ``coupler_point`` (mean of the tool link's two joint points, m;
 link 2 of the Bennett linkage), ``joint_angles`` (the n relative rotations about the joint axes, rad),
 ``link{k}_node{j}`` (three tracked surface nodes of every moving link, m), ``energy_kinetic``,
-``energy_strain``, ``energy_potential`` (J) and ``constraint_residual`` (largest |g|), ``joint_reactions``
+``energy_strain``, ``energy_potential`` (J) and ``constraint_residual`` (largest ``|g|``), ``joint_reactions``
 (rows x (n + 1) x 6: clamp, joints 0..n-1; force and torque on each joint's side 1 in its joint frame 0,
 N and N m, :mod:`ffrf.system.reactions`; names in the metadata's ``joint_reaction_names``). The ideal
 coupler point at the same drive angle comes from the scene's rigid nominal loop
@@ -76,7 +76,7 @@ class LinkageResult:
     critical: CriticalPose | None = None  # with stability: the fold, or the least stable output
 
     def summary(self) -> dict[str, float]:
-        """The largest coupler deviation (same drive angle), distance to the ideal path, |driving torque|, and,
+        """The largest coupler deviation (same drive angle), distance to the ideal path, ``|driving torque|``, and,
         when their sensors were evaluated (``sensors="all"``), constraint residual and relative energy balance."""
         s = self.sensors
         out = {

@@ -173,12 +173,12 @@ def path_points(
 
 
 def _speed(rate_of_change: NDArray, n: int) -> float:
-    """c: the largest |dq/dt| of the path's tangent (y_t of ``F_y y_t = -F_t``), floored at 1e-12."""
+    """c: the largest ``|dq/dt|`` of the path's tangent (y_t of ``F_y y_t = -F_t``), floored at 1e-12."""
     return float(max(np.abs(rate_of_change[:n]).max(), 1e-12))
 
 
 def path_speed(system: MultibodySystem, q: NDArray, multipliers: NDArray, t: float) -> float:
-    """c of Eq. (S5) at an equilibrium: how fast the coordinates move with t there (largest |dq/dt|)."""
+    """c of Eq. (S5) at an equilibrium: how fast the coordinates move with t there (largest ``|dq/dt|``)."""
     matrix, rate = _Model(system).jacobians(q, multipliers, t)
     return _speed(factor(matrix, what="static tangent").solve(-rate), system.n_coordinates)
 

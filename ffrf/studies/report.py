@@ -23,7 +23,7 @@ from ffrf.studies.sensitivity import sobol_indices, standardised_regression
 __all__ = ["PERCENTILES", "percentile_table", "saltelli_outputs", "analyse", "write_report"]
 
 PERCENTILES = (0, 1, 5, 25, 50, 75, 95, 99, 100)
-#: Scatter plots per output: the parameters with the largest total index (or |SRC|).
+#: Scatter plots per output: the parameters with the largest total index (or ``|SRC|``).
 TOP_PARAMETERS = 3
 
 
@@ -142,7 +142,7 @@ def _contour_figure(x1: NDArray, x2: NDArray, y: NDArray, labels: tuple[str, str
 
 
 def _influence(entry: dict, names: list[str]) -> list[str]:
-    """Parameters by influence: total Sobol index where there is one, else |SRC|."""
+    """Parameters by influence: total Sobol index where there is one, else ``|SRC|``."""
     score = entry.get("sobol_total", {n: abs(entry["src"][n]) for n in names})
     return sorted(names, key=lambda n: -np.nan_to_num(score[n], nan=-1.0))
 

@@ -28,7 +28,7 @@ __all__ = ["exp_so3_kernel", "exp_so3_tangent_kernel", "marker_frame", "exp_so3_
 
 @njit(cache=True)
 def exp_so3_kernel(theta: np.ndarray) -> np.ndarray:
-    """Rodrigues' formula, Eq. (K3) (Taylor series below |theta|^2 = 1e-8)."""
+    """Rodrigues' formula, Eq. (K3) (Taylor series below ``|theta|^2 = 1e-8``)."""
     phi2 = dot(theta, theta)
     s = skew(theta)
     if abs(phi2) < 1e-8:

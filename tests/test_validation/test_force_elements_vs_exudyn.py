@@ -20,7 +20,7 @@ from validation_fixtures import bar, max_difference
 
 from validation.exudyn_ffrf import TrajectoryResult, run_exudyn, run_ffrf
 from validation.force_specs import BushingSpring, CartesianSpring, HingeTorque, InterfaceLoad
-from validation.single_body_scenes import Scene, free_body_scene, pendulum_scene
+from validation.single_body_scenes import SingleBodyScene, free_body_scene, pendulum_scene
 
 #: Round-off agreement (after aligning definitions where they differ): tracked nodes and frame origin (m), Euler
 #: parameters, modal coordinates relative to their largest magnitude. Measured at most 6.5e-12 m, 1.8e-11 and
@@ -53,13 +53,13 @@ BUSHING = BushingSpring(stiffness=(2e3, 3e3, 1.5e3, 20.0, 30.0, 15.0), damping=(
 
 
 @cache
-def pendulum(step: float = 1e-3, **changes) -> Scene:
+def pendulum(step: float = 1e-3, **changes) -> SingleBodyScene:
     """The flexible pendulum of test_ffrf_vs_exudyn.py (hinged at bore 0, released from horizontal), 0.1 s."""
     return dataclasses.replace(pendulum_scene(bar(), step=step, t_end=0.1, beta=1e-3, rho_inf=0.8), **changes)
 
 
 @cache
-def hanging_bar(scale: float = 1.0, damped: bool = True, tilted: bool = False) -> Scene:
+def hanging_bar(scale: float = 1.0, damped: bool = True, tilted: bool = False) -> SingleBodyScene:
     """The bar held at bore 0 by a six-axis spring-damper (no hinge), released under ``scale`` g with ``scale``
     0.1 mm of offset along z and turning at ``scale`` (3, 0, 0.3) rad/s: relative rotations up to about ``scale``
     1.1e-3 rad about y, 1.0e-3 about z and 5.3e-4 about x."""
@@ -76,12 +76,12 @@ def hanging_bar(scale: float = 1.0, damped: bool = True, tilted: bool = False) -
 
 
 @cache
-def exudyn(scene: Scene) -> TrajectoryResult:
+def exudyn(scene: SingleBodyScene) -> TrajectoryResult:
     return run_exudyn(scene)
 
 
 @cache
-def ours(scene: Scene, exudyn_definitions: bool = False) -> TrajectoryResult:
+def ours(scene: SingleBodyScene, exudyn_definitions: bool = False) -> TrajectoryResult:
     return run_ffrf(scene, exudyn_definitions=exudyn_definitions)
 
 
@@ -165,7 +165,7 @@ def test_rayleigh_damping_agrees_to_round_off():
 
 
 @cache
-def spinning_body() -> Scene:
+def spinning_body() -> SingleBodyScene:
     """The tilted free body (omega_bar = (1, 2, 30) rad/s) whose tip-interface centre starts at 0.1 m/s along x."""
     body = bar()
     tip = body.tip_weights @ body.nodes[body.tip_nodes]

@@ -21,14 +21,14 @@ from ffrf.fe.matrix_import import abaqus_model
 from ffrf.fe.node_selection import node_at_point, nodes_in_plane
 from ffrf.reduction.free_free import free_free_basis
 from validation.reduced_body import ReducedBody
-from validation.single_body_scenes import Scene
+from validation.single_body_scenes import SingleBodyScene
 
 DATA = Path(__file__).parents[2] / "validation" / "data" / "exudyn_testmodels"
 OMEGA = (0.0, 0.0, 50.0 * 2.0 * np.pi)
 
 
 @cache
-def rotor_scene() -> Scene:
+def rotor_scene() -> SingleBodyScene:
     model = abaqus_model(
         DATA / "rotorDiscTest.inp", DATA / "rotorDiscTestMASS1.mtx.xz", DATA / "rotorDiscTestSTIF1.mtx.xz", "rotor-1"
     )
@@ -48,7 +48,7 @@ def rotor_scene() -> Scene:
         length=0.5,
     )
     middle = node_at_point(model.nodes, [0.0, 0.0, 0.25])
-    return Scene(body, (middle, unbalance), omega_bar=OMEGA, t_end=0.01, step=1e-4, rho_inf=0.5)
+    return SingleBodyScene(body, (middle, unbalance), omega_bar=OMEGA, t_end=0.01, step=1e-4, rho_inf=0.5)
 
 
 def test_spinning_rotor_agrees_with_exudyn():

@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 
 from validation.exudyn_ffrf import TrajectoryResult, run_exudyn, run_ffrf
 from validation.reduced_body import ReducedBody, bar_body
-from validation.single_body_scenes import Scene, free_body_scene, pendulum_scene
+from validation.single_body_scenes import SingleBodyScene, free_body_scene, pendulum_scene
 
 # Agreement of the two solvers, about 100x the largest difference measured on 2026-11-24 (AMD EPYC):
 #: tracked node and frame positions (m); measured 2.8e-12 m on the 0.2 m bar.
@@ -37,22 +37,22 @@ def bar() -> ReducedBody:
 
 
 @cache
-def pendulum(step: float = 1e-3, t_end: float = 1.0) -> Scene:
+def pendulum(step: float = 1e-3, t_end: float = 1.0) -> SingleBodyScene:
     return pendulum_scene(bar(), step=step, t_end=t_end, beta=PENDULUM_BETA, rho_inf=0.8)
 
 
 @cache
-def free_body(tilted: bool = False, step: float = 1e-3, t_end: float = 0.2) -> Scene:
+def free_body(tilted: bool = False, step: float = 1e-3, t_end: float = 0.2) -> SingleBodyScene:
     return free_body_scene(bar(), step=step, t_end=t_end, rho_inf=0.8, tilted=tilted)
 
 
 @cache
-def exudyn_run(scene: Scene) -> TrajectoryResult:
+def exudyn_run(scene: SingleBodyScene) -> TrajectoryResult:
     return run_exudyn(scene)
 
 
 @cache
-def ffrf_run(scene: Scene) -> TrajectoryResult:
+def ffrf_run(scene: SingleBodyScene) -> TrajectoryResult:
     return run_ffrf(scene)
 
 
@@ -71,7 +71,9 @@ def mass_moments(body: ReducedBody) -> tuple[float, NDArray[np.float64], NDArray
     return float(ones @ scalar @ ones), ones @ weighted, body.nodes.T @ weighted
 
 
-def rigid_pendulum_tip(body: ReducedBody, scene: Scene, times: NDArray[np.float64], node: int) -> NDArray[np.float64]:
+def rigid_pendulum_tip(
+    body: ReducedBody, scene: SingleBodyScene, times: NDArray[np.float64], node: int
+) -> NDArray[np.float64]:
     """Tip path of the same body taken as rigid, hinged about world y at the origin, g along -z.
 
     J phi'' = m g c_x cos(phi) with J = int (x^2 + z^2) dm, c = first moment / m; phi is the

@@ -6,7 +6,7 @@ x = 0 is the interface (its nodes weighted by their surface areas, ``GetNodeWeig
 5 Hurty/Craig-Bampton modes (RBE2, the interface's rigid motions left out, dense eigensolver), the
 interface clamped to ground at its centre (0, 0.5, 0.5) m by a ``GenericJoint`` locking all six motions,
 gravity -9.81 m/s^2 along y (``LoadMassProportional``), generalized-alpha, rho_inf = 0.5, h = 1e-4 s to
-5e-3 s. Result: the sum over the five blocks of |DisplacementLocal| of the node at (4, 0, 0) at the
+5e-3 s. Result: the sum over the five blocks of ``|DisplacementLocal|`` of the node at (4, 0, 0) at the
 last step. The script also round-trips the FE data and the reduced body through files
 (``SaveToFile``/``LoadFromFile``); the rebuild here leaves that out (it writes files, the data are the
 same), and its Exudyn run reproduces the stored value.
@@ -47,7 +47,7 @@ STEP, T_END, RHO_INF = 1e-4, 5e-3, 0.5
 
 
 def _result(sensor: np.ndarray) -> float:
-    """Sum over the blocks of |last row| (time column left out); ``sensor`` stacks the blocks' rows."""
+    """Sum over the blocks of ``|last row|`` (time column left out); ``sensor`` stacks the blocks' rows."""
     rows = sensor.reshape(len(BLOCKS), -1, sensor.shape[1])
     return float(np.abs(rows[:, -1, 1:]).sum())
 

@@ -7,7 +7,7 @@ functions for the FFRF terms (``AddObjectFFRFreducedOrderWithUserFunctions``, wh
 Exudyn's simplified one, as ``exact_gravity=False``), gravity -9.81 m/s^2 along y. Joints locking all six
 motions: body 1's face z = 0 to ground at the origin, body 1's face z = 0.5 to body 2's face z = 0 (rigid
 interface markers, equal weights, ``useAlternativeApproach=True``). Generalized-alpha, rho_inf = 0.5,
-h = 1e-3 s to 0.005 s; result: sum of |Displacement| of body 1's node at (0, 0, 0.25), time column
+h = 1e-3 s to 0.005 s; result: sum of ``|Displacement|`` of body 1's node at (0, 0, 0.25), time column
 included.
 
 Ours: :func:`ffrf.reduction.free_free.free_free_basis`, :func:`ffrf.system.joints.fixed_joint` on

@@ -27,7 +27,7 @@ Ours: :func:`ffrf.reduction.free_free.free_free_basis` (the same span as Exudyn'
 :class:`~ffrf.body.flexible_body.FlexibleBody`, :func:`ffrf.system.forces.spring_damper` on a joint locking
 the three translations of the face's mean (world components: ``CartesianSpringDamper``; its damper sees
 the tangent Euler-parameter rates, as Exudyn's marker velocity), the sensors as Exudyn defines them
-(:mod:`.sensors`).
+(:mod:`validation.testmodels.sensors`).
 """
 
 from __future__ import annotations

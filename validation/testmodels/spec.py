@@ -159,7 +159,7 @@ FREQUENCY_TOLERANCE = 1e-9
 
 
 def relative(a: float, b: float) -> float:
-    """|a - b| / |b|."""
+    """``|a - b|`` / ``|b|``."""
     return abs(a - b) / abs(b)
 
 
