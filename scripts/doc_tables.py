@@ -606,7 +606,7 @@ def table_iteration_cost() -> str:
 
 
 def table_speed() -> str:
-    """The README's speed table: ours, Exudyn where it does the same, and the target (several benchmarks)."""
+    """The speed table of docs/capabilities.md: ours, Exudyn where it does the same, and the target."""
     revolution, paper = _results("full_revolution"), _results("full_revolution_paper")
     quasi, setup, compiled = _results("bennett_speed"), _results("setup_speed"), _results("compile_times")
     quasi_static_s = quasi["quasi_static"]["fast"]["wall_s"]
@@ -653,7 +653,7 @@ def table_speed() -> str:
     ]
     names = ("full_revolution", "full_revolution_paper", "bennett_speed", "iteration_cost", "setup_speed")
     names += ("compile_times", "memory")
-    return "\n".join(lines + ["", "Source: " + ", ".join(f"[`{n}.json`](docs/results/{n}.json)" for n in names)])
+    return "\n".join(lines + ["", "Source: " + ", ".join(f"[`{n}.json`](results/{n}.json)" for n in names)])
 
 
 TABLES = {name[len("table_") :]: function for name, function in list(globals().items()) if name.startswith("table_")}
