@@ -26,8 +26,10 @@ it between the variants it runs); ``SceneCache(enabled=False)`` builds everythin
 on disk) by :class:`DiskStore`, and a later process with the same content reads it back instead of meshing,
 assembling and reducing again. A file's name is the SHA-256 of :data:`DISK_FORMAT`, :func:`code_version` (the
 solver's sources and the versions of the libraries that compute the values: a changed code computes afresh), the
-map's name and the content key; the file holds a header with the SHA-256 of its payload, so a truncated or
-corrupt file is detected, deleted with a one-line warning and recomputed. The payload is a pickle, which is exact
+map's name and the content key. The file holds a header with that whole identity again (format, map, content key,
+code version) and the SHA-256 of identity and payload, and a read compares the identity with the one asked for: a
+file copied or renamed over another's name (another scene's values under this scene's key) is detected like a
+truncated or corrupt one, deleted with a one-line warning and recomputed. The payload is a pickle, which is exact
 for arrays and floats (a hit is, bit for bit, what the computation gives) and trusted as numba's cache is: the
 folder is the user's own. Writes are atomic (a temporary file, then :func:`os.replace`), so processes running
 side by side never read a partial file; the folder is kept under :data:`DISK_BYTES` by deleting the files least
@@ -79,7 +81,7 @@ MOTION_ENTRIES = 64
 CACHE_DIR_VARIABLE = "FFRF_CACHE_DIR"
 _OFF = ("off", "none", "0", "false", "no")
 #: Bump when what a disk file holds, or how, changes: every older file is then ignored.
-DISK_FORMAT = "ffrf-scene-cache-1"
+DISK_FORMAT = "ffrf-scene-cache-2"
 #: Bytes of files the disk cache keeps: the default scene writes about 60 MB (four FE models and their bases).
 DISK_BYTES = 2 * 1024**3
 #: The packages whose sources compute the cached values, and the libraries whose versions can change them.
@@ -134,13 +136,18 @@ class DiskStore:
         name = hashlib.sha256(f"{DISK_FORMAT};{code_version()};{self.name};{key}".encode()).hexdigest()
         return folder / f"{self.name}-{name}.pkl"
 
+    def identity(self, key: str) -> dict[str, str]:
+        """What the file of ``key`` is for, written into it and compared on read (its name is a hash of it):
+        format, map, content key and code version."""
+        return {"format": DISK_FORMAT, "map": self.name, "key": key, "code": code_version()}
+
     def load(self, key: str) -> Any:
         """The value stored under ``key``, else :data:`_MISSING` (a corrupt file is deleted with a warning)."""
         path = self.path(key)
         if path is None or not path.is_file():
             return _MISSING
         try:
-            value = _unpacked(path.read_bytes())
+            value = _unpacked(path.read_bytes(), self.identity(key))
             os.utime(path)  # recently used: the last to be evicted
             return value
         except Exception as error:  # noqa: BLE001 -- whatever a broken file raises, the run recomputes
@@ -159,7 +166,7 @@ class DiskStore:
             handle, temporary = tempfile.mkstemp(prefix=".tmp-", dir=path.parent)
             try:
                 with os.fdopen(handle, "wb") as stream:
-                    stream.write(_packed(value))
+                    stream.write(_packed(value, self.identity(key)))
                 os.replace(temporary, path)
             except BaseException:
                 Path(temporary).unlink(missing_ok=True)
@@ -169,20 +176,30 @@ class DiskStore:
             log.warning("scene cache: cannot write %s (%s); continuing without it", path, error)
 
 
-def _packed(value: Any) -> bytes:
-    """The bytes of a disk file: :data:`DISK_FORMAT`, the payload's SHA-256, the payload (a pickle)."""
+def _packed(value: Any, identity: dict[str, str]) -> bytes:
+    """The bytes of a disk file: :data:`DISK_FORMAT`, the ``identity`` (:meth:`DiskStore.identity`, one JSON line),
+    the SHA-256 of identity line and payload, the payload (a pickle)."""
     payload = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
-    return f"{DISK_FORMAT}\n{hashlib.sha256(payload).hexdigest()}\n".encode() + payload
+    line = json.dumps(identity, sort_keys=True).encode()
+    digest = hashlib.sha256(line + b"\n" + payload).hexdigest()
+    return f"{DISK_FORMAT}\n".encode() + line + f"\n{digest}\n".encode() + payload
 
 
-def _unpacked(data: bytes) -> Any:
-    """The value of :func:`_packed` bytes; ``ValueError`` if the header or the checksum does not match."""
+def _unpacked(data: bytes, identity: dict[str, str]) -> Any:
+    """The value of :func:`_packed` bytes written for ``identity``; ``ValueError`` if the format, the identity (a
+    file of another key, map or code under this name) or the checksum does not match."""
     head, _, rest = data.partition(b"\n")
+    line, _, rest = rest.partition(b"\n")
     digest, _, payload = rest.partition(b"\n")
     if head.decode(errors="replace") != DISK_FORMAT:
         raise ValueError(f"format {head[:40]!r}, expected {DISK_FORMAT!r}")
-    if hashlib.sha256(payload).hexdigest() != digest.decode(errors="replace"):
+    if hashlib.sha256(line + b"\n" + payload).hexdigest() != digest.decode(errors="replace"):
         raise ValueError("checksum mismatch: truncated or corrupt")
+    stored = json.loads(line)
+    differs = sorted(k for k in identity.keys() | stored.keys() if stored.get(k) != identity.get(k))
+    if differs:
+        shown = ", ".join(f"{k} {str(stored.get(k))[:12]} instead of {str(identity.get(k))[:12]}" for k in differs)
+        raise ValueError(f"it holds another entry ({shown}), copied or renamed over this one")
     return pickle.loads(payload)
 
 
