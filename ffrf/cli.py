@@ -669,7 +669,11 @@ def _run_study(args: argparse.Namespace) -> int:
     from ffrf.studies.report import write_report
     from ffrf.studies.runner import run_study
 
-    run = run_study(study, out, scheduler=args.scheduler, workers=args.workers)
+    try:
+        run = run_study(study, out, scheduler=args.scheduler, workers=args.workers)
+    except Interrupted as error:  # the rows of the finished variants are written (run_study's finally)
+        message = f"{error}: the finished variants' rows are in {out}; the same command runs the rest"
+        raise Interrupted(message) from None
     print(
         f"{study.name}: {run.design} variants, {run.skipped} finished before, {run.ok} ok and {run.failed} failed "
         f"now, {run.lost} lost (a rerun runs them); {run.wall_time_s:.1f} s -> {out}"
