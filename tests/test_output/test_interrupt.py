@@ -6,7 +6,6 @@ nothing.
 The run is ``python -m ffrf run`` of the bar pendulum of ``scene_fixtures`` (dynamic, 20 s at 1 ms steps; about
 7 s when uninterrupted with warm numba kernels), in a process of its own so that the signal is real."""
 
-import json
 import os
 import re
 import signal
@@ -65,3 +64,58 @@ def test_a_signal_stops_the_run_with_130_one_line_and_its_results_so_far(tmp_pat
     q0 = scene.q_initial
     reference = generalized_alpha(scene.system, q0, np.zeros_like(q0), end, 1e-3, rho_inf=0.8, output_every=10)
     np.testing.assert_allclose(arrays["q"], reference.q, rtol=0.0, atol=1e-9)
+
+
+STUDY = """
+[study]
+name = "interrupted"
+method = "grid"
+[base]
+bennett = "pla"
+h = 0.012
+order = 1
+modes = 2
+mode = "quasi_static"
+outputs = 9
+[[parameters]]
+name = "twist"
+target = "bore_twist_deg"
+joint = 3
+link = 0
+values = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5]
+"""
+
+
+@pytest.mark.slow
+def test_ctrl_c_in_a_study_keeps_the_finished_rows_and_a_rerun_runs_the_rest(tmp_path):
+    """SIGINT once two variants of 16 are done: exit 130, one line, no traceback; the rows written are the variants
+    that finished, and the same command then runs exactly the others (each id once in the end)."""
+    from ffrf.studies.runner import read_rows
+
+    (tmp_path / "study.toml").write_text(STUDY)
+    environment = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    command = [sys.executable, "-m", "ffrf", "study", str(tmp_path / "study.toml"), "--out", str(tmp_path / "out")]
+    command += ["--workers", "2", "--no-report"]
+    process = subprocess.Popen(command, stderr=subprocess.PIPE, cwd=tmp_path, env=environment)
+    assert process.stderr is not None
+    seen = b""
+    try:
+        while not re.search(rb"\b([2-9]|1[0-5])/16\b", seen):
+            byte = process.stderr.read(1)
+            assert byte, f"the study ended before two variants were done: {seen.decode()}"
+            seen += byte
+        process.send_signal(signal.SIGINT)
+        stderr = (seen + process.stderr.read()).decode()
+        status = process.wait(timeout=120)
+    finally:
+        process.kill()
+    assert status == 130 and "Traceback" not in stderr, stderr
+    last = stderr.strip().splitlines()[-1]
+    assert last.startswith("interrupted by SIGINT") and "the same command runs the rest" in last, last
+    first = read_rows(tmp_path / "out")
+    assert first is not None and 2 <= first.num_rows < 16
+    rerun = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path, env=environment, timeout=600)
+    assert rerun.returncode == 0, rerun.stderr
+    assert f"{first.num_rows} finished before, {16 - first.num_rows} ok" in rerun.stdout
+    rows = read_rows(tmp_path / "out")
+    assert rows is not None and sorted(rows.column("twist").to_pylist()) == pytest.approx([0.1 * k for k in range(16)])
