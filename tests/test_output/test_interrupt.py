@@ -15,10 +15,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scene_fixtures import PENDULUM, write_bar
+from scene_fixtures import PENDULUM, driven_link_scene, write_bar
 
+from ffrf.errors import Interrupted
 from ffrf.output.tables import read_results
-from ffrf.scenes.scene_file import load_scene
+from ffrf.scenes.scene_file import load_scene, start_state
 from ffrf.solvers.generalized_alpha import generalized_alpha
 
 ROOT = Path(__file__).parents[2]
@@ -119,3 +120,42 @@ def test_ctrl_c_in_a_study_keeps_the_finished_rows_and_a_rerun_runs_the_rest(tmp
     assert f"{first.num_rows} finished before, {16 - first.num_rows} ok" in rerun.stdout
     rows = read_rows(tmp_path / "out")
     assert rows is not None and sorted(rows.column("twist").to_pylist()) == pytest.approx([0.1 * k for k in range(16)])
+
+
+def _stop_at(call: int):
+    """A progress callback that asks to stop at its ``call``-th call, as the CLI's does after a signal."""
+    calls = []
+
+    def progress(t: float, t_end: float) -> None:
+        calls.append(t)
+        if len(calls) == call:
+            raise Interrupted("interrupted by SIGINT")
+
+    return progress
+
+
+@pytest.mark.parametrize("mode", ["dynamic", "quasi_static", "quasi_static through snaps"])
+def test_an_interrupted_solver_hands_over_the_outputs_it_computed(tmp_path, mode):
+    """The solver a progress callback interrupts raises :class:`Interrupted` with ``partial``: the outputs before the
+    stop, equal to the first outputs of the same run left alone (same steps, same code: to the bit)."""
+    from ffrf.solvers.simulate import simulate
+
+    if mode == "dynamic":
+        write_bar(tmp_path)
+        (tmp_path / "scene.toml").write_text(PENDULUM)
+        arguments = {"mode": "dynamic", "t_end": 0.1, "outputs": 11, "step": 1e-3, "rho_inf": 0.8}
+        call, rows = 35, 4  # outputs every 10 steps: the 35th step is past the 4th output (t = 0, 10, 20, 30 ms)
+    else:
+        (tmp_path / "scene.toml").write_text(driven_link_scene("[0.0, 1.0, 0.0]", t_end=5.0, outputs=11, modes=2))
+        arguments = {"mode": "quasi_static", "t_end": 5.0, "outputs": 11, "through_snaps": mode.endswith("snaps")}
+        call, rows = 4, 4
+    scene = load_scene(tmp_path / "scene.toml")
+    q0 = start_state(scene)
+    whole = simulate(scene.system, q0, **arguments)
+    with pytest.raises(Interrupted) as stop:
+        simulate(scene.system, q0, **arguments, progress=_stop_at(call))
+    part = stop.value.partial
+    assert len(part.time) == rows and part.q.shape == (rows, whole.q.shape[1])
+    np.testing.assert_array_equal(part.time, whole.time[:rows])
+    np.testing.assert_array_equal(part.q, whole.q[:rows])
+    np.testing.assert_array_equal(part.multipliers, whole.multipliers[:rows])
