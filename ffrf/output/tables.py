@@ -151,9 +151,10 @@ def write_results(
 
     The three files are written whole under temporary names first (a failure or a kill then leaves the folder as it
     was), then renamed into place, then the files of an earlier run in the folder (:data:`RUN_OUTPUTS` last written
-    before ``since``, default :func:`process_started`) are deleted, then the manifest (each file's size and SHA-256)
-    is written, atomically too: a folder holds a complete set of this run exactly when its manifest matches its files
-    (:func:`check_results`)."""
+    before ``since``, default :func:`process_started`; only where results were) are deleted, then the manifest (each
+    file's size and SHA-256: the three, and the :data:`RUN_OUTPUTS` this run wrote before them) is written, atomically
+    too: a folder holds a complete set of one run exactly when its manifest matches its files (:func:`check_results`).
+    Outputs written after the results (figures) are not listed."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     extra = {} if coordinates is None else {"q": coordinates}
@@ -177,9 +178,14 @@ def write_results(
     (directory / MANIFEST).unlink(missing_ok=True)
     for name, path in staged.items():
         os.replace(path, directory / name)
-    for path in _stale_outputs(directory, process_started() if since is None else since) if held_run else ():
+    since = process_started() if since is None else since
+    for path in _stale_outputs(directory, since) if held_run else ():
         log.info("removing %s: an earlier run's output, older than this run", path)
         path.unlink(missing_ok=True)
+    for name in RUN_OUTPUTS:  # what this run wrote before its results (assembly.vtu, linkage.json, ...) is its too
+        path = directory / name
+        if since > -math.inf and path.is_file() and path.stat().st_mtime >= since:
+            files[name] = _digest(path)
     manifest = {"format": MANIFEST_FORMAT, "files": files}
     temporary = directory / f".{MANIFEST}{tag}"
     temporary.write_text(json.dumps(manifest, indent=2))

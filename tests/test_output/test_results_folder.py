@@ -113,6 +113,19 @@ def test_a_new_run_removes_an_earlier_runs_other_outputs_and_keeps_its_own_and_t
     expected = ["assembly.vtu", "manifest.json", "metadata.json", "my_notes.txt", "results.csv", "results.npz"]
     assert left == expected
     assert (tmp_path / "assembly.vtu").read_text() == "this run's"
+    listed = json.loads((tmp_path / MANIFEST).read_text())["files"]
+    assert sorted(listed) == ["assembly.vtu", "metadata.json", "results.csv", "results.npz"]
+
+
+def test_a_run_that_stops_before_its_results_cannot_pass_for_the_earlier_one(tmp_path):
+    """A run wrote linkage.json, then stopped before writing results: the folder's manifest, the earlier run's, lists
+    the earlier linkage.json, so the folder is refused rather than read as one run."""
+    (tmp_path / "linkage.json").write_text("linkage A")
+    write_results(tmp_path, _arrays(5, 0.0), {"linkage": "A"}, since=time.time() - 10.0)
+    check_results(tmp_path)
+    (tmp_path / "linkage.json").write_text("linkage B")  # the next run's first file; then it was killed
+    with pytest.raises(ResultsError, match="linkage.json is not the file the run wrote"):
+        check_results(tmp_path)
 
 
 def test_a_folder_without_results_keeps_files_of_those_names(tmp_path):
