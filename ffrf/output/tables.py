@@ -123,10 +123,11 @@ def _digest(path: Path) -> dict[str, int | str]:
 
 
 def _stale_outputs(directory: Path, since: float) -> list[Path]:
-    """The files of :data:`RUN_OUTPUTS` (and ParaView series: ``*.pvd``, ``vtk/*.vtu``) in ``directory`` last
-    written before ``since``: an earlier run's, which the run being written may not write again."""
-    candidates = [directory / name for name in RUN_OUTPUTS]
-    candidates += list(directory.glob("*.pvd")) + list((directory / "vtk").glob("*.vtu"))
+    """The files of :data:`RUN_OUTPUTS` and ParaView series (``*.pvd`` of ``vtk/`` frames, as
+    :func:`ffrf.output.paraview.write_time_series` writes them, and ``vtk/*.vtu``) in ``directory`` last written before
+    ``since``: an earlier run's, which the run being written may not write again."""
+    series = [path for path in directory.glob("*.pvd") if 'file="vtk/' in path.read_text(errors="replace")]
+    candidates = [directory / name for name in RUN_OUTPUTS] + series + list((directory / "vtk").glob("*.vtu"))
     stale = []
     for path in candidates:
         try:

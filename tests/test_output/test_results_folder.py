@@ -103,14 +103,15 @@ def test_a_new_run_removes_an_earlier_runs_other_outputs_and_keeps_its_own_and_t
     write_results(tmp_path, _arrays(5, 0.0), {"run": 1})
     old = ["stability.json", "coupler_deviation.png", "linkage.pvd", "vtk/linkage_00000.vtu", "assembly.vtu"]
     (tmp_path / "vtk").mkdir()
-    for name in [*old, "my_notes.txt"]:
-        (tmp_path / name).write_text("earlier")
+    for name in [*old, "my_notes.txt", "my_own.pvd"]:
+        (tmp_path / name).write_text('<DataSet file="vtk/linkage_00000.vtu"/>' if name == "linkage.pvd" else "earlier")
         os.utime(tmp_path / name, (1e9, 1e9))
     started = time.time() - 1.0
     (tmp_path / "assembly.vtu").write_text("this run's")  # written by the new run before its results
     write_results(tmp_path, _arrays(7, 1.0), {"run": 2}, since=started)
     left = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file())
-    expected = ["assembly.vtu", "manifest.json", "metadata.json", "my_notes.txt", "results.csv", "results.npz"]
+    expected = ["assembly.vtu", "manifest.json", "metadata.json", "my_notes.txt", "my_own.pvd", "results.csv"]
+    expected += ["results.npz"]
     assert left == expected
     assert (tmp_path / "assembly.vtu").read_text() == "this run's"
     listed = json.loads((tmp_path / MANIFEST).read_text())["files"]
