@@ -159,3 +159,25 @@ def test_an_interrupted_solver_hands_over_the_outputs_it_computed(tmp_path, mode
     np.testing.assert_array_equal(part.time, whole.time[:rows])
     np.testing.assert_array_equal(part.q, whole.q[:rows])
     np.testing.assert_array_equal(part.multipliers, whole.multipliers[:rows])
+
+
+def test_the_first_signal_in_a_run_is_noted_and_a_second_one_or_one_outside_stops_at_once():
+    """``ffrf.cli``'s handling of SIGINT in-process (a signal to this process runs its handler before the next line):
+    outside a run a signal raises at once; inside one the first is
+    noted (the next step's check raises) and a second raises at once; the handlers before are restored after."""
+    from ffrf.cli import _StopRequest
+
+    stop = _StopRequest()
+    before = signal.getsignal(signal.SIGINT)
+    with stop.installed():
+        with pytest.raises(Interrupted, match="interrupted by SIGINT"):
+            os.kill(os.getpid(), signal.SIGINT)
+        stop.signal = None
+        with stop.deferred():
+            os.kill(os.getpid(), signal.SIGTERM)
+            assert stop.signal == "SIGTERM"  # noted, the run goes on to its next step
+            with pytest.raises(Interrupted, match="interrupted by SIGTERM after"):
+                stop.check(" after")
+            with pytest.raises(Interrupted):
+                os.kill(os.getpid(), signal.SIGINT)
+    assert signal.getsignal(signal.SIGINT) is before

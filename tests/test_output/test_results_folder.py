@@ -140,3 +140,21 @@ def test_a_folder_without_results_keeps_files_of_those_names(tmp_path):
 def test_the_process_start_is_before_now_and_after_boot():
     started = tables.process_started()
     assert time.time() - 3600 * 24 * 365 < started <= time.time()
+
+
+def test_identification_refuses_a_mixed_result_folder_with_one_line_and_exit_2(tmp_path, capsys):
+    """``python -m identification --result DIR`` on a folder whose results.npz is not the one its manifest lists."""
+    from identification.__main__ import main
+
+    def nodes(rows: int) -> dict:
+        return {"time": np.arange(float(rows))} | {
+            f"link{k}_node{j}": np.zeros((rows, 3)) for k in (1, 2, 3) for j in (0, 1)
+        }
+
+    write_results(tmp_path, nodes(5), {})
+    write_results(tmp_path / "later", nodes(6), {})
+    os.replace(tmp_path / "later" / "results.npz", tmp_path / "results.npz")
+    assert main(["--result", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert "results.npz is not the file the run wrote" in err
