@@ -22,18 +22,18 @@ Every process has one, :data:`PROCESS_CACHE`, which the builders use unless give
 it between the variants it runs); ``SceneCache(enabled=False)`` builds everything afresh.
 
 **On disk, between processes.** A value computed afresh is also written to a folder (:func:`cache_directory`:
-``$FFRF_CACHE_DIR``, else ``$XDG_CACHE_HOME/ffrf``, else ``~/.cache/ffrf``; ``FFRF_CACHE_DIR=off`` keeps nothing
-on disk) by :class:`DiskStore`, and a later process with the same content reads it back instead of meshing,
-assembling and reducing again. A file's name is the SHA-256 of :data:`DISK_FORMAT`, :func:`code_version` (the
-solver's sources and the versions of the libraries that compute the values: a changed code computes afresh), the
-map's name and the content key. The file holds a header with that whole identity again (format, map, content key,
-code version) and the SHA-256 of identity and payload, and a read compares the identity with the one asked for: a
-file copied or renamed over another's name (another scene's values under this scene's key) is detected like a
-truncated or corrupt one, deleted with a one-line warning and recomputed. The payload is a pickle, which is exact
-for arrays and floats (a hit is, bit for bit, what the computation gives) and trusted as numba's cache is: the
-folder is the user's own. Writes are atomic (a temporary file, then :func:`os.replace`), so processes running
-side by side never read a partial file; the folder is kept under :data:`DISK_BYTES` by deleting the files least
-recently used.
+``$FFRF_CACHE_DIR``, else ``$XDG_CACHE_HOME/ffrf``, else ``~/.cache/ffrf``; ``FFRF_CACHE_DIR=off`` keeps nothing on
+disk) by :class:`DiskStore`, and a later process with the same content reads it back instead of meshing, assembling
+and reducing again. A file's name is the SHA-256 of :data:`DISK_FORMAT`, :func:`code_version` (the solver's sources
+and the versions of the libraries that compute the values: a changed code computes afresh), the map's name and the
+content key. The file holds a header with that whole identity again (format, map, content key, code version, and the
+library versions readably) and the SHA-256 of identity and payload, and a read compares the identity with the one
+asked for: a file copied or renamed over another's name (another scene's values under this scene's key) is detected
+like a truncated or corrupt one, deleted with a one-line warning and recomputed. The payload is a pickle, which is
+exact for arrays and floats (a hit is, bit for bit, what the computation gives) and trusted as numba's cache is: the
+folder is the user's own. Writes are atomic (a temporary file, then :func:`os.replace`), so processes running side
+by side never read a partial file; the folder is kept under :data:`DISK_BYTES` by deleting the files least recently
+used.
 """
 
 from __future__ import annotations
@@ -65,6 +65,7 @@ __all__ = [
     "cache_directory",
     "code_version",
     "content_key",
+    "library_versions",
 ]
 
 log = logging.getLogger(__name__)
@@ -99,6 +100,18 @@ def cache_directory() -> Path | None:
     if value:
         return Path(value).expanduser()
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "ffrf"
+
+
+@functools.cache
+def library_versions() -> str:
+    """The Python version and the versions of :data:`_LIBRARIES`, as text (``numpy=2.1.3;scipy=...``)."""
+    versions = [f"python={sys.version.split()[0]}"]
+    for library in _LIBRARIES:
+        try:
+            versions.append(f"{library}={importlib.metadata.version(library)}")
+        except importlib.metadata.PackageNotFoundError:
+            versions.append(f"{library}=none")
+    return ";".join(versions)
 
 
 @functools.cache
@@ -137,9 +150,16 @@ class DiskStore:
         return folder / f"{self.name}-{name}.pkl"
 
     def identity(self, key: str) -> dict[str, str]:
-        """What the file of ``key`` is for, written into it and compared on read (its name is a hash of it):
-        format, map, content key and code version."""
-        return {"format": DISK_FORMAT, "map": self.name, "key": key, "code": code_version()}
+        """What the file of ``key`` is for, written into it and compared on read (its name is a hash of all but the
+        libraries, which the code version covers and are here to be read): format, map, content key, code version
+        (:func:`code_version`) and library versions (:func:`library_versions`)."""
+        return {
+            "format": DISK_FORMAT,
+            "map": self.name,
+            "key": key,
+            "code": code_version(),
+            "libraries": library_versions(),
+        }
 
     def load(self, key: str) -> Any:
         """The value stored under ``key``, else :data:`_MISSING` (a corrupt file is deleted with a warning)."""
