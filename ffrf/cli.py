@@ -10,8 +10,11 @@ import argparse
 import json
 import logging
 import os
+import signal
 import sys
-from collections.abc import Callable, Sequence
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 
@@ -26,7 +29,7 @@ from ffrf.geometry.link_geometry import LinkDesign, mesh_link
 from ffrf.mesh.tet_mesh import quality_summary, write_vtu
 from ffrf.scenes.scene_cache import CACHE_DIR_VARIABLE
 
-from .errors import FEInputError, NewtonDivergence, SceneError, StaticDivergence
+from .errors import FEInputError, Interrupted, NewtonDivergence, SceneError, StaticDivergence
 
 __all__ = ["main", "SUBCOMMANDS", "bennett_axes", "link_summary"]
 
@@ -169,10 +172,63 @@ def _configure_linkage_run(parser: argparse.ArgumentParser) -> None:
     )
 
 
+class _StopRequest:
+    """SIGINT (Ctrl-C) and SIGTERM during a command. Inside :meth:`deferred` (a run, the writing of its results) the
+    first one is noted and the run stops at its next step (the progress callback, :meth:`check`, raises
+    :class:`Interrupted`, and the solver hands over what it computed: issue #32); elsewhere, or a second time, it raises
+    :class:`Interrupted` at once. :func:`main` prints one line and exits with 130 (128 + SIGINT, as shells do)."""
+
+    def __init__(self) -> None:
+        self.signal: str | None = None
+        self.deferring = False
+
+    def handle(self, number: int, frame: object) -> None:
+        name = signal.Signals(number).name
+        if self.signal is None and self.deferring:
+            self.signal = name
+            return
+        raise Interrupted(f"interrupted by {name}")
+
+    def check(self, where: str = "") -> None:
+        """Raise :class:`Interrupted` if a stop was asked for (``where``: what the message adds)."""
+        if self.signal is not None:
+            raise Interrupted(f"interrupted by {self.signal}{where}")
+
+    @contextmanager
+    def deferred(self) -> Iterator[None]:
+        before, self.deferring = self.deferring, True
+        try:
+            yield
+        finally:
+            self.deferring = before
+
+    @contextmanager
+    def installed(self) -> Iterator[None]:
+        """The handlers of SIGINT and SIGTERM for one command (main thread only: Python allows no other)."""
+        self.signal, self.deferring = None, False
+        if threading.current_thread() is not threading.main_thread():
+            yield
+            return
+        before = {number: signal.signal(number, self.handle) for number in (signal.SIGINT, signal.SIGTERM)}
+        try:
+            yield
+        finally:
+            for number, handler in before.items():
+                signal.signal(number, handler)
+
+
+_STOP = _StopRequest()
+
+
 def _progress_printer():
     last = [-1]
 
     def show(t: float, t_end: float) -> None:
+        try:
+            _STOP.check()  # a Ctrl-C noted during the run stops it here, between two steps
+        except Interrupted:
+            print(file=sys.stderr)  # end the progress bar's line
+            raise
         percent = int(100 * t / t_end) if t_end > 0 else 100
         if percent != last[0]:
             last[0] = percent
@@ -209,17 +265,19 @@ def _run_and_report(
         file=sys.stderr,
     )
     try:
-        result = run_linkage(
-            scene,
-            mode=mode,
-            n_outputs=options["outputs"],
-            step=options["step"],
-            progress=_progress_printer(),
-            stability=options.get("stability", False),
-        )
+        with _STOP.deferred():
+            result = run_linkage(
+                scene,
+                mode=mode,
+                n_outputs=options["outputs"],
+                step=options["step"],
+                progress=_progress_printer(),
+                stability=options.get("stability", False),
+            )
         stopped = None
-    except (StaticDivergence, NewtonDivergence) as error:  # the path ends: write what was computed, then say so
-        print(file=sys.stderr)  # end the progress bar's line
+    except (StaticDivergence, NewtonDivergence, Interrupted) as error:  # write what was computed, then say so
+        if not isinstance(error, Interrupted):  # (the progress bar ended its line)
+            print(file=sys.stderr)  # end the progress bar's line
         if error.partial is None:
             raise
         result, stopped = error.partial, error
@@ -231,7 +289,15 @@ def _run_and_report(
         ],
         "contact_m": clearance.contact,
     }
-    write_results(result, out)
+    with _STOP.deferred():
+        write_results(result, out)
+    if isinstance(stopped, Interrupted):  # the user asked to stop: the results so far, no figures
+        end = result.time[-1]
+        raise Interrupted(
+            f"{stopped}: the results up to t = {end:.6g} s (drive angle {np.degrees(scene.drive_angle(end)):.4g} deg) "
+            f"are in {out} (metadata.json: stopped)"
+        )
+    _STOP.check(f" after the run: its complete results are in {out}, without figures")
     if options["vtk_every"] > 0:
         from ffrf.output.paraview import write_time_series
 
@@ -550,7 +616,9 @@ def _run_scene_file(args: argparse.Namespace) -> int:
         f"{scene.system.n_coordinates} coordinates",
         file=sys.stderr,
     )
-    metadata = run_scene(scene, out, progress=_progress_printer())
+    with _STOP.deferred():
+        metadata = run_scene(scene, out, progress=_progress_printer())
+    _STOP.check(f" after the run: its complete results are in {out}")
     for snap in metadata.get("stability", {}).get("snaps", []):
         released = snap["energy_released_J"]
         print(
@@ -601,7 +669,11 @@ def _run_study(args: argparse.Namespace) -> int:
     from ffrf.studies.report import write_report
     from ffrf.studies.runner import run_study
 
-    run = run_study(study, out, scheduler=args.scheduler, workers=args.workers)
+    try:
+        run = run_study(study, out, scheduler=args.scheduler, workers=args.workers)
+    except Interrupted as error:  # the rows of the finished variants are written (run_study's finally)
+        message = f"{error}: the finished variants' rows are in {out}; the same command runs the rest"
+        raise Interrupted(message) from None
     print(
         f"{study.name}: {run.design} variants, {run.skipped} finished before, {run.ok} ok and {run.failed} failed "
         f"now, {run.lost} lost (a rerun runs them); {run.wall_time_s:.1f} s -> {out}"
@@ -717,8 +789,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if getattr(args, "stability", False) and getattr(args, "mode", None) == "dynamic":
             raise SceneError("stability is judged at equilibria: run quasi-statically (drop --dynamic)")
-        with threadpool_limits(limits=args.blas_threads, user_api="blas"):
+        with threadpool_limits(limits=args.blas_threads, user_api="blas"), _STOP.installed():
             return SUBCOMMANDS[args.command][2](args)
+    except Interrupted as exc:  # SIGINT or SIGTERM: one line, what was computed is written (_StopRequest)
+        print(exc, file=sys.stderr)
+        return 130
     except FEInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -2,8 +2,8 @@
 
 Bad input (:class:`FEInputError` and its subclasses) derives from :class:`ValueError`, so callers
 that only care about "bad input" can catch that; solver failures (:class:`StaticDivergence`,
-:class:`NewtonDivergence`) derive from :class:`RuntimeError`. Every message names the object,
-the bad value and a remedy.
+:class:`NewtonDivergence`) derive from :class:`RuntimeError`; a run stopped on request (:class:`Interrupted`) from
+:class:`BaseException`. Every message names the object, the bad value and a remedy.
 """
 
 from __future__ import annotations
@@ -19,10 +19,12 @@ __all__ = [
     "SceneError",
     "ReductionError",
     "ExternalFEError",
+    "ResultsError",
     "StaticDivergence",
     "AssemblyDivergence",
     "NewtonDivergence",
     "SingularIterationMatrix",
+    "Interrupted",
 ]
 
 
@@ -59,6 +61,11 @@ class ExternalFEError(FEInputError):
     cannot be read or do not make one solid FE model."""
 
 
+class ResultsError(FEInputError):
+    """A results folder that cannot be read: a file missing, damaged, or not the one its manifest lists
+    (:func:`ffrf.output.tables.check_results`)."""
+
+
 # Solver failures: not bad input, so not FEInputError.
 
 
@@ -87,3 +94,16 @@ class NewtonDivergence(RuntimeError):
 
 class SingularIterationMatrix(NewtonDivergence):
     """The iteration matrix (G3) has zero singular values by the rank rule (R1): no step can be solved."""
+
+
+class Interrupted(BaseException):
+    """The run was asked to stop (SIGINT, SIGTERM: :mod:`ffrf.cli`) and stopped between two steps. A progress callback
+    raises it; the solver it interrupts sets ``partial`` (as :class:`NewtonDivergence` does: what was computed up to
+    the last output) and ``snaps`` (as :class:`StaticDivergence`), so that callers can write what was computed.
+    Neither bad input nor a solver failure: like :class:`KeyboardInterrupt` a :class:`BaseException`, so that no
+    ``except Exception`` on the way (a cache file's read, a worker pool) takes it for a failure of its own."""
+
+    def __init__(self, message: str = "interrupted", partial: Any = None, snaps: tuple = ()):
+        super().__init__(message)
+        self.partial = partial
+        self.snaps = snaps

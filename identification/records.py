@@ -22,6 +22,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import uniform_filter1d
 
+from ffrf.errors import ResultsError
+from ffrf.output.tables import MANIFEST, check_results
+
 from .circle_fit import IdentificationError
 
 __all__ = ["LinkRecord", "read_vicon_csv", "read_simulation_result", "clean_record", "moving_average"]
@@ -135,6 +138,11 @@ def read_simulation_result(directory: str | Path) -> LinkRecord:
     path = Path(directory) / "results.npz"
     if not path.exists():
         raise IdentificationError(f"{path} not found: run a simulation first (python -m ffrf bennett --out DIR)")
+    if (path.parent / MANIFEST).is_file():  # written by this project's solver: the set must be the one it wrote
+        try:
+            check_results(path.parent)
+        except ResultsError as error:
+            raise IdentificationError(str(error)) from error
     data = _npz_arrays(path)
     if "time" not in data:
         raise IdentificationError(f"{path} has no 'time' array")
@@ -154,7 +162,7 @@ def _npz_arrays(path: Path) -> dict[str, NDArray]:
             raise ValueError("one array, not an archive of named arrays")
         with archive:
             return {name: archive[name] for name in archive.files}
-    except (OSError, ValueError, zipfile.BadZipFile) as error:  # damaged, pickled objects, or not numpy at all
+    except (OSError, EOFError, ValueError, zipfile.BadZipFile) as error:  # damaged or empty, pickles, not numpy
         raise IdentificationError(
             f"{path} cannot be read as a results archive ({type(error).__name__}: "
             f"{error}); write it again with python -m ffrf bennett --out DIR"

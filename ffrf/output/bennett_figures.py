@@ -31,6 +31,8 @@ import numpy as np
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
+from ffrf.output.tables import read_arrays
+
 __all__ = [
     "Series",
     "Run",
@@ -66,11 +68,7 @@ def run_sensors(run: Run) -> Mapping[str, NDArray]:
     """Sensors of a run (``drive_angle``, ``coupler_deviation``, ``driving_torque``, ...), SI units."""
     if not isinstance(run, (str, os.PathLike)):
         return run.sensors
-    path = Path(run)
-    if path.is_dir():
-        path = path / "results.npz"
-    with np.load(path) as data:
-        return {name: data[name] for name in data.files}
+    return read_arrays(run)  # checked against its folder's manifest, one-line errors
 
 
 def _angle_from_start(sensors: Mapping[str, NDArray]) -> NDArray[np.float64]:

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.errors import NewtonDivergence, StaticDivergence
+from ffrf.errors import Interrupted, NewtonDivergence, StaticDivergence
 from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
 from ffrf.output.sensors import path_sensors, scene_sensors
 from ffrf.output.tables import write_results as write_tables
@@ -195,7 +195,8 @@ def run_linkage(
     generalized-alpha with ``step`` (s; default :func:`ffrf.scenes.assembly.dynamic_step`, 10 ms at 1 rpm) starting
     from the assembled state at rest. ``t_end``
     shortens the run (default: the scene's ramp plus revolutions). A run that stops raises the solver's error
-    (:class:`ffrf.errors.StaticDivergence` or :class:`ffrf.errors.NewtonDivergence`) with ``partial``, the
+    (:class:`ffrf.errors.StaticDivergence` or :class:`ffrf.errors.NewtonDivergence`; :class:`ffrf.errors.Interrupted`
+    when ``progress`` asked it to stop, ``stopped.reason`` then ``"interrupted"``) with ``partial``, the
     :class:`LinkageResult` up to its last output (its metadata's ``stopped`` says where and why), when there is one.
     With ``stability`` (quasi-static runs) every equilibrium's three smallest squared frequencies of Eq. (B1) are
     the sensor ``stability_squared_frequencies`` (rad^2/s^2) and the metadata's ``stability`` sums them up.
@@ -229,8 +230,9 @@ def run_linkage(
             through_snaps=stability,
         )
         stopped = None
-    except (StaticDivergence, NewtonDivergence) as error:
+    except (StaticDivergence, NewtonDivergence, Interrupted) as error:
         if error.partial is None or len(error.partial.time) < 2:
+            error.partial = None  # too little to evaluate: no LinkageResult to write
             raise
         run, stopped = error.partial, error
     times, q, qd, lam = run.time, run.q, run.qd, run.multipliers
@@ -281,7 +283,8 @@ def run_linkage(
             "time_s": float(times[-1]),
             "drive_angle_rad": scene.drive_angle(times[-1]),
             "drive_angle_deg": float(np.degrees(scene.drive_angle(times[-1]))),
-            "reason": str(stopped),
+            "reason": "interrupted" if isinstance(stopped, Interrupted) else str(stopped),
+            "message": str(stopped),
         }
         stopped.partial = out
         raise stopped

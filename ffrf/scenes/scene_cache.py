@@ -22,16 +22,18 @@ Every process has one, :data:`PROCESS_CACHE`, which the builders use unless give
 it between the variants it runs); ``SceneCache(enabled=False)`` builds everything afresh.
 
 **On disk, between processes.** A value computed afresh is also written to a folder (:func:`cache_directory`:
-``$FFRF_CACHE_DIR``, else ``$XDG_CACHE_HOME/ffrf``, else ``~/.cache/ffrf``; ``FFRF_CACHE_DIR=off`` keeps nothing
-on disk) by :class:`DiskStore`, and a later process with the same content reads it back instead of meshing,
-assembling and reducing again. A file's name is the SHA-256 of :data:`DISK_FORMAT`, :func:`code_version` (the
-solver's sources and the versions of the libraries that compute the values: a changed code computes afresh), the
-map's name and the content key; the file holds a header with the SHA-256 of its payload, so a truncated or
-corrupt file is detected, deleted with a one-line warning and recomputed. The payload is a pickle, which is exact
-for arrays and floats (a hit is, bit for bit, what the computation gives) and trusted as numba's cache is: the
-folder is the user's own. Writes are atomic (a temporary file, then :func:`os.replace`), so processes running
-side by side never read a partial file; the folder is kept under :data:`DISK_BYTES` by deleting the files least
-recently used.
+``$FFRF_CACHE_DIR``, else ``$XDG_CACHE_HOME/ffrf``, else ``~/.cache/ffrf``; ``FFRF_CACHE_DIR=off`` keeps nothing on
+disk) by :class:`DiskStore`, and a later process with the same content reads it back instead of meshing, assembling
+and reducing again. A file's name is the SHA-256 of :data:`DISK_FORMAT`, :func:`code_version` (the solver's sources
+and the versions of the libraries that compute the values: a changed code computes afresh), the map's name and the
+content key. The file holds a header with that whole identity again (format, map, content key, code version, and the
+library versions readably) and the SHA-256 of identity and payload, and a read compares the identity with the one
+asked for: a file copied or renamed over another's name (another scene's values under this scene's key) is detected
+like a truncated or corrupt one, deleted with a one-line warning and recomputed. The payload is a pickle, which is
+exact for arrays and floats (a hit is, bit for bit, what the computation gives) and trusted as numba's cache is: the
+folder is the user's own. Writes are atomic (a temporary file, then :func:`os.replace`), so processes running side
+by side never read a partial file; the folder is kept under :data:`DISK_BYTES` by deleting the files least recently
+used.
 """
 
 from __future__ import annotations
@@ -63,6 +65,7 @@ __all__ = [
     "cache_directory",
     "code_version",
     "content_key",
+    "library_versions",
 ]
 
 log = logging.getLogger(__name__)
@@ -79,7 +82,7 @@ MOTION_ENTRIES = 64
 CACHE_DIR_VARIABLE = "FFRF_CACHE_DIR"
 _OFF = ("off", "none", "0", "false", "no")
 #: Bump when what a disk file holds, or how, changes: every older file is then ignored.
-DISK_FORMAT = "ffrf-scene-cache-1"
+DISK_FORMAT = "ffrf-scene-cache-2"
 #: Bytes of files the disk cache keeps: the default scene writes about 60 MB (four FE models and their bases).
 DISK_BYTES = 2 * 1024**3
 #: The packages whose sources compute the cached values, and the libraries whose versions can change them.
@@ -97,6 +100,18 @@ def cache_directory() -> Path | None:
     if value:
         return Path(value).expanduser()
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "ffrf"
+
+
+@functools.cache
+def library_versions() -> str:
+    """The Python version and the versions of :data:`_LIBRARIES`, as text (``numpy=2.1.3;scipy=...``)."""
+    versions = [f"python={sys.version.split()[0]}"]
+    for library in _LIBRARIES:
+        try:
+            versions.append(f"{library}={importlib.metadata.version(library)}")
+        except importlib.metadata.PackageNotFoundError:
+            versions.append(f"{library}=none")
+    return ";".join(versions)
 
 
 @functools.cache
@@ -134,13 +149,25 @@ class DiskStore:
         name = hashlib.sha256(f"{DISK_FORMAT};{code_version()};{self.name};{key}".encode()).hexdigest()
         return folder / f"{self.name}-{name}.pkl"
 
+    def identity(self, key: str) -> dict[str, str]:
+        """What the file of ``key`` is for, written into it and compared on read (its name is a hash of all but the
+        libraries, which the code version covers and are here to be read): format, map, content key, code version
+        (:func:`code_version`) and library versions (:func:`library_versions`)."""
+        return {
+            "format": DISK_FORMAT,
+            "map": self.name,
+            "key": key,
+            "code": code_version(),
+            "libraries": library_versions(),
+        }
+
     def load(self, key: str) -> Any:
         """The value stored under ``key``, else :data:`_MISSING` (a corrupt file is deleted with a warning)."""
         path = self.path(key)
         if path is None or not path.is_file():
             return _MISSING
         try:
-            value = _unpacked(path.read_bytes())
+            value = _unpacked(path.read_bytes(), self.identity(key))
             os.utime(path)  # recently used: the last to be evicted
             return value
         except Exception as error:  # noqa: BLE001 -- whatever a broken file raises, the run recomputes
@@ -159,7 +186,7 @@ class DiskStore:
             handle, temporary = tempfile.mkstemp(prefix=".tmp-", dir=path.parent)
             try:
                 with os.fdopen(handle, "wb") as stream:
-                    stream.write(_packed(value))
+                    stream.write(_packed(value, self.identity(key)))
                 os.replace(temporary, path)
             except BaseException:
                 Path(temporary).unlink(missing_ok=True)
@@ -169,20 +196,30 @@ class DiskStore:
             log.warning("scene cache: cannot write %s (%s); continuing without it", path, error)
 
 
-def _packed(value: Any) -> bytes:
-    """The bytes of a disk file: :data:`DISK_FORMAT`, the payload's SHA-256, the payload (a pickle)."""
+def _packed(value: Any, identity: dict[str, str]) -> bytes:
+    """The bytes of a disk file: :data:`DISK_FORMAT`, the ``identity`` (:meth:`DiskStore.identity`, one JSON line),
+    the SHA-256 of identity line and payload, the payload (a pickle)."""
     payload = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
-    return f"{DISK_FORMAT}\n{hashlib.sha256(payload).hexdigest()}\n".encode() + payload
+    line = json.dumps(identity, sort_keys=True).encode()
+    digest = hashlib.sha256(line + b"\n" + payload).hexdigest()
+    return f"{DISK_FORMAT}\n".encode() + line + f"\n{digest}\n".encode() + payload
 
 
-def _unpacked(data: bytes) -> Any:
-    """The value of :func:`_packed` bytes; ``ValueError`` if the header or the checksum does not match."""
+def _unpacked(data: bytes, identity: dict[str, str]) -> Any:
+    """The value of :func:`_packed` bytes written for ``identity``; ``ValueError`` if the format, the identity (a
+    file of another key, map or code under this name) or the checksum does not match."""
     head, _, rest = data.partition(b"\n")
+    line, _, rest = rest.partition(b"\n")
     digest, _, payload = rest.partition(b"\n")
     if head.decode(errors="replace") != DISK_FORMAT:
         raise ValueError(f"format {head[:40]!r}, expected {DISK_FORMAT!r}")
-    if hashlib.sha256(payload).hexdigest() != digest.decode(errors="replace"):
+    if hashlib.sha256(line + b"\n" + payload).hexdigest() != digest.decode(errors="replace"):
         raise ValueError("checksum mismatch: truncated or corrupt")
+    stored = json.loads(line)
+    differs = sorted(k for k in identity.keys() | stored.keys() if stored.get(k) != identity.get(k))
+    if differs:
+        shown = ", ".join(f"{k} {str(stored.get(k))[:12]} instead of {str(identity.get(k))[:12]}" for k in differs)
+        raise ValueError(f"it holds another entry ({shown}), copied or renamed over this one")
     return pickle.loads(payload)
 
 

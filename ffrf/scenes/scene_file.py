@@ -132,7 +132,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.errors import NewtonDivergence, SceneError, StaticDivergence
+from ffrf.errors import Interrupted, NewtonDivergence, SceneError, StaticDivergence
 from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
 from ffrf.output.sensors import node_sensors, scene_sensors
 from ffrf.output.tables import write_results
@@ -223,7 +223,7 @@ def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
     try:
         run = simulate_scene(scene, q0, progress=progress)
         stopped = None
-    except (StaticDivergence, NewtonDivergence) as error:  # write what was computed, then say so
+    except (StaticDivergence, NewtonDivergence, Interrupted) as error:  # write what was computed, then say so
         if error.partial is None or len(error.partial.time) == 0:
             raise
         run, stopped = error.partial, error
@@ -232,7 +232,8 @@ def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
         metadata["stability"] = _monitor_stability(scene, run, sensors, directory)
     metadata["wall_time_s"] = wallclock.perf_counter() - started
     if stopped is not None:
-        metadata["stopped"] = {"time_s": float(run.time[-1]), "reason": str(stopped)}
+        reason = "interrupted" if isinstance(stopped, Interrupted) else str(stopped)
+        metadata["stopped"] = {"time_s": float(run.time[-1]), "reason": reason, "message": str(stopped)}
     write_results(directory, {"time": run.time, **sensors}, metadata, coordinates=run.q)
     if stopped is not None:
         stopped.args = (f"{stopped} (the results up to t = {run.time[-1]:.6g} s are in {directory})",)

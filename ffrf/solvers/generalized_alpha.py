@@ -44,7 +44,7 @@ from numpy.typing import NDArray
 from scipy.linalg.lapack import dgecon as gecon
 from scipy.linalg.lapack import dgetrs as getrs
 
-from ffrf.errors import NewtonDivergence, SingularIterationMatrix
+from ffrf.errors import Interrupted, NewtonDivergence, SingularIterationMatrix
 from ffrf.numerics.rank_revealing import WELL_CONDITIONED, factor
 from ffrf.solvers.common import IntegrationResult, consistent_accelerations, extrapolation_weights
 from ffrf.solvers.newton_kernels import CONVERGED, EXHAUSTED, NOT_FINITE, REFACTOR, alpha_iterations, should_refactor
@@ -411,6 +411,16 @@ def generalized_alpha(
             np.array(position_errors),
         )
 
+    def report(t: float) -> None:
+        """``progress``; a stop it asks for (:class:`Interrupted`) leaves with the outputs so far."""
+        if progress is None:
+            return
+        try:
+            progress(t, t_end)
+        except Interrupted as error:
+            error.partial = result(False)
+            raise
+
     def guarded_step(t_new: float, h_new: float):
         try:
             return _step(newton, state, t_new, h_new, before)
@@ -434,8 +444,7 @@ def generalized_alpha(
             step_sizes.append(h)
             if k % output_every == 0 or k == n_steps:
                 record(t, state)
-            if progress is not None:
-                progress(t, t_end)
+            report(t)
         return result(True)
 
     outputs = list(np.minimum(h * output_every * np.arange(1, int(np.ceil(n_steps / output_every)) + 1), t_end))
@@ -468,8 +477,7 @@ def generalized_alpha(
         if landing:
             record(t, state)
             outputs.pop(0)
-        if progress is not None:
-            progress(t, t_end)
+        report(t)
         # a step cut short to land on an output says nothing about the next one's size
         trial = step_control.next_step(h_try, ratio) if not landing or h_try >= trial else trial
     return result(True)

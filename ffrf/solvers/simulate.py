@@ -2,7 +2,8 @@
 stride that puts ``outputs`` rows between t = 0 and ``t_end``. Every scene runs through here.
 
 A run that stops (:class:`ffrf.errors.StaticDivergence`, :class:`ffrf.errors.NewtonDivergence`) raises with
-``partial``, the :class:`Run` up to its last output, so that callers can still write what was computed."""
+``partial``, the :class:`Run` up to its last output, so that callers can still write what was computed; so does a
+run stopped by its ``progress`` callback (:class:`ffrf.errors.Interrupted`)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.errors import NewtonDivergence, StaticDivergence
+from ffrf.errors import Interrupted, NewtonDivergence, StaticDivergence
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.snap_through import SnapThrough, quasi_static_through_snaps
 from ffrf.solvers.static_solver import quasi_static
@@ -70,7 +71,7 @@ def simulate(
                 )
             else:
                 solution = quasi_static(system, q0, times, progress=progress, max_step=max_static_step)
-        except StaticDivergence as error:
+        except (StaticDivergence, Interrupted) as error:
             done = error.partial
             if done is not None:
                 error.partial = Run(times[: len(done.q)], done.q, None, done.multipliers, error.snaps)
@@ -88,9 +89,10 @@ def simulate(
                 output_every=output_stride(t_end, step, outputs),
                 progress=progress,
             )
-        except NewtonDivergence as error:
+        except (NewtonDivergence, Interrupted) as error:
             done = error.partial
-            error.partial = Run(done.time, done.q, done.qd, done.multipliers, (), done.position_errors)
+            if done is not None:
+                error.partial = Run(done.time, done.q, done.qd, done.multipliers, (), done.position_errors)
             raise
         return Run(result.time, result.q, result.qd, result.multipliers, (), result.position_errors)
     raise ValueError(f"run mode {mode!r}: use one of {list(MODES)}")

@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.errors import StaticDivergence
+from ffrf.errors import Interrupted, StaticDivergence
 from ffrf.solvers.continuation import EquilibriumPath, equilibrium_path, parabola_vertex, path_points, path_speed
 from ffrf.solvers.stability import CriticalPose, critical_pose, equilibrium_stability, mode_shares
 from ffrf.solvers.static_solver import StaticSolution, quasi_static, static_equilibrium
@@ -235,6 +235,14 @@ def quasi_static_through_snaps(
             stop = None
         except StaticDivergence as error:
             part, stop = error.partial, error
+        except Interrupted as error:  # asked to stop: leave with every equilibrium found and the snaps passed
+            if error.partial is not None:
+                qs.extend(error.partial.q[1 if landed else 0 :])
+                lams.extend(error.partial.multipliers[1 if landed else 0 :])
+                counts.extend(error.partial.iterations[1 if landed else 0 :])
+            error.partial = StaticSolution(np.array(qs), np.array(lams), tuple(counts))
+            error.snaps = tuple(snaps)
+            raise
         skip = 1 if landed else 0  # the landing itself, solved again at the fold's t, is no output
         qs.extend(part.q[skip:])
         lams.extend(part.multipliers[skip:])

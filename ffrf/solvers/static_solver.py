@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.errors import StaticDivergence
+from ffrf.errors import Interrupted, StaticDivergence
 from ffrf.numerics.rank_revealing import FactoredMatrix, factor
 from ffrf.solvers.common import extrapolation_weights
 from ffrf.solvers.newton_kernels import CONVERGED, NOT_FINITE, REFACTOR, static_iterations, static_rhs, static_update
@@ -375,7 +375,8 @@ def quasi_static(
     on long steps (60 deg of drive between equilibria, coarse Bennett links) its updates led
     Newton to a wrong equilibrium (driving torque -16.5 N m instead of 0.018 N m) that plain
     modified Newton does not reach; on fine steps it saves about a fifth of the time. A failed step raises
-    :class:`StaticDivergence` whose ``partial`` holds the equilibria at the ``times`` reached before it."""
+    :class:`StaticDivergence` whose ``partial`` holds the equilibria at the ``times`` reached before it, and so does
+    the :class:`Interrupted` a ``progress`` callback raises."""
     if predictor_order < 0:
         raise ValueError(f"predictor_order must be >= 0, got {predictor_order}")
     outputs = np.asarray(times, dtype=float)
@@ -403,7 +404,12 @@ def quasi_static(
         lams.append(path.lam[-1].copy())
         counts.append(iterations)
         if progress is not None:
-            progress(float(t), float(times[-1]))
+            try:
+                progress(float(t), float(times[-1]))
+            except Interrupted as error:  # asked to stop: leave with the equilibria at the times reached
+                keep = np.flatnonzero(returned[: k + 1])
+                error.partial = StaticSolution(np.array(qs)[keep], np.array(lams)[keep], tuple(counts[j] for j in keep))
+                raise
     keep = np.flatnonzero(returned)
     return StaticSolution(np.array(qs)[keep], np.array(lams)[keep], tuple(counts[k] for k in keep))
 

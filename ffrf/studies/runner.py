@@ -5,11 +5,12 @@ runner starts a :class:`dask.distributed.LocalCluster` of one single-threaded wo
 ``workers``); with ``scheduler = "tcp://host:8786"`` it submits to that cluster, nothing else changed. Rows are
 collected as futures complete (``as_completed``) and written in batches, each a Parquet file
 ``DIR/rows/part-*.parquet`` written under a temporary name and renamed (a reader never sees half a file).
-A rerun reads the ids already in ``DIR/rows`` and submits only the others, so a Ctrl-C (the buffer is written
-on the way out) or a killed client loses at most the variants in flight and the rows of the last
-``flush_seconds``. A worker that dies has its variant rerun by the scheduler elsewhere; a variant that could
-not be computed at all (its worker died too often) writes no row, so a rerun tries it again. A variant that
-fails (no assembly, Newton divergence, bad parameters) is a row with its reason. A folder that holds another
+A rerun reads the ids already in ``DIR/rows`` and submits only the others, so a Ctrl-C (the buffer is written on
+the way out; ``python -m ffrf study`` then ends with one line and exit status 130) or a killed client loses at
+most the variants in flight and the rows of the last ``flush_seconds``. A worker that dies has its variant rerun
+by the scheduler elsewhere; a variant that could not be computed at all (its worker died too often) writes no row,
+so a rerun tries it again. A variant that fails (no assembly, Newton divergence, bad parameters) is a row with its
+reason. A folder that holds another
 study's rows (another name, base or parameter columns in its ``study.json``) is refused before anything runs.
 
 A worker keeps its scene cache (:data:`ffrf.scenes.scene_cache.PROCESS_CACHE`) between the variants it runs, and
@@ -139,9 +140,20 @@ def _allocator_for_variants() -> None:
         )
 
 
+class _CancelledQuietly(logging.Filter):
+    """Drops a worker's warning that a task it ran was cancelled: what the run's Ctrl-C does on purpose (its client
+    cancels the variants in flight), not news to the user, who is told in one line (:mod:`ffrf.cli`)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "CancelledError" not in record.getMessage()
+
+
 def _worker_variant(study: Study, variant: Variant) -> dict:
     """A variant's row (:func:`ffrf.studies.variant.run_variant`) on a Dask worker, its allocator set first."""
     _allocator_for_variants()
+    state = logging.getLogger("distributed.worker.state_machine")
+    if not any(isinstance(f, _CancelledQuietly) for f in state.filters):
+        state.addFilter(_CancelledQuietly())
     return run_variant(study, variant)
 
 

@@ -82,6 +82,7 @@ def _zip_cut_in_half(path):
         (lambda path: path.write_text("time,x\n0,1\n"), "ValueError"),
         (_zip_cut_in_half, "BadZipFile"),
         (lambda path: path.write_bytes(_npy_bytes()), "one array"),
+        (lambda path: path.write_bytes(b""), "EOFError"),  # a zero-byte file: was a traceback (issue #32)
     ],
 )
 def test_identification_refuses_a_damaged_result_with_exit_2(tmp_path, capsys, damage, words):
