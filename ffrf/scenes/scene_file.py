@@ -152,7 +152,7 @@ def load_scene(path: str | Path) -> Scene:
     """Read and build a TOML scene (see the module docstring)."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))  # a BOM (Windows editors) is no TOML
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         raise SceneError(f"{path}: cannot read the scene ({error})") from error
     if "linkage" in data:  # a linkage file: the links, joints and sensors are generated
