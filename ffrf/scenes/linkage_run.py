@@ -231,6 +231,7 @@ def run_linkage(
         stopped = None
     except (StaticDivergence, NewtonDivergence) as error:
         if error.partial is None or len(error.partial.time) < 2:
+            error.partial = None  # the solver's Run is no LinkageResult: callers would read its metadata
             raise
         run, stopped = error.partial, error
     times, q, qd, lam = run.time, run.q, run.qd, run.multipliers

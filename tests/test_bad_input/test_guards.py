@@ -104,6 +104,28 @@ def test_max_steps_lifts_the_limit_of_the_command_line(tmp_path, capsys, monkeyp
     assert "error: the scene would be built now" in capsys.readouterr().err
 
 
+def test_a_run_that_stops_at_its_first_step_is_reported_not_an_attribute_error(monkeypatch):
+    """With the step limit lifted, a 1e-9 s step's Newton fails at once; the solver's partial run of one output is no
+    LinkageResult, and the command line read its metadata (AttributeError). Now no partial result: "the run stopped"."""
+    from types import SimpleNamespace
+
+    import ffrf.scenes.linkage_run as linkage_run
+    from ffrf.errors import NewtonDivergence
+    from ffrf.solvers.simulate import Run
+
+    def stops(*args, **kwargs):
+        raise NewtonDivergence("Newton did not converge at t = 1e-09 s", Run(np.zeros(1), np.zeros((1, 3)), None, []))
+
+    monkeypatch.setattr(linkage_run, "choose_mode", lambda scene: ("dynamic", 1.0))
+    monkeypatch.setattr(linkage_run, "assemble", lambda scene: SimpleNamespace(q=np.zeros(3), multipliers=None))
+    monkeypatch.setattr(linkage_run, "scene_assembly_stress", lambda *args: None)
+    monkeypatch.setattr(linkage_run, "quasi_static_step", lambda scene: None)
+    monkeypatch.setattr(linkage_run, "simulate", stops)
+    with pytest.raises(NewtonDivergence, match="did not converge") as stopped:
+        linkage_run.run_linkage(SimpleNamespace(t_end=61.0, system=None), mode="dynamic", step=1e-9)
+    assert stopped.value.partial is None
+
+
 def test_size_limits_are_lifted_by_their_keys(tmp_path):
     """The keys that the refusals name (max_steps in [scene], max_variants in [study]) lift the limits."""
     long = LINKAGE.replace("driver = 3", "driver = 3\nrevolutions = 1e6") + "[scene]\nmax_steps = 1e9\n"
