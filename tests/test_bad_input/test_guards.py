@@ -224,6 +224,16 @@ def test_linkage_lengths_in_the_wrong_unit_warn(dh, unit, words):
         linkage_options(tomllib.loads(text))
 
 
+def test_a_model_scaled_by_a_factor_of_millimetres_warns():
+    """Rational Linkages' models are of unit size (scale 0.1 gives links of a few cm); scale = 100 gives links of
+    tens of metres."""
+    with pytest.warns(UserWarning, match=r"above 10 m: .*check scale = 100"):
+        linkage_options({"linkage": {"model": "bennett_ark24", "scale": 100}})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        linkage_options({"linkage": {"model": "bennett_ark24"}})
+
+
 @pytest.mark.parametrize("factor, words", [(1e-3, "0.22 mm, below 1 mm"), (1e3, "220 m, above 10 m")])
 def test_identification_in_the_wrong_unit_warns(factor, words):
     """The paper's Bennett linkage (links of 110 and 220 mm) tracked in metres read as millimetres, and back."""
@@ -313,3 +323,21 @@ def test_any_number_in_a_linkage_file_is_refused_in_one_line_or_taken(key, value
             return
     # taken: at most 1e7 equilibria of 3 deg (120 per revolution), a start within a turn
     assert options.revolutions * 120 <= 1e7 and abs(options.start_angle) <= 2 * math.pi
+
+
+@settings(max_examples=150, deadline=None, derandomize=True)
+@given(
+    method=st.sampled_from(["monte_carlo", "lhs", "sobol", "saltelli"]),
+    samples=st.one_of(st.integers(-5, 10**6), st.sampled_from([2**k for k in (10, 16, 17, 20, 30, 40)])),
+)
+def test_any_sample_count_is_refused_in_one_line_or_within_the_limit(method, samples):
+    """Whatever the sample count, a study file is refused in one line before any worker, or its design, counted by
+    hand (N, or N (d + 2) for Saltelli with d = 1), has at most 1e5 variants."""
+    text = STUDY.replace('method = "sobol"', f'method = "{method}"').replace("samples = 8", f"samples = {samples}")
+    try:
+        study = study_from_document(tomllib.loads(text))
+    except SceneError as error:
+        assert "\n" not in str(error)
+        return
+    assert (samples * 3 if method == "saltelli" else samples) <= 100_000
+    assert design_size(study.method, study.samples, study.parameters) <= 100_000
