@@ -370,8 +370,7 @@ def _check_run_length(args: argparse.Namespace) -> None:
     after a 1 s ramp for one revolution (:class:`ffrf.scenes.linkage_description.LinkageOptions`)."""
     from ffrf.system.drives import rpm
 
-    mode = "auto" if args.mode == "auto" else args.mode
-    steps = linkage_run_steps(rpm(1.0), 1.0, 1.0, mode, args.dt)
+    steps = linkage_run_steps(rpm(1.0), 1.0, 1.0, args.mode, args.dt)
     problem = steps_problem(steps, args.max_steps, "--max-steps N", " over the revolution")
     if problem is not None:
         raise SceneError(problem)

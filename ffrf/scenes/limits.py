@@ -78,16 +78,19 @@ def linkage_run_steps(
     (s) to the drive speed ``omega`` (rad/s), then ``revolutions``; its end ``t_end = ramp_time + 2 pi revolutions /
     omega`` (the ramp turns ``omega ramp_time / 2``, :mod:`ffrf.scenes.linkage_description`). Dynamic: ``t_end /
     step`` (default step :func:`ffrf.scenes.assembly.dynamic_step`); quasi-static: the turn over
-    :data:`ffrf.scenes.assembly.MAX_DRIVE_STEP`; ``auto``: the smaller, the count of either mode."""
+    :data:`ffrf.scenes.assembly.MAX_DRIVE_STEP`; ``auto``: the dynamic count when a ``step`` is given (it is there to
+    be used), else the smaller, the count of either mode."""
     from ffrf.scenes.assembly import DRIVE_ANGLE_PER_STEP, MAX_DRIVE_STEP, MAX_DYNAMIC_STEP
 
     speed = abs(omega)
     turn = 0.5 * speed * ramp_time + 2.0 * math.pi * revolutions
     t_end = ramp_time + 2.0 * math.pi * revolutions / speed
+    given = step is not None
     if step is None:
         step = min(MAX_DYNAMIC_STEP, DRIVE_ANGLE_PER_STEP / speed)
     dynamic, quasi_static = t_end / step, turn / MAX_DRIVE_STEP
-    return {"dynamic": dynamic, "quasi_static": quasi_static}.get(mode, min(dynamic, quasi_static))
+    auto = dynamic if given else min(dynamic, quasi_static)
+    return {"dynamic": dynamic, "quasi_static": quasi_static}.get(mode, auto)
 
 
 def variants_problem(variants: int, parameters: int, limit: int | None) -> str | None:

@@ -82,10 +82,12 @@ def test_every_run_flag_is_checked_like_a_file_key(tmp_path, capsys, case):
 
 
 @pytest.mark.parametrize("command", [["bennett"], ["linkage", "--model", "bennett_ark24"]], ids=["bennett", "linkage"])
-def test_a_nanosecond_step_is_refused_with_its_estimate_before_building(tmp_path, capsys, command):
-    """Once an AttributeError on the error path: 61 s of drive (1 s ramp, one revolution at 1 rpm) in 1e-9 s steps."""
+@pytest.mark.parametrize("mode", [["--dynamic"], []], ids=["dynamic", "auto"])
+def test_a_nanosecond_step_is_refused_with_its_estimate_before_building(tmp_path, capsys, command, mode):
+    """Once an AttributeError on the error path: 61 s of drive (1 s ramp, one revolution at 1 rpm) in 1e-9 s steps.
+    With the mode left to the run (auto), a step given counts: it is there to be used."""
     out = tmp_path / "out"
-    assert main([*command, "--dynamic", "--dt", "1e-9", "--out", str(out)]) == 2
+    assert main([*command, *mode, "--dt", "1e-9", "--out", str(out)]) == 2
     err = one_line_error(capsys)
     assert "6.1e+10 time steps over the revolution (more than 1e+07" in err, err
     assert "at least 311 days at 0.44 ms per step" in err and "set --max-steps N to run it anyway" in err, err
