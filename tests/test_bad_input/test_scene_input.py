@@ -196,6 +196,11 @@ CASES = {
     ),
     "driven joint without drive": ('type = "revolute"', 'type = "driven_revolute"', ["needs drive = {rpm"]),
     "zero drive speed": ('type = "revolute"', 'type = "driven_revolute"\ndrive = {rpm = 0.0}', ["'rpm' must not be 0"]),
+    "drive start angle of 1e300 deg": (
+        'type = "revolute"',
+        'type = "driven_revolute"\ndrive = {rpm = 1.0, start_angle_deg = 1e300}',
+        ["drive: 'start_angle_deg' must lie in [-360, 360], got 1e+300"],
+    ),
     "unknown body in a joint": ('body1 = "bar"', 'body1 = "rod"', ["unknown body 'rod'", "bodies are ['bar']"]),
     "unknown interface": ('interface1 = "hinge"', 'interface1 = "bore"', ["no interface 'bore'", "['hinge']"]),
     "duplicate body names": (
