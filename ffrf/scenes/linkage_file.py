@@ -25,7 +25,7 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
                                        # along the normal, axial along the bore, in unit), or the measured
                                        # bore: {joint, link, point = [...], direction = [...], axial = ...}
 
-    [scene]                            # gravity, beta, mode, outputs, step, rho_inf, joint_offsets, ...
+    [scene]                            # gravity, beta, mode, outputs, step, rho_inf, joint_offsets, max_steps, ...
 
 A DH table must close at its ``theta_deg`` (default the folded home pose 0, 180, 0, 180 of a 4R with
 ``d = 0``) and every source must give a *mobile* loop: one that does not move is refused with
@@ -33,6 +33,10 @@ A DH table must close at its ``theta_deg`` (default the folded home pose 0, 180,
 Linkages starts at a regular pose of its motion polynomial (``t = 0``, else 1, -1, ...:
 :func:`kinematics.rational_mechanism.regular_start`) unless ``start_angle_deg`` is given, since its home
 pose ``t = infinity`` may be folded flat (singular).
+
+Sizes are checked before anything is built (:mod:`ffrf.scenes.limits`): a run of more than 1e7 time steps or
+equilibria (``revolutions``, ``step``) is refused with its estimated time unless ``[scene] max_steps`` lifts the
+limit; link lengths outside 1 mm to 10 m, and two bore errors of one bore, are warned about.
 """
 
 from __future__ import annotations
