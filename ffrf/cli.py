@@ -446,7 +446,7 @@ def _run_linkage(args: argparse.Namespace) -> int:
     import time
 
     from ffrf.scenes.linkage_description import LINKAGE_VARIANTS
-    from ffrf.scenes.linkage_file import load_linkage
+    from ffrf.scenes.linkage_file import linkage_options, load_linkage
 
     started = time.perf_counter()
     if args.reach and args.bore_error:
@@ -456,7 +456,6 @@ def _run_linkage(args: argparse.Namespace) -> int:
     if args.reach and args.variant == "rigid":
         raise SceneError("--reach measures strain energy, which rigid links do not store: use --variant pla")
     _check_run_length(args)
-    _output_folder(args.out)
     material = LINKAGE_VARIANTS[args.variant]
     document = {  # the linkage file these options stand for (ffrf.scenes.linkage_file)
         "linkage": {
@@ -473,6 +472,8 @@ def _run_linkage(args: argparse.Namespace) -> int:
         },
         "scene": {"joint_offsets": args.joint_offsets},
     }
+    linkage_options(document, where="python -m ffrf linkage")  # the file's checks (bore errors ...) before --out
+    _output_folder(args.out)
     print(
         f"Building {args.model} ({args.variant}, scale {args.scale:g}): h = {1e3 * args.h:g} mm, P{args.order}, "
         f"{args.modes} fixed-interface modes per link ...",

@@ -94,6 +94,13 @@ def test_a_nanosecond_step_is_refused_with_its_estimate_before_building(tmp_path
     assert not out.exists()
 
 
+def test_a_bore_error_of_1e300_deg_on_the_command_line_is_one_line_before_the_output_folder(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["linkage", "--model", "bennett_ark24", "--bore-error", "3:0:1e300", "--out", str(out)]) == 2
+    assert "bore_errors[0]: 'twist_deg' must lie in [-180, 180], got 1e+300" in one_line_error(capsys)
+    assert not out.exists()
+
+
 def test_max_steps_lifts_the_limit_of_the_command_line(tmp_path, capsys, monkeypatch):
     import ffrf.scenes.bennett_scene as bennett_scene
 
