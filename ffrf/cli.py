@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import os
 import signal
 import sys
@@ -27,7 +28,9 @@ from ffrf.fe.materials import PLA
 from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
 from ffrf.geometry.link_geometry import LinkDesign, mesh_link
 from ffrf.mesh.tet_mesh import quality_summary, write_vtu
+from ffrf.scenes.limits import MAX_OUTPUTS, MAX_TIME_STEPS, linkage_run_steps, steps_problem
 from ffrf.scenes.scene_cache import CACHE_DIR_VARIABLE
+from ffrf.scenes.scene_schema import PARAMETRIC_H_RANGE
 
 from .errors import FEInputError, Interrupted, NewtonDivergence, SceneError, StaticDivergence
 
@@ -87,7 +90,7 @@ def _output_folder(path: Path) -> Path:
 def _configure_mesh(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--link", type=int, choices=(0, 1, 2, 3), required=True, help="link index, 0 = base")
     parser.add_argument("--alpha3-deg", type=float, default=90.0, help="base-link twist alpha_3 in degrees")
-    parser.add_argument("--h", type=float, default=2e-3, help="maximum element edge length in metres")
+    parser.add_argument("--h", type=_element_edge, default=2e-3, help="maximum element edge length in metres")
     parser.add_argument("--order", type=int, choices=(1, 2), default=1, help="tetrahedron order")
     parser.add_argument("--out", type=Path, required=True, help="output directory")
 
@@ -125,9 +128,11 @@ def _configure_bennett(parser: argparse.ArgumentParser) -> None:
 def _configure_linkage_run(parser: argparse.ArgumentParser) -> None:
     """Options of every linkage run: discretisation, mode, outputs, ParaView series, output folder."""
     # Defaults: the cheapest discretisation with the coupler path within 0.01 mm (docs/speed_vs_error.md).
-    parser.add_argument("--h", type=float, default=6e-3, help="maximum element edge in metres (paper: 0.002)")
+    parser.add_argument("--h", type=_element_edge, default=6e-3, help="maximum element edge in metres (paper: 0.002)")
     parser.add_argument("--order", type=int, choices=(1, 2), default=2, help="tetrahedron order (paper: 1)")
-    parser.add_argument("--modes", type=int, default=4, help="fixed-interface modes per link (paper: 32)")
+    parser.add_argument(
+        "--modes", type=_count_at_least(1), default=4, help="fixed-interface modes per link, >= 1 (paper: 32)"
+    )
     parser.add_argument(
         "--joint-offsets",
         choices=("body", "marker"),
@@ -136,14 +141,14 @@ def _configure_linkage_run(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--dt",
-        type=float,
+        type=_number_in(0.0, math.inf, closed_low=False, unit=" s"),
         default=None,
         help="time step of a dynamic run (s); default: the drive turns 0.06 deg per step, at most 10 ms "
         "(10 ms at 1 rpm, where the coupler path is within 1e-9 m of shorter steps'; docs/speed_vs_error.md)",
     )
     parser.add_argument(
         "--outputs",
-        type=int,
+        type=_count_at_least(2, MAX_OUTPUTS),
         default=961,
         help="output times over the run (961: every 0.375 deg; the energy balance, a Simpson "
         "integral over them, then closes to 2e-7)",
@@ -160,9 +165,16 @@ def _configure_linkage_run(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--vtk-every",
-        type=int,
+        type=_count_at_least(0),
         default=0,
         help="also write deformed meshes for ParaView (DIR/bennett.pvd) every N outputs (0: none)",
+    )
+    parser.add_argument(
+        "--max-steps",
+        type=_count_at_least(1),
+        default=MAX_TIME_STEPS,
+        help=f"largest number of time steps (or equilibria) of the run (default {MAX_TIME_STEPS:.0e}, "
+        "docs/bad_input.md): a longer run is refused with its estimated time unless this is raised",
     )
     parser.add_argument(
         "--out",
@@ -404,6 +416,7 @@ def _run_bennett(args: argparse.Namespace) -> int:
     from ffrf.scenes.bennett_scene import build_bennett, paper_max_coupler_deviation
 
     started = time.perf_counter()
+    _check_run_length(args)
     _output_folder(args.out)
     print(
         f"Building the {args.variant} Bennett scene: 4 links, h = {1e3 * args.h:g} mm, P{args.order}, "
@@ -416,6 +429,17 @@ def _run_bennett(args: argparse.Namespace) -> int:
     return _run_and_report(
         scene, args.out, args.variant, started, _options(args), paper_max_coupler_deviation(args.variant)
     )
+
+
+def _check_run_length(args: argparse.Namespace) -> None:
+    """Refuse, before building, a run of ``bennett`` or ``linkage`` longer than ``--max-steps``: both drive at 1 rpm
+    after a 1 s ramp for one revolution (:class:`ffrf.scenes.linkage_description.LinkageOptions`)."""
+    from ffrf.system.drives import rpm
+
+    steps = linkage_run_steps(rpm(1.0), 1.0, 1.0, args.mode, args.dt)
+    problem = steps_problem(steps, args.max_steps, "--max-steps N", " over the revolution")
+    if problem is not None:
+        raise SceneError(problem)
 
 
 def _options(args: argparse.Namespace) -> dict:
@@ -449,8 +473,13 @@ def _configure_linkage(parser: argparse.ArgumentParser) -> None:
     from ffrf.scenes.linkage_description import LINKAGE_VARIANTS
 
     parser.add_argument("--variant", choices=tuple(LINKAGE_VARIANTS), default="pla", help="link material")
-    parser.add_argument("--scale", type=float, default=0.1, help="length scale of the model (its unit -> metres)")
-    parser.add_argument("--driver", type=int, default=0, help="driven joint")
+    parser.add_argument(
+        "--scale",
+        type=_number_in(0.0, math.inf, closed_low=False),
+        default=0.1,
+        help="length scale of the model (its unit -> metres)",
+    )
+    parser.add_argument("--driver", type=_count_at_least(0), default=0, help="driven joint")
     parser.add_argument(
         "--design-points",
         action="store_true",
@@ -483,7 +512,7 @@ def _run_linkage(args: argparse.Namespace) -> int:
     import time
 
     from ffrf.scenes.linkage_description import LINKAGE_VARIANTS
-    from ffrf.scenes.linkage_file import load_linkage
+    from ffrf.scenes.linkage_file import linkage_options, load_linkage
 
     started = time.perf_counter()
     if args.reach and args.bore_error:
@@ -492,7 +521,7 @@ def _run_linkage(args: argparse.Namespace) -> int:
         )
     if args.reach and args.variant == "rigid":
         raise SceneError("--reach measures strain energy, which rigid links do not store: use --variant pla")
-    _output_folder(args.out)
+    _check_run_length(args)
     material = LINKAGE_VARIANTS[args.variant]
     document = {  # the linkage file these options stand for (ffrf.scenes.linkage_file)
         "linkage": {
@@ -509,6 +538,8 @@ def _run_linkage(args: argparse.Namespace) -> int:
         },
         "scene": {"joint_offsets": args.joint_offsets},
     }
+    linkage_options(document, where="python -m ffrf linkage")  # the file's checks (bore errors ...) before --out
+    _output_folder(args.out)
     print(
         f"Building {args.model} ({args.variant}, scale {args.scale:g}): h = {1e3 * args.h:g} mm, P{args.order}, "
         f"{args.modes} fixed-interface modes per link ...",
@@ -641,8 +672,8 @@ def _configure_study(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-report", action="store_true", help="do not write report.md after the run")
 
 
-def _count_at_least(smallest: int) -> Callable[[str], int]:
-    """An argparse type: a whole number >= ``smallest``."""
+def _count_at_least(smallest: int, largest: int | None = None) -> Callable[[str], int]:
+    """An argparse type: a whole number >= ``smallest`` (and <= ``largest``)."""
 
     def count(text: str) -> int:
         try:
@@ -651,12 +682,35 @@ def _count_at_least(smallest: int) -> Callable[[str], int]:
             value = smallest - 1
         if value < smallest:
             raise argparse.ArgumentTypeError(f"must be a whole number >= {smallest}, got {text!r}")
+        if largest is not None and value > largest:
+            raise argparse.ArgumentTypeError(f"must be a whole number <= {largest:.3g}, got {text!r}")
         return value
 
     return count
 
 
+def _number_in(low: float, high: float, closed_low: bool = True, unit: str = "") -> Callable[[str], float]:
+    """An argparse type: a finite number in ``[low, high]`` (``(low, high]`` without ``closed_low``), as a file key."""
+    if math.isinf(high):
+        bounds = f"{'>=' if closed_low else '>'} {low:g}{unit}"
+    else:
+        bounds = f"in {'[' if closed_low else '('}{low:g}, {high:g}]{unit}"
+
+    def number(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a number {bounds}, got {text!r}") from None
+        inside = (low <= value if closed_low else low < value) and value <= high
+        if not (math.isfinite(value) and inside):
+            raise argparse.ArgumentTypeError(f"must be a finite number {bounds}, got {text!r}")
+        return value
+
+    return number
+
+
 _positive_count = _count_at_least(1)
+_element_edge = _number_in(*PARAMETRIC_H_RANGE, unit=" m")
 
 
 def _run_study(args: argparse.Namespace) -> int:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import csv
 import itertools
 import logging
+import math
 import re
 import warnings
 import zipfile
@@ -30,6 +31,9 @@ from .circle_fit import IdentificationError
 __all__ = ["LinkRecord", "read_vicon_csv", "read_simulation_result", "clean_record", "moving_average"]
 
 log = logging.getLogger(__name__)
+
+#: Farthest segment origin (m) taken from a motion-capture export: beyond, a cell or the unit is wrong.
+MAX_COORDINATE_M = 1e3
 
 
 @dataclass(frozen=True)
@@ -68,11 +72,18 @@ def _link_index(name: str) -> int | None:
 def _numbers(cells: list[str], path: Path, line: int) -> list[float]:
     """A data row of a Vicon export as floats (empty cells: NaN, a missing frame)."""
     try:
-        return [float(c) if c.strip() else np.nan for c in cells]
+        values = [float(c) if c.strip() else np.nan for c in cells]
     except ValueError as error:
         raise IdentificationError(
             f"{path}, line {line}: {error}; data rows hold numbers or empty cells only"
         ) from error
+    for column, (cell, value) in enumerate(zip(cells, values, strict=True)):
+        if cell.strip() and not math.isfinite(value):  # "inf", "nan", or 1e400 that overflows
+            raise IdentificationError(
+                f"{path}, line {line}, column {column + 1}: {cell.strip()!r} is not a finite number; a missing "
+                "frame is an empty cell"
+            )
+    return values
 
 
 def read_vicon_csv(path: str | Path, segments: dict[str, int] | None = None, unit: str = "mm") -> LinkRecord:
@@ -126,6 +137,13 @@ def read_vicon_csv(path: str | Path, segments: dict[str, int] | None = None, uni
         if tx is None:
             raise IdentificationError(f"{path}: segment {name!r} has no TX, TY, TZ columns")
         points[link] = scale * table[:, tx : tx + 3][:, None, :]
+        far = np.flatnonzero(np.nanmax(np.abs(points[link][:, 0, :]), axis=1, initial=0.0) > MAX_COORDINATE_M)
+        if far.size:
+            raise IdentificationError(
+                f"{path}, line {header_row + 3 + int(far[0])}: segment {name.strip()!r} is "
+                f"{np.nanmax(np.abs(points[link][far[0]])):.3g} m from the origin (more than {MAX_COORDINATE_M:g} m "
+                f"of a capture volume); check the cell and --unit ({unit!r})"
+            )
     frame = table[:, 0]  # the sub-frame index only counts analog samples within a frame
     time = frame / rate if rate else frame
     log.info("read %s: %d frames, links %s", path, len(time), sorted(points))

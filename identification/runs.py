@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ffrf.scenes.limits import length_unit_problem
 from kinematics import PAPER_ALPHA
 
 from .branches import fit_link_axis
@@ -36,6 +38,9 @@ def identify_record(
         raise IdentificationError(f"{record.source}: links {missing} are not tracked; links 1, 2 and 3 are needed")
     cleaned = moving_average(clean_record(record), window)
     loop = identify_dh(cleaned.points, nominal_alpha)
+    problem = length_unit_problem([*map(float, loop.dh.a), *map(float, loop.dh.d)], "the record's length unit (--unit)")
+    if problem is not None:  # plausible, not impossible: a warning, and the table as identified
+        warnings.warn(f"{record.source}: identified {problem}", UserWarning, stacklevel=2)
     # Revolutions of the driven link 3 about the base (angle span / 2 pi).
     revolutions = float(np.ptp(fit_link_axis(cleaned.points[3], "link 3").angles) / (2 * np.pi))
     return RecordIdentification(loop, revolutions, cleaned.n_frames, record.source)

@@ -11,6 +11,8 @@ Conventions (stated once for the package):
 
 from __future__ import annotations
 
+import contextlib
+import io
 import logging
 import warnings
 from dataclasses import dataclass, field
@@ -74,6 +76,12 @@ class TetMesh:
             raise MeshError(f"{self.name}: points must have shape (n, 3), got {points.shape}")
         if tets.ndim != 2 or tets.shape[1] != 4:
             raise MeshError(f"{self.name}: tetrahedra must have shape (k, 4) (linear tets), got {tets.shape}")
+        bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
+        if bad.size:  # scikit-fem would sort them away and every later number would be nan
+            raise MeshError(
+                f"{self.name}: {bad.size} points have coordinates that are not finite, first point {bad[0]} at "
+                f"{points[bad[0]].tolist()}; fix the mesh file (a failed export or a division by zero)"
+            )
         groups = {str(k): np.ascontiguousarray(v, dtype=np.int64).reshape(-1, 3) for k, v in self.groups.items()}
         object.__setattr__(self, "points", points)
         object.__setattr__(self, "tets", tets)
@@ -301,10 +309,15 @@ def read_mesh(path: str | Path, *, unit: str | None = None, scale: float | None 
         )
     if not path.is_file():
         raise MeshError(f"{path}: mesh file not found")
+    said = io.StringIO()  # meshio prints its own error lines (and may exit): keep them for our one line
     try:
-        raw = meshio.read(path)
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+            raw = meshio.read(path)
     except (Exception, SystemExit) as exc:  # meshio raises a variety of types, and exits on some broken files
-        raise MeshError(f"{path}: meshio cannot read it ({exc}); convert to .msh, .vtu or .inp") from exc
+        why = " ".join(said.getvalue().split()) or str(exc)
+        raise MeshError(f"{path}: meshio cannot read it ({why}); convert to .msh, .vtu or .inp") from exc
+    if said.getvalue().strip():
+        logger.info("meshio on %s: %s", path, said.getvalue().strip())
     tet_blocks = [c.data[:, :4] for c in raw.cells if c.type in ("tetra", "tetra10")]
     if not tet_blocks:
         raise MeshError(

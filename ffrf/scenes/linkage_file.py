@@ -25,7 +25,7 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
                                        # along the normal, axial along the bore, in unit), or the measured
                                        # bore: {joint, link, point = [...], direction = [...], axial = ...}
 
-    [scene]                            # gravity, beta, mode, outputs, step, rho_inf, joint_offsets, ...
+    [scene]                            # gravity, beta, mode, outputs, step, rho_inf, joint_offsets, max_steps, ...
 
 A DH table must close at its ``theta_deg`` (default the folded home pose 0, 180, 0, 180 of a 4R with
 ``d = 0``) and every source must give a *mobile* loop: one that does not move is refused with
@@ -33,11 +33,16 @@ A DH table must close at its ``theta_deg`` (default the folded home pose 0, 180,
 Linkages starts at a regular pose of its motion polynomial (``t = 0``, else 1, -1, ...:
 :func:`kinematics.rational_mechanism.regular_start`) unless ``start_angle_deg`` is given, since its home
 pose ``t = infinity`` may be folded flat (singular).
+
+Sizes are checked before anything is built (:mod:`ffrf.scenes.limits`): a run of more than 1e7 time steps or
+equilibria (``revolutions``, ``step``) is refused with its estimated time unless ``[scene] max_steps`` lifts the
+limit; link lengths outside 1 mm to 10 m, and two bore errors of one bore, are warned about.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -47,9 +52,11 @@ import numpy as np
 from ffrf.errors import GeometryError, SceneError
 from ffrf.fe.materials import PLA, Material
 from ffrf.geometry.link_geometry import LinkDesign
+from ffrf.scenes.limits import length_unit_problem, linkage_run_steps, steps_problem
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_schema import LINK_DESIGN, MATERIAL, PARAMETRIC_H_RANGE, SETTINGS, Key, check_table
+from ffrf.scenes.schema_keys import between, nonzero_vector
 from ffrf.system.drives import rpm
 from kinematics import Line, LoopClosureError, LoopFoldError, SingleLoop, explain_mobility
 from kinematics.rational_mechanism import (
@@ -76,8 +83,19 @@ def _nonzero(value: Any) -> str | None:
     return None if value != 0 else "must not be 0"
 
 
-def _nonzero_vector(value: Any) -> str | None:
-    return None if math.hypot(*value) > 0 else "has zero length; give a direction such as [0, 0, 1]"
+def _modes(value: Any) -> str | None:
+    return (
+        None
+        if value >= 1
+        else f"must be >= 1, got {value!r}: the run chooses quasi-static or dynamic from each link's longest "
+        "fixed-interface period, which a link without modes lacks"
+    )
+
+
+#: Largest bore-error twist (deg): a twist beyond half a turn is the same bore turned the other way.
+MAX_BORE_TWIST_DEG = 180.0
+#: Largest bore-error offset and axial shift (m): beyond, the bore lies outside any link of this solver.
+MAX_BORE_SHIFT = 10.0
 
 
 def _moving_link(value: Any) -> str | None:
@@ -109,16 +127,16 @@ DH = {
 }
 AXIS = {
     "point": Key("vector3", True),
-    "direction": Key("vector3", True, _nonzero_vector),
+    "direction": Key("vector3", True, nonzero_vector),
 }
 BORE_ERROR = {
     "joint": Key("integer", True, _non_negative),
     "link": Key("integer", True, _non_negative),
-    "twist_deg": Key("number"),
+    "twist_deg": Key("number", False, between(-MAX_BORE_TWIST_DEG, MAX_BORE_TWIST_DEG, closed=True)),
     "offset": Key("number"),
     "axial": Key("number"),
     "point": Key("vector3"),
-    "direction": Key("vector3", False, _nonzero_vector),
+    "direction": Key("vector3", False, nonzero_vector),
 }
 DRIVE = {
     "rpm": Key("number", False, _nonzero),
@@ -135,11 +153,11 @@ LINKAGE = {
     "unit": Key("string", False, _unit),
     "driver": Key("integer", False, _non_negative),
     "tool_link": Key("integer", False, _moving_link),
-    "start_angle_deg": Key("number"),
+    "start_angle_deg": Key("number", False, between(-360.0, 360.0, closed=True)),
     "material": Key("table", keys=MATERIAL),
     "h": Key("number", False, _element_size),
     "order": Key("integer", False, _order),
-    "modes": Key("integer", False, _non_negative),
+    "modes": Key("integer", False, _modes),
     "drive": Key("table", keys=DRIVE),
     "revolutions": Key("number", False, _positive),
     "bore_errors": Key("tables", keys=BORE_ERROR),
@@ -203,7 +221,43 @@ def _bore_error(entry: dict, length: float, where: str) -> BoreError:
         raise SceneError(f"{where}: give either twist_deg/offset or the bore's axis (point, direction), not both")
     axis = Line.from_point_direction(length * np.asarray(entry["point"]), entry["direction"]) if measured else None
     twist, offset = math.radians(entry.get("twist_deg", 0.0)), length * entry.get("offset", 0.0)
-    return BoreError(entry["joint"], entry["link"], twist, offset, axis, length * entry.get("axial", 0.0))
+    axial = length * entry.get("axial", 0.0)
+    for key, value in (("offset", offset), ("axial", axial)):
+        if abs(value) > MAX_BORE_SHIFT:
+            raise SceneError(
+                f"{where}: {key!r} = {entry[key]!r} is {value:.3g} m, more than {MAX_BORE_SHIFT:g} m: no bore error; "
+                "check the unit"
+            )
+    return BoreError(entry["joint"], entry["link"], twist, offset, axis, axial)
+
+
+def _warn_duplicate_bores(entries: list[dict], where: str) -> None:
+    """Two bore errors of one bore add up (their twists, offsets and shifts); more likely a copy than meant."""
+    seen: dict[tuple[int, int], int] = {}
+    for k, entry in enumerate(entries):
+        bore = (entry["joint"], entry["link"])
+        if bore in seen:
+            warnings.warn(
+                f"{where}: bore_errors[{seen[bore]}] and bore_errors[{k}] both set the bore of joint {bore[0]} on "
+                f"link {bore[1]}; their errors are added: give one entry per bore",
+                UserWarning,
+                stacklevel=3,
+            )
+        else:
+            seen[bore] = k
+
+
+def _warn_units(loop: SingleLoop, spec: dict, where: str) -> None:
+    """Link lengths outside :data:`ffrf.scenes.limits.LINK_LENGTH_RANGE`: a unit mistake is likelier."""
+    dh = loop.dh()
+    given = (
+        f"scale = {spec.get('scale', 0.1)!r}"
+        if "model" in spec
+        else f"unit = {spec.get('unit', 'm')!r} (the lengths of dh or axes)"
+    )
+    problem = length_unit_problem([*map(float, dh.a), *map(float, dh.d)], given)
+    if problem is not None:
+        warnings.warn(f"{where}: {problem}", UserWarning, stacklevel=3)
 
 
 def load_linkage(document: dict, base: Path | None = None, where: str = "linkage") -> LinkageScene:
@@ -236,10 +290,12 @@ def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop,
     mobility = explain_mobility(loop, driver, start=origin)
     if not mobility.mobile:
         raise SceneError(f"{label}: {mobility.summary()}; check the source (dh, axes) or its units")
+    _warn_units(loop, spec, label)
     tool = spec.get("tool_link", model_tool)
     if tool is not None and tool >= n:
         raise SceneError(f"{label}: tool_link {tool} does not exist; the moving links are 1 to {n - 1}")
     length = 1e-3 if spec.get("unit") == "mm" else 1.0
+    _warn_duplicate_bores(spec.get("bore_errors", []), label)
     errors = tuple(
         _bore_error(e, length, f"{label}, bore_errors[{k}]") for k, e in enumerate(spec.get("bore_errors", []))
     )
@@ -258,6 +314,22 @@ def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop,
     if start is None:
         start = float(origin[driver]) if origin is not None else 0.0
     settings = document.get("scene", {})
+    steps = linkage_run_steps(
+        omega,
+        drive.get("ramp_time", 1.0),
+        spec.get("revolutions", 1.0),
+        settings.get("mode", "auto"),
+        settings.get("step"),
+    )
+    t_end = drive.get("ramp_time", 1.0) + 2.0 * math.pi * spec.get("revolutions", 1.0) / abs(omega)
+    if settings.get("step", 0.0) > t_end:
+        raise SceneError(
+            f"{where}, scene: step = {settings['step']!r} s is longer than the run ({t_end:.4g} s: ramp and "
+            "revolutions); give a shorter step"
+        )
+    problem = steps_problem(steps, settings.get("max_steps"), "max_steps = N in [scene]", " over the run")
+    if problem is not None:
+        raise SceneError(f"{label}: {problem}")
     material = Material(**spec["material"]) if "material" in spec else PLA
     try:
         design = LinkDesign(**{key: length * value for key, value in spec.get("link_design", {}).items()})

@@ -19,7 +19,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     alpha = 0.0                       # (1/s)
     mode = "dynamic"                  # or "quasi_static"
     t_end = 1.0
-    step = 1e-3                       # dynamic time step
+    step = 1e-3                       # dynamic time step (<= t_end)
+    # max_steps = 2e7                 # lifts the limit of 1e7 steps (t_end / step; ffrf.scenes.limits)
     rho_inf = 0.9
     outputs = 101
     joint_offsets = "body"            # joint point off its interface centre: "body" (as Exudyn) or "marker" frame
@@ -152,7 +153,7 @@ def load_scene(path: str | Path) -> Scene:
     """Read and build a TOML scene (see the module docstring)."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))  # a BOM (Windows editors) is no TOML
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         raise SceneError(f"{path}: cannot read the scene ({error})") from error
     if "linkage" in data:  # a linkage file: the links, joints and sensors are generated

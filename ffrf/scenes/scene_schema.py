@@ -10,10 +10,12 @@ its body) stay with the builder in :mod:`ffrf.scenes.scene_file`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 from ffrf.errors import SceneError
 from ffrf.geometry.link_geometry import LINK_DESIGN_FIELDS
+from ffrf.scenes.limits import MAX_OUTPUTS, MAX_TIME_STEPS, steps_problem
 from ffrf.scenes.scene_forces import ELASTIC, FORCE_TYPES, check_force
 from ffrf.scenes.scene_matrices import MATRIX_FILES, MATRIX_FORMATS, is_abaqus_input
 from ffrf.scenes.schema_keys import (
@@ -32,12 +34,19 @@ from ffrf.scenes.schema_keys import (
 )
 from ffrf.system.markers import JOINT_OFFSETS
 
-__all__ = ["Key", "MATERIAL", "REDUCTIONS", "SCHEMA", "SETTINGS", "check_scene", "check_table"]
+__all__ = [
+    "Key",
+    "MATERIAL",
+    "MAX_OUTPUTS",
+    "MAX_TIME_STEPS",
+    "REDUCTIONS",
+    "SCHEMA",
+    "SETTINGS",
+    "check_scene",
+    "check_table",
+]
 
 JOINT_TYPES = ("revolute", "fixed", "driven_revolute")
-#: Runs beyond these sizes are typing mistakes, not studies: they would not finish (or not fit in memory).
-MAX_TIME_STEPS = 10_000_000
-MAX_OUTPUTS = 1_000_000
 PARAMETRIC_H_RANGE = (5e-4, 0.05)  # m: finer meshes of a whole link do not fit in memory
 MESH_UNITS = ("m", "mm")
 MODES = ("dynamic", "quasi_static")
@@ -140,8 +149,8 @@ DRIVE = {
     "rpm": Key("number", False, nonzero),
     "omega": Key("number", False, nonzero),
     "ramp_time": Key("number", False, positive),
-    "start_angle": Key("number"),
-    "start_angle_deg": Key("number"),
+    "start_angle": Key("number", False, between(-2.0 * math.pi, 2.0 * math.pi, closed=True)),
+    "start_angle_deg": Key("number", False, between(-360.0, 360.0, closed=True)),
 }
 JOINT = {
     "name": Key("string"),
@@ -204,6 +213,7 @@ SETTINGS = {
     "exact_gravity": Key("boolean"),
     "static_start": Key("boolean"),
     "stability": Key("boolean"),
+    "max_steps": Key("number", False, positive),
 }
 #: The whole document: ``[scene]``, ``[[bodies]]``, ``[[joints]]``, ``[[sensors]]``.
 SCHEMA = {
@@ -328,12 +338,15 @@ def _check_joint(joint: dict, interfaces: Mapping[str, set[str]], where: str) ->
 
 
 def _check_run_size(settings: dict, where: str) -> None:
-    steps = settings.get("t_end", 1.0) / settings.get("step", 1e-3)
-    if settings.get("mode", "dynamic") == "dynamic" and steps > MAX_TIME_STEPS:
-        raise SceneError(
-            f"{where}: t_end / step = {steps:.3g} time steps (more than {MAX_TIME_STEPS:.0e}); check "
-            "the units (seconds) or split the run"
-        )
+    """A dynamic run's step no longer than the run, and at most ``max_steps`` (:data:`MAX_TIME_STEPS`) of them."""
+    t_end, step = settings.get("t_end", 1.0), settings.get("step", 1e-3)
+    if settings.get("mode", "dynamic") != "dynamic":
+        return
+    if step > t_end:
+        raise SceneError(f"{where}: step = {step!r} s is longer than the run, t_end = {t_end!r} s; give step <= t_end")
+    problem = steps_problem(t_end / step, settings.get("max_steps"), "max_steps = N in [scene]", " (t_end / step)")
+    if problem is not None:
+        raise SceneError(f"{where}: {problem}")
 
 
 def check_scene(document: dict, where: str = "scene") -> None:

@@ -15,6 +15,7 @@ from typing import Any
 from ffrf.errors import SceneError
 
 __all__ = [
+    "SHORTEST_DIRECTION",
     "Key",
     "at_least",
     "between",
@@ -68,8 +69,20 @@ def at_least(bound: int) -> Callable[[Any], str | None]:
     return lambda value: None if value >= bound else f"must be >= {bound}, got {value!r}"
 
 
+#: Shortest direction vector taken: shorter ones lose their digits when squared (1e-300 squares to 0).
+SHORTEST_DIRECTION = 1e-9
+
+
 def nonzero_vector(value) -> str | None:
-    return None if math.hypot(*value) > 0.0 else "has zero length; give a direction such as [0.0, 0.0, 1.0]"
+    length = math.hypot(*value)
+    if length == 0.0:
+        return "has zero length; give a direction such as [0.0, 0.0, 1.0]"
+    if length < SHORTEST_DIRECTION:
+        return (
+            f"has length {length:.3g}, too short to give a direction (below {SHORTEST_DIRECTION:g}); give a "
+            "direction such as [0.0, 0.0, 1.0]"
+        )
+    return None
 
 
 def ordered_pair(value) -> str | None:

@@ -7,6 +7,7 @@ r"""Study files (TOML): a base linkage, the parameters a study varies and how it
     method = "saltelli"          # grid | monte_carlo | lhs | sobol | saltelli
     samples = 64                 # rows (monte_carlo, lhs, sobol: a power of 2); saltelli: N base rows -> N (d + 2)
     seed = 1                     # variants; grid: ignored (every combination of the values)
+    # max_variants = 200000      # a design above 100000 variants is refused unless lifted here (ffrf.scenes.limits)
 
     [base]
     bennett = "pla"              # a built-in variant of the paper's Bennett linkage, or
@@ -47,10 +48,11 @@ from typing import Any
 
 from ffrf.errors import SceneError
 from ffrf.scenes.bennett_scene import VARIANTS
+from ffrf.scenes.limits import MAX_OUTPUTS, linkage_run_steps, steps_problem, variants_problem
 from ffrf.scenes.linkage_description import BORE_ERROR_MODELS
-from ffrf.scenes.schema_keys import Key, at_least, check_table, one_of, positive
+from ffrf.scenes.schema_keys import Key, at_least, between, check_table, one_of, positive
 
-__all__ = ["METHODS", "TARGETS", "Base", "Parameter", "Study", "load_study", "study_from_document"]
+__all__ = ["METHODS", "TARGETS", "Base", "Parameter", "Study", "design_size", "load_study", "study_from_document"]
 
 #: Sampling methods (:mod:`ffrf.studies.sampling`).
 METHODS = ("grid", "monte_carlo", "lhs", "sobol", "saltelli")
@@ -77,19 +79,21 @@ _STUDY = {
     "method": Key("string", True, one_of(METHODS)),
     "samples": Key("integer", False, at_least(1)),
     "seed": Key("integer"),
+    "max_variants": Key("integer", False, at_least(1)),
 }
 _BASE = {
     "bennett": Key("string", False, one_of(tuple(VARIANTS))),
     "linkage": Key("string"),
     "h": Key("number", False, positive),
     "order": Key("integer", False, one_of((1, 2))),
-    "modes": Key("integer", False, at_least(0)),
+    "modes": Key("integer", False, at_least(1)),
     "mode": Key("string", False, one_of(RUN_MODES)),
-    "outputs": Key("integer", False, at_least(2)),
+    "outputs": Key("integer", False, between(2, MAX_OUTPUTS, closed=True)),
     "revolutions": Key("number", False, positive),
     "rpm": Key("number", False, positive),
     "bore_error_model": Key("string", False, one_of(BORE_ERROR_MODELS)),
     "stability": Key("boolean"),
+    "max_steps": Key("number", False, positive),
 }
 _UNIFORM = {"low": Key("number", True), "high": Key("number", True)}
 _NORMAL = {"mean": Key("number", True), "std": Key("number", True, positive)}
@@ -210,11 +214,18 @@ def _base(table: dict, directory: Path, where: str) -> Base:
     if "linkage" in table:
         path = directory / table["linkage"]
         try:
-            document = tomllib.loads(path.read_text())
+            document = tomllib.loads(path.read_text(encoding="utf-8-sig"))  # a BOM (Windows editors) is no TOML
         except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
             raise SceneError(f"{where}: cannot read the linkage file {path} ({error})") from error
         if "linkage" not in document:
             raise SceneError(f"{where}: {path} has no [linkage] table; a study's base is a linkage file")
+    if "revolutions" in table or "rpm" in table:  # the Bennett base's drive: 1 rpm after a 1 s ramp
+        steps = linkage_run_steps(
+            2.0 * math.pi * table.get("rpm", 1.0) / 60.0, 1.0, table.get("revolutions", 1.0), table.get("mode", "auto")
+        )
+        problem = steps_problem(steps, table.get("max_steps"), "max_steps = N in [base]", " per variant")
+        if problem is not None:
+            raise SceneError(f"{where}: {problem}")
     keys = ("h", "order", "modes", "mode", "outputs", "revolutions", "rpm", "stability")
     overrides = {key: table[key] for key in keys if key in table}
     if overrides.get("stability") and overrides.get("mode") == "dynamic":
@@ -257,6 +268,9 @@ def study_from_document(document: dict, directory: Path = Path("."), where: str 
     names = [p.name for p in parameters]
     if len(set(names)) != len(names):
         raise SceneError(f"{where}: parameter names must be unique, got {names}")
+    problem = variants_problem(design_size(method, samples, parameters), len(parameters), head.get("max_variants"))
+    if problem is not None:
+        raise SceneError(f"{where}, study: {problem}")
     base = _base(document["base"], directory, f"{where}, base")
     n = 4 if base.document is None else _loop_size(base.document)
     _check_bores(parameters, n, where)
@@ -265,6 +279,14 @@ def study_from_document(document: dict, directory: Path = Path("."), where: str 
     ).hexdigest()[:16]
     name = head.get("name", "study")
     return Study(name, method, samples, int(head.get("seed", 0)), base, parameters, fingerprint, n)
+
+
+def design_size(method: str, samples: int, parameters: tuple[Parameter, ...]) -> int:
+    """The number of variants of a design (:func:`ffrf.studies.sampling.study_design`), without building it: a grid
+    every combination of the values, Saltelli ``samples (d + 2)``, the other methods ``samples``."""
+    if method == "grid":
+        return math.prod(len(p.arguments) for p in parameters)
+    return samples * (len(parameters) + 2) if method == "saltelli" else samples
 
 
 def _loop_size(document: dict) -> int:
@@ -279,7 +301,7 @@ def load_study(path: str | Path) -> Study:
     """Read and check a study file (module docstring)."""
     path = Path(path)
     try:
-        document = tomllib.loads(path.read_text())
+        document = tomllib.loads(path.read_text(encoding="utf-8-sig"))  # a BOM (Windows editors) is no TOML
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         raise SceneError(f"{path}: cannot read the study ({error})") from error
     return study_from_document(document, path.parent, path.name)

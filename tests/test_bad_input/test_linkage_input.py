@@ -94,6 +94,39 @@ LINKAGE_CASES = {
         ["link_design: LinkDesign: bore radius 0.02 m must be smaller than the housing outer radius 0.016 m"],
     ),
     "nan in a DH table": ("a = [110, 220, 110, 220]", "a = [110, nan, 110, 220]", ["'a' must be finite"]),
+    # issue #32: size guards and numbers that used to end in a traceback or a run of months
+    "a million revolutions": (
+        "tool_link = 2",
+        "tool_link = 2\nrevolutions = 1e6",  # 1e6 turns at 3 deg per equilibrium: 1.2e8 equilibria
+        ["1.2e+08 time steps over the run", "more than 1e+07", "max_steps = N in [scene]"],
+    ),
+    "dynamic step of a nanosecond": (
+        "tool_link = 2",
+        'tool_link = 2\n[scene]\nmode = "dynamic"\nstep = 1e-9',  # 1 s ramp + 60 s at 1 rpm: 6.1e10 steps
+        ["6.1e+10 time steps over the run", "max_steps = N in [scene]"],
+    ),
+    "step longer than the linkage run": (
+        "tool_link = 2",
+        'tool_link = 2\n[scene]\nmode = "dynamic"\nstep = 100.0',
+        ["step = 100.0 s is longer than the run (61 s"],
+    ),
+    "bore twist of 1e300 deg": (
+        "tool_link = 2",
+        "tool_link = 2\nbore_errors = [{joint = 3, link = 0, twist_deg = 1e300}]",
+        ["'twist_deg' must lie in [-180, 180]"],
+    ),
+    "bore offset of a kilometre": (
+        "tool_link = 2",
+        "tool_link = 2\nbore_errors = [{joint = 3, link = 0, offset = 1e6}]",
+        ["'offset' = 1000000.0 is 1e+03 m, more than 10 m"],
+    ),
+    "start angle of 1e300 deg": ("driver = 3", "driver = 3\nstart_angle_deg = 1e300", ["'start_angle_deg' must lie"]),
+    "no modes": ("driver = 3", "driver = 3\nmodes = 0", ["'modes' must be >= 1, got 0"]),
+    "bore axis of length 1e-300": (
+        "tool_link = 2",
+        "tool_link = 2\nbore_errors = [{joint = 3, link = 0, point = [0, 0, 0], direction = [0, 0, 1e-300]}]",
+        ["'direction' has length 1e-300, too short to give a direction"],
+    ),
 }
 
 

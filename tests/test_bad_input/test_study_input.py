@@ -21,6 +21,11 @@ link = 0
 normal = {mean = 0.0, std = 0.5}
 """
 
+#: A grid of two parameters of 1000 values each.
+GRID_1000_BY_1000 = 'method = "grid"\n\n[base]\nbennett = "pla"\n' + "".join(
+    f'\n[[parameters]]\nname = "{name}"\ntarget = "{name}"\nvalues = {list(range(1, 1001))}\n' for name in ("E", "rho")
+)
+
 CASES = {
     "unknown method": (('method = "sobol"', 'method = "random"'), "'method' must be one of"),
     "samples not a power of 2": (("samples = 8", "samples = 10"), "use 8 or 16"),
@@ -34,6 +39,24 @@ CASES = {
         "stability is judged at equilibria",
     ),
     "parameter named like an output": (('name = "twist"', 'name = "max_coupler_deviation_m"'), "taken by a result"),
+    # issue #32: sizes refused with their estimate and the key that lifts the limit
+    "grid of a million variants": (
+        (GOOD[GOOD.index('method = "sobol"') :], GRID_1000_BY_1000),  # 1e6 rows of 2 values of 8 bytes: 15.3 MiB
+        "the design has 1e+06 variants (more than 1e+05; its unit samples alone take 15.3 MiB",
+    ),
+    "Latin hypercube of 1e12 samples": (
+        ('method = "sobol"\nsamples = 8', 'method = "lhs"\nsamples = 1000000000000'),
+        "1e+12 variants (more than 1e+05; its unit samples alone take 7.28 TiB",
+    ),
+    "Saltelli design above the limit": (
+        ('method = "sobol"\nsamples = 8', 'method = "saltelli"\nsamples = 65536'),  # 65536 (1 + 2) rows
+        "1.97e+05 variants",
+    ),
+    "base without modes": (('bennett = "pla"', 'bennett = "pla"\nmodes = 0'), "'modes' must be >= 1"),
+    "base of a million revolutions": (
+        ('bennett = "pla"', 'bennett = "pla"\nrevolutions = 1e6'),
+        "1.2e+08 time steps per variant",
+    ),
 }
 
 

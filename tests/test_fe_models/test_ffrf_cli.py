@@ -64,8 +64,10 @@ def test_misaligned_base_link_via_module_entry_point(tmp_path):
 
 
 def test_bad_arguments_give_a_clear_error(tmp_path, capsys):
-    assert main(["mesh", "--link", "1", "--h", "-1", "--out", str(tmp_path)]) == 2
-    assert "h=-1" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:  # refused by the flag's type, as a file's h: a usage error
+        main(["mesh", "--link", "1", "--h", "-1", "--out", str(tmp_path)])
+    assert exit_.value.code == 2
+    assert "argument --h: must be a finite number in [0.0005, 0.05] m, got '-1'" in capsys.readouterr().err
 
 
 def test_paper_axes_agree_with_kinematics_dh():
