@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from ffrf.errors import AssemblyDivergence, StaticDivergence
 from ffrf.scenes.builder import Scene
+from ffrf.scenes.step_sizes import DRIVE_ANGLE_PER_STEP, MAX_DRIVE_STEP, MAX_DYNAMIC_STEP
 from ffrf.solvers.static_solver import StaticSolution, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
 
@@ -34,15 +35,6 @@ __all__ = [
 
 #: Continuation steps of :func:`assemble` per degree of the largest axis misfit.
 STEPS_PER_DEGREE = 4
-#: Largest turn of a drive (rad) between two equilibria of a quasi-static run. Longer steps let Newton land on
-#: another assembly branch: the PLA collisions_free_6r (P1, 12 mm) fails at 15 deg and passes at 7.5 deg.
-MAX_DRIVE_STEP = math.radians(3.0)
-#: Turn of the fastest drive per generalized-alpha step of a dynamic run without a step of its own, and the longest
-#: such step (s): 0.06 deg is 10 ms at 1 rpm, where the default Bennett's coupler path over a revolution is within
-#: 1.4e-10 m of 2 ms steps' (``bench/dynamic_step_rule.py``, ``docs/speed_vs_error.md``); 10 ms is the longest step
-#: that sweep and the Exudyn twins checked.
-DRIVE_ANGLE_PER_STEP = math.radians(0.06)
-MAX_DYNAMIC_STEP = 1e-2
 
 
 def _fastest_drive_speed(scene: Scene) -> float | None:

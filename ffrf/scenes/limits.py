@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import math
 
+from ffrf.scenes.step_sizes import DRIVE_ANGLE_PER_STEP, MAX_DRIVE_STEP, MAX_DYNAMIC_STEP
+
 __all__ = [
     "LINK_LENGTH_RANGE",
     "MAX_OUTPUTS",
@@ -78,10 +80,8 @@ def linkage_run_steps(
     (s) to the drive speed ``omega`` (rad/s), then ``revolutions``; its end ``t_end = ramp_time + 2 pi revolutions /
     omega`` (the ramp turns ``omega ramp_time / 2``, :mod:`ffrf.scenes.linkage_description`). Dynamic: ``t_end /
     step`` (default step :func:`ffrf.scenes.assembly.dynamic_step`); quasi-static: the turn over
-    :data:`ffrf.scenes.assembly.MAX_DRIVE_STEP`; ``auto``: the dynamic count when a ``step`` is given (it is there to
+    :data:`ffrf.scenes.step_sizes.MAX_DRIVE_STEP`; ``auto``: the dynamic count when a ``step`` is given (it is there to
     be used), else the smaller, the count of either mode."""
-    from ffrf.scenes.assembly import DRIVE_ANGLE_PER_STEP, MAX_DRIVE_STEP, MAX_DYNAMIC_STEP
-
     speed = abs(omega)
     turn = 0.5 * speed * ramp_time + 2.0 * math.pi * revolutions
     t_end = ramp_time + 2.0 * math.pi * revolutions / speed
