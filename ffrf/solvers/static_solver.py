@@ -472,9 +472,10 @@ class _History(_Path):
         self.kept.append((t, q, lam))
         del self.kept[: -self._KEPT]
 
-    def interpolate(self, t: float) -> tuple[NDArray, NDArray]:
-        """Eq. (S2) through the ``order + 1`` kept equilibria nearest ``t`` (a start for Newton at ``t``)."""
-        nearest = sorted(self.kept, key=lambda point: abs(point[0] - t))[: self.order + 1]
+    def interpolate(self, t: float, more: list[tuple[float, NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
+        """Eq. (S2) through the ``order + 1`` equilibria nearest ``t`` among the kept ones and ``more`` (outputs
+        solved before): a start for Newton at ``t``."""
+        nearest = sorted(self.kept + more, key=lambda point: abs(point[0] - t))[: self.order + 1]
         if len(nearest) < 2:
             return nearest[0][1], nearest[0][2]
         weights = extrapolation_weights(np.array([point[0] for point in nearest]), t)
@@ -492,18 +493,25 @@ def _on_own_steps(
     done_times: list[float] = []
     path_tangent = None
 
+    output_tangent = None
+
     def emit(upto: float, path: _History) -> None:
-        """Solve every output not yet solved up to ``upto`` from the path around it (the path's tangent is reused,
-        never replaced, so that the outputs do not change the path)."""
+        """Solve every output not yet solved up to ``upto`` from the path around it, with a tangent of their own
+        (the path's to begin with), so that the outputs do not change the path."""
+        nonlocal output_tangent
         while len(qs) < outputs.size and outputs[len(qs)] <= upto + 1e-12 * max(1.0, abs(upto)):
             t_out = float(outputs[len(qs)])
             exact = [point for point in path.kept if abs(point[0] - t_out) <= 1e-12 * max(1.0, abs(t_out))]
             if exact:
                 q, lam, count = exact[-1][1], exact[-1][2], 0
             else:
-                q_guess, lam_guess = path.interpolate(t_out)
-                q, lam, count, _ = _newton(
-                    model, q_guess, lam_guess, t_out, tolerance, max_iterations, path_tangent, False, _PATH_ADVICE
+                # the outputs solved last are equilibria too: a start through them (closer than the path's points
+                # when the outputs are denser) saves iterations, and the outputs still never enter the path
+                recent = [(done_times[j], qs[j], lams[j]) for j in range(max(0, len(qs) - path.order - 1), len(qs))]
+                q_guess, lam_guess = path.interpolate(t_out, recent)
+                kept = path_tangent if output_tangent is None else output_tangent
+                q, lam, count, output_tangent = _newton(
+                    model, q_guess, lam_guess, t_out, tolerance, max_iterations, kept, False, _PATH_ADVICE
                 )
             qs.append(q.copy())
             lams.append(lam.copy())

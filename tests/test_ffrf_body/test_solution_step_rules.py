@@ -144,7 +144,7 @@ def test_quasi_static_path_on_its_own_steps_does_not_depend_on_the_outputs():
     stops = []
     for outputs in (7, 13, 31):
         times = np.linspace(0.0, 3.0, outputs)
-        with pytest.raises(StaticDivergence, match=r"last equilibrium at t = 2.1 s") as stopped:
+        with pytest.raises(StaticDivergence, match=r"the last equilibrium at t = 2\.149") as stopped:
             quasi_static(driven, driven.initial_state(), times, path_step=lambda t: 0.1)
         partial = stopped.value.partial
         reached = partial.times

@@ -114,3 +114,23 @@ def test_a_run_whose_path_ends_writes_what_it_computed_and_says_where(tmp_path, 
     assert -3.0 < stopped["drive_angle_deg"] < 5.0  # home, the fold, is at 0 deg
     for name in ("results.csv", "assembly.vtu", "coupler_deviation.png", "driving_torque.png"):
         assert (tmp_path / "out" / name).is_file()
+
+
+@pytest.mark.slow
+def test_the_plane_fold_6r_stops_where_its_path_ends_whatever_the_outputs():
+    """Issue #32: the quasi-static path is solved on its own steps (docs/formulation.md, Eq. (S10)) and the outputs
+    from it, so where the coarse PLA plane_fold_6r's path ends near its flat-folded home pose is the same for 61,
+    241 and 961 outputs (it was 0.27, 1.80 and 2.94 deg for the default links when the path was solved at the
+    outputs), to the path's own halving resolution of 3 deg / 2^8 (the same path: the same float)."""
+    from ffrf.errors import StaticDivergence
+    from ffrf.scenes.linkage_file import load_linkage
+
+    document = {"linkage": {"name": "plane_fold_6r pla", "model": "plane_fold_6r", "h": 0.012, "order": 1, "modes": 2}}
+    scene = load_linkage(document)
+    stops = []
+    for outputs in (61, 241, 961):
+        with pytest.raises(StaticDivergence) as stopped:
+            run_linkage(scene, mode="quasi_static", n_outputs=outputs, t_end=30.0, sensors="path")
+        stops.append(stopped.value.partial.metadata["stopped"]["drive_angle_deg"])
+    assert -3.0 < stops[0] < 5.0  # home, the fold, is at 0 deg
+    assert stops[1] == pytest.approx(stops[0], abs=3.0 / 2**8) and stops[2] == pytest.approx(stops[0], abs=3.0 / 2**8)
