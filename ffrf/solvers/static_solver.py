@@ -475,7 +475,11 @@ class _History(_Path):
     def interpolate(self, t: float, more: list[tuple[float, NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
         """Eq. (S2) through the ``order + 1`` equilibria nearest ``t`` among the kept ones and ``more`` (outputs
         solved before): a start for Newton at ``t``."""
-        nearest = sorted(self.kept + more, key=lambda point: abs(point[0] - t))[: self.order + 1]
+        points = list(self.kept)
+        for point in more:  # distinct times only: the Lagrange weights divide by their differences
+            if all(abs(point[0] - other[0]) > 1e-9 * max(1.0, abs(t)) for other in points):
+                points.append(point)
+        nearest = sorted(points, key=lambda point: abs(point[0] - t))[: self.order + 1]
         if len(nearest) < 2:
             return nearest[0][1], nearest[0][2]
         weights = extrapolation_weights(np.array([point[0] for point in nearest]), t)
