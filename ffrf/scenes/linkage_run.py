@@ -40,7 +40,7 @@ from ffrf.output.tables import write_results as write_tables
 from ffrf.reduction.craig_bampton import CraigBamptonBasis
 from ffrf.scenes.assembly import assemble, dynamic_step, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
-from ffrf.scenes.linkage_steps import dynamic_step_limit, near_dead_point, quasi_static_path_step
+from ffrf.scenes.linkage_steps import dynamic_step_limit, near_dead_point, near_dead_poses, quasi_static_path_step
 from ffrf.solvers.simulate import MODES, Run, simulate
 from ffrf.solvers.snap_through import SnapThrough, run_critical_pose, snap_summary
 from ffrf.solvers.stability import (
@@ -275,6 +275,9 @@ def run_linkage(
     )
     out = LinkageResult(times, values, q, metadata, stress)
     out.metadata["summary"] = out.summary()
+    out.metadata["near_dead_poses"] = near_dead_poses(
+        scene, values["drive_angle"], np.linalg.norm(values["coupler_deviation"], axis=1)
+    )
     if stability:
         out.metadata["stability"] = stability_summary(
             values["stability_squared_frequencies"], np.degrees(values["drive_angle"]), "drive_angle_deg"

@@ -37,6 +37,7 @@ __all__ = [
     "dynamic_step_limit",
     "joint_rate_profile",
     "near_dead_point",
+    "near_dead_poses",
     "quasi_static_path_step",
 ]
 
@@ -113,3 +114,36 @@ def near_dead_point(scene: LinkageScene, t: float, window: float = math.radians(
         f"near-dead point of the rigid loop at drive angle {np.degrees(sign * at):.4g} deg: joint {joint} turns "
         f"{ratio:.3g} times faster than the driver (joint {scene.driver}) there"
     )
+
+
+def near_dead_poses(scene: LinkageScene, drive_angles: np.ndarray, deviation: np.ndarray) -> list[dict]:
+    """The near-dead poses the run passed (peaks of the rigid loop's joint-rate ratio of at least
+    :data:`NEAR_DEAD_RATIO`, Eq. (L9)) and how far the coupler left the rigid motion near each (within 2 deg of drive)
+    and elsewhere: ``deviation`` (m) at the outputs' ``drive_angles`` (rad, the driven joint's prescribed angle).
+    There the rigid motion is ill-conditioned (a joint turns many times faster than the driver, the loop is near a
+    bifurcation) and a built model may leave it by far more than its strain elsewhere."""
+    profile = joint_rate_profile(scene)
+    sign = drive_sign(scene.driver, scene.loop.n)
+    ratios = profile.ratios
+    peaks = [
+        k
+        for k in range(1, len(ratios) - 1)
+        if ratios[k] >= NEAR_DEAD_RATIO and ratios[k] >= ratios[k - 1] and ratios[k] > ratios[k + 1]
+    ]
+    reached = sign * np.asarray(drive_angles, dtype=float)
+    out = []
+    for k in peaks:
+        angle = float(profile.driver_angles[k])
+        if not min(reached) - 1e-9 <= angle <= max(reached) + 1e-9:
+            continue
+        near = np.abs(reached - angle) <= math.radians(2.0)
+        out.append(
+            {
+                "drive_angle_deg": float(np.degrees(sign * angle)),
+                "joint": int(profile.fastest[k]),
+                "ratio": float(ratios[k]),
+                "max_coupler_deviation_near_m": float(np.max(deviation[near], initial=0.0)),
+                "max_coupler_deviation_elsewhere_m": float(np.max(deviation[~near], initial=0.0)),
+            }
+        )
+    return out

@@ -9,7 +9,7 @@ import pytest
 from pendulum_fixtures import pendulum
 
 from ffrf.errors import StaticDivergence
-from ffrf.scenes.linkage_steps import JOINT_ANGLE_PER_STEP, dynamic_step_limit, joint_rate_profile
+from ffrf.scenes.linkage_steps import JOINT_ANGLE_PER_STEP, dynamic_step_limit, joint_rate_profile, near_dead_point
 from ffrf.scenes.scene_cache import SceneCache
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.static_solver import path_times, quasi_static
@@ -156,3 +156,45 @@ def test_quasi_static_path_on_its_own_steps_does_not_depend_on_the_outputs():
     whole = quasi_static(_driven_bar(10.0), driven.initial_state(), np.linspace(0.0, 3.0, 13), path_step=lambda t: 0.3)
     np.testing.assert_allclose(whole.multipliers[:, -1], -mass * 9.81 * 0.1 * np.cos(whole.times), atol=1e-12)
     np.testing.assert_allclose(path_times(0.0, 1.0, lambda t: 0.32), [0.0, 0.32, 0.64, 1.0])
+
+
+def test_a_near_dead_pose_is_named_with_its_joint_and_rate():
+    """The crank-rocker driven by its rocker towards the rocker's extreme (crank and coupler in line): there the
+    crank turns ever faster than the rocker. near_dead_point names the pose with the closed-form rate ratio of the
+    velocity equations (Norton, Sect. 6.7) inverted for the rocker as driver, and says nothing far from it."""
+    theta2_home = 1.2  # the rocker then rises for about 50 deg to its extreme
+    theta3, theta4_home, a, b = _four_bar(theta2_home)
+    # the rocker loop: joint 0 at O4 (driven), 1 at B, 2 at A, 3 at O2; joints turn by t4, t3 - t4, t2 - t3, -t2
+    points = np.array([[D, 0.0, 0.0], [*b, 0.0], [*a, 0.0], [0.0, 0.0, 0.0]])
+    loop = SingleLoop.from_points_directions(points, np.tile([0.0, 0.0, 1.0], (4, 1)))
+    crank = np.linspace(theta2_home, theta2_home + 2.0 * np.pi, 200001)
+    rocker = np.array([_four_bar(t)[1] for t in crank])
+    # the rocker's extreme reached first from home, and the crank angle there (crank and coupler in line)
+    moving = np.sign(rocker[1] - rocker[0])
+    turn_back = int(np.flatnonzero(np.diff(rocker) * moving < 0.0)[0])
+    extreme = rocker[turn_back] - theta4_home
+    end = extreme - moving * np.radians(0.05)  # stop 0.05 deg before the extreme
+    k_end = int(np.argmin(np.abs(rocker[: turn_back + 1] - theta4_home - end)))
+    t3, t4 = _four_bar(crank[k_end])[:2]
+    w3 = A * np.sin(t4 - crank[k_end]) / (B * np.sin(t3 - t4))
+    w4 = A * np.sin(crank[k_end] - t3) / (C * np.sin(t4 - t3))
+    expected = np.abs([1.0, (w3 - w4) / w4, (1.0 - w3) / w4, 1.0 / w4])
+    assert expected.max() > 10.0
+    omega = 2.0 * np.pi / 60.0
+    assert moving > 0.0
+    drive = CosineRamp(omega, 1.0)
+    t_end = drive.time_for_angle(end)  # the drive turns the way the rocker goes to its extreme
+    scene = SimpleNamespace(
+        loop=loop,
+        driver=0,
+        start_phi=np.zeros(4),
+        t_end=t_end,
+        drive=drive,
+        drive_angle=lambda t: float(drive(t)),
+        cache=SceneCache(enabled=False),
+    )
+    message = near_dead_point(scene, t_end, window=np.radians(0.01))
+    assert message is not None and f"joint {int(np.argmax(expected))} turns" in message
+    ratio = float(message.split(" turns ")[1].split(" times")[0])
+    assert ratio == pytest.approx(expected.max(), rel=0.02)
+    assert near_dead_point(scene, 0.5 * t_end) is None
