@@ -198,3 +198,29 @@ def test_a_near_dead_pose_is_named_with_its_joint_and_rate():
     ratio = float(message.split(" turns ")[1].split(" times")[0])
     assert ratio == pytest.approx(expected.max(), rel=0.02)
     assert near_dead_point(scene, 0.5 * t_end) is None
+
+
+def test_joint_rates_of_interp_4poses_6r_equal_rational_linkages_factorisation():
+    """Issue #32's near-dead pose, from independent truth: a factor t - h of the motion polynomial turns by
+    phi = 2 atan2(-|v|, t - s) (Eq. (L5), Rational Linkages' factorisations), so d phi / dt = 2|v| / ((t - s)^2 + |v|^2)
+    and the joint rates against joint 0 are ratios of these. Their peak over the curve equals the peak of the
+    continuation's rate_profile (Eq. (L9)) over a revolution: joint 5, 41.6 times the driver."""
+    from kinematics.rational_mechanism import load_model, loop_from_mechanism, regular_start
+
+    mechanism = load_model("interp_4poses_6r")
+    first, second = mechanism.factorizations
+    factors = [np.asarray(axis.array(), dtype=float) for axis in first.dq_axes]
+    factors += [np.asarray(axis.array(), dtype=float) for axis in second.dq_axes][::-1]
+
+    def rates(t: np.ndarray) -> np.ndarray:
+        speed = np.array([2.0 * np.linalg.norm(c[1:4]) / ((t - c[0]) ** 2 + c[1:4] @ c[1:4]) for c in factors])
+        return speed / speed[0]
+
+    curve = np.concatenate([np.linspace(-50.0, 50.0, 400001), [-1e3, 1e3]])  # the curve parameter, t = inf home
+    closed = rates(curve).max(axis=0)
+    k = int(np.argmax(closed))
+    loop = loop_from_mechanism(mechanism)
+    profile = rate_profile(loop, 0, regular_start(mechanism, loop), 2.0 * np.pi, np.radians(1.0), np.radians(4.0))
+    assert profile.ratios.max() == pytest.approx(closed[k], rel=2e-3)
+    assert profile.fastest[np.argmax(profile.ratios)] == int(np.argmax(rates(curve[k : k + 1])[:, 0]))
+    assert closed[k] == pytest.approx(41.6, abs=0.05)
