@@ -274,7 +274,14 @@ def _run_and_report(
     estimate = result.metadata.get("step_error_estimate")
     if estimate is not None:
         print(
-            f"time steps of {1e3 * result.metadata['step']:g} ms; local error estimate of the bodies' positions per "
+            f"time steps of {1e3 * result.metadata['step']:g} ms"
+            + (
+                f" ({estimate['steps']} steps, down to {1e3 * estimate['shortest_step_s']:.3g} ms where a joint turns "
+                "fast, Eq. (G7))"
+                if "steps" in estimate and estimate["shortest_step_s"] < 0.999 * result.metadata["step"]
+                else ""
+            )
+            + "; local error estimate of the bodies' positions per "
             f"step (Eq. (G5)): median {estimate['median_m']:.1e} m, largest {estimate['largest_m']:.1e} m "
             f"at t = {estimate['largest_at_s']:.3g} s"
         )
