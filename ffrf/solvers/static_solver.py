@@ -486,6 +486,19 @@ class _History(_Path):
         return weights @ np.array([point[1] for point in nearest]), weights @ np.array([point[2] for point in nearest])
 
 
+def _along_path(model, path: _History, t_out: float, tolerance: float, max_iterations: int):
+    """The equilibrium at ``t_out`` followed from the path's last equilibrium before it, as a path step (halved
+    where needed, Eq. (S4)) on a copy of the path: for an output that Newton from the interpolated start does not
+    solve on the path. Returns ``(q, lambda, iterations)``."""
+    before = [point for point in path.kept if point[0] < t_out]
+    start = before[-(path.order + 1) :]
+    copy = _Path(start[0][0], start[0][1], start[0][2], path.order)
+    for t, q, lam in start[1:]:
+        copy.add(t, q, lam)
+    iterations, _ = _advance(model, copy, t_out, tolerance, max_iterations, None, False)
+    return copy.q[-1], copy.lam[-1], iterations
+
+
 def _on_own_steps(
     model, q0: NDArray, outputs: NDArray, path_step, tolerance: float, max_iterations: int, progress, order, secant
 ) -> StaticSolution:
@@ -514,9 +527,19 @@ def _on_own_steps(
                 recent = [(done_times[j], qs[j], lams[j]) for j in range(max(0, len(qs) - path.order - 1), len(qs))]
                 q_guess, lam_guess = path.interpolate(t_out, recent)
                 kept = path_tangent if output_tangent is None else output_tangent
-                q, lam, count, output_tangent = _newton(
-                    model, q_guess, lam_guess, t_out, tolerance, max_iterations, kept, False, _PATH_ADVICE
-                )
+                nearest = min(path.kept, key=lambda point: abs(point[0] - t_out))[1]
+                try:
+                    q, lam, count, output_tangent = _newton(
+                        model, q_guess, lam_guess, t_out, tolerance, max_iterations, kept, False, _PATH_ADVICE
+                    )
+                    # Eq. (S4) for an output: a correction larger than half the way from the nearest path point
+                    # means Newton left the path (another branch near a bifurcation)
+                    left = _path_departure(q, q_guess, nearest, tolerance) is not None
+                except StaticDivergence:
+                    left = True
+                if left:
+                    q, lam, count = _along_path(model, path, t_out, tolerance, max_iterations)
+                    output_tangent = None
             qs.append(q.copy())
             lams.append(lam.copy())
             counts.append(count)
