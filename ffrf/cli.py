@@ -352,9 +352,24 @@ def _run_and_report(
     estimate = result.metadata.get("step_error_estimate")
     if estimate is not None:
         print(
-            f"time steps of {1e3 * result.metadata['step']:g} ms; local error estimate of the bodies' positions per "
+            f"time steps of {1e3 * result.metadata['step']:g} ms"
+            + (
+                f" ({estimate['steps']} steps, down to {1e3 * estimate['shortest_step_s']:.3g} ms where a joint turns "
+                "fast, Eq. (G7))"
+                if "steps" in estimate and estimate["shortest_step_s"] < 0.999 * result.metadata["step"]
+                else ""
+            )
+            + "; local error estimate of the bodies' positions per "
             f"step (Eq. (G5)): median {estimate['median_m']:.1e} m, largest {estimate['largest_m']:.1e} m "
             f"at t = {estimate['largest_at_s']:.3g} s"
+        )
+    for pose in result.metadata.get("near_dead_poses", []):
+        print(
+            f"near-dead pose at drive angle {pose['drive_angle_deg']:.4g} deg: joint {pose['joint']} turns "
+            f"{pose['ratio']:.3g} times faster than the driver; the coupler leaves the rigid motion by "
+            f"{1e3 * pose['max_coupler_deviation_near_m']:.3g} mm within 2 deg of it "
+            f"({1e3 * pose['max_coupler_deviation_elsewhere_m']:.3g} mm elsewhere): the rigid motion is "
+            "ill-conditioned there (docs/hard_cases.md)"
         )
     print(f"clearance of the links along the rigid motion: {clearance.summary()}")
     misfit = scene.misfit_degrees > 0.0

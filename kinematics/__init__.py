@@ -25,7 +25,16 @@ from .dh import (
 from .dual_quaternion import DualQuaternion
 from .mobility import LoopMobility, MobilityReport, explain_mobility, rigid_mobility
 from .pluecker import CommonNormal, Line, angle, common_normal, distance
-from .single_loop import LoopFoldError, LoopMotion, SingleLoop, follow_driver, trace_motion
+from .single_loop import (
+    LoopFoldError,
+    LoopMotion,
+    RateProfile,
+    SingleLoop,
+    follow_driver,
+    joint_rates,
+    rate_profile,
+    trace_motion,
+)
 
 __all__ = [
     "PAPER_A",
@@ -53,6 +62,9 @@ __all__ = [
     "dh_matrix",
     "dh_transform",
     "follow_driver",
+    "joint_rates",
+    "rate_profile",
+    "RateProfile",
     "distance",
     "explain_mobility",
     "home_configuration",

@@ -46,7 +46,10 @@ from .pluecker import Line
 __all__ = [
     "LoopFoldError",
     "follow_driver",
+    "joint_rates",
     "LoopMotion",
+    "RateProfile",
+    "rate_profile",
     "SingleLoop",
     "trace_motion",
 ]
@@ -434,3 +437,66 @@ def _advance(
         f"not close beyond it (a dead point: the joint's share of the motion has fallen to {share:.2e}); "
         "drive another joint"
     )
+
+
+def joint_rates(loop: SingleLoop, phi: ArrayLike, driver: int, fold_tolerance: float = 1e-3) -> NDArray[np.float64]:
+    r"""Eq. (L9): the joint rates :math:`|d\varphi_k / d\varphi_{\mathrm{driver}}|` at the closing pose ``phi``,
+    the kernel of the closure Jacobian (L3) scaled to the driver's share 1. :class:`LoopFoldError` at a dead point
+    of the driver (its share of the unit kernel below ``fold_tolerance``)."""
+    return np.abs(_tangent(loop, loop._angles(phi), driver, None, fold_tolerance))
+
+
+@dataclass(frozen=True)
+class RateProfile:
+    r"""How fast the rigid loop's joints turn against its driver along a motion (Eq. (L9)).
+
+    ``driver_angles`` (rad from home, in the order of travel), ``ratios`` the largest
+    :math:`|d\varphi_k / d\varphi_{\mathrm{driver}}|` there and ``fastest`` that joint ``k``.
+    """
+
+    driver_angles: NDArray[np.float64]
+    ratios: NDArray[np.float64]
+    fastest: NDArray[np.int64]
+
+    def largest(self, angle_from: float, angle_to: float) -> tuple[float, int, float]:
+        """``(ratio, joint, driver angle)`` of the fastest sample among those bracketing the driver's travel from
+        ``angle_from`` to ``angle_to`` (the samples just outside count too: between two samples the ratio may come
+        near the larger one; past the profile's ends, its end samples)."""
+        sign = 1.0 if self.driver_angles[-1] >= self.driver_angles[0] else -1.0
+        travel = sign * (self.driver_angles - self.driver_angles[0])
+        low, high = sorted((sign * (angle_from - self.driver_angles[0]), sign * (angle_to - self.driver_angles[0])))
+        first = max(0, int(np.searchsorted(travel, low, side="right")) - 1)
+        last = max(first, min(len(travel) - 1, int(np.searchsorted(travel, high, side="left"))))
+        k = first + int(np.argmax(self.ratios[first : last + 1]))
+        return float(self.ratios[k]), int(self.fastest[k]), float(self.driver_angles[k])
+
+
+def rate_profile(
+    loop: SingleLoop,
+    driver: int,
+    start: ArrayLike,
+    turn: float,
+    max_joint_step: float = np.radians(0.25),
+    max_driver_step: float = np.radians(1.0),
+    fold_tolerance: float = 1e-3,
+) -> RateProfile:
+    r"""The :class:`RateProfile` of the motion from the closing pose near ``start`` over ``turn`` (rad, signed) of
+    joint ``driver``, traced as (L4) in steps that turn the fastest joint by at most ``max_joint_step`` and the
+    driver by at most ``max_driver_step``, so that a sharp peak of the ratios (a near-dead point) is sampled."""
+    if not (max_joint_step > 0.0 and max_driver_step > 0.0 and np.isfinite(turn)):
+        raise ValueError(
+            f"max_joint_step and max_driver_step must be > 0 rad and turn finite, got {max_joint_step}, "
+            f"{max_driver_step}, {turn}"
+        )
+    phi = loop.close(np.asarray(start, dtype=float), driver)
+    tangent = _tangent(loop, phi, driver, None, fold_tolerance)
+    first, sign = float(phi[driver]), 1.0 if turn >= 0.0 else -1.0
+    angles, ratios, fastest = [first], [float(np.abs(tangent).max())], [int(np.argmax(np.abs(tangent)))]
+    while sign * (angles[-1] - first) < abs(turn) * (1.0 - 1e-12):
+        step = min(max_driver_step, max_joint_step / ratios[-1])
+        target = first + sign * min(abs(turn), sign * (angles[-1] - first) + step)
+        phi, tangent = _advance(loop, phi, tangent, driver, target, fold_tolerance)
+        angles.append(float(phi[driver]))
+        ratios.append(float(np.abs(tangent).max()))
+        fastest.append(int(np.argmax(np.abs(tangent))))
+    return RateProfile(np.array(angles), np.array(ratios), np.array(fastest, dtype=np.int64))

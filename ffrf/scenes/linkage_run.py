@@ -40,6 +40,7 @@ from ffrf.output.tables import write_results as write_tables
 from ffrf.reduction.craig_bampton import CraigBamptonBasis
 from ffrf.scenes.assembly import assemble, dynamic_step, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
+from ffrf.scenes.linkage_steps import dynamic_step_limit, near_dead_point, near_dead_poses, quasi_static_path_step
 from ffrf.solvers.simulate import MODES, Run, simulate
 from ffrf.solvers.snap_through import SnapThrough, run_critical_pose, snap_summary
 from ffrf.solvers.stability import (
@@ -228,9 +229,19 @@ def run_linkage(
             progress=progress,
             max_static_step=quasi_static_step(scene),
             through_snaps=stability,
+            static_path_step=None if stability else quasi_static_path_step(scene),
+            step_limit=dynamic_step_limit(scene) if mode == "dynamic" else None,
         )
         stopped = None
     except (StaticDivergence, NewtonDivergence, Interrupted) as error:
+        if not isinstance(error, Interrupted):
+            reached = error.partial.time[-1] if error.partial is not None and len(error.partial.time) else 0.0
+            near = near_dead_point(scene, float(reached))
+            if near is not None:  # the solver's own message cannot know the loop: name the real cause first
+                error.args = (
+                    f"{near}; the run's steps were refined there and still failed: drive another joint, one that "
+                    f"turns steadily through this pose, or run more slowly. The solver said: {error}",
+                )
         if error.partial is None or len(error.partial.time) < 2:
             error.partial = None  # too little to evaluate: no LinkageResult to write
             raise
@@ -251,7 +262,7 @@ def run_linkage(
         n_outputs=len(times),
         joint_reaction_names=[c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)],
         step=step if mode == "dynamic" else None,
-        step_error_estimate=_step_error_summary(run, step),
+        step_error_estimate=_step_error_summary(run),
         rho_inf=rho_inf if mode == "dynamic" else None,
         timings_s={
             "assembly": assembled - started,
@@ -267,6 +278,9 @@ def run_linkage(
     )
     out = LinkageResult(times, values, q, metadata, stress)
     out.metadata["summary"] = out.summary()
+    out.metadata["near_dead_poses"] = near_dead_poses(
+        scene, values["drive_angle"], np.linalg.norm(values["coupler_deviation"], axis=1)
+    )
     if stability:
         out.metadata["stability"] = stability_summary(
             values["stability_squared_frequencies"], np.degrees(values["drive_angle"]), "drive_angle_deg"
@@ -291,19 +305,22 @@ def run_linkage(
     return out
 
 
-def _step_error_summary(run: Run, step: float) -> dict | None:
-    """The local error estimates of a dynamic run's steps of length ``step`` (Eq. (G5), bodies' positions): the
-    largest, when, and the median; ``None`` for a quasi-static run. The largest is usually in the first steps,
-    while the numerical damping removes the start's high-frequency accelerations, and bounds the path's error
-    loosely; the median is the steady motion's (``docs/speed_vs_error.md``)."""
+def _step_error_summary(run: Run) -> dict | None:
+    """The local error estimates of a dynamic run's steps (Eq. (G5), bodies' positions): the largest, when, and the
+    median, and the number of steps and the shortest (s, Eq. (G7)); ``None`` for a quasi-static run. The largest is
+    usually in the first steps, while the numerical damping removes the start's high-frequency accelerations, and
+    bounds the path's error loosely; the median is the steady motion's (``docs/speed_vs_error.md``)."""
     errors = run.position_errors
-    if errors is None or errors.size == 0:
+    if errors is None or errors.size == 0 or run.step_sizes is None:
         return None
     largest = int(np.argmax(errors))
+    ends = np.cumsum(run.step_sizes)
     return {
         "largest_m": float(errors[largest]),
-        "largest_at_s": (largest + 1) * step,
+        "largest_at_s": float(ends[largest]),
         "median_m": float(np.median(errors)),
+        "steps": int(errors.size),
+        "shortest_step_s": float(np.min(run.step_sizes)),
     }
 
 

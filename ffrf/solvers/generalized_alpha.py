@@ -60,6 +60,8 @@ log = logging.getLogger(__name__)
 #: the default Bennett scene's revolution at 10 ms steps: 4.22 iterations per step with the line (degree 1),
 #: 3.78 with the parabola, and 124 against 71 factorisations.
 PREDICTOR_DEGREE = 2
+#: Most parts one step of a run with a ``step_limit`` is done in after Newton failures (Eq. (G7)).
+MAX_PARTS = 64
 
 
 @dataclass(frozen=True)
@@ -103,8 +105,10 @@ def _factor_iteration_matrix(
         if deficiency:
             raise _Singular(
                 f"the iteration matrix at t = {t:.6g} s is singular ({deficiency} zero singular value(s)): "
-                "redundant constraints (a closed loop of rigid bodies) or a coordinate without mass or stiffness; "
-                "give the links modes, or remove the redundant joint directions"
+                "the constraints are redundant at this state (a closed loop of links without modes, or Newton's "
+                "iterate far from the motion, as after a step too long near a near-dead pose where one joint turns "
+                "much faster than the driver) or a coordinate has no mass or stiffness; shorten the step where the "
+                "motion is fast, give links without modes some, or remove redundant joint directions"
             )
     return factors
 
@@ -346,6 +350,7 @@ def generalized_alpha(
     *,
     fast_path: bool = True,
     step_control: StepControl | None = None,
+    step_limit: Callable[[float, float], float] | None = None,
 ) -> IntegrationResult:
     """Integrate from ``t = 0`` to ``t_end`` with fixed steps ``step`` (s), or, with a
     :class:`StepControl`, with steps chosen by its error estimate (starting from ``step``);
@@ -364,6 +369,11 @@ def generalized_alpha(
     reference Python implementation of :class:`MultibodySystem`; both agree to round-off).
     ``newton_iterations`` of the result has one entry per accepted step (with
     ``step_control``, ``step_sizes`` in the same order).
+    ``step_limit(t0, t1)`` (fixed steps only): the longest step allowed between ``t0`` and ``t1`` (s; e.g. from
+    how fast the fastest coordinate moves there, Eq. (G7)); each step of length ``step`` is then done in as many
+    equal parts as that needs, and a part whose Newton fails (or meets a singular iteration matrix) makes the whole
+    step start over in twice as many parts, up to :data:`MAX_PARTS` (the outputs stay at the multiples of
+    ``output_every * step``).
     """
     if step <= 0 or t_end <= 0:
         raise ValueError(f"step and t_end must be positive, got step={step}, t_end={t_end}")
@@ -430,18 +440,40 @@ def generalized_alpha(
     if step_control is None:
         for k in range(1, n_steps + 1):
             t = k * h
-            new, count, diagnostics = guarded_step(t, h)
-            if new is None:
-                raise NewtonDivergence(
-                    f"Newton did not converge at t = {t:.6g} s after {max_iterations} iterations: {diagnostics}; "
-                    + _failure_advice(newton, state, h, "reduce the step size or check the constraints"),
-                    result(False),
-                )
-            before = (*before, (state.qdd, state.lam, h))[-PREDICTOR_DEGREE:]
-            position_errors.append(_position_error(par, h, new, state, positions))
-            state = new
-            iterations.append(count)
-            step_sizes.append(h)
+            parts = 1 if step_limit is None else max(1, int(np.ceil(h / step_limit(t - h, t) - 1e-9)))
+            while True:  # the step in ``parts`` equal parts (Eq. (G7)); start over in more parts if one fails
+                start, start_before, done = state, before, len(iterations)
+                failure = None
+                for j in range(1, parts + 1):
+                    t_part, h_part = (t, h) if parts == 1 else ((k - 1) * h + j * h / parts, h / parts)
+                    try:
+                        new, count, diagnostics = _step(newton, state, t_part, h_part, before)
+                    except _Singular as error:
+                        if step_limit is None or parts >= MAX_PARTS:
+                            raise SingularIterationMatrix(str(error), result(False)) from None
+                        new, diagnostics = None, str(error)
+                    if new is None:
+                        failure = (t_part, h_part, diagnostics)
+                        break
+                    before = (*before, (state.qdd, state.lam, h_part))[-PREDICTOR_DEGREE:]
+                    position_errors.append(_position_error(par, h_part, new, state, positions))
+                    state = new
+                    iterations.append(count)
+                    step_sizes.append(h_part)
+                if failure is None:
+                    break
+                t_fail, h_fail, diagnostics = failure
+                if step_limit is None or parts >= MAX_PARTS:
+                    raise NewtonDivergence(
+                        f"Newton did not converge at t = {t_fail:.6g} s after {max_iterations} iterations "
+                        f"(step {h_fail:.3g} s): {diagnostics}; "
+                        + _failure_advice(newton, state, h_fail, "reduce the step size or check the constraints"),
+                        result(False),
+                    )
+                state, before, parts = start, start_before, 2 * parts
+                del iterations[done:], step_sizes[done:], position_errors[done:]
+                newton.factors = None
+                log.debug("step to t = %g s failed at %g s (%s); %d parts", t, t_fail, diagnostics, parts)
             if k % output_every == 0 or k == n_steps:
                 record(t, state)
             report(t)

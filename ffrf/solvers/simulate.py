@@ -28,7 +28,8 @@ MODES = ("quasi_static", "dynamic")
 class Run:
     """Output times and coordinates, velocities (``None`` for quasi-static runs) and multipliers, and the snaps a
     quasi-static run went through (:func:`ffrf.solvers.snap_through.quasi_static_through_snaps`); of a dynamic run,
-    the steps' local error estimates of the bodies' positions (m, Eq. (G5), the largest of each step)."""
+    the steps' local error estimates of the bodies' positions (m, Eq. (G5), the largest of each step) and the steps'
+    lengths (s)."""
 
     time: NDArray[np.float64]
     q: NDArray[np.float64]
@@ -36,6 +37,7 @@ class Run:
     multipliers: NDArray[np.float64]
     snaps: tuple[SnapThrough, ...] = ()
     position_errors: NDArray[np.float64] | None = None
+    step_sizes: NDArray[np.float64] | None = None
 
 
 def output_stride(t_end: float, step: float, outputs: int) -> int:
@@ -56,11 +58,17 @@ def simulate(
     max_static_step: float | None = None,
     qd0: NDArray | None = None,
     through_snaps: bool = False,
+    static_path_step: Callable[[float], float] | None = None,
+    step_limit: Callable[[float, float], float] | None = None,
 ) -> Run:
     """``quasi_static``: equilibria at ``outputs`` equally spaced times, followed through intermediate
     ones at most ``max_static_step`` (s) apart, and with ``through_snaps`` on past folds of the equilibrium
     path (the jump to another branch, Eq. (S6)); ``dynamic``: generalized-alpha from ``q0`` with velocities ``qd0``
-    (default at rest) with time step ``step`` and spectral radius ``rho_inf``."""
+    (default at rest) with time step ``step`` and spectral radius ``rho_inf``.
+
+    ``static_path_step`` (quasi-static without ``through_snaps``): the path on its own steps, the outputs solved from
+    it (:func:`ffrf.solvers.static_solver.quasi_static`, Eq. (S10)); ``step_limit`` (dynamic): the longest step
+    between two times, each step done in as many parts as it needs (Eq. (G7))."""
     if mode == "quasi_static":
         times = np.linspace(0.0, t_end, outputs)
         snaps: tuple[SnapThrough, ...] = ()
@@ -70,11 +78,14 @@ def simulate(
                     system, q0, times, progress=progress, max_step=max_static_step
                 )
             else:
-                solution = quasi_static(system, q0, times, progress=progress, max_step=max_static_step)
+                solution = quasi_static(
+                    system, q0, times, progress=progress, max_step=max_static_step, path_step=static_path_step
+                )
         except (StaticDivergence, Interrupted) as error:
             done = error.partial
             if done is not None:
-                error.partial = Run(times[: len(done.q)], done.q, None, done.multipliers, error.snaps)
+                reached = times[: len(done.q)] if done.times is None else done.times
+                error.partial = Run(reached, done.q, None, done.multipliers, error.snaps)
             raise
         return Run(times, solution.q, None, solution.multipliers, snaps)
     if mode == "dynamic":
@@ -88,11 +99,14 @@ def simulate(
                 rho_inf=rho_inf,
                 output_every=output_stride(t_end, step, outputs),
                 progress=progress,
+                step_limit=step_limit,
             )
         except (NewtonDivergence, Interrupted) as error:
             done = error.partial
             if done is not None:
-                error.partial = Run(done.time, done.q, done.qd, done.multipliers, (), done.position_errors)
+                error.partial = Run(
+                    done.time, done.q, done.qd, done.multipliers, (), done.position_errors, done.step_sizes
+                )
             raise
-        return Run(result.time, result.q, result.qd, result.multipliers, (), result.position_errors)
+        return Run(result.time, result.q, result.qd, result.multipliers, (), result.position_errors, result.step_sizes)
     raise ValueError(f"run mode {mode!r}: use one of {list(MODES)}")

@@ -21,6 +21,7 @@ from __future__ import annotations
 import itertools
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -33,18 +34,20 @@ from ffrf.solvers.newton_kernels import CONVERGED, NOT_FINITE, REFACTOR, static_
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import PackedSystem, contiguous, newton_model
 
-__all__ = ["StaticDivergence", "StaticSolution", "quasi_static", "refined_times", "static_equilibrium"]
+__all__ = ["StaticDivergence", "StaticSolution", "path_times", "quasi_static", "refined_times", "static_equilibrium"]
 
 log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
 class StaticSolution:
-    """Equilibrium coordinates ``q``, multipliers, and Newton iterations per load step."""
+    """Equilibrium coordinates ``q``, multipliers, and Newton iterations per load step; ``times``, where given, the
+    times of the rows (a path that stopped between outputs ends with the last equilibrium it reached)."""
 
     q: NDArray[np.float64]
     multipliers: NDArray[np.float64]
     iterations: tuple[int, ...]
+    times: NDArray[np.float64] | None = None
 
 
 def _factor_tangent(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float) -> FactoredMatrix:
@@ -363,6 +366,7 @@ def quasi_static(
     predictor_order: int = 4,
     secant: bool = False,
     max_step: float | None = None,
+    path_step: Callable[[float], float] | None = None,
 ) -> StaticSolution:
     """A sequence of static equilibria at ``times`` (prescribed motions follow their time laws;
     no inertia). Returns ``q`` and ``multipliers`` with one row per time (``iterations`` per time).
@@ -376,9 +380,26 @@ def quasi_static(
     Newton to a wrong equilibrium (driving torque -16.5 N m instead of 0.018 N m) that plain
     modified Newton does not reach; on fine steps it saves about a fifth of the time. A failed step raises
     :class:`StaticDivergence` whose ``partial`` holds the equilibria at the ``times`` reached before it, and so does
-    the :class:`Interrupted` a ``progress`` callback raises."""
+    the :class:`Interrupted` a ``progress`` callback raises.
+
+    With ``path_step`` (the longest path step from a time, s; e.g. Eq. (S10)) the path is followed on its own times
+    (:func:`path_times`, ``max_step`` ignored) and each output is solved from the path's polynomial through the
+    equilibria around it (Eq. (S2)), never becoming a path point: the equilibria and where the path stops do not
+    depend on the outputs. A path that stops then ends the partial result with its last equilibrium (``times``)."""
     if predictor_order < 0:
         raise ValueError(f"predictor_order must be >= 0, got {predictor_order}")
+    if path_step is not None:
+        return _on_own_steps(
+            newton_model(system, fast_path),
+            np.array(q0, dtype=float),
+            np.asarray(times, dtype=float),
+            path_step,
+            tolerance,
+            max_iterations,
+            progress,
+            predictor_order,
+            secant,
+        )
     outputs = np.asarray(times, dtype=float)
     times, returned = refined_times(outputs, max_step)
     model = newton_model(system, fast_path)
@@ -427,3 +448,144 @@ def refined_times(times: NDArray, max_step: float | None) -> tuple[NDArray[np.fl
         refined.append(np.append(start + (end - start) * np.arange(1, pieces) / pieces, end))
         returned.append(np.arange(1, pieces + 1) == pieces)
     return np.concatenate(refined), np.concatenate(returned)
+
+
+def path_times(t_start: float, t_end: float, path_step: Callable[[float], float]) -> NDArray[np.float64]:
+    """The path's own times from ``t_start`` to ``t_end``: each the one before plus ``path_step`` of it (Eq. (S10)),
+    the last step shortened to end at ``t_end`` (a last step under a quarter of the one before is merged into it)."""
+    times = [float(t_start)]
+    while times[-1] < t_end - 1e-12 * max(1.0, abs(t_end)):
+        step = float(path_step(times[-1]))
+        if not step > 0.0:
+            raise ValueError(f"path_step({times[-1]:g}) must be > 0 s, got {step}")
+        times.append(min(float(t_end), times[-1] + step))
+    if len(times) > 2 and times[-1] - times[-2] < 0.25 * (times[-2] - times[-3]):
+        del times[-2]
+    return np.array(times)
+
+
+class _History(_Path):
+    """A :class:`_Path` that also keeps the last :data:`_KEPT` equilibria, to interpolate outputs among them."""
+
+    _KEPT = 32
+
+    def __init__(self, t: float, q: NDArray, lam: NDArray, order: int):
+        super().__init__(t, q, lam, order)
+        self.kept: list[tuple[float, NDArray, NDArray]] = [(t, q, lam)]
+
+    def add(self, t: float, q: NDArray, lam: NDArray) -> None:
+        super().add(t, q, lam)
+        self.kept.append((t, q, lam))
+        del self.kept[: -self._KEPT]
+
+    def interpolate(self, t: float, more: list[tuple[float, NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
+        """Eq. (S2) through the ``order + 1`` equilibria nearest ``t`` among the kept ones and ``more`` (outputs
+        solved before): a start for Newton at ``t``."""
+        points = list(self.kept)
+        for point in more:  # distinct times only: the Lagrange weights divide by their differences
+            if all(abs(point[0] - other[0]) > 1e-9 * max(1.0, abs(t)) for other in points):
+                points.append(point)
+        nearest = sorted(points, key=lambda point: abs(point[0] - t))[: self.order + 1]
+        if len(nearest) < 2:
+            return nearest[0][1], nearest[0][2]
+        weights = extrapolation_weights(np.array([point[0] for point in nearest]), t)
+        return weights @ np.array([point[1] for point in nearest]), weights @ np.array([point[2] for point in nearest])
+
+
+def _along_path(model, path: _History, t_out: float, tolerance: float, max_iterations: int):
+    """The equilibrium at ``t_out`` followed from the path's last equilibrium before it, as a path step (halved
+    where needed, Eq. (S4)) on a copy of the path: for an output that Newton from the interpolated start does not
+    solve on the path. Returns ``(q, lambda, iterations)``."""
+    before = [point for point in path.kept if point[0] < t_out]
+    start = before[-(path.order + 1) :]
+    copy = _Path(start[0][0], start[0][1], start[0][2], path.order)
+    for t, q, lam in start[1:]:
+        copy.add(t, q, lam)
+    iterations, _ = _advance(model, copy, t_out, tolerance, max_iterations, None, False)
+    return copy.q[-1], copy.lam[-1], iterations
+
+
+def _on_own_steps(
+    model, q0: NDArray, outputs: NDArray, path_step, tolerance: float, max_iterations: int, progress, order, secant
+) -> StaticSolution:
+    """:func:`quasi_static` with ``path_step``: the path on :func:`path_times`, the outputs solved from it."""
+    own = path_times(float(outputs[0]), float(outputs[-1]), path_step)
+    qs: list[NDArray] = []
+    lams: list[NDArray] = []
+    counts: list[int] = []
+    done_times: list[float] = []
+    path_tangent = None
+
+    output_tangent = None
+
+    def emit(upto: float, path: _History) -> None:
+        """Solve every output not yet solved up to ``upto`` from the path around it, with a tangent of their own
+        (the path's to begin with), so that the outputs do not change the path."""
+        nonlocal output_tangent
+        while len(qs) < outputs.size and outputs[len(qs)] <= upto + 1e-12 * max(1.0, abs(upto)):
+            t_out = float(outputs[len(qs)])
+            exact = [point for point in path.kept if abs(point[0] - t_out) <= 1e-12 * max(1.0, abs(t_out))]
+            if exact:
+                q, lam, count = exact[-1][1], exact[-1][2], 0
+            else:
+                # the outputs solved last are equilibria too: a start through them (closer than the path's points
+                # when the outputs are denser) saves iterations, and the outputs still never enter the path
+                recent = [(done_times[j], qs[j], lams[j]) for j in range(max(0, len(qs) - path.order - 1), len(qs))]
+                q_guess, lam_guess = path.interpolate(t_out, recent)
+                kept = path_tangent if output_tangent is None else output_tangent
+                nearest = min(path.kept, key=lambda point: abs(point[0] - t_out))[1]
+                try:
+                    q, lam, count, output_tangent = _newton(
+                        model, q_guess, lam_guess, t_out, tolerance, max_iterations, kept, False, _PATH_ADVICE
+                    )
+                    # Eq. (S4) for an output: a correction larger than half the way from the nearest path point
+                    # means Newton left the path (another branch near a bifurcation)
+                    left = _path_departure(q, q_guess, nearest, tolerance) is not None
+                except StaticDivergence:
+                    left = True
+                if left:
+                    q, lam, count = _along_path(model, path, t_out, tolerance, max_iterations)
+                    output_tangent = None
+            qs.append(q.copy())
+            lams.append(lam.copy())
+            counts.append(count)
+            done_times.append(t_out)
+
+    def partial(path: _History) -> StaticSolution:
+        times = list(done_times)
+        q_rows, lam_rows, count_rows = list(qs), list(lams), list(counts)
+        last_t, last_q, last_lam = path.kept[-1]
+        if not times or last_t > times[-1] + 1e-12 * max(1.0, abs(last_t)):
+            times.append(last_t)
+            q_rows.append(last_q.copy())
+            lam_rows.append(last_lam.copy())
+            count_rows.append(0)
+        return StaticSolution(np.array(q_rows), np.array(lam_rows), tuple(count_rows), np.array(times))
+
+    q, lam, _, path_tangent = _newton(
+        model, q0, np.zeros(model.n_constraints), float(own[0]), tolerance, max_iterations, None, secant, _START_ADVICE
+    )
+    path = _History(float(own[0]), q, lam, order)
+    emit(float(own[0]), path)
+    for k, t in enumerate(own[1:], start=1):
+        try:
+            _, path_tangent = _advance(model, path, float(t), tolerance, max_iterations, path_tangent, secant)
+            emit(float(t), path)
+        except StaticDivergence as error:
+            try:
+                emit(path.times[-1], path)
+            except StaticDivergence:
+                pass  # the outputs before the stop that do not converge are left out; the path's own end is kept
+            raise StaticDivergence(
+                f"quasi-static path step {k} at t = {t:.6g} s (the last equilibrium at t = {path.times[-1]:.9g} s): "
+                f"{error}",
+                partial(path),
+            ) from error
+        if progress is not None:
+            try:
+                progress(float(t), float(own[-1]))
+            except Interrupted as error:  # asked to stop: leave with the outputs solved so far
+                error.partial = StaticSolution(np.array(qs), np.array(lams), tuple(counts), np.array(done_times))
+                raise
+    emit(float(outputs[-1]), path)
+    return StaticSolution(np.array(qs), np.array(lams), tuple(counts), np.array(done_times))

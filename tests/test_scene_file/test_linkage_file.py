@@ -114,3 +114,48 @@ def test_a_run_whose_path_ends_writes_what_it_computed_and_says_where(tmp_path, 
     assert -3.0 < stopped["drive_angle_deg"] < 5.0  # home, the fold, is at 0 deg
     for name in ("results.csv", "assembly.vtu", "coupler_deviation.png", "driving_torque.png"):
         assert (tmp_path / "out" / name).is_file()
+
+
+@pytest.mark.slow
+def test_the_plane_fold_6r_stops_where_its_path_ends_whatever_the_outputs():
+    """Issue #32: the quasi-static path is solved on its own steps (docs/formulation.md, Eq. (S10)) and the outputs
+    from it, so where the coarse PLA plane_fold_6r's path ends near its flat-folded home pose is the same for 61,
+    241 and 961 outputs (it was 0.27, 1.80 and 2.94 deg for the default links when the path was solved at the
+    outputs), to the path's own halving resolution of 3 deg / 2^8 (the same path: the same float)."""
+    from ffrf.errors import StaticDivergence
+    from ffrf.scenes.linkage_file import load_linkage
+
+    document = {"linkage": {"name": "plane_fold_6r pla", "model": "plane_fold_6r", "h": 0.012, "order": 1, "modes": 2}}
+    scene = load_linkage(document)
+    stops = []
+    for outputs in (61, 241, 961):
+        with pytest.raises(StaticDivergence) as stopped:
+            run_linkage(scene, mode="quasi_static", n_outputs=outputs, t_end=30.0, sensors="path")
+        stops.append(stopped.value.partial.metadata["stopped"]["drive_angle_deg"])
+    assert -3.0 < stops[0] < 5.0  # home, the fold, is at 0 deg
+    assert stops[1] == pytest.approx(stops[0], abs=3.0 / 2**8) and stops[2] == pytest.approx(stops[0], abs=3.0 / 2**8)
+
+
+@pytest.mark.slow
+def test_near_rigid_interp_4poses_6r_without_load_follows_rational_linkages_through_its_near_dead_pose():
+    """Issue #32: Rational Linkages' interp_4poses_6r passes a near-dead pose at drive angle -16.45 deg where joint 5
+    turns 41.6 times faster than the driver. Without gravity nothing strains links of E = 1e15 Pa, so the quasi-static
+    path on its own steps (docs/formulation.md, Eq. (S10): at most 6 deg of the fastest joint per step) must follow
+    the rigid motion of the nominal loop (traced from Rational Linkages' axes) to round-off through that pose; the
+    run names the pose (metadata ``near_dead_poses``). With gravity the same links leave the motion there by
+    millimetres (docs/hard_cases.md): the near-bifurcation amplifies their strain."""
+    from ffrf.fe.materials import RIGID
+    from ffrf.scenes.linkage_file import load_linkage
+
+    material = {"E": RIGID.E, "nu": RIGID.nu, "rho": RIGID.rho, "name": RIGID.name}
+    document = {
+        "linkage": {"name": "interp_4poses_6r rigid", "model": "interp_4poses_6r", "material": material},
+        "scene": {"gravity": [0.0, 0.0, 0.0]},
+    }
+    result = run_linkage(load_linkage(document), mode="quasi_static", n_outputs=31, t_end=9.0, sensors="path")
+    angles = np.degrees(result.sensors["drive_angle"])
+    assert angles.min() < -16.45 < angles.max()
+    assert np.max(np.linalg.norm(result.sensors["coupler_deviation"], axis=1)) < 1e-10
+    (pose,) = result.metadata["near_dead_poses"]
+    assert pose["joint"] == 5 and pose["ratio"] == pytest.approx(41.6, abs=0.05)
+    assert pose["drive_angle_deg"] == pytest.approx(-16.45, abs=0.05)
