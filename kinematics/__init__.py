@@ -25,7 +25,16 @@ from .dh import (
 from .dual_quaternion import DualQuaternion
 from .mobility import LoopMobility, MobilityReport, explain_mobility, rigid_mobility
 from .pluecker import CommonNormal, Line, angle, common_normal, distance
-from .single_loop import LoopFoldError, LoopMotion, SingleLoop, follow_driver, trace_motion
+from .single_loop import (
+    LoopFoldError,
+    LoopMotion,
+    SingleLoop,
+    close_near,
+    follow_driver,
+    motion_tangents,
+    point_paths,
+    trace_motion,
+)
 
 __all__ = [
     "PAPER_A",
@@ -47,6 +56,7 @@ __all__ = [
     "NearbyAssemblies",
     "SingleLoop",
     "angle",
+    "close_near",
     "common_normal",
     "dh_axes",
     "dh_from_axes",
@@ -57,8 +67,10 @@ __all__ = [
     "explain_mobility",
     "home_configuration",
     "loop_closure_residual",
+    "motion_tangents",
     "nearby_assemblies",
     "open_loop_axes",
+    "point_paths",
     "rigid_mobility",
     "solve_closure",
     "trace_motion",
