@@ -5,7 +5,7 @@ polynomial of a Bennett linkage, or the rigid loop closed at that angle, ``docs/
 samples :math:`p_j = p(\theta_j)` only bound the distance from above; between two samples the chord is off the
 curve by up to the sagitta, about :math:`|p_{j+1} - 2p_j + p_{j-1}|/8`, which is millimetres where the coupler
 moves fast (issue #32: 1.7 mm for a run that follows the curve to 1e-15 m). The distance here is exact to a
-tolerance (Eq. (D1) of ``docs/formulation.md``):
+tolerance (Eq. (C1) of ``docs/formulation.md``):
 
 .. math:: d(x) = \min_\theta |p(\theta) - x| ,
 
@@ -78,7 +78,7 @@ class PathDistance:
 
 
 def distance_to_curve(points: NDArray, curve: ExactCurve, tolerance: float = 1e-12) -> PathDistance:
-    """Distance of each of ``points`` ``(k, 3)`` to ``curve`` (Eq. (D1), module docstring), to ``tolerance`` (m)."""
+    """Distance of each of ``points`` ``(k, 3)`` to ``curve`` (Eq. (C1), module docstring), to ``tolerance`` (m)."""
     points = np.asarray(points, dtype=float)
     samples, (start, end) = curve.points, curve.arc_ends
     following = np.roll(samples, -1, axis=0)

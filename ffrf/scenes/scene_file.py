@@ -136,6 +136,7 @@ from ffrf.errors import NewtonDivergence, SceneError, StaticDivergence
 from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
 from ffrf.output.sensors import node_sensors, scene_sensors
 from ffrf.output.tables import write_results
+from ffrf.output.verification import verify_scene_run
 from ffrf.scenes.assembly import assemble, quasi_static_step, start_state, starts_static
 from ffrf.scenes.builder import Scene, build_scene
 from ffrf.scenes.linkage_file import load_linkage
@@ -230,6 +231,7 @@ def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
     sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
     if scene.settings.get("stability", False):
         metadata["stability"] = _monitor_stability(scene, run, sensors, directory)
+    metadata["verification"] = verify_scene_run(scene, sensors, metadata).as_dict()
     metadata["wall_time_s"] = wallclock.perf_counter() - started
     if stopped is not None:
         metadata["stopped"] = {"time_s": float(run.time[-1]), "reason": str(stopped)}

@@ -1,4 +1,4 @@
-"""The distance to the ideal path is exact (ffrf.output.path_distance, Eq. (D1)), not that of a polyline through
+"""The distance to the ideal path is exact (ffrf.output.path_distance, Eq. (C1)), not that of a polyline through
 samples of the curve: checked against closed forms (a circle run at uneven speed, a planar four-bar's coupler
 curve) and against the rigid loop followed by continuation (the paper's Bennett linkage, whose curve comes from
 its motion polynomial)."""
