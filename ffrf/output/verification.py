@@ -101,7 +101,7 @@ class Check:
             "tolerance": float(self.tolerance),
             "unit": self.unit,
             "passed": self.passed,
-            "margin": self.margin,
+            "margin": self.margin if np.isfinite(self.margin) else None,  # JSON has no infinity
             "what": self.what,
         }
 
