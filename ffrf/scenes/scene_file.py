@@ -36,7 +36,7 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
                                       #   joint_point = [...]}, {name = "b", ...}], h = 0.006, mount = false,
                                       #   design = {arm_width = 0.016, arm_thickness = 0.012}}  (m, LinkDesign)
     unit = "mm"                       # optional, scales the mesh to metres
-    material = {E = 1.2e9, nu = 0.33, rho = 450.0}
+    material = {E = 1.2e9, nu = 0.33, rho = 450.0}   # optional strength = 53e6 (Pa): the assembly is checked
     order = 2                         # default 2: linear tetrahedra are too stiff in bending
     modes = 4
     reduction = "craig_bampton"       # default; or "free_free": modes = the lowest elastic free-free modes (>= 1),
