@@ -148,3 +148,54 @@ def test_the_command_line_ends_with_the_verdict_and_exits_3_when_a_check_fails(t
     else:
         assert code == 3 and last.startswith("verified: false: joint_constraints")
         assert metadata["verification"]["reasons"][0].startswith("joint_constraints")
+
+
+def _fake_run(deviation: float, step_median: float | None, step_largest: float, torque_offset: float = 0.0):
+    """A 0.2 m linkage of 1 kg links without gravity whose drive turns once at a constant 0.5 N m torque stored as
+    strain energy (a balanced run), with the coupler ``deviation`` m off the ideal curve, the residual of a torque
+    ``torque_offset`` N m the energies do not account for, and a step error estimate of that median and largest."""
+    from types import SimpleNamespace
+
+    rows = 41
+    angle = np.linspace(0.0, 2 * np.pi, rows)
+    torque = np.full(rows, 0.5 + torque_offset)
+    strain = 0.5 * angle
+    sensors = {
+        "drive_angle": angle,
+        "driving_torque": torque,
+        "energy_kinetic": np.zeros(rows),
+        "energy_potential": np.zeros(rows),
+        "energy_strain": strain,
+        "energy_balance_residual": torque * angle - strain,
+        "constraint_residual": np.full(rows, 1e-13),
+        "coupler_deviation": np.tile([0.0, 0.0, deviation], (rows, 1)),
+        "coupler_distance_to_path": np.full(rows, deviation),
+    }
+    estimate = (
+        None if step_median is None else {"median_m": step_median, "largest_m": step_largest, "largest_at_s": 0.01}
+    )
+    result = SimpleNamespace(sensors=sensors, metadata={"step_error_estimate": estimate}, assembly=None)
+    scene = SimpleNamespace(
+        link_length=0.2,
+        bodies=[SimpleNamespace(fe=SimpleNamespace(total_mass=1.0))],
+        system=SimpleNamespace(gravity=np.zeros(3)),
+        settings={"bore_errors": []},
+        misfit_degrees=0.0,
+    )
+    return result, scene
+
+
+def test_each_check_fails_where_the_run_misses_it_and_only_there():
+    """A balanced stiff run on its path passes; a torque that does 1 % more work than the energies take fails the
+    energy balance (1e-4 of the scale); a coupler 1 um off the rigid motion of unloaded stiff links fails
+    stiff_follows_rigid (no sag: only the Newton tolerance); a steady step error of 1 um fails against 1e-6 of the
+    0.2 m link, a large start transient with a small median passes."""
+
+    def failed(*args, **kwargs) -> list[str]:
+        outcome = verification.verify_run(*_fake_run(*args, **kwargs))
+        return [check.name for check in outcome.checks if not check.passed]
+
+    assert failed(0.0, 1e-11, 1e-5) == []
+    assert failed(0.0, None, 0.0, torque_offset=0.005) == ["energy_balance"]
+    assert failed(1e-6, None, 0.0) == ["stiff_follows_rigid"]
+    assert failed(0.0, 1e-6, 1e-6) == ["step_error"]
