@@ -7,6 +7,8 @@ them. The checks (those whose sensors the run has):
 * ``joint_constraints``: the largest joint constraint residual (the loop's closure at every joint; m, or rad for
   the rotation rows) against the Newton tolerance :data:`SOLVER_TOLERANCE` times ``max(1, L / 1 m)``: both
   solvers stop only when the residual is below it, so a larger one means an output that did not converge.
+* ``loop_closure``: the largest distance between the two sides' points of any joint (m), against the same
+  tolerance: the loop's closure measured as a length, from the bodies' poses, whatever the constraints' rows.
 * ``energy_balance``: the largest residual of the balance (drive and force elements' work against the changes of
   kinetic, potential and strain energy and the damping dissipation, J) against :data:`ENERGY_RTOL` times the energy
   scale of Eq. (C2) (at least the links' weight-length energy ``m g_n L``) plus the estimated quadrature error of
@@ -203,6 +205,25 @@ def _constraint_check(sensors: dict, length: float) -> Check:
     )
 
 
+def _closure_check(sensors: dict, length: float) -> Check | None:
+    """The loop's closure measured as a length: the largest distance between the two sides' joint points of any
+    joint (``J_point0``, ``J_point1`` of :func:`ffrf.output.sensors.joint_rows`); None without those sensors."""
+    gaps = [
+        float(np.max(np.linalg.norm(sensors[name] - sensors[name[:-1] + "1"], axis=-1)))
+        for name in sensors
+        if name.endswith("_point0") and name[:-1] + "1" in sensors and len(sensors[name])
+    ]
+    if not gaps:
+        return None
+    return Check(
+        "loop_closure",
+        max(gaps),
+        SOLVER_TOLERANCE * max(1.0, length),
+        "m",
+        "largest distance between the two sides' points of a joint (the loop closes at every joint)",
+    )
+
+
 def _energy_check(sensors: dict, floor: float) -> Check:
     residual = sensors["energy_balance_residual"]
     scale = energy_scale(sensors, floor)
@@ -225,6 +246,9 @@ def verify_run(result: Any, scene: Any) -> Verification:
     notes: list[str] = []
     if "constraint_residual" in sensors:
         checks.append(_constraint_check(sensors, length))
+    closure = _closure_check(sensors, length)
+    if closure is not None:
+        checks.append(closure)
     if "energy_balance_residual" in sensors:
         checks.append(_energy_check(sensors, float(metadata.get("energy_floor_j", weight_energy(scene)))))
     estimate = metadata.get("step_error_estimate")
@@ -276,9 +300,12 @@ def verify_run(result: Any, scene: Any) -> Verification:
 
 def verify_scene_run(scene: Any, sensors: dict, metadata: dict) -> Verification:
     """What applies to any scene's run (:func:`ffrf.scenes.scene_file.run_scene`): the joint constraints, the
-    energy balance when the scene has one driven joint, and the assembly's stresses against the strength."""
+    loop's closure, the energy balance when the scene has one driven joint, and the assembly's stresses against
+    the strength."""
     length = scene_length(scene)
     checks = [_constraint_check(sensors, length)] if "constraint_residual" in sensors else []
+    closure = _closure_check(sensors, length)
+    checks += [] if closure is None else [closure]
     notes: list[str] = []
     if "energy_balance_residual" in sensors:
         checks.append(_energy_check(sensors, weight_energy(scene)))

@@ -38,7 +38,9 @@ def test_an_unloaded_stiff_run_is_on_its_ideal_path_and_does_no_work():
     assert summary["energy_balance_relative"] < 1e-4
     checks = {check["name"]: check for check in result.metadata["verification"]["checks"]}
     assert result.metadata["verification"]["verified"]
-    assert {"joint_constraints", "energy_balance", "path_distance", "stiff_follows_rigid"} <= set(checks)
+    assert {"joint_constraints", "loop_closure", "energy_balance", "path_distance", "stiff_follows_rigid"} <= set(
+        checks
+    )
 
 
 def test_the_energy_balance_of_a_run_where_nothing_moves_is_zero_not_nan_or_one():
@@ -131,7 +133,8 @@ def test_a_material_without_a_strength_is_noted_not_checked():
 
 @pytest.mark.parametrize("verified", [True, False])
 def test_the_command_line_ends_with_the_verdict_and_exits_3_when_a_check_fails(tmp_path, capsys, monkeypatch, verified):
-    """A scene file's run (a driven PLA link under gravity) verifies its joint constraints and energy balance; with
+    """A scene file's run (a driven PLA link under gravity) verifies its joint constraints, the closure at its joint
+    and its energy balance; with
     a Newton tolerance of zero, which no residual meets, the run is written all the same, the last line says
     ``verified: false`` naming the check, metadata.json records it and the exit status is 3."""
     (tmp_path / "scene.toml").write_text(driven_link_scene("[0.0, 0.0, 1.0]", t_end=1.0, outputs=9, modes=2))
@@ -141,7 +144,7 @@ def test_the_command_line_ends_with_the_verdict_and_exits_3_when_a_check_fails(t
     last = capsys.readouterr().out.strip().splitlines()[-1]
     metadata = json.loads((tmp_path / "out" / "metadata.json").read_text())
     names = [check["name"] for check in metadata["verification"]["checks"]]
-    assert names == ["joint_constraints", "energy_balance"]
+    assert names == ["joint_constraints", "loop_closure", "energy_balance"]
     assert metadata["verification"]["verified"] is verified
     if verified:
         assert code == 0 and last.startswith("verified: true")
