@@ -38,9 +38,8 @@ def test_an_unloaded_stiff_run_is_on_its_ideal_path_and_does_no_work():
     assert summary["energy_balance_relative"] < 1e-4
     checks = {check["name"]: check for check in result.metadata["verification"]["checks"]}
     assert result.metadata["verification"]["verified"]
-    assert {"joint_constraints", "loop_closure", "energy_balance", "path_distance", "stiff_follows_rigid"} <= set(
-        checks
-    )
+    expected = {"joint_constraints", "loop_closure", "energy_balance", "path_distance", "stiff_follows_rigid"}
+    assert expected <= set(checks)
 
 
 def test_the_energy_balance_of_a_run_where_nothing_moves_is_zero_not_nan_or_one():
