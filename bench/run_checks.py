@@ -6,11 +6,10 @@ the ideal path against the polyline it replaced (issue #32).
         python bench/run_checks.py --json out/run_checks.json
 
 Runs, at the command line's defaults (961 outputs, 6 mm P2, 4 modes): the PLA and rigid Bennett linkages
-quasi-statically, PLA dynamically (10 ms steps), collisions_free_6r in PLA and rigid, interp_4poses_6r rigid (a
-run that misses its checks), and the stiff Bennett and collisions_free_6r without gravity (241 outputs). Per run:
-every check's value, tolerance and margin (tolerance / value), the warnings; for the unloaded stiff runs the
-largest distance to the path, exact and by the polyline through the samples the old metric used (4000 for the
-Bennett, 720 for any loop), and the distance's time.
+quasi-statically, PLA dynamically (10 ms steps), collisions_free_6r in PLA and rigid, and the stiff Bennett and
+collisions_free_6r without gravity (241 outputs). Per run: every check's value, tolerance and margin (tolerance /
+value), the warnings; for the unloaded stiff runs the largest distance to the path, exact and by the polyline
+through the samples the old metric used (4000 for the Bennett, 720 for any loop), and the distance's time.
 """
 
 from __future__ import annotations
@@ -113,9 +112,6 @@ def main() -> int:
         measure("bennett_rigid", build_bennett("rigid"), "quasi_static", OUTPUTS),
         measure("collisions_free_6r_pla", six_r(pla, (0.0, 0.0, -9.81)), "quasi_static", OUTPUTS, distances=True),
         measure("collisions_free_6r_rigid", six_r(rigid, (0.0, 0.0, -9.81)), "quasi_static", OUTPUTS),
-        measure(
-            "interp_4poses_6r_rigid", six_r(rigid, (0.0, 0.0, -9.81), model="interp_4poses_6r"), "quasi_static", OUTPUTS
-        ),
         measure("bennett_pla_dynamic", build_bennett("pla"), "dynamic", OUTPUTS),
         measure(
             "bennett_rigid_unloaded",
