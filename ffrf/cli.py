@@ -346,7 +346,7 @@ def _run_and_report(
         + (f" (paper: below {paper} mm)" if paper else "")
         + f"; max driving torque {1e3 * summary['max_abs_driving_torque_Nm']:.3f} N mm; "
         f"largest constraint residual {summary['max_constraint_residual']:.1e}; energy balance closed to "
-        f"{summary['energy_balance_relative']:.1e} of the drive work; wall time "
+        f"{summary['energy_balance_relative']:.1e} of its energy scale (Eq. (C2)); wall time "
         f"{time.perf_counter() - started:.1f} s -> {out}"
     )
     estimate = result.metadata.get("step_error_estimate")
@@ -386,7 +386,19 @@ def _run_and_report(
         return 1
     if then is not None:
         then(result)
-    return 0
+    return _report_verification(result.metadata.get("verification"))
+
+
+def _report_verification(verification: dict | None) -> int:
+    """Print the run's warnings and, as the last line, its verdict (``verification`` of ``metadata.json``,
+    :mod:`ffrf.output.verification`); exit status 0 when the run verified itself, 3 when a check failed (the
+    results are written all the same, and ``verification.reasons`` names what failed)."""
+    if verification is None:
+        return 0
+    for warning in verification["warnings"]:
+        print(f"warning: {warning}")
+    print(verification["verdict"])
+    return 0 if verification["verified"] else 3
 
 
 def _write_stability(result, out: Path) -> None:
@@ -544,7 +556,8 @@ def _run_linkage(args: argparse.Namespace) -> int:
             "model": args.model,
             "scale": args.scale,
             "driver": args.driver,
-            "material": {"E": material.E, "nu": material.nu, "rho": material.rho, "name": material.name},
+            "material": {"E": material.E, "nu": material.nu, "rho": material.rho, "name": material.name}
+            | ({} if material.strength is None else {"strength": material.strength}),
             "h": args.h,
             "order": args.order,
             "modes": args.modes,
@@ -672,7 +685,7 @@ def _run_scene_file(args: argparse.Namespace) -> int:
             + (f"it lands on another branch, releasing {released:.4g} J" if snap["landed"] else "no landing found")
         )
     print(f"{scene.name}: wall time {metadata['wall_time_s']:.1f} s -> {args.out}")
-    return 0
+    return _report_verification(metadata.get("verification"))
 
 
 def _configure_study(parser: argparse.ArgumentParser) -> None:

@@ -45,12 +45,15 @@ from .pluecker import Line
 
 __all__ = [
     "LoopFoldError",
+    "close_near",
     "follow_driver",
     "joint_rates",
     "LoopMotion",
     "RateProfile",
     "rate_profile",
     "SingleLoop",
+    "motion_tangents",
+    "point_paths",
     "trace_motion",
 ]
 
@@ -500,3 +503,97 @@ def rate_profile(
         ratios.append(float(np.abs(tangent).max()))
         fastest.append(int(np.argmax(np.abs(tangent))))
     return RateProfile(np.array(angles), np.array(ratios), np.array(fastest, dtype=np.int64))
+
+
+def _stacked_transforms(loop: SingleLoop, phi: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+    r"""Rotations ``(m, n + 1, 3, 3)`` and translations ``(m, n + 1, 3)`` of Eq. (L1) for ``m`` poses at once
+    (:meth:`SingleLoop.link_transforms`, row by row)."""
+    points, directions = loop._axis_arrays
+    m, n = phi.shape
+    rotations = Rotation.from_rotvec((phi[:, :, None] * directions[None]).reshape(-1, 3)).as_matrix()
+    rotations = rotations.reshape(m, n, 3, 3)
+    shifts = points[None] - (rotations @ points[None, :, :, None])[..., 0]
+    rotation, translation = np.empty((m, n + 1, 3, 3)), np.empty((m, n + 1, 3))
+    rotation[:, 0], translation[:, 0] = np.eye(3), 0.0
+    for i in range(n):
+        rotation[:, i + 1] = rotation[:, i] @ rotations[:, i]
+        translation[:, i + 1] = (rotation[:, i] @ shifts[:, i, :, None])[..., 0] + translation[:, i]
+    return rotation, translation
+
+
+def _stacked_jacobian(loop: SingleLoop, rotation: NDArray, translation: NDArray) -> NDArray[np.float64]:
+    """Eq. (L3) for ``m`` poses at once, ``(m, 6, n)`` (:meth:`SingleLoop.jacobian`, row by row)."""
+    points, directions = loop._axis_arrays
+    n = loop.n
+    direction = (rotation[:, :n] @ directions[None, :, :, None])[..., 0]
+    point = (rotation[:, :n] @ points[None, :, :, None])[..., 0] + translation[:, :n]
+    moment = np.cross(point, direction)
+    jacobian = np.empty((len(rotation), 6, n))
+    jacobian[:, :3] = np.swapaxes(np.cross(direction, translation[:, n, None, :]) + moment, 1, 2)
+    jacobian[:, 3:] = np.swapaxes(direction, 1, 2)
+    return jacobian
+
+
+def close_near(
+    loop: SingleLoop,
+    driver: int,
+    seeds: ArrayLike,
+    angles: ArrayLike,
+    tangents: ArrayLike | None = None,
+    max_iterations: int = 30,
+) -> NDArray[np.float64]:
+    r"""Closing joint angles ``(m, n)`` with joint ``driver`` at ``angles`` ``(m,)`` (rad from home), each found from
+    the closing pose ``seeds[i]`` nearby (a sample of :func:`follow_driver`; a step of a few degrees at most), all
+    at once: one predictor along the kernel of the seed's closure Jacobian, then Gauss-Newton with the driver held
+    (Eq. (L4), as :meth:`SingleLoop.close`, to :data:`CLOSURE_TOLERANCE` and one step more).
+
+    Raises :class:`kinematics.dh.LoopClosureError` when a pose does not close (a dead point between the seed and
+    its angle: seeds from a closer sample are needed). ``tangents``: the seeds' :func:`motion_tangents`, when
+    known (several angles from one seed)."""
+    seeds = np.asarray(seeds, dtype=float)
+    angles = np.asarray(angles, dtype=float)
+    if seeds.ndim != 2 or seeds.shape[1] != loop.n or angles.shape != (len(seeds),):
+        raise ValueError(f"expected seeds (m, {loop.n}) and angles (m,), got {seeds.shape} and {angles.shape}")
+    weights = loop.residual_weights
+    free = np.array([i for i in range(loop.n) if i != driver])
+    tangents = motion_tangents(loop, driver, seeds) if tangents is None else np.asarray(tangents, dtype=float)
+    phi = seeds + (angles - seeds[:, driver])[:, None] * tangents
+    phi[:, driver] = angles
+    converged = np.zeros(len(phi), dtype=bool)
+    for _ in range(max_iterations):
+        rotation, translation = _stacked_transforms(loop, phi)
+        residual = np.concatenate(
+            [translation[:, loop.n], Rotation.from_matrix(rotation[:, loop.n]).as_rotvec()], axis=1
+        )
+        residual *= weights
+        jacobian = weights[:, None] * _stacked_jacobian(loop, rotation, translation)[:, :, free]
+        # Gauss-Newton by the normal equations: with the driver held, a loop that moves keeps n - 1 independent
+        # columns away from its dead points, and the step only has to converge, the residual is evaluated exactly.
+        transposed = np.swapaxes(jacobian, 1, 2)
+        phi[:, free] -= np.linalg.solve(transposed @ jacobian, transposed @ residual[:, :, None])[:, :, 0]
+        if np.all(converged):  # one more (quadratically convergent) step puts every residual at round-off
+            return phi
+        converged = np.max(np.abs(residual), axis=1) <= CLOSURE_TOLERANCE
+    worst = int(np.argmin(converged))
+    raise LoopClosureError(
+        f"the loop does not close with joint {driver} at {np.degrees(angles[worst]):.6g} deg from the pose at "
+        f"{np.degrees(seeds[worst, driver]):.6g} deg after {max_iterations} Gauss-Newton iterations (a dead point "
+        "between them; start from a closer pose)"
+    )
+
+
+def motion_tangents(loop: SingleLoop, driver: int, phi: ArrayLike) -> NDArray[np.float64]:
+    """Tangents ``(m, n)`` of the motion at closing poses ``phi`` ``(m, n)``: the kernel of the closure Jacobian
+    (Eq. (L3), lengths over :attr:`SingleLoop.scale`), scaled so that the driver's share is 1."""
+    phi = np.atleast_2d(np.asarray(phi, dtype=float))
+    jacobian = _stacked_jacobian(loop, *_stacked_transforms(loop, phi))
+    jacobian[:, :3] /= loop.scale
+    kernel = np.linalg.svd(jacobian)[2][:, -1]
+    return kernel / kernel[:, driver : driver + 1]
+
+
+def point_paths(loop: SingleLoop, phi: ArrayLike, link: int, point: ArrayLike) -> NDArray[np.float64]:
+    """Positions ``(m, 3)`` of a point fixed to ``link`` (world coordinates at home) at the poses ``phi`` ``(m, n)``
+    (:meth:`LoopMotion.path`, all poses at once)."""
+    rotation, translation = _stacked_transforms(loop, np.atleast_2d(np.asarray(phi, dtype=float)))
+    return rotation[:, link] @ np.asarray(point, dtype=float) + translation[:, link]

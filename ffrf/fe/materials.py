@@ -30,12 +30,16 @@ class Material:
         Mass density in kg/m^3, > 0.
     name : str
         Label used in error messages and summaries.
+    strength : float or None
+        Stress (Pa) beyond which the material breaks (tensile strength), compared with the assembled links' peak
+        von Mises stress (:mod:`ffrf.output.verification`); None: unknown, the comparison is skipped.
     """
 
     E: float
     nu: float
     rho: float
     name: str = "material"
+    strength: float | None = None
 
     def __post_init__(self) -> None:
         for label, value in (("E", self.E), ("nu", self.nu), ("rho", self.rho)):
@@ -50,6 +54,11 @@ class Material:
             raise MaterialError(
                 f"Material {self.name!r}: density rho={self.rho!r} kg/m^3 must be > 0 "
                 "(give it in kg/m^3, e.g. 450.0 for printed PLA)"
+            )
+        if self.strength is not None and not (isinstance(self.strength, (int, float)) and self.strength > 0.0):
+            raise MaterialError(
+                f"Material {self.name!r}: strength={self.strength!r} Pa must be a number > 0 "
+                "(give it in Pa, e.g. 53e6 for PLA), or leave it out"
             )
         if not -1.0 < self.nu < 0.5:
             raise MaterialError(
@@ -68,9 +77,9 @@ class Material:
         return self.E * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu))
 
 
-PLA = Material(1.2e9, 0.33, 450.0, "PLA (printed, 15% infill)")
-RIGID = Material(1e15, 0.33, 1250.0, "ideally rigid")
 #: Tensile strength of PLA (Pa): 53 MPa at break, NatureWorks Ingeo 4043D technical data sheet (the 3D-printing
 #: filament grade; ASTM D882 on injection-moulded bars). A part printed at 15 % infill fails at a lower stress in
 #: the homogenised sense of :data:`PLA`, so a stress above it is conclusive and one below it is not.
 PLA_TENSILE_STRENGTH = 53e6
+PLA = Material(1.2e9, 0.33, 450.0, "PLA (printed, 15% infill)", strength=PLA_TENSILE_STRENGTH)
+RIGID = Material(1e15, 0.33, 1250.0, "ideally rigid")

@@ -11,7 +11,14 @@ from scipy.integrate import cumulative_simpson
 
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["cumulative_integral", "element_work", "energy_balance"]
+__all__ = [
+    "cumulative_integral",
+    "element_work",
+    "energy_balance",
+    "energy_scale",
+    "relative_balance",
+    "work_quadrature_error",
+]
 
 
 def cumulative_integral(values: NDArray, x: NDArray) -> NDArray[np.float64]:
@@ -74,3 +81,43 @@ def energy_balance(
         work = work + out["energy_elements_work"]
     out["energy_balance_residual"] = work - stored - dissipated
     return out
+
+
+def energy_scale(sensors: dict[str, NDArray], floor: float = 0.0) -> float:
+    r"""The energy a run moves (J), the scale its balance is judged against (Eq. (C2) of ``docs/formulation.md``):
+    the largest of the drive's absolute work :math:`\int |\tau\, d\theta|` (trapezoids over the rows), the force
+    elements' (the sum of the magnitudes of their work's increments), the dissipated energy and the ranges of the
+    kinetic, potential and strain energies, and ``floor``. Unlike the drive's net work it is not zero where the
+    drive does no net work, and it is zero only where nothing moves at all."""
+    terms = [floor]
+    if "driving_torque" in sensors and len(sensors["driving_torque"]) > 1:
+        torque, angle = sensors["driving_torque"], sensors["drive_angle"]
+        terms.append(float(np.sum(np.abs(0.5 * (torque[1:] + torque[:-1]) * np.diff(angle)))))
+    if "energy_elements_work" in sensors:
+        terms.append(float(np.sum(np.abs(np.diff(sensors["energy_elements_work"])))))
+    if "energy_dissipated" in sensors:
+        terms.append(float(np.max(np.abs(sensors["energy_dissipated"]))))
+    for kind in ("kinetic", "potential", "strain"):
+        if f"energy_{kind}" in sensors:
+            terms.append(float(np.ptp(sensors[f"energy_{kind}"])))
+    return max(terms)
+
+
+def relative_balance(residual: NDArray, scale: float) -> float:
+    """``max |residual| / scale``; where the scale is zero (nothing moved) 0 for a zero residual, else infinity:
+    never the 0/0 of a residual relative to a drive that does no work."""
+    largest = float(np.max(np.abs(residual))) if len(residual) else 0.0
+    if scale > 0.0:
+        return largest / scale
+    return 0.0 if largest == 0.0 else float("inf")
+
+
+def work_quadrature_error(sensors: dict[str, NDArray]) -> float:
+    """An estimate (J) of the error of the drive's work integrated over the output rows: the largest difference,
+    over the rows, between the cumulative Simpson integral the balance uses and trapezoids (which bounds the
+    trapezoids' error, and Simpson's, fourth order, generously); 0 without a drive."""
+    if "driving_torque" not in sensors or len(sensors["driving_torque"]) < 3:
+        return 0.0
+    torque, angle = sensors["driving_torque"], sensors["drive_angle"]
+    trapezoids = np.concatenate([[0.0], np.cumsum(0.5 * (torque[1:] + torque[:-1]) * np.diff(angle))])
+    return float(np.max(np.abs(cumulative_integral(torque, angle) - trapezoids)))

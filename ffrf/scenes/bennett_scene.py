@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ffrf.fe.materials import PLA, RIGID, Material
+from ffrf.output.path_distance import ExactCurve
 from ffrf.scenes.assembly import assemble
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, linkage_description
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
@@ -113,6 +114,19 @@ class BennettScene(LinkageScene):
     def ideal_coupler_curve(self, n: int = 4000) -> NDArray[np.float64]:
         """``n`` points of the ideal coupler curve over one revolution from the start (motion polynomial)."""
         return self.ideal_coupler_points(self.start_angle + np.linspace(0.0, 2 * np.pi, n, endpoint=False))
+
+    def ideal_coupler_exact(self, n: int = 720) -> ExactCurve:
+        """The ideal coupler curve over one revolution from the start, ``n`` samples and the motion polynomial at
+        any drive angle between them (for :func:`ffrf.output.path_distance.distance_to_curve`)."""
+        linkage = self.linkage
+        point = linkage.coupler_point()
+
+        def exact(angles: NDArray[np.float64], arcs: NDArray[np.int64]) -> NDArray[np.float64]:
+            t = linkage.parameter_from_joint(linkage.home_theta[3] - angles, joint=3)
+            return linkage.coupler_pose(t).act(point)
+
+        angles = self.start_angle + np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        return ExactCurve(angles, self.ideal_coupler_points(angles), 2 * np.pi, exact)
 
 
 def _bore_errors(variant: str) -> tuple[BoreError, ...]:

@@ -331,7 +331,14 @@ def _fe_model(entry: dict, base: Path, where: str) -> tuple[FEModel | ExternalFE
     if "matrices" in entry:
         return matrices_model(entry["matrices"], base, entry["name"], where), None
     m = entry["material"]
-    material = Material(float(m["E"]), float(m["nu"]), float(m["rho"]), name=m.get("name", f"{entry['name']} material"))
+    strength = None if m.get("strength") is None else float(m["strength"])
+    material = Material(
+        float(m["E"]),
+        float(m["nu"]),
+        float(m["rho"]),
+        name=m.get("name", f"{entry['name']} material"),
+        strength=strength,
+    )
     mesh, geometry = _mesh(entry, base, where)
     return FEModel.from_tet_mesh(mesh, material, entry.get("order", 2)), geometry
 

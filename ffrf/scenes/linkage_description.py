@@ -293,7 +293,8 @@ def linkage_description(
             {
                 "name": f"link{k}",
                 "parametric": {"axes": axes, "h": o.h, "mount": k == 0} | ({"design": design} if design else {}),
-                "material": {"E": o.material.E, "nu": o.material.nu, "rho": o.material.rho, "name": o.material.name},
+                "material": {"E": o.material.E, "nu": o.material.nu, "rho": o.material.rho, "name": o.material.name}
+                | ({} if o.material.strength is None else {"strength": o.material.strength}),
                 "order": o.order,
                 "modes": o.n_modes,
                 "interfaces": [{"name": i, "group": i} for i in interfaces],

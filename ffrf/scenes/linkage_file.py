@@ -16,7 +16,8 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
     driver = 0                         # the driven joint
     tool_link = 3                      # the coupler: its joint points' mean is the coupler point
     start_angle_deg = 0.0              # driver rotation from home at the start (default: a regular pose)
-    material = {E = 1.2e9, nu = 0.33, rho = 450.0, name = "PLA"}   # default PLA
+    material = {E = 1.2e9, nu = 0.33, rho = 450.0, name = "PLA", strength = 53e6}   # default PLA (strength: Pa,
+                                       #   optional; the assembled links' peak stress is checked against it)
     h = 0.006                          # tetrahedron edge (m), order = 2, modes = 4
     drive = {rpm = 1.0, ramp_time = 1.0}
     revolutions = 1.0

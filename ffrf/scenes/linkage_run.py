@@ -12,7 +12,7 @@ N and N m, :mod:`ffrf.system.reactions`; names in the metadata's ``joint_reactio
 coupler point at the same drive angle comes from the scene's rigid nominal loop
 (:meth:`ffrf.scenes.linkage_scene.LinkageScene.ideal_coupler_points`; the motion polynomial for the
 paper's Bennett), giving ``coupler_deviation`` (same drive angle) and ``coupler_distance_to_path``
-(closest point of the ideal curve).
+(closest point of the exact ideal curve, :func:`ffrf.output.path_distance.distance_to_curve`, Eq. (C1)).
 
 An energy balance closes the books: the drive's work against the changes of kinetic,
 gravity and strain energy plus the damping dissipation (``energy_balance_residual``).
@@ -35,8 +35,11 @@ from numpy.typing import NDArray
 
 from ffrf.errors import Interrupted, NewtonDivergence, StaticDivergence
 from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
+from ffrf.output.energy_balance import energy_scale, relative_balance
+from ffrf.output.path_distance import distance_to_curve
 from ffrf.output.sensors import path_sensors, scene_sensors
 from ffrf.output.tables import write_results as write_tables
+from ffrf.output.verification import Verification, verify_run, weight_energy
 from ffrf.reduction.craig_bampton import CraigBamptonBasis
 from ffrf.scenes.assembly import assemble, dynamic_step, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
@@ -75,10 +78,13 @@ class LinkageResult:
     metadata: dict = field(default_factory=dict)
     assembly: AssemblyStress | None = None
     critical: CriticalPose | None = None  # with stability: the fold, or the least stable output
+    verification: Verification | None = None  # the run's checks of itself (ffrf.output.verification)
 
     def summary(self) -> dict[str, float]:
         """The largest coupler deviation (same drive angle), distance to the ideal path, ``|driving torque|``, and,
-        when their sensors were evaluated (``sensors="all"``), constraint residual and relative energy balance."""
+        when their sensors were evaluated (``sensors="all"``), constraint residual and energy balance: its largest
+        residual relative to the energy scale of Eq. (C2) (:func:`ffrf.output.energy_balance.energy_scale`, with the
+        metadata's ``energy_floor_j``), never the 0/0 of a residual relative to a drive that does no work."""
         s = self.sensors
         out = {
             "max_coupler_deviation_m": float(np.max(np.linalg.norm(s["coupler_deviation"], axis=1))),
@@ -87,9 +93,8 @@ class LinkageResult:
         }
         if "constraint_residual" in s:
             out["max_constraint_residual"] = float(np.max(s["constraint_residual"]))
-            out["energy_balance_relative"] = float(
-                np.max(np.abs(s["energy_balance_residual"])) / max(np.max(np.abs(s["energy_drive_work"])), 1e-300)
-            )
+            scale = energy_scale(s, float(self.metadata.get("energy_floor_j", 0.0)))
+            out["energy_balance_relative"] = relative_balance(s["energy_balance_residual"], scale)
         return out
 
 
@@ -142,20 +147,6 @@ def _joints(scene: LinkageScene) -> list[MarkerJoint]:
     return [c for c in scene.system.constraints if isinstance(c, MarkerJoint) and c.name != "clamp"]
 
 
-def _distance_to_polyline(points: NDArray, curve: NDArray) -> NDArray[np.float64]:
-    start, end = curve, np.roll(curve, -1, axis=0)
-    seg = end - start
-    seg2 = np.einsum("ij,ij->i", seg, seg)
-    out = np.empty(len(points))
-    chunk = 32  # points per vectorised block: (32, segments, 3) temporaries of a few MB
-    for k in range(0, len(points), chunk):
-        rel = points[k : k + chunk, None, :] - start[None]
-        s = np.clip(np.einsum("cij,ij->ci", rel, seg) / seg2, 0.0, 1.0)
-        gap = rel - s[..., None] * seg
-        out[k : k + chunk] = np.sqrt(np.min(np.einsum("cij,cij->ci", gap, gap), axis=1))
-    return out
-
-
 def evaluate_sensors(
     scene: LinkageScene, time: NDArray, q: NDArray, qd: NDArray | None, multipliers: NDArray, which: str = "all"
 ) -> dict[str, NDArray]:
@@ -175,8 +166,8 @@ def evaluate_sensors(
     ideal = scene.ideal_coupler_points(out["drive_angle"])
     out["coupler_ideal"] = ideal
     out["coupler_deviation"] = out["coupler_point"] - ideal
-    curve = scene.ideal_coupler_curve()
-    out["coupler_distance_to_path"] = _distance_to_polyline(out["coupler_point"], curve)
+    # The closest point of the exact ideal curve (Eq. (C1)), not of a polyline through its samples (issue #32).
+    out["coupler_distance_to_path"] = distance_to_curve(out["coupler_point"], scene.ideal_coupler_exact()).distance
     return out
 
 
@@ -273,6 +264,7 @@ def run_linkage(
         numpy=np.__version__,
         n_coordinates=scene.system.n_coordinates,
         n_constraints=scene.system.n_constraints,
+        energy_floor_j=weight_energy(scene),
         modes_per_link=[link.reduction.n_modes for link in scene.links],
         assembly=stress.as_dict(),
     )
@@ -281,6 +273,10 @@ def run_linkage(
     out.metadata["near_dead_poses"] = near_dead_poses(
         scene, values["drive_angle"], np.linalg.norm(values["coupler_deviation"], axis=1)
     )
+    out.verification = verify_run(out, scene)
+    out.metadata["verification"] = out.verification.as_dict()
+    for warning in out.verification.warnings:
+        log.warning(warning)
     if stability:
         out.metadata["stability"] = stability_summary(
             values["stability_squared_frequencies"], np.degrees(values["drive_angle"]), "drive_angle_deg"

@@ -23,6 +23,7 @@ from ffrf.errors import SceneError
 from ffrf.fe.interfaces import boundary_triangles
 from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.output.clearance import Clearance, link_clearance
+from ffrf.output.path_distance import ExactCurve
 from ffrf.scenes.builder import Scene, SceneBody, build_scene
 from ffrf.scenes.linkage_description import (
     BoreError,
@@ -35,7 +36,15 @@ from ffrf.scenes.linkage_description import (
 )
 from ffrf.scenes.scene_cache import PROCESS_CACHE, SceneCache, content_key
 from ffrf.system.drives import CosineRamp
-from kinematics import LoopFoldError, SingleLoop, follow_driver, trace_motion
+from kinematics import (
+    LoopFoldError,
+    SingleLoop,
+    close_near,
+    follow_driver,
+    motion_tangents,
+    point_paths,
+    trace_motion,
+)
 
 __all__ = ["LinkageScene", "build_linkage"]
 
@@ -131,6 +140,31 @@ class LinkageScene(Scene):
             return motion.path(self.tool_link, self.home_coupler_point())
 
         return self._kept("ideal coupler curve", n, curve)
+
+    def ideal_coupler_exact(self, n: int = 720) -> ExactCurve:
+        """The ideal coupler curve over one revolution of the driver from the start, exactly: ``n`` samples at equal
+        drive angles (with the rigid loop's joint angles there, kept as :meth:`ideal_coupler_curve`) and, between
+        them, the rigid loop closed at any drive angle from the sample before it (:func:`kinematics.close_near`),
+        for :func:`ffrf.output.path_distance.distance_to_curve`."""
+        sign = drive_sign(self.driver, self.loop.n)
+        home = self.home_coupler_point()
+
+        def samples() -> NDArray[np.float64]:
+            motion = trace_motion(self.loop, self.driver, n_poses=n, revolution=sign * 2 * np.pi, start=self.start_phi)
+            tangents = motion_tangents(self.loop, self.driver, motion.phi)
+            return np.column_stack(
+                [sign * motion.driver_angles, motion.phi, tangents, motion.path(self.tool_link, home)]
+            )
+
+        table = self._kept("ideal coupler samples", n, samples)
+        joints = self.loop.n
+        phi, tangents = table[:, 1 : 1 + joints], table[:, 1 + joints : 1 + 2 * joints]
+
+        def exact(angles: NDArray[np.float64], arcs: NDArray[np.int64]) -> NDArray[np.float64]:
+            closed = close_near(self.loop, self.driver, phi[arcs], sign * angles, tangents[arcs])
+            return point_paths(self.loop, closed, self.tool_link, home)
+
+        return ExactCurve(table[:, 0], table[:, 1 + 2 * joints :], 2 * np.pi, exact)
 
 
 def _plain(error: BoreError) -> dict:

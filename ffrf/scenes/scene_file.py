@@ -37,7 +37,7 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
                                       #   joint_point = [...]}, {name = "b", ...}], h = 0.006, mount = false,
                                       #   design = {arm_width = 0.016, arm_thickness = 0.012}}  (m, LinkDesign)
     unit = "mm"                       # optional, scales the mesh to metres
-    material = {E = 1.2e9, nu = 0.33, rho = 450.0}
+    material = {E = 1.2e9, nu = 0.33, rho = 450.0}   # optional strength = 53e6 (Pa): the assembly is checked
     order = 2                         # default 2: linear tetrahedra are too stiff in bending
     modes = 4
     reduction = "craig_bampton"       # default; or "free_free": modes = the lowest elastic free-free modes (>= 1),
@@ -137,6 +137,7 @@ from ffrf.errors import Interrupted, NewtonDivergence, SceneError, StaticDiverge
 from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
 from ffrf.output.sensors import node_sensors, scene_sensors
 from ffrf.output.tables import write_results
+from ffrf.output.verification import verify_scene_run
 from ffrf.scenes.assembly import assemble, quasi_static_step, start_state, starts_static
 from ffrf.scenes.builder import Scene, build_scene
 from ffrf.scenes.linkage_file import load_linkage
@@ -231,6 +232,7 @@ def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
     sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
     if scene.settings.get("stability", False):
         metadata["stability"] = _monitor_stability(scene, run, sensors, directory)
+    metadata["verification"] = verify_scene_run(scene, sensors, metadata).as_dict()
     metadata["wall_time_s"] = wallclock.perf_counter() - started
     if stopped is not None:
         reason = "interrupted" if isinstance(stopped, Interrupted) else str(stopped)

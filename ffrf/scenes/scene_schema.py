@@ -61,6 +61,7 @@ MATERIAL = {
     "E": Key("number", True, positive),
     "nu": Key("number", True, between(-1.0, 0.5, closed=False)),
     "rho": Key("number", True, positive),
+    "strength": Key("number", False, positive),
 }
 LINK_AXIS = {
     "name": Key("string", True),

@@ -158,3 +158,30 @@ def test_bad_input_is_named():
         load_model("bennet")
     with pytest.raises(ValueError, match="driver must be a joint index"):
         trace_motion(loop, driver=4)
+
+
+def test_loops_closed_near_samples_are_the_closed_form_bennett_poses(rng):
+    """close_near, all poses at once from the sample before each angle (72 samples of a revolution), gives the
+    Bennett linkage's closed-form joint angles at any driver angle (measured 3.6e-15 rad) and the coupler's points
+    of point_paths those of the motion polynomial (measured 2.1e-16 m); its tangents are the kernel of the closure
+    Jacobian with the driver's share 1."""
+    from kinematics import close_near, motion_tangents, point_paths
+
+    bennett = BennettLinkage.paper()
+    loop = SingleLoop(bennett.axes)
+    motion = trace_motion(loop, driver=3, n_poses=72)
+    step = motion.driver_angles[1] - motion.driver_angles[0]
+    seeds = rng.integers(0, 72, 500)
+    angles = motion.driver_angles[seeds] + rng.uniform(0.0, step, 500)
+    phi = close_near(loop, 3, motion.phi[seeds], angles)
+    theta = bennett.joint_angles_from_driver(bennett.home_theta[3] + angles, joint=3)
+    assert np.max(np.abs(wrap_angle(theta - bennett.home_theta - phi))) < 1e-12
+    points = point_paths(loop, phi, 2, bennett.coupler_point())
+    truth = bennett.coupler_pose(bennett.parameter_from_joint(bennett.home_theta[3] + angles, 3)).act(
+        bennett.coupler_point()
+    )
+    assert np.max(np.abs(points - truth)) < 1e-13
+    tangents = motion_tangents(loop, 3, phi[:20])
+    assert np.allclose(tangents[:, 3], 1.0)
+    for p, tangent in zip(phi[:20], tangents, strict=True):
+        assert np.max(np.abs(loop.jacobian(p) @ tangent)) < 1e-12
