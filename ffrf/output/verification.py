@@ -239,6 +239,20 @@ def _energy_check(sensors: dict, floor: float) -> Check:
     )
 
 
+def _near_dead_cause(poses) -> str:
+    """Where the deviation from the rigid motion peaks at a near-dead pose the run passed (metadata
+    ``near_dead_poses``, :func:`ffrf.scenes.linkage_steps.near_dead_poses`), the words that name it as the cause."""
+    worst = max(poses, key=lambda pose: pose["max_coupler_deviation_near_m"], default=None)
+    if worst is None or worst["max_coupler_deviation_near_m"] <= worst["max_coupler_deviation_elsewhere_m"]:
+        return ""
+    return (
+        f"; it peaks at {worst['max_coupler_deviation_near_m']:.3g} m within 2 deg of the near-dead pose at drive "
+        f"angle {worst['drive_angle_deg']:.4g} deg, where joint {worst['joint']} turns {worst['ratio']:.3g} times "
+        f"faster than the driver ({worst['max_coupler_deviation_elsewhere_m']:.3g} m elsewhere): the rigid motion is "
+        "ill-conditioned there and the load's strain is amplified (docs/hard_cases.md); drive another joint"
+    )
+
+
 def verify_run(result: Any, scene: Any) -> Verification:
     """The checks of the module docstring for a linkage run (:class:`ffrf.scenes.linkage_run.LinkageResult` of
     :class:`ffrf.scenes.linkage_scene.LinkageScene`); those whose sensors the run did not evaluate are left out."""
@@ -287,7 +301,7 @@ def verify_run(result: Any, scene: Any) -> Verification:
                 SAG_FACTOR * sag + SOLVER_TOLERANCE * max(1.0, length),
                 "m",
                 f"largest coupler deviation from the rigid motion against {SAG_FACTOR:g} times the gravity sag "
-                f"{sag:.3g} m of the stiff links",
+                f"{sag:.3g} m of the stiff links" + _near_dead_cause(metadata.get("near_dead_poses", ())),
             )
         )
     else:

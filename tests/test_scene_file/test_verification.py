@@ -201,3 +201,21 @@ def test_each_check_fails_where_the_run_misses_it_and_only_there():
     assert failed(0.0, None, 0.0, torque_offset=0.005) == ["energy_balance"]
     assert failed(1e-6, None, 0.0) == ["stiff_follows_rigid"]
     assert failed(0.0, 1e-6, 1e-6) == ["step_error"]
+
+
+def test_a_stiff_deviation_that_peaks_at_a_near_dead_pose_is_named_as_its_cause():
+    """The verdict of a stiff run off its rigid motion names the near-dead pose where the deviation peaks (the issue's
+    6R: joint 5 turns 41.6 times faster than the driver at -16.45 deg), and says nothing where the peak is elsewhere."""
+    from ffrf.output.verification import _near_dead_cause
+
+    pose = {
+        "drive_angle_deg": -16.45,
+        "joint": 5,
+        "ratio": 41.6,
+        "max_coupler_deviation_near_m": 3.4e-3,
+        "max_coupler_deviation_elsewhere_m": 1e-8,
+    }
+    cause = _near_dead_cause([pose])
+    assert "-16.45 deg" in cause and "joint 5 turns 41.6 times faster" in cause
+    assert _near_dead_cause([pose | {"max_coupler_deviation_elsewhere_m": 5e-3}]) == ""
+    assert _near_dead_cause([]) == ""
