@@ -69,16 +69,24 @@ def exudyn_eigenmodes(name: str) -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize("name", CASES)
 def test_frequencies_and_modes_equal_exudyns(name):
     """Measured: frequencies to 2e-12 relative (Exudyn's ARPACK starts from a random vector, so its
-    last digits vary from run to run); every cluster of repeated frequencies spans Exudyn's modes to
+    last digits vary from run to run: in a run where it converged less far, 2.3e-10, at 1 % of the residual bound
+    of its own eigenpair, which the test then takes); every cluster of repeated frequencies spans Exudyn's modes to
     2e-9, or, where Exudyn's modes are less accurate than that in a run, to the Davis-Kahan bound of their
     own eigen-residual: sin(angle) <= |K phi - lambda M phi|_{M^-1} / gap (M-norm of the part of Exudyn's
     modes outside ours; seen: 3.5e-9 outside against a bound of 1.7e-7 for the C3D4 block's first pair)."""
     model = abaqus(name)
     ours = free_free_basis(model, CASES[name])
     theirs, frequencies = exudyn_eigenmodes(name)
-    np.testing.assert_allclose(ours.frequencies_hz, frequencies, rtol=1e-10)
     eigenvalues = (2.0 * np.pi * frequencies) ** 2
     mass = scipy.sparse.linalg.splu(scipy.sparse.csc_matrix(model.mass))
+    # an exact eigenvalue lies within |K phi - lambda M phi|_{M^-1} / |phi|_M of Exudyn's lambda (Kahan's residual
+    # bound): where Exudyn's run converged less far than 1e-10, ours must still lie inside that bound
+    residual = model.stiffness @ theirs - (model.mass @ theirs) * eigenvalues
+    bound = np.sqrt(np.einsum("ij,ij->j", residual, mass.solve(residual))) / np.sqrt(
+        np.einsum("ij,ij->j", theirs, model.mass @ theirs)
+    )
+    ours_eigenvalues = (2.0 * np.pi * ours.frequencies_hz) ** 2
+    assert np.all(np.abs(ours_eigenvalues - eigenvalues) <= np.maximum(2e-10 * eigenvalues, bound))
     for cluster in frequency_clusters(frequencies, rel_gap=1e-8):
         psi, phi = ours.basis[:, cluster], theirs[:, cluster]
         outside = phi - psi @ (psi.T @ (model.mass @ phi))
