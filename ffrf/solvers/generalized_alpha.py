@@ -48,7 +48,7 @@ from ffrf.errors import Interrupted, NewtonDivergence, SingularIterationMatrix
 from ffrf.numerics.rank_revealing import WELL_CONDITIONED, factor
 from ffrf.solvers.common import IntegrationResult, consistent_accelerations, extrapolation_weights
 from ffrf.solvers.newton_kernels import CONVERGED, EXHAUSTED, NOT_FINITE, REFACTOR, alpha_iterations, should_refactor
-from ffrf.solvers.step_control import StepControl, local_error
+from ffrf.solvers.step_control import DisplacementScales, StepControl, displacement_error, local_error
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import PackedSystem, contiguous, newton_model
 
@@ -317,63 +317,6 @@ def _position_error(par: AlphaParameters, h: float, new: _State, old: _State, po
     return float(np.abs(local_error(par.beta, h, new.qdd[positions], old.qdd[positions])).max(initial=0.0))
 
 
-@dataclass(frozen=True)
-class _DisplacementScales:
-    """What turns the (G5) estimates of all bodies' coordinates into metres (Eq. (G8)), gathered once per run so
-    that a step's measure is a few array operations: the indices of the positions ``R`` (bodies x 3) and Euler
-    parameters ``p`` (bodies x 4), each body's radius of gyration about its frame's origin (m), the indices of the
-    modal coordinates and a block-diagonal ``F`` with ``|F_b e_b|^2 = e_b^T (Psi^T M Psi / m) e_b`` per body, and
-    where each body's modes start among them (bodies with modes only)."""
-
-    positions: NDArray
-    rotations: NDArray
-    radii: NDArray
-    modal: NDArray
-    factor: NDArray
-    mode_starts: NDArray
-
-    @classmethod
-    def of(cls, system: MultibodySystem) -> _DisplacementScales:
-        offsets = [int(o) for o in system.offsets[:-1]]
-        radii: list[float] = []
-        modal: list[int] = []
-        blocks: list[NDArray] = []
-        starts: list[int] = []
-        for body, offset in zip(system.bodies, offsets, strict=True):
-            mm = body.moments
-            mass = max(mm.mass, np.finfo(float).tiny)
-            radii.append(np.sqrt(max(float(np.trace(mm.x2)), 0.0) / mass))
-            if mm.n_modes:
-                values, vectors = np.linalg.eigh(mm.reduced_mass / mass)  # its square root, even if semidefinite
-                starts.append(len(modal))
-                modal.extend(range(offset + 7, offset + 7 + mm.n_modes))
-                blocks.append(np.sqrt(np.maximum(values, 0.0))[:, None] * vectors.T)
-        return cls(
-            np.array([[o + i for i in range(3)] for o in offsets], dtype=np.int64),
-            np.array([[o + 3 + i for i in range(4)] for o in offsets], dtype=np.int64),
-            np.array(radii),
-            np.array(modal, dtype=np.int64),
-            scipy.linalg.block_diag(*blocks) if blocks else np.zeros((0, 0)),
-            np.array(starts, dtype=np.int64),
-        )
-
-
-def _displacement_error(par: AlphaParameters, h: float, new: _State, old: _State, scales: _DisplacementScales) -> float:
-    r"""Eq. (G8): the largest local error estimate (G5) of a step, every coordinate of every body in metres: the
-    position's largest component, the rotation's :math:`2|e_p|` times the radius of gyration, and the modal
-    coordinates' mass-weighted displacement :math:`\sqrt{e_\zeta^T \Psi^T M \Psi e_\zeta / m}` (the root mean square
-    over the body's material of the elastic displacement the error makes)."""
-    error = local_error(par.beta, h, new.qdd, old.qdd)
-    largest = max(
-        float(np.abs(error[scales.positions]).max(initial=0.0)),
-        float((2.0 * scales.radii * np.linalg.norm(error[scales.rotations], axis=1)).max(initial=0.0)),
-    )
-    if scales.modal.size:
-        squares = (scales.factor @ error[scales.modal]) ** 2
-        largest = max(largest, float(np.sqrt(np.add.reduceat(squares, scales.mode_starts).max())))
-    return largest
-
-
 def precision_floor(par: AlphaParameters, h: float, q: NDArray, qd: NDArray) -> float:
     """The smallest Newton ``tolerance`` double precision can meet in a step of length ``h`` from
     positions ``q`` and velocities ``qd`` (the tests of :func:`_step`, Eq. (G3)). One unit in the last
@@ -474,7 +417,7 @@ def generalized_alpha(
     positions = np.concatenate([np.arange(s, s + 3) for s in system.offsets[:-1]])  # each body's R (m)
     if error_tolerance is not None and not error_tolerance > 0.0:
         raise ValueError(f"error_tolerance must be positive (m) or None, got {error_tolerance}")
-    scales = _DisplacementScales.of(system) if error_tolerance is not None else None
+    scales = DisplacementScales.of(system) if error_tolerance is not None else None
     position_errors: list[float] = []
     started = wallclock.perf_counter()
 
@@ -536,7 +479,7 @@ def generalized_alpha(
                         failure = (t_part, h_part, diagnostics)
                         break
                     if scales is not None and error_tolerance is not None:
-                        estimate = _displacement_error(par, h_part, new, state, scales)
+                        estimate = displacement_error(par.beta, h_part, new.qdd, state.qdd, scales)
                         if estimate > error_tolerance and parts < MAX_PARTS:
                             failure = (t_part, h_part, f"local error estimate (G8) {estimate:.3g} m")
                             break

@@ -114,11 +114,10 @@ def test_modal_error_in_metres_is_the_nodal_rms_displacement():
     """Eq. (G8)'s modal term against the full nodal model: an estimate e_zeta of the modal coordinates alone
     measures sqrt(u^T M u / m) with the nodal displacements u = Psi e_zeta and the FE mass matrix M (m = the bar's
     mass, the sum of M's translational rows); a position estimate alone measures its largest component."""
-    from types import SimpleNamespace
-
     from body_fixtures import free_bar
 
-    from ffrf.solvers.generalized_alpha import AlphaParameters, _displacement_error, _DisplacementScales
+    from ffrf.solvers.generalized_alpha import AlphaParameters
+    from ffrf.solvers.step_control import DisplacementScales, displacement_error
     from ffrf.system.multibody import MultibodySystem
 
     model, psi, _, body = free_bar()
@@ -131,10 +130,9 @@ def test_modal_error_in_metres_is_the_nodal_rms_displacement():
     u = psi @ (scale * change[7:])
     mass = model.mass.sum() / 3.0
     expected = np.sqrt(u @ (model.mass @ u) / mass)
-    zero = SimpleNamespace(qdd=np.zeros_like(change))
-    scales = _DisplacementScales.of(system)
-    measured = _displacement_error(par, h, SimpleNamespace(qdd=change), zero, scales)
+    scales = DisplacementScales.of(system)
+    measured = displacement_error(par.beta, h, change, np.zeros_like(change), scales)
     assert measured == pytest.approx(expected, rel=1e-9)
     change[:] = 0.0
     change[:3] = [1.0, -3.0, 2.0]
-    assert _displacement_error(par, h, SimpleNamespace(qdd=change), zero, scales) == pytest.approx(3.0 * abs(scale))
+    assert displacement_error(par.beta, h, change, np.zeros_like(change), scales) == pytest.approx(3.0 * abs(scale))
