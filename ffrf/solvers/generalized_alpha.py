@@ -458,6 +458,7 @@ def generalized_alpha(
 
     if step_control is None:
         carried = 0  # parts the error control (G8) asks the next step to start from (0: the step_limit's alone)
+        capped = 0  # parts accepted above the tolerance of (G8) because the step was already in MAX_PARTS parts
         for k in range(1, n_steps + 1):
             t = k * h
             base = 1 if step_limit is None else max(1, int(np.ceil(h / step_limit(t - h, t) - 1e-9)))
@@ -483,6 +484,7 @@ def generalized_alpha(
                         if estimate > error_tolerance and parts < MAX_PARTS:
                             failure = (t_part, h_part, f"local error estimate (G8) {estimate:.3g} m")
                             break
+                        capped += estimate > error_tolerance
                         largest, slowest = max(largest, estimate), max(slowest, count)
                     before = (*before, (state.qdd, state.lam, h_part))[-PREDICTOR_DEGREE:]
                     position_errors.append(_position_error(par, h_part, new, state, positions))
@@ -513,6 +515,14 @@ def generalized_alpha(
             if k % output_every == 0 or k == n_steps:
                 record(t, state)
             report(t)
+        if capped:  # said, not hidden: these parts' error is larger than asked for
+            log.warning(
+                "%d step parts kept a local error estimate (G8) above error_tolerance = %.3g m in %d parts, the most "
+                "allowed: shorten the step or raise the tolerance",
+                capped,
+                error_tolerance,
+                MAX_PARTS,
+            )
         return result(True)
 
     outputs = list(np.minimum(h * output_every * np.arange(1, int(np.ceil(n_steps / output_every)) + 1), t_end))

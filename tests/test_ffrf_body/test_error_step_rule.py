@@ -136,3 +136,13 @@ def test_modal_error_in_metres_is_the_nodal_rms_displacement():
     change[:] = 0.0
     change[:3] = [1.0, -3.0, 2.0]
     assert displacement_error(par.beta, h, change, np.zeros_like(change), scales) == pytest.approx(3.0 * abs(scale))
+
+
+def test_a_tolerance_beyond_the_cap_is_said(caplog):
+    """A tolerance no part of 1/MAX_PARTS of the drive step meets (the 0.16 ms part's estimate is about 3.6e-8 m):
+    the parts are kept at the cap and the run says so."""
+    system, q0, qd0 = _start(0.01)
+    with caplog.at_level("WARNING", logger="ffrf.solvers.generalized_alpha"):
+        result = generalized_alpha(system, q0, qd0, 2 * H, H, rho_inf=RHO, error_tolerance=1e-9)
+    assert np.all(_parts(result) == MAX_PARTS)
+    assert "above error_tolerance" in caplog.text
