@@ -43,7 +43,13 @@ from ffrf.output.verification import Verification, verify_run, weight_energy
 from ffrf.reduction.craig_bampton import CraigBamptonBasis
 from ffrf.scenes.assembly import assemble, dynamic_step, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
-from ffrf.scenes.linkage_steps import dynamic_step_limit, near_dead_point, near_dead_poses, quasi_static_path_step
+from ffrf.scenes.linkage_steps import (
+    dynamic_error_tolerance,
+    dynamic_step_limit,
+    near_dead_point,
+    near_dead_poses,
+    quasi_static_path_step,
+)
 from ffrf.solvers.simulate import MODES, Run, simulate
 from ffrf.solvers.snap_through import SnapThrough, run_critical_pose, snap_summary
 from ffrf.solvers.stability import (
@@ -181,11 +187,14 @@ def run_linkage(
     t_end: float | None = None,
     stability: bool = False,
     sensors: str = "all",
+    error_tolerance: float | None = None,
 ) -> LinkageResult:
     """Assemble (static, with misalignment continuation), then run over the drive's ramp and
     revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
     generalized-alpha with ``step`` (s; default :func:`ffrf.scenes.assembly.dynamic_step`, 10 ms at 1 rpm) starting
-    from the assembled state at rest. ``t_end``
+    from the assembled state at rest, each step in more parts where its local error estimate exceeds
+    ``error_tolerance`` (m; default :func:`~ffrf.scenes.linkage_steps.dynamic_error_tolerance`, 1e-6 of the longest
+    link, Eq. (G8)). ``t_end``
     shortens the run (default: the scene's ramp plus revolutions). A run that stops raises the solver's error
     (:class:`ffrf.errors.StaticDivergence` or :class:`ffrf.errors.NewtonDivergence`; :class:`ffrf.errors.Interrupted`
     when ``progress`` asked it to stop, ``stopped.reason`` then ``"interrupted"``) with ``partial``, the
@@ -208,6 +217,7 @@ def run_linkage(
     assembled = wallclock.perf_counter()
     t_end = scene.t_end if t_end is None else float(t_end)
     step = dynamic_step(scene) if step is None else float(step)
+    tolerance = dynamic_error_tolerance(scene) if error_tolerance is None else error_tolerance
     try:
         run = simulate(
             scene.system,
@@ -222,6 +232,7 @@ def run_linkage(
             through_snaps=stability,
             static_path_step=quasi_static_path_step(scene) if mode == "quasi_static" and not stability else None,
             step_limit=dynamic_step_limit(scene) if mode == "dynamic" else None,
+            error_tolerance=tolerance if mode == "dynamic" else None,
         )
         stopped = None
     except (StaticDivergence, NewtonDivergence, Interrupted) as error:

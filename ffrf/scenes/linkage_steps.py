@@ -12,6 +12,10 @@ bound the steps (``docs/formulation.md``):
 * (S10) quasi-static: the path's own step from t turns the drive by at most
   :data:`~ffrf.scenes.assembly.MAX_DRIVE_STEP` and the fastest joint by at most :data:`MAX_JOINT_PATH_STEP`.
 
+* (G8) dynamic, from the solution: a part whose local error estimate (every coordinate in metres) exceeds
+  :func:`dynamic_error_tolerance` is redone in twice as many parts (the elastic vibration and whatever the rigid
+  loop's rates do not see).
+
 Both leave a loop whose joints turn at most twice as fast as its driver (the paper's Bennett: :math:`\sqrt3`) on
 the drive's own steps. A run that stops where the ratio is large names the near-dead point
 (:func:`near_dead_point`).
@@ -24,6 +28,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ffrf.output.verification import STEP_ERROR_RTOL, scene_length
 from ffrf.scenes.assembly import DRIVE_ANGLE_PER_STEP, MAX_DRIVE_STEP
 from ffrf.scenes.linkage_description import drive_sign
 from ffrf.scenes.linkage_scene import LinkageScene, _loop_content
@@ -34,6 +39,8 @@ __all__ = [
     "JOINT_ANGLE_PER_STEP",
     "MAX_JOINT_PATH_STEP",
     "NEAR_DEAD_RATIO",
+    "STEP_ERROR_FLOOR",
+    "dynamic_error_tolerance",
     "dynamic_step_limit",
     "joint_rate_profile",
     "near_dead_point",
@@ -50,6 +57,9 @@ JOINT_ANGLE_PER_STEP = 2.0 * DRIVE_ANGLE_PER_STEP
 MAX_JOINT_PATH_STEP = 2.0 * MAX_DRIVE_STEP
 #: A joint this many times faster than the driver makes a pose near-dead (:func:`near_dead_point`).
 NEAR_DEAD_RATIO = 10.0
+#: Smallest local error tolerance of a dynamic step (m, Eq. (G8)): a thousand times the Newton tolerance 1e-10 (m
+#: for a scene of at most 1 m), which bounds how well the accelerations that Eq. (G5) differences are known.
+STEP_ERROR_FLOOR = 1e-9
 #: Sampling of :func:`joint_rate_profile`: the fastest joint turns at most this much between samples (rad) ...
 PROFILE_JOINT_STEP = math.radians(2.0)
 #: ... and the driver at most this much (rad).
@@ -87,6 +97,13 @@ def dynamic_step_limit(scene: LinkageScene) -> Callable[[float, float], float]:
     """Eq. (G7): ``limit(t0, t1)``, the longest generalized-alpha step between t0 and t1 (s)."""
     profile = joint_rate_profile(scene)
     return lambda t0, t1: _limit(scene, profile, t0, t1, JOINT_ANGLE_PER_STEP)
+
+
+def dynamic_error_tolerance(scene: LinkageScene) -> float:
+    """Eq. (G8): the local error estimate a dynamic step may make (m), :data:`~ffrf.output.verification.STEP_ERROR_RTOL`
+    of the longest link (what the run's ``step_error`` self-check judges the median estimate against), at least
+    :data:`STEP_ERROR_FLOOR`."""
+    return max(STEP_ERROR_RTOL * scene_length(scene), STEP_ERROR_FLOOR)
 
 
 def quasi_static_path_step(scene: LinkageScene) -> Callable[[float], float]:

@@ -60,6 +60,7 @@ def simulate(
     through_snaps: bool = False,
     static_path_step: Callable[[float], float] | None = None,
     step_limit: Callable[[float, float], float] | None = None,
+    error_tolerance: float | None = None,
 ) -> Run:
     """``quasi_static``: equilibria at ``outputs`` equally spaced times, followed through intermediate
     ones at most ``max_static_step`` (s) apart, and with ``through_snaps`` on past folds of the equilibrium
@@ -68,7 +69,8 @@ def simulate(
 
     ``static_path_step`` (quasi-static without ``through_snaps``): the path on its own steps, the outputs solved from
     it (:func:`ffrf.solvers.static_solver.quasi_static`, Eq. (S10)); ``step_limit`` (dynamic): the longest step
-    between two times, each step done in as many parts as it needs (Eq. (G7))."""
+    between two times, each step done in as many parts as it needs (Eq. (G7)); ``error_tolerance`` (dynamic, m): the
+    local error estimate each part may make, more parts where it is larger (Eq. (G8); default ``None``, off)."""
     if mode == "quasi_static":
         times = np.linspace(0.0, t_end, outputs)
         snaps: tuple[SnapThrough, ...] = ()
@@ -100,6 +102,7 @@ def simulate(
                 output_every=output_stride(t_end, step, outputs),
                 progress=progress,
                 step_limit=step_limit,
+                error_tolerance=error_tolerance,
             )
         except (NewtonDivergence, Interrupted) as error:
             done = error.partial

@@ -1,13 +1,16 @@
-"""Step-size control of generalized-alpha by a local error estimate of the positions."""
+"""Step-size control of generalized-alpha by a local error estimate of the positions (Eqs. (G5), (G8))."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 from numpy.typing import NDArray
 
-__all__ = ["StepControl", "local_error"]
+from ffrf.system.multibody import MultibodySystem
+
+__all__ = ["DisplacementScales", "StepControl", "displacement_error", "local_error"]
 
 
 def local_error(beta: float, h: float, qdd_new: NDArray, qdd_old: NDArray) -> NDArray:
@@ -47,3 +50,60 @@ class StepControl:
     def next_step(self, h: float, ratio: float) -> float:
         factor = 2.0 if ratio <= 0.0 else min(2.0, max(0.2, 0.9 * ratio ** (-1.0 / 3.0)))
         return min(self.max_step, max(self.min_step, factor * h))
+
+
+@dataclass(frozen=True)
+class DisplacementScales:
+    """What turns the (G5) estimates of all bodies' coordinates into metres (Eq. (G8)), gathered once per run so
+    that a step's measure is a few array operations: the indices of the positions ``R`` (bodies x 3) and Euler
+    parameters ``p`` (bodies x 4), each body's radius of gyration about its frame's origin (m), the indices of the
+    modal coordinates and a block-diagonal ``F`` with ``|F_b e_b|^2 = e_b^T (Psi^T M Psi / m) e_b`` per body, and
+    where each body's modes start among them (bodies with modes only)."""
+
+    positions: NDArray
+    rotations: NDArray
+    radii: NDArray
+    modal: NDArray
+    factor: NDArray
+    mode_starts: NDArray
+
+    @classmethod
+    def of(cls, system: MultibodySystem) -> DisplacementScales:
+        offsets = [int(o) for o in system.offsets[:-1]]
+        radii: list[float] = []
+        modal: list[int] = []
+        blocks: list[NDArray] = []
+        starts: list[int] = []
+        for body, offset in zip(system.bodies, offsets, strict=True):
+            mm = body.moments
+            mass = max(mm.mass, np.finfo(float).tiny)
+            radii.append(np.sqrt(max(float(np.trace(mm.x2)), 0.0) / mass))
+            if mm.n_modes:
+                values, vectors = np.linalg.eigh(mm.reduced_mass / mass)  # its square root, even if semidefinite
+                starts.append(len(modal))
+                modal.extend(range(offset + 7, offset + 7 + mm.n_modes))
+                blocks.append(np.sqrt(np.maximum(values, 0.0))[:, None] * vectors.T)
+        return cls(
+            np.array([[o + i for i in range(3)] for o in offsets], dtype=np.int64),
+            np.array([[o + 3 + i for i in range(4)] for o in offsets], dtype=np.int64),
+            np.array(radii),
+            np.array(modal, dtype=np.int64),
+            scipy.linalg.block_diag(*blocks) if blocks else np.zeros((0, 0)),
+            np.array(starts, dtype=np.int64),
+        )
+
+
+def displacement_error(beta: float, h: float, qdd_new: NDArray, qdd_old: NDArray, scales: DisplacementScales) -> float:
+    r"""Eq. (G8): the largest local error estimate (G5) of a step, every coordinate of every body in metres: the
+    position's largest component, the rotation's :math:`2|e_p|` times the radius of gyration, and the modal
+    coordinates' mass-weighted displacement :math:`\sqrt{e_\zeta^T \Psi^T M \Psi e_\zeta / m}` (the root mean square
+    over the body's material of the elastic displacement the error makes)."""
+    error = local_error(beta, h, qdd_new, qdd_old)
+    largest = max(
+        float(np.abs(error[scales.positions]).max(initial=0.0)),
+        float((2.0 * scales.radii * np.linalg.norm(error[scales.rotations], axis=1)).max(initial=0.0)),
+    )
+    if scales.modal.size:
+        squares = (scales.factor @ error[scales.modal]) ** 2
+        largest = max(largest, float(np.sqrt(np.add.reduceat(squares, scales.mode_starts).max())))
+    return largest

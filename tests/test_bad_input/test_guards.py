@@ -129,8 +129,9 @@ def test_a_run_that_stops_at_its_first_step_is_reported_not_an_attribute_error(m
     monkeypatch.setattr(linkage_run, "assemble", lambda scene: SimpleNamespace(q=np.zeros(3), multipliers=None))
     monkeypatch.setattr(linkage_run, "scene_assembly_stress", lambda *args: None)
     monkeypatch.setattr(linkage_run, "quasi_static_step", lambda scene: None)
-    monkeypatch.setattr(linkage_run, "dynamic_step_limit", lambda scene: None)  # no rigid loop to take rates from
-    monkeypatch.setattr(linkage_run, "near_dead_point", lambda scene, t: None)
+    for rule in ("quasi_static_path_step", "dynamic_step_limit", "near_dead_point"):  # no loop in this stand-in
+        monkeypatch.setattr(linkage_run, rule, lambda *args: None)
+    monkeypatch.setattr(linkage_run, "dynamic_error_tolerance", lambda scene: 1e-6)
     monkeypatch.setattr(linkage_run, "simulate", stops)
     with pytest.raises(NewtonDivergence, match="did not converge") as stopped:
         linkage_run.run_linkage(SimpleNamespace(t_end=61.0, system=None), mode="dynamic", step=1e-9)
