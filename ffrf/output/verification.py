@@ -235,7 +235,8 @@ def _energy_check(sensors: dict, floor: float) -> Check:
         ENERGY_RTOL * scale + work_quadrature_error(sensors),
         "J",
         f"largest residual of the energy balance against {ENERGY_RTOL:g} of the energy scale {scale:.3g} J "
-        "(Eq. (C2)) plus the quadrature error of the drive's work",
+        "(Eq. (C2)) plus the quadrature error of the drive's work (the books are kept at the outputs: where the "
+        "driving torque changes faster than they sample it, as in a snap, more outputs close them further)",
     )
 
 
