@@ -220,7 +220,7 @@ def run_linkage(
             progress=progress,
             max_static_step=quasi_static_step(scene),
             through_snaps=stability,
-            static_path_step=None if stability else quasi_static_path_step(scene),
+            static_path_step=quasi_static_path_step(scene),
             step_limit=dynamic_step_limit(scene) if mode == "dynamic" else None,
         )
         stopped = None

@@ -66,8 +66,9 @@ def simulate(
     path (the jump to another branch, Eq. (S6)); ``dynamic``: generalized-alpha from ``q0`` with velocities ``qd0``
     (default at rest) with time step ``step`` and spectral radius ``rho_inf``.
 
-    ``static_path_step`` (quasi-static without ``through_snaps``): the path on its own steps, the outputs solved from
-    it (:func:`ffrf.solvers.static_solver.quasi_static`, Eq. (S10)); ``step_limit`` (dynamic): the longest step
+    ``static_path_step`` (quasi-static): the path on its own steps, the outputs solved from it
+    (:func:`ffrf.solvers.static_solver.quasi_static`, Eq. (S10)), also through snaps
+    (:func:`ffrf.solvers.snap_through.quasi_static_through_snaps`); ``step_limit`` (dynamic): the longest step
     between two times, each step done in as many parts as it needs (Eq. (G7))."""
     if mode == "quasi_static":
         times = np.linspace(0.0, t_end, outputs)
@@ -75,7 +76,7 @@ def simulate(
         try:
             if through_snaps:
                 solution, snaps = quasi_static_through_snaps(
-                    system, q0, times, progress=progress, max_step=max_static_step
+                    system, q0, times, progress=progress, max_step=max_static_step, path_step=static_path_step
                 )
             else:
                 solution = quasi_static(
@@ -87,7 +88,8 @@ def simulate(
                 reached = times[: len(done.q)] if done.times is None else done.times
                 error.partial = Run(reached, done.q, None, done.multipliers, error.snaps)
             raise
-        return Run(times, solution.q, None, solution.multipliers, snaps)
+        reached = times if solution.times is None else solution.times
+        return Run(reached, solution.q, None, solution.multipliers, snaps)
     if mode == "dynamic":
         try:
             result = generalized_alpha(
