@@ -22,7 +22,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     step = 1e-3                       # dynamic time step (<= t_end)
     # max_steps = 2e7                 # lifts the limit of 1e7 steps (t_end / step; ffrf.scenes.limits)
     rho_inf = 0.9
-    outputs = 101
+    outputs = 101                     # quasi_static: solved from the path, whose own steps (3 deg of the fastest
+                                      # drive, or t_end / 40) the outputs do not change (Eq. (S10))
     joint_offsets = "body"            # joint point off its interface centre: "body" (as Exudyn) or "marker" frame
     stability = false                 # quasi_static only: Eq. (B1) at every output, and the run goes on past folds
                                       # of the equilibrium path (Eq. (S6)), each snap in the metadata
