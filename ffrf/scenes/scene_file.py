@@ -202,7 +202,15 @@ def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> Ru
         qd0=scene.qd_initial,
         through_snaps=bool(s.get("stability", False)),
         static_path_step=quasi_static_path_step(scene, t_end) if mode == "quasi_static" else None,
+        static_path_breaks=_table_corners(scene),
     )
+
+
+def _table_corners(scene: Scene) -> tuple[float, ...]:
+    """The times of the load tables' points: kinks of the loads' time laws (linear between them), where the
+    quasi-static path's predictor starts again (``docs/formulation.md``, (S10))."""
+    tables = [force["table"] for force in scene.description.get("forces", []) if "table" in force]
+    return tuple(sorted({float(t) for table in tables for t in table["time"]}))
 
 
 def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:

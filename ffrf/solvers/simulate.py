@@ -59,6 +59,7 @@ def simulate(
     qd0: NDArray | None = None,
     through_snaps: bool = False,
     static_path_step: Callable[[float], float] | None = None,
+    static_path_breaks: tuple[float, ...] = (),
     step_limit: Callable[[float, float], float] | None = None,
 ) -> Run:
     """``quasi_static``: equilibria at ``outputs`` equally spaced times, followed through intermediate
@@ -68,7 +69,8 @@ def simulate(
 
     ``static_path_step`` (quasi-static): the path on its own steps, the outputs solved from it
     (:func:`ffrf.solvers.static_solver.quasi_static`, Eq. (S10)), also through snaps
-    (:func:`ffrf.solvers.snap_through.quasi_static_through_snaps`); ``step_limit`` (dynamic): the longest step
+    (:func:`ffrf.solvers.snap_through.quasi_static_through_snaps`), restarting its predictor at
+    ``static_path_breaks`` (kinks of the time laws); ``step_limit`` (dynamic): the longest step
     between two times, each step done in as many parts as it needs (Eq. (G7))."""
     if mode == "quasi_static":
         times = np.linspace(0.0, t_end, outputs)
@@ -76,11 +78,23 @@ def simulate(
         try:
             if through_snaps:
                 solution, snaps = quasi_static_through_snaps(
-                    system, q0, times, progress=progress, max_step=max_static_step, path_step=static_path_step
+                    system,
+                    q0,
+                    times,
+                    progress=progress,
+                    max_step=max_static_step,
+                    path_step=static_path_step,
+                    path_breaks=static_path_breaks,
                 )
             else:
                 solution = quasi_static(
-                    system, q0, times, progress=progress, max_step=max_static_step, path_step=static_path_step
+                    system,
+                    q0,
+                    times,
+                    progress=progress,
+                    max_step=max_static_step,
+                    path_step=static_path_step,
+                    path_breaks=static_path_breaks,
                 )
         except (StaticDivergence, Interrupted) as error:
             done = error.partial

@@ -89,17 +89,19 @@ def trace_snap(
     step: float,
     max_points: int = 600,
     tolerance: float = 1e-10,
+    max_step: float | None = None,
 ) -> SnapThrough | None:
     """Follow the path from the equilibrium ``(q0, multipliers0)`` at ``t0`` towards ``t_end`` (Eq. (S5), first
-    arclength ``step``). ``None`` if t reaches ``t_end`` without a fold; otherwise the :class:`SnapThrough` at the
-    first fold, with the landing equilibrium if the path comes forward past the fold's t within ``max_points``."""
+    arclength ``step``, at most ``max_step``, default 8 ``step``). ``None`` if t reaches ``t_end`` without a fold;
+    otherwise the :class:`SnapThrough` at the first fold, with the landing equilibrium if the path comes forward past
+    the fold's t within ``max_points``."""
     direction = 1.0 if t_end >= t0 else -1.0
     points: list[tuple[float, NDArray, NDArray, float]] = []
     fold: tuple[float, NDArray, NDArray] | None = None
     return_t = None
     speed = path_speed(system, q0, multipliers0, t0)  # one c for the trace and the refinement: one arclength
     step = _forward_step(system, q0, multipliers0, t0, direction, step, tolerance, speed)
-    for point in path_points(system, q0, multipliers0, t0, direction, step, tolerance, speed=speed):
+    for point in path_points(system, q0, multipliers0, t0, direction, step, tolerance, max_step=max_step, speed=speed):
         points.append(point)
         if len(points) >= max_points:
             break
@@ -237,6 +239,7 @@ def quasi_static_through_snaps(
     progress=None,
     max_snaps: int = MAX_SNAPS,
     path_step: Callable[[float], float] | None = None,
+    path_breaks: tuple[float, ...] = (),
 ) -> tuple[StaticSolution, tuple[SnapThrough, ...]]:
     """:func:`ffrf.solvers.static_solver.quasi_static` over ``times`` that goes on past folds: where it stops,
     the path is traced from the last equilibrium (:func:`trace_snap`, first step the spacing of ``times``); at a
@@ -250,7 +253,9 @@ def quasi_static_through_snaps(
     (:func:`_through_snaps_on_own_steps`)."""
     times = np.asarray(times, dtype=float)
     if path_step is not None:
-        return _through_snaps_on_own_steps(system, np.asarray(q0, dtype=float), times, path_step, progress, max_snaps)
+        return _through_snaps_on_own_steps(
+            system, np.asarray(q0, dtype=float), times, path_step, progress, max_snaps, tuple(path_breaks)
+        )
     spacing = float(np.max(np.diff(times))) if times.size > 1 else 1.0
     qs: list[NDArray] = []
     lams: list[NDArray] = []
@@ -312,12 +317,15 @@ def _through_snaps_on_own_steps(
     path_step: Callable[[float], float],
     progress,
     max_snaps: int,
+    breaks: tuple[float, ...] = (),
 ) -> tuple[StaticSolution, tuple[SnapThrough, ...]]:
-    """:func:`quasi_static_through_snaps` with the path on its own steps. Each leg is
+    """:func:`quasi_static_through_snaps` with the path on its own steps (``breaks``: as ``path_breaks`` of
+    :func:`~ffrf.solvers.static_solver.quasi_static`). Each leg is
     :func:`~ffrf.solvers.static_solver.quasi_static` with ``path_step`` from the leg's start (the run's start, or a
     landing at a fold's t, or the end of a bridge) to the last output; where a leg stops, the path is bridged from
     its last equilibrium to its next own time (:func:`path_times` from the leg's start), or traced through the fold
-    (:func:`trace_snap`), first arclength step the path step there. The outputs a bridge or a trace passes are
+    (:func:`trace_snap`), first arclength step an eighth of the path step there, at most eight path steps. The
+    outputs a bridge or a trace passes are
     solved from its continuation points (Newton from the two that bracket each). Rows carry their ``times``; a stop
     ends them with the path's last equilibrium."""
     scale = max(1.0, float(np.abs(outputs).max()))
@@ -356,7 +364,7 @@ def _through_snaps_on_own_steps(
         todo = outputs[outputs > start_t + 1e-12 * scale]
         leg = np.concatenate([[start_t], todo]) if skip else outputs
         try:
-            part = quasi_static(system, start_q, leg, progress=progress, path_step=path_step)
+            part = quasi_static(system, start_q, leg, progress=progress, path_step=path_step, path_breaks=breaks)
             stop = None
         except StaticDivergence as error:
             part, stop = error.partial, error
@@ -377,7 +385,7 @@ def _through_snaps_on_own_steps(
             raise stopped(stop, end)
         t_last, q_last, lam_last = end
         step = float(path_step(t_last))
-        own = path_times(start_t, float(outputs[-1]), path_step)
+        own = path_times(start_t, float(outputs[-1]), path_step, breaks)
         ahead = own[own > t_last + 1e-12 * scale]
         if ahead.size:  # a sharp stretch of the path without a fold: bridged to the path's next own time
             targets = [float(t) for t in todo if t_last + 1e-12 * scale < t < ahead[0]] + [float(ahead[0])]
@@ -389,7 +397,10 @@ def _through_snaps_on_own_steps(
                         keep(t, q, lam, 0)
                 start_t, start_q, skip = targets[-1], crossed[-1][0], 1
                 continue
-        snap = trace_snap(system, q_last, lam_last, t_last, float(outputs[-1]), step=step)
+        # The stop lies within 1/256 of a path step of the fold (the halvings, Eq. (S4)): a whole path step as the
+        # first arclength can cross the fold's turn unseen (plane_fold_6r, 8e-4 s from it); an eighth of it, growing
+        # to eight path steps along the unstable branch, finds it.
+        snap = trace_snap(system, q_last, lam_last, t_last, float(outputs[-1]), step=step / 8.0, max_step=8.0 * step)
         if snap is None:
             raise stopped(stop, end)
         if not _lands(system, snap):
