@@ -17,19 +17,21 @@ from numpy.typing import NDArray
 
 from ffrf.errors import AssemblyDivergence, StaticDivergence
 from ffrf.scenes.builder import Scene
-from ffrf.scenes.step_sizes import DRIVE_ANGLE_PER_STEP, MAX_DRIVE_STEP, MAX_DYNAMIC_STEP
+from ffrf.scenes.step_sizes import DRIVE_ANGLE_PER_STEP, MAX_DRIVE_STEP, MAX_DYNAMIC_STEP, PATH_STEPS_WITHOUT_DRIVE
 from ffrf.solvers.static_solver import StaticSolution, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
 
 __all__ = [
     "assemble",
     "dynamic_step",
+    "quasi_static_path_step",
     "quasi_static_step",
     "start_state",
     "starts_static",
     "DRIVE_ANGLE_PER_STEP",
     "MAX_DRIVE_STEP",
     "MAX_DYNAMIC_STEP",
+    "PATH_STEPS_WITHOUT_DRIVE",
     "STEPS_PER_DEGREE",
 ]
 
@@ -48,6 +50,18 @@ def quasi_static_step(scene: Scene) -> float | None:
     without a drive. Quasi-static runs insert equilibria so that no step is longer."""
     speed = _fastest_drive_speed(scene)
     return None if speed is None else MAX_DRIVE_STEP / speed
+
+
+def quasi_static_path_step(scene: Scene, t_end: float) -> Callable[[float], float]:
+    """The path step of a quasi-static run of ``scene`` over [0, ``t_end``] (Eq. (S10), constant): the time in which
+    its fastest drive turns :data:`MAX_DRIVE_STEP` at full speed (:func:`quasi_static_step`), or without a drive
+    ``t_end`` / :data:`PATH_STEPS_WITHOUT_DRIVE`. It depends on the scene alone, not on its outputs, so neither
+    do the equilibria at a given time (to Newton's tolerance) nor where the path stops or snaps."""
+    if not t_end > 0.0:
+        raise ValueError(f"t_end must be > 0 s for a quasi-static run, got {t_end}")
+    drive = quasi_static_step(scene)
+    step = t_end / PATH_STEPS_WITHOUT_DRIVE if drive is None else drive
+    return lambda t: step
 
 
 def dynamic_step(scene: Scene) -> float:

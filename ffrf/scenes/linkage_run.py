@@ -230,7 +230,7 @@ def run_linkage(
             progress=progress,
             max_static_step=quasi_static_step(scene),
             through_snaps=stability,
-            static_path_step=quasi_static_path_step(scene) if mode == "quasi_static" and not stability else None,
+            static_path_step=quasi_static_path_step(scene) if mode == "quasi_static" else None,
             step_limit=dynamic_step_limit(scene) if mode == "dynamic" else None,
             error_tolerance=tolerance if mode == "dynamic" else None,
         )

@@ -22,7 +22,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     step = 1e-3                       # dynamic time step (<= t_end)
     # max_steps = 2e7                 # lifts the limit of 1e7 steps (t_end / step; ffrf.scenes.limits)
     rho_inf = 0.9
-    outputs = 101
+    outputs = 101                     # quasi_static: solved from the path, whose own steps (3 deg of the fastest
+                                      # drive, or t_end / 40) the outputs do not change (Eq. (S10))
     joint_offsets = "body"            # joint point off its interface centre: "body" (as Exudyn) or "marker" frame
     stability = false                 # quasi_static only: Eq. (B1) at every output, and the run goes on past folds
                                       # of the equilibrium path (Eq. (S6)), each snap in the metadata
@@ -138,7 +139,7 @@ from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vt
 from ffrf.output.sensors import node_sensors, scene_sensors
 from ffrf.output.tables import write_results
 from ffrf.output.verification import verify_scene_run
-from ffrf.scenes.assembly import assemble, quasi_static_step, start_state, starts_static
+from ffrf.scenes.assembly import assemble, quasi_static_path_step, start_state, starts_static
 from ffrf.scenes.builder import Scene, build_scene
 from ffrf.scenes.linkage_file import load_linkage
 from ffrf.solvers.simulate import Run, simulate
@@ -183,22 +184,33 @@ def sensor_arrays(scene: Scene, q: NDArray, multipliers: NDArray) -> dict[str, N
 
 def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> Run:
     """The scene's dynamic or quasi-static run from ``q0`` (default :func:`start_state`); with ``stability`` a
-    quasi-static run goes on past folds of its equilibrium path (:func:`ffrf.solvers.simulate.simulate`)."""
+    quasi-static run goes on past folds of its equilibrium path (:func:`ffrf.solvers.simulate.simulate`). A
+    quasi-static path is followed on its own steps (:func:`ffrf.scenes.assembly.quasi_static_path_step`, Eq. (S10))
+    and the outputs are solved from it: they do not change the equilibria or where the path stops or snaps."""
     s = scene.settings
     q0 = start_state(scene) if q0 is None else q0
+    mode, t_end = s.get("mode", "dynamic"), float(s.get("t_end", 1.0))
     return simulate(
         scene.system,
         q0,
-        s.get("mode", "dynamic"),
-        float(s.get("t_end", 1.0)),
+        mode,
+        t_end,
         int(s.get("outputs", 101)),
         step=float(s.get("step", 1e-3)),
         rho_inf=float(s.get("rho_inf", 0.9)),
         progress=progress,
-        max_static_step=quasi_static_step(scene),
         qd0=scene.qd_initial,
         through_snaps=bool(s.get("stability", False)),
+        static_path_step=quasi_static_path_step(scene, t_end) if mode == "quasi_static" else None,
+        static_path_breaks=_table_corners(scene),
     )
+
+
+def _table_corners(scene: Scene) -> tuple[float, ...]:
+    """The times of the load tables' points: kinks of the loads' time laws (linear between them), where the
+    quasi-static path's predictor starts again (``docs/formulation.md``, (S10))."""
+    tables = [force["table"] for force in scene.description.get("forces", []) if "table" in force]
+    return tuple(sorted({float(t) for table in tables for t in table["time"]}))
 
 
 def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:

@@ -59,6 +59,7 @@ def simulate(
     qd0: NDArray | None = None,
     through_snaps: bool = False,
     static_path_step: Callable[[float], float] | None = None,
+    static_path_breaks: tuple[float, ...] = (),
     step_limit: Callable[[float, float], float] | None = None,
     error_tolerance: float | None = None,
 ) -> Run:
@@ -67,21 +68,35 @@ def simulate(
     path (the jump to another branch, Eq. (S6)); ``dynamic``: generalized-alpha from ``q0`` with velocities ``qd0``
     (default at rest) with time step ``step`` and spectral radius ``rho_inf``.
 
-    ``static_path_step`` (quasi-static without ``through_snaps``): the path on its own steps, the outputs solved from
-    it (:func:`ffrf.solvers.static_solver.quasi_static`, Eq. (S10)); ``step_limit`` (dynamic): the longest step
-    between two times, each step done in as many parts as it needs (Eq. (G7)); ``error_tolerance`` (dynamic, m): the
-    local error estimate each part may make, more parts where it is larger (Eq. (G8); default ``None``, off)."""
+    ``static_path_step`` (quasi-static): the path on its own steps, the outputs solved from it
+    (:func:`ffrf.solvers.static_solver.quasi_static`, Eq. (S10)), also through snaps
+    (:func:`ffrf.solvers.snap_through.quasi_static_through_snaps`), restarting its predictor at
+    ``static_path_breaks`` (kinks of the time laws); ``step_limit`` (dynamic): the longest step between two times,
+    each step done in as many parts as it needs (Eq. (G7)); ``error_tolerance`` (dynamic, m): the local error
+    estimate each part may make, more parts where it is larger (Eq. (G8); default ``None``, off)."""
     if mode == "quasi_static":
         times = np.linspace(0.0, t_end, outputs)
         snaps: tuple[SnapThrough, ...] = ()
         try:
             if through_snaps:
                 solution, snaps = quasi_static_through_snaps(
-                    system, q0, times, progress=progress, max_step=max_static_step
+                    system,
+                    q0,
+                    times,
+                    progress=progress,
+                    max_step=max_static_step,
+                    path_step=static_path_step,
+                    path_breaks=static_path_breaks,
                 )
             else:
                 solution = quasi_static(
-                    system, q0, times, progress=progress, max_step=max_static_step, path_step=static_path_step
+                    system,
+                    q0,
+                    times,
+                    progress=progress,
+                    max_step=max_static_step,
+                    path_step=static_path_step,
+                    path_breaks=static_path_breaks,
                 )
         except (StaticDivergence, Interrupted) as error:
             done = error.partial
@@ -89,7 +104,8 @@ def simulate(
                 reached = times[: len(done.q)] if done.times is None else done.times
                 error.partial = Run(reached, done.q, None, done.multipliers, error.snaps)
             raise
-        return Run(times, solution.q, None, solution.multipliers, snaps)
+        reached = times if solution.times is None else solution.times
+        return Run(reached, solution.q, None, solution.multipliers, snaps)
     if mode == "dynamic":
         try:
             result = generalized_alpha(

@@ -14,6 +14,7 @@ dissipates.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -22,7 +23,7 @@ from numpy.typing import NDArray
 from ffrf.errors import Interrupted, StaticDivergence
 from ffrf.solvers.continuation import EquilibriumPath, equilibrium_path, parabola_vertex, path_points, path_speed
 from ffrf.solvers.stability import CriticalPose, critical_pose, equilibrium_stability, mode_shares
-from ffrf.solvers.static_solver import StaticSolution, quasi_static, static_equilibrium
+from ffrf.solvers.static_solver import StaticSolution, path_times, quasi_static, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
 
 __all__ = ["SnapThrough", "run_critical_pose", "snap_summary", "trace_snap", "quasi_static_through_snaps"]
@@ -88,17 +89,19 @@ def trace_snap(
     step: float,
     max_points: int = 600,
     tolerance: float = 1e-10,
+    max_step: float | None = None,
 ) -> SnapThrough | None:
     """Follow the path from the equilibrium ``(q0, multipliers0)`` at ``t0`` towards ``t_end`` (Eq. (S5), first
-    arclength ``step``). ``None`` if t reaches ``t_end`` without a fold; otherwise the :class:`SnapThrough` at the
-    first fold, with the landing equilibrium if the path comes forward past the fold's t within ``max_points``."""
+    arclength ``step``, at most ``max_step``, default 8 ``step``). ``None`` if t reaches ``t_end`` without a fold;
+    otherwise the :class:`SnapThrough` at the first fold, with the landing equilibrium if the path comes forward past
+    the fold's t within ``max_points``."""
     direction = 1.0 if t_end >= t0 else -1.0
     points: list[tuple[float, NDArray, NDArray, float]] = []
     fold: tuple[float, NDArray, NDArray] | None = None
     return_t = None
     speed = path_speed(system, q0, multipliers0, t0)  # one c for the trace and the refinement: one arclength
     step = _forward_step(system, q0, multipliers0, t0, direction, step, tolerance, speed)
-    for point in path_points(system, q0, multipliers0, t0, direction, step, tolerance, speed=speed):
+    for point in path_points(system, q0, multipliers0, t0, direction, step, tolerance, max_step=max_step, speed=speed):
         points.append(point)
         if len(points) >= max_points:
             break
@@ -192,16 +195,35 @@ def bridge(
     (Eq. (S5), first arclength ``step``) across a stretch the quasi-static steps cannot follow (the path turns
     sharply within a step, as near a singular pose of the rigid loop); ``None`` if the path turns back in t first
     (a fold: :func:`trace_snap` follows it) or takes more than ``max_points`` points."""
-    direction = 1.0 if t_target >= t0 else -1.0
+    found = _bridged(system, q0, multipliers0, t0, [t_target], step, max_points, tolerance)
+    return None if found is None else found[-1]
+
+
+def _bridged(
+    system: MultibodySystem,
+    q0: NDArray,
+    multipliers0: NDArray,
+    t0: float,
+    targets: list[float],
+    step: float,
+    max_points: int,
+    tolerance: float,
+) -> list[tuple[NDArray, NDArray]] | None:
+    """:func:`bridge` to the last of ``targets`` (ascending along the path), with the equilibria at every one of
+    them, each by Newton from the continuation points that bracket it."""
+    direction = 1.0 if targets[-1] >= t0 else -1.0
     speed = path_speed(system, q0, multipliers0, t0)
     step = _forward_step(system, q0, multipliers0, t0, direction, step, tolerance, speed)
     previous = None
+    found: list[tuple[NDArray, NDArray]] = []
     for k, point in enumerate(path_points(system, q0, multipliers0, t0, direction, step, tolerance, speed=speed)):
         if previous is not None:
             if (point[0] - previous[0]) * direction <= 0.0:
                 return None
-            if (point[0] - t_target) * direction >= 0.0:
-                return _landing(system, previous, point, t_target, tolerance)
+            while len(found) < len(targets) and (point[0] - targets[len(found)]) * direction >= 0.0:
+                found.append(_landing(system, previous, point, targets[len(found)], tolerance))
+            if len(found) == len(targets):
+                return found
         if k >= max_points:
             return None
         previous = point
@@ -216,13 +238,24 @@ def quasi_static_through_snaps(
     max_step: float | None = None,
     progress=None,
     max_snaps: int = MAX_SNAPS,
+    path_step: Callable[[float], float] | None = None,
+    path_breaks: tuple[float, ...] = (),
 ) -> tuple[StaticSolution, tuple[SnapThrough, ...]]:
     """:func:`ffrf.solvers.static_solver.quasi_static` over ``times`` that goes on past folds: where it stops,
     the path is traced from the last equilibrium (:func:`trace_snap`, first step the spacing of ``times``); at a
     fold the run jumps to the landing equilibrium and resumes from it over the remaining times. Returns the
     equilibria at ``times`` and the snaps. A stop with no fold ahead, or a fold with no landing, is raised as it
-    was, ``partial`` holding every equilibrium found (before and after earlier snaps)."""
+    was, ``partial`` holding every equilibrium found (before and after earlier snaps).
+
+    With ``path_step`` (s, from a time; Eq. (S10)) the path is followed on its own times, the outputs solved from it
+    (:func:`ffrf.solvers.static_solver.quasi_static`), and the traces and bridges start with the path's step, not
+    the outputs' spacing: where the run folds and lands does not depend on ``times``
+    (:func:`_through_snaps_on_own_steps`)."""
     times = np.asarray(times, dtype=float)
+    if path_step is not None:
+        return _through_snaps_on_own_steps(
+            system, np.asarray(q0, dtype=float), times, path_step, progress, max_snaps, tuple(path_breaks)
+        )
     spacing = float(np.max(np.diff(times))) if times.size > 1 else 1.0
     qs: list[NDArray] = []
     lams: list[NDArray] = []
@@ -275,6 +308,135 @@ def quasi_static_through_snaps(
         if remaining.size == 0 or remaining[0] <= snap.fold_t:
             raise _with_partial(stop, qs, lams, counts, snaps)
         start, todo, landed = np.asarray(snap.landing_q), np.concatenate([[snap.fold_t], remaining]), True
+
+
+def _through_snaps_on_own_steps(
+    system: MultibodySystem,
+    q0: NDArray,
+    outputs: NDArray,
+    path_step: Callable[[float], float],
+    progress,
+    max_snaps: int,
+    breaks: tuple[float, ...] = (),
+) -> tuple[StaticSolution, tuple[SnapThrough, ...]]:
+    """:func:`quasi_static_through_snaps` with the path on its own steps (``breaks``: as ``path_breaks`` of
+    :func:`~ffrf.solvers.static_solver.quasi_static`). Each leg is
+    :func:`~ffrf.solvers.static_solver.quasi_static` with ``path_step`` from the leg's start (the run's start, or a
+    landing at a fold's t, or the end of a bridge) to the last output; where a leg stops, the path is bridged from
+    its last equilibrium to its next own time (:func:`path_times` from the leg's start), or traced through the fold
+    (:func:`trace_snap`), first arclength step an eighth of the path step there, at most eight path steps. The
+    outputs a bridge or a trace passes are
+    solved from its continuation points (Newton from the two that bracket each). Rows carry their ``times``; a stop
+    ends them with the path's last equilibrium."""
+    scale = max(1.0, float(np.abs(outputs).max()))
+    times: list[float] = []
+    qs: list[NDArray] = []
+    lams: list[NDArray] = []
+    counts: list[int] = []
+    snaps: list[SnapThrough] = []
+
+    def keep(t: float, q: NDArray, lam: NDArray, count: int) -> None:
+        times.append(float(t))
+        qs.append(np.asarray(q))
+        lams.append(np.asarray(lam))
+        counts.append(int(count))
+
+    def is_output(t: float) -> bool:
+        return bool(np.any(np.abs(outputs - t) <= 1e-12 * scale))
+
+    def result(end: tuple[float, NDArray, NDArray] | None = None) -> StaticSolution:
+        rows_t, rows_q, rows_lam, rows_n = list(times), list(qs), list(lams), list(counts)
+        if end is not None and (not rows_t or end[0] > rows_t[-1] + 1e-12 * scale):
+            rows_t.append(end[0])
+            rows_q.append(end[1])
+            rows_lam.append(end[2])
+            rows_n.append(0)
+        return StaticSolution(np.array(rows_q), np.array(rows_lam), tuple(rows_n), np.array(rows_t))
+
+    def stopped(stop: StaticDivergence, end, reason: str | None = None) -> StaticDivergence:
+        error = StaticDivergence(f"{stop}; {reason}") if reason else stop
+        error.partial = result(end)
+        error.snaps = tuple(snaps)
+        return error
+
+    start_t, start_q, skip = float(outputs[0]), q0, 0
+    while True:
+        todo = outputs[outputs > start_t + 1e-12 * scale]
+        leg = np.concatenate([[start_t], todo]) if skip else outputs
+        try:
+            part = quasi_static(system, start_q, leg, progress=progress, path_step=path_step, path_breaks=breaks)
+            stop = None
+        except StaticDivergence as error:
+            part, stop = error.partial, error
+        except Interrupted as error:  # asked to stop: leave with the outputs solved and the snaps passed
+            for t, q, lam, n in _rows(error.partial)[skip:]:
+                keep(t, q, lam, n)
+            error.partial = result()
+            error.snaps = tuple(snaps)
+            raise
+        rows = _rows(part)
+        end = (float(rows[-1][0]), rows[-1][1], rows[-1][2]) if rows else None
+        for t, q, lam, n in rows[skip:]:
+            if is_output(float(t)):  # a stopped leg ends with the path's last equilibrium, no output
+                keep(t, q, lam, n)
+        if stop is None:
+            return result(), tuple(snaps)
+        if end is None or len(snaps) >= max_snaps:
+            raise stopped(stop, end)
+        t_last, q_last, lam_last = end
+        step = float(path_step(t_last))
+        own = path_times(start_t, float(outputs[-1]), path_step, breaks)
+        ahead = own[own > t_last + 1e-12 * scale]
+        if ahead.size:  # a sharp stretch of the path without a fold: bridged to the path's next own time
+            targets = [float(t) for t in todo if t_last + 1e-12 * scale < t < ahead[0]] + [float(ahead[0])]
+            crossed = _bridged(system, q_last, lam_last, t_last, targets, step / 8.0, 600, 1e-10)
+            if crossed is not None:
+                log.info("quasi-static path bridged by continuation from t = %.6g to %.6g s", t_last, targets[-1])
+                for t, (q, lam) in zip(targets, crossed, strict=True):
+                    if is_output(t):
+                        keep(t, q, lam, 0)
+                start_t, start_q, skip = targets[-1], crossed[-1][0], 1
+                continue
+        # The stop lies within 1/256 of a path step of the fold (the halvings, Eq. (S4)): a whole path step as the
+        # first arclength can cross the fold's turn unseen (plane_fold_6r, 8e-4 s from it); an eighth of it, growing
+        # to eight path steps along the unstable branch, finds it.
+        snap = trace_snap(system, q_last, lam_last, t_last, float(outputs[-1]), step=step / 8.0, max_step=8.0 * step)
+        if snap is None:
+            raise stopped(stop, end)
+        if not _lands(system, snap):
+            snaps.append(replace(snap, landing_q=None, landing_multipliers=None))
+            raise stopped(stop, end, _NO_LANDING.format(t=snap.fold_t))
+        log.info("snap at t = %.6g: fold of the equilibrium path, landing on another branch", snap.fold_t)
+        snaps.append(snap)
+        for t in todo[(todo > t_last + 1e-12 * scale) & (todo < snap.fold_t)]:  # outputs between the stop and the fold
+            q, lam = _before_fold(system, snap, float(t))
+            keep(t, q, lam, 0)
+        if not np.any(todo > snap.fold_t):
+            raise stopped(stop, end)
+        start_t, start_q, skip = snap.fold_t, np.asarray(snap.landing_q), 1
+
+
+def _rows(solution: StaticSolution | None) -> list[tuple[float, NDArray, NDArray, int]]:
+    """``(t, q, multipliers, iterations)`` per row of a solution on its own steps (whose rows carry their times)."""
+    if solution is None or solution.times is None:
+        return []
+    return list(zip(solution.times, solution.q, solution.multipliers, solution.iterations, strict=True))
+
+
+def _before_fold(system: MultibodySystem, snap: SnapThrough, t: float) -> tuple[NDArray, NDArray]:
+    """The equilibrium at ``t`` on the traced path's stable part before the fold: Newton from the two points that
+    bracket it (the fold itself as the last)."""
+    path = snap.path
+    rising = [(path.t[0], path.q[0], path.multipliers[0])]
+    for k in range(1, len(path.t)):
+        if path.t[k] <= rising[-1][0] or path.t[k] >= snap.fold_t:
+            break
+        rising.append((path.t[k], path.q[k], path.multipliers[k]))
+    rising.append((snap.fold_t, snap.fold_q, snap.fold_multipliers))
+    for before, after in zip(rising, rising[1:], strict=False):
+        if before[0] <= t <= after[0]:
+            return _landing(system, before, after, t, 1e-10)
+    raise StaticDivergence(f"t = {t:.9g} s lies outside the traced path before the fold at t = {snap.fold_t:.9g} s")
 
 
 _NO_LANDING = (

@@ -367,6 +367,7 @@ def quasi_static(
     secant: bool = False,
     max_step: float | None = None,
     path_step: Callable[[float], float] | None = None,
+    path_breaks: tuple[float, ...] = (),
 ) -> StaticSolution:
     """A sequence of static equilibria at ``times`` (prescribed motions follow their time laws;
     no inertia). Returns ``q`` and ``multipliers`` with one row per time (``iterations`` per time).
@@ -385,7 +386,9 @@ def quasi_static(
     With ``path_step`` (the longest path step from a time, s; e.g. Eq. (S10)) the path is followed on its own times
     (:func:`path_times`, ``max_step`` ignored) and each output is solved from the path's polynomial through the
     equilibria around it (Eq. (S2)), never becoming a path point: the equilibria and where the path stops do not
-    depend on the outputs. A path that stops then ends the partial result with its last equilibrium (``times``)."""
+    depend on the outputs. A path that stops then ends the partial result with its last equilibrium (``times``).
+    ``path_breaks``: times where the time laws have kinks (a load table's corners); each is a path point where the
+    predictor starts again."""
     if predictor_order < 0:
         raise ValueError(f"predictor_order must be >= 0, got {predictor_order}")
     if path_step is not None:
@@ -399,6 +402,7 @@ def quasi_static(
             progress,
             predictor_order,
             secant,
+            tuple(path_breaks),
         )
     outputs = np.asarray(times, dtype=float)
     times, returned = refined_times(outputs, max_step)
@@ -450,9 +454,17 @@ def refined_times(times: NDArray, max_step: float | None) -> tuple[NDArray[np.fl
     return np.concatenate(refined), np.concatenate(returned)
 
 
-def path_times(t_start: float, t_end: float, path_step: Callable[[float], float]) -> NDArray[np.float64]:
+def path_times(
+    t_start: float, t_end: float, path_step: Callable[[float], float], breaks: tuple[float, ...] = ()
+) -> NDArray[np.float64]:
     """The path's own times from ``t_start`` to ``t_end``: each the one before plus ``path_step`` of it (Eq. (S10)),
-    the last step shortened to end at ``t_end`` (a last step under a quarter of the one before is merged into it)."""
+    the last step shortened to end at ``t_end`` (a last step under a quarter of the one before is merged into it);
+    with ``breaks`` (kinks of the time laws, e.g. a load table's corners) the same on each piece between them."""
+    inside = sorted(b for b in breaks if t_start < b < t_end)
+    if inside:
+        ends = [t_start, *inside, t_end]
+        pieces = [path_times(a, b, path_step)[1:] for a, b in itertools.pairwise(ends)]
+        return np.concatenate([[float(t_start)], *pieces])
     times = [float(t_start)]
     while times[-1] < t_end - 1e-12 * max(1.0, abs(t_end)):
         step = float(path_step(times[-1]))
@@ -506,10 +518,21 @@ def _along_path(model, path: _History, t_out: float, tolerance: float, max_itera
 
 
 def _on_own_steps(
-    model, q0: NDArray, outputs: NDArray, path_step, tolerance: float, max_iterations: int, progress, order, secant
+    model,
+    q0: NDArray,
+    outputs: NDArray,
+    path_step,
+    tolerance: float,
+    max_iterations: int,
+    progress,
+    order,
+    secant,
+    breaks: tuple[float, ...] = (),
 ) -> StaticSolution:
-    """:func:`quasi_static` with ``path_step``: the path on :func:`path_times`, the outputs solved from it."""
-    own = path_times(float(outputs[0]), float(outputs[-1]), path_step)
+    """:func:`quasi_static` with ``path_step``: the path on :func:`path_times`, the outputs solved from it. At a
+    ``breaks`` time the predictor (S2), which assumes a smooth path, starts again from that equilibrium alone."""
+    own = path_times(float(outputs[0]), float(outputs[-1]), path_step, breaks)
+    restart = {float(b) for b in breaks}
     qs: list[NDArray] = []
     lams: list[NDArray] = []
     counts: list[int] = []
@@ -571,6 +594,8 @@ def _on_own_steps(
         try:
             _, path_tangent = _advance(model, path, float(t), tolerance, max_iterations, path_tangent, secant)
             emit(float(t), path)
+            if float(t) in restart:  # a kink of the path: the polynomial through points before it would miss after
+                path = _History(float(t), path.q[-1], path.lam[-1], order)
         except StaticDivergence as error:
             try:
                 emit(path.times[-1], path)

@@ -134,7 +134,10 @@ def _stop_at(call: int):
     return progress
 
 
-@pytest.mark.parametrize("mode", ["dynamic", "quasi_static", "quasi_static through snaps", "quasi_static own steps"])
+@pytest.mark.parametrize(
+    "mode",
+    ["dynamic", "quasi_static", "quasi_static through snaps", "quasi_static own steps", "quasi_static snaps own steps"],
+)
 def test_an_interrupted_solver_hands_over_the_outputs_it_computed(tmp_path, mode):
     """The solver a progress callback interrupts raises :class:`Interrupted` with ``partial``: the outputs before the
     stop, equal to the first outputs of the same run left alone (same steps, same code: to the bit)."""
@@ -147,7 +150,7 @@ def test_an_interrupted_solver_hands_over_the_outputs_it_computed(tmp_path, mode
         call, rows = 35, 4  # outputs every 10 steps: the 35th step is past the 4th output (t = 0, 10, 20, 30 ms)
     else:
         (tmp_path / "scene.toml").write_text(driven_link_scene("[0.0, 1.0, 0.0]", t_end=5.0, outputs=11, modes=2))
-        arguments = {"mode": "quasi_static", "t_end": 5.0, "outputs": 11, "through_snaps": mode.endswith("snaps")}
+        arguments = {"mode": "quasi_static", "t_end": 5.0, "outputs": 11, "through_snaps": "snaps" in mode}
         call, rows = 4, 4
         if mode.endswith("own steps"):  # the path on steps of 0.3 s (Eq. (S10)): the 4th step ends at 1.2 s
             arguments["static_path_step"] = lambda t: 0.3

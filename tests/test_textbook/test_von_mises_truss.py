@@ -21,7 +21,9 @@ from scipy.optimize import brentq
 from textbook_fixtures import HALF_SPAN, LOAD_RATE, RISE, truss_closed_form, truss_load, write_truss_scene
 
 from ffrf.cli import main
-from ffrf.scenes.scene_file import load_scene
+from ffrf.errors import StaticDivergence
+from ffrf.scenes.assembly import PATH_STEPS_WITHOUT_DRIVE, quasi_static_path_step
+from ffrf.scenes.scene_file import load_scene, simulate_scene
 
 
 def test_the_bars_axial_stiffness_is_ea_over_l_and_their_euler_load_is_far(tmp_path):
@@ -84,3 +86,46 @@ def test_run_with_stability_on_a_dynamic_scene_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and 'set mode = "quasi_static"' in err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_fold_and_the_landing_do_not_depend_on_the_outputs(tmp_path):
+    """The truss has no drive: its path steps t_end / PATH_STEPS_WITHOUT_DRIVE (Eq. (S10)), and the trace through the
+    fold starts from where that path stops with the path's step, so 5 and 9 outputs fold at the same load (measured
+    identical to the last digit, 2.2e-9 from the closed form's P_max; before, with the path and the trace on the
+    outputs' spacing, 7 and 16 outputs folded 1.8e-6 and 8.8e-9 from it) and land on the same equilibrium."""
+    c = truss_closed_form()
+    folds, ends = [], []
+    for outputs in (5, 9):
+        (tmp_path / str(outputs)).mkdir()
+        scene = load_scene(write_truss_scene(tmp_path / str(outputs), outputs=outputs))
+        assert quasi_static_path_step(scene, 1.5)(0.3) == pytest.approx(1.5 / PATH_STEPS_WITHOUT_DRIVE, rel=1e-12)
+        run = simulate_scene(scene)
+        assert run.time.shape == (outputs,) and len(run.snaps) == 1
+        folds.append(run.snaps[0].fold_t)
+        ends.append(run.q[-1])
+    print("fold loads", [t * LOAD_RATE / c["limit_load"] - 1.0 for t in folds])
+    assert folds[0] * LOAD_RATE == pytest.approx(c["limit_load"], rel=1e-6)
+    assert folds[1] == pytest.approx(folds[0], rel=1e-12)
+    np.testing.assert_allclose(ends[1], ends[0], rtol=0, atol=1e-9 * np.abs(ends[0]).max())
+
+
+@pytest.mark.slow  # the halvings at the fold: 4 min on the loaded 2-core machine
+def test_without_monitoring_the_run_stops_at_the_fold_whatever_the_outputs(tmp_path):
+    """Without ``stability`` the truss's path cannot pass the fold: it stops there (Eq. (S4), the step halved 8
+    times), and the partial run ends with the path's last equilibrium. On its own steps that stop is the same for
+    5 and 9 outputs and lies within 1/256 of a path step (1.5e-4 s) below the closed form's limit time P_max / rate
+    (measured 1.0078223 s for both, 2.1e-5 s below; before, the run ended at the last output before the fold:
+    0.75 s with 5 outputs, 0.9375 s with 9, by construction, not measured)."""
+    c = truss_closed_form()
+    stops = []
+    for outputs in (5, 9):
+        (tmp_path / str(outputs)).mkdir()
+        path = write_truss_scene(tmp_path / str(outputs), outputs=outputs)
+        path.write_text(path.read_text().replace("stability = true", ""))
+        with pytest.raises(StaticDivergence) as stopped:
+            simulate_scene(load_scene(path))
+        stops.append(float(stopped.value.partial.time[-1]))
+    limit_time = c["limit_load"] / LOAD_RATE
+    print("stops", stops, "limit time", limit_time)
+    assert stops[1] == stops[0]
+    assert limit_time - 1.5 / PATH_STEPS_WITHOUT_DRIVE / 256 <= stops[0] <= limit_time
