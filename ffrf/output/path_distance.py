@@ -35,8 +35,8 @@ __all__ = ["ExactCurve", "PathDistance", "distance_to_curve"]
 
 log = logging.getLogger(__name__)
 
-#: Central-difference step of the curve's derivatives (rad): the truncation error h^2 p''' and the round-off
-#: eps |p| / h of p' are both near 1e-10 of |p'| for a curve of about unit angular scale.
+#: Central-difference step of the curve's derivatives (rad): the truncation error ``h^2 p'''`` and the round-off
+#: ``eps |p| / h`` of ``p'`` are both near 1e-10 of ``|p'|`` for a curve of about unit angular scale.
 DERIVATIVE_STEP = 1e-5
 #: Newton iterations per arc; from the chord's closest point it converges in 3 to 5.
 MAX_ITERATIONS = 30
