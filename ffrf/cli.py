@@ -131,7 +131,7 @@ def _configure_linkage_run(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--h", type=_element_edge, default=6e-3, help="maximum element edge in metres (paper: 0.002)")
     parser.add_argument("--order", type=int, choices=(1, 2), default=2, help="tetrahedron order (paper: 1)")
     parser.add_argument(
-        "--modes", type=_count_at_least(1), default=4, help="fixed-interface modes per link, >= 1 (paper: 32)"
+        "--modes", type=count_at_least(1), default=4, help="fixed-interface modes per link, >= 1 (paper: 32)"
     )
     parser.add_argument(
         "--joint-offsets",
@@ -141,14 +141,14 @@ def _configure_linkage_run(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--dt",
-        type=_number_in(0.0, math.inf, closed_low=False, unit=" s"),
+        type=number_in(0.0, math.inf, closed_low=False, unit=" s"),
         default=None,
         help="time step of a dynamic run (s); default: the drive turns 0.06 deg per step, at most 10 ms "
         "(10 ms at 1 rpm, where the coupler path is within 1e-9 m of shorter steps'; docs/speed_vs_error.md)",
     )
     parser.add_argument(
         "--outputs",
-        type=_count_at_least(2, MAX_OUTPUTS),
+        type=count_at_least(2, MAX_OUTPUTS),
         default=961,
         help="output times over the run (961: every 0.375 deg; the energy balance, a Simpson "
         "integral over them, then closes to 2e-7)",
@@ -165,13 +165,13 @@ def _configure_linkage_run(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--vtk-every",
-        type=_count_at_least(0),
+        type=count_at_least(0),
         default=0,
         help="also write deformed meshes for ParaView (DIR/bennett.pvd) every N outputs (0: none)",
     )
     parser.add_argument(
         "--max-steps",
-        type=_count_at_least(1),
+        type=count_at_least(1),
         default=MAX_TIME_STEPS,
         help=f"largest number of time steps (or equilibria) of the run (default {MAX_TIME_STEPS:.0e}, "
         "docs/bad_input.md): a longer run is refused with its estimated time unless this is raised",
@@ -502,11 +502,11 @@ def _configure_linkage(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--variant", choices=tuple(LINKAGE_VARIANTS), default="pla", help="link material")
     parser.add_argument(
         "--scale",
-        type=_number_in(0.0, math.inf, closed_low=False),
+        type=number_in(0.0, math.inf, closed_low=False),
         default=0.1,
         help="length scale of the model (its unit -> metres)",
     )
-    parser.add_argument("--driver", type=_count_at_least(0), default=0, help="driven joint")
+    parser.add_argument("--driver", type=count_at_least(0), default=0, help="driven joint")
     parser.add_argument(
         "--design-points",
         action="store_true",
@@ -528,7 +528,7 @@ def _configure_linkage(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--reach-images",
-        type=_count_at_least(3),
+        type=count_at_least(3),
         default=21,
         help="images of the string between the motion and an assembly, both ends included (default 21)",
     )
@@ -700,7 +700,7 @@ def _configure_study(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-report", action="store_true", help="do not write report.md after the run")
 
 
-def _count_at_least(smallest: int, largest: int | None = None) -> Callable[[str], int]:
+def count_at_least(smallest: int, largest: int | None = None) -> Callable[[str], int]:
     """An argparse type: a whole number >= ``smallest`` (and <= ``largest``)."""
 
     def count(text: str) -> int:
@@ -717,7 +717,7 @@ def _count_at_least(smallest: int, largest: int | None = None) -> Callable[[str]
     return count
 
 
-def _number_in(low: float, high: float, closed_low: bool = True, unit: str = "") -> Callable[[str], float]:
+def number_in(low: float, high: float, closed_low: bool = True, unit: str = "") -> Callable[[str], float]:
     """An argparse type: a finite number in ``[low, high]`` (``(low, high]`` without ``closed_low``), as a file key."""
     if math.isinf(high):
         bounds = f"{'>=' if closed_low else '>'} {low:g}{unit}"
@@ -737,8 +737,8 @@ def _number_in(low: float, high: float, closed_low: bool = True, unit: str = "")
     return number
 
 
-_positive_count = _count_at_least(1)
-_element_edge = _number_in(*PARAMETRIC_H_RANGE, unit=" m")
+_positive_count = count_at_least(1)
+_element_edge = number_in(*PARAMETRIC_H_RANGE, unit=" m")
 
 
 def _run_study(args: argparse.Namespace) -> int:

@@ -19,6 +19,10 @@ import argparse
 import sys
 from pathlib import Path
 
+from ffrf.cli import count_at_least, number_in
+from ffrf.scenes.limits import MAX_OUTPUTS
+from ffrf.scenes.scene_schema import PARAMETRIC_H_RANGE
+
 from .bennett_validation import ValidationSettings, validate_bennett
 from .report import write_report, write_summary
 
@@ -27,18 +31,37 @@ VARIANTS = ("rigid", "pla", "pla1", "pla2")
 
 def _settings_arguments(parser: argparse.ArgumentParser) -> None:
     defaults = ValidationSettings()
-    parser.add_argument("--h", type=float, default=defaults.h, help="maximum tetrahedron edge (m); paper 0.002")
+    parser.add_argument(
+        "--h",
+        type=number_in(*PARAMETRIC_H_RANGE, unit=" m"),
+        default=defaults.h,
+        help="maximum tetrahedron edge (m); paper 0.002",
+    )
     parser.add_argument("--order", type=int, choices=(1, 2), default=defaults.order, help="element order")
-    parser.add_argument("--modes", type=int, default=defaults.n_modes, help="fixed-interface modes per link (paper 32)")
-    parser.add_argument("--outputs", type=int, default=defaults.outputs, help="quasi-static rows over the revolution")
+    parser.add_argument(
+        "--modes", type=count_at_least(1), default=defaults.n_modes, help="fixed-interface modes per link (paper 32)"
+    )
+    parser.add_argument(
+        "--outputs",
+        type=count_at_least(2, MAX_OUTPUTS),
+        default=defaults.outputs,
+        help="quasi-static rows over the revolution",
+    )
     parser.add_argument(
         "--dynamic-window",
-        type=float,
+        type=number_in(0.0, 3600.0, unit=" s"),
         default=defaults.dynamic_t_end,
         help="seconds of dynamic simulation compared from t = 0 (0: skip)",
     )
-    parser.add_argument("--step", type=float, default=defaults.step, help="time step of the dynamic window (s)")
-    parser.add_argument("--rho-inf", type=float, default=defaults.rho_inf, help="generalized-alpha spectral radius")
+    parser.add_argument(
+        "--step",
+        type=number_in(0.0, 1.0, closed_low=False, unit=" s"),
+        default=defaults.step,
+        help="time step of the dynamic window (s)",
+    )
+    parser.add_argument(
+        "--rho-inf", type=number_in(0.0, 1.0), default=defaults.rho_inf, help="generalized-alpha spectral radius"
+    )
     parser.add_argument(
         "--basis",
         choices=("exudyn", "ffrf"),

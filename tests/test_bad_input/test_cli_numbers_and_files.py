@@ -143,3 +143,27 @@ def test_ffrf_checks_the_output_folder_before_the_run(tmp_path, capsys, monkeypa
     command = [str(tmp_path / c) if c.endswith(".toml") else c for c in command]
     assert main([*command, "--out", str(tmp_path / "out")]) == 2
     assert "cannot write to --out" in one_line_error(capsys)
+
+
+@pytest.mark.parametrize(
+    ("flag", "value"),
+    [
+        ("--step", "-1"),
+        ("--step", "inf"),
+        ("--rho-inf", "1.5"),
+        ("--modes", "0"),
+        ("--outputs", "1"),
+        ("--h", "nan"),
+        ("--dynamic-window", "-0.5"),
+    ],
+)
+def test_validation_flags_are_checked_like_the_runs_flags(tmp_path, capsys, flag, value):
+    """``python -m validation report`` refuses what ``python -m ffrf bennett`` refuses, before anything is built:
+    a usage error naming the flag, exit status 2, nothing written."""
+    from validation.__main__ import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(["report", "--variant", "pla", flag, value, "--out", str(tmp_path / "out")])
+    assert stop.value.code == 2
+    assert flag in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
