@@ -20,10 +20,12 @@ from bench.registry import BENCHMARKS, Benchmark, Recording, benchmark, recordin
 
 def _list() -> int:
     for entry in BENCHMARKS:
-        how = f"python -m bench {entry.name}" if entry.in_bench else f"python -m {entry.runnable}"
-        print(f"{entry.name}: {entry.summary}\n    run: {how}\n    measures: {', '.join(entry.sources())}")
+        print(f"{entry.name}: {entry.summary}\n    run: {entry.command}\n    measures: {', '.join(entry.sources())}")
         for rec in entry.records:
-            args = " ".join([*rec.env, *rec.args]) if not rec.recipe_missing else f"(not: {rec.recipe_missing})"
+            if rec.recipe_missing:
+                args = f"(not by the runner: {rec.recipe_missing})"
+            else:
+                args = " ".join([*rec.env, *rec.args])
             print(f"    docs/results/{rec.result}.json  {args}")
     return 0
 
@@ -81,7 +83,7 @@ def _run(name: str, args: list[str]) -> int:
         print(f"bench: {error.args[0]}")
         return 2
     if not entry.in_bench:
-        print(f"bench: {name} is run as python -m {entry.runnable}, not by this runner")
+        print(f"bench: {name} is run as {entry.command}, not by this runner")
         return 2
     sys.argv = [f"bench/{name}.py", *args]
     runpy.run_module(entry.runnable, run_name="__main__", alter_sys=True)

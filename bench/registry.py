@@ -21,6 +21,8 @@ __all__ = ["BENCHMARKS", "Benchmark", "Recording", "benchmark", "recording", "re
 ENGINE = ("ffrf", "kinematics")
 #: The engine and the Exudyn twins and validation reports.
 WITH_VALIDATION = (*ENGINE, "validation", "identification")
+#: The arguments of a command that writes its JSON to the file ``--json`` names.
+JSON = ("--json", "{out}/report.json")
 
 
 @dataclass(frozen=True)
@@ -41,7 +43,7 @@ class Recording:
     """
 
     result: str
-    args: tuple[str, ...] = ("--json", "{out}/report.json")
+    args: tuple[str, ...] = JSON
     outputs: tuple[str, ...] = ("report.json",)
     select: tuple[str, ...] = ()
     rows_by: str | None = None
@@ -61,7 +63,8 @@ class Benchmark:
     measures : repository paths (packages, modules) whose change makes its results stale; a module of ``bench/`` is
         added itself (:meth:`sources`).
     records : the result files it writes.
-    module : the module run with ``python -m``: ``bench.{name}`` unless one of the library's command lines.
+    module : the module run with ``python -m`` (``bench.{name}`` when empty), or the path of a script that writes its
+        result files itself.
     helpers : other modules of ``bench/`` whose code takes part in the measurement.
     """
 
@@ -78,6 +81,13 @@ class Benchmark:
         return self.module or f"bench.{self.name}"
 
     @property
+    def command(self) -> str:
+        """How it is run, as typed at the repository's root."""
+        if self.in_bench:
+            return f"python -m bench {self.name}"
+        return self.module if "/" in self.module else f"python -m {self.module}"
+
+    @property
     def in_bench(self) -> bool:
         """Whether it is a module of ``bench/`` (else a command line of the library)."""
         return not self.module
@@ -88,26 +98,22 @@ class Benchmark:
         return (*self.measures, *own)
 
 
-def _json(name: str = "report.json") -> tuple[str, ...]:
-    return ("--json", f"{{out}}/{name}")
-
-
 BENCHMARKS: tuple[Benchmark, ...] = (
     # ---------------------------------------------------------------------------------------- modules of bench/
     Benchmark(
         "bennett_speed",
         "set-up, dynamic and quasi-static run times of the Bennett scene, fast options against the reference",
-        records=(Recording("bennett_speed", ("--cold", *_json())),),
+        records=(Recording("bennett_speed", ("--cold", *JSON)),),
     ),
     Benchmark(
         "bennett_variants",
         "the four variants of the paper's Bennett linkage at a discretisation (README's headline table)",
         records=(
             Recording("bennett_variants_default", rows_by="variant", rows_name="variants"),
-            Recording("bennett_variants_p2_4mm", ("--h", "0.004", *_json()), rows_by="variant", rows_name="variants"),
+            Recording("bennett_variants_p2_4mm", ("--h", "0.004", *JSON), rows_by="variant", rows_name="variants"),
             Recording(
                 "bennett_variants_paper",
-                ("--order", "1", "--h", "0.002", "--modes", "32", *_json()),
+                ("--order", "1", "--h", "0.002", "--modes", "32", *JSON),
                 rows_by="variant",
                 rows_name="variants",
             ),
@@ -146,7 +152,7 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         "mesh, assembly and modal-analysis cost of the coupler link",
         records=(
             Recording("fe_link_p1"),
-            Recording("fe_link_p2", ("--order", "2", "--h", "0.004", "0.002", *_json())),
+            Recording("fe_link_p2", ("--order", "2", "--h", "0.004", "0.002", *JSON)),
         ),
     ),
     Benchmark(
@@ -154,9 +160,9 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         "a whole ramp and revolution, ours against the Exudyn twin",
         measures=WITH_VALIDATION,
         records=(
-            Recording("full_revolution", ("--step", "0.01", *_json())),
+            Recording("full_revolution", ("--step", "0.01", *JSON)),
             Recording(
-                "full_revolution_paper", ("--order", "1", "--h", "0.004", "--modes", "32", "--step", "0.01", *_json())
+                "full_revolution_paper", ("--order", "1", "--h", "0.004", "--modes", "32", "--step", "0.01", *JSON)
             ),
         ),
     ),
@@ -180,7 +186,7 @@ BENCHMARKS: tuple[Benchmark, ...] = (
     Benchmark(
         "memory",
         "peak resident memory of the main job, per stage and per mesh",
-        records=(Recording("memory", ("--meshes", "1,0.002", "1,0.001", "2,0.003", *_json())),),
+        records=(Recording("memory", ("--meshes", "1,0.002", "1,0.001", "2,0.003", *JSON)),),
         helpers=("memory_probe",),
     ),
     Benchmark(
@@ -257,10 +263,10 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         measures=WITH_VALIDATION,
         records=(
             Recording("validation_refinement_pla", rows_by="step"),
-            Recording("validation_refinement_pla1", ("--variant", "pla1", *_json()), rows_by="step"),
+            Recording("validation_refinement_pla1", ("--variant", "pla1", *JSON), rows_by="step"),
             Recording(
                 "validation_refinement_pla1_exudyn_jacobian",
-                ("--variant", "pla1", "--exudyn-jacobian", *_json()),
+                ("--variant", "pla1", "--exudyn-jacobian", *JSON),
                 rows_by="step",
             ),
         ),
@@ -336,7 +342,7 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         measures=WITH_VALIDATION,
         records=(
             Recording("validation_summary", ("summary", "--out", "{out}"), ("summary.json",)),
-            Recording("testmodels", ("testmodels", *_json())),
+            Recording("testmodels", ("testmodels", *JSON)),
             Recording(
                 "validation_collisions_free_6r",
                 ("report", "--scene", "out/rec/6r_validation.toml", "--out", "{out}"),
@@ -351,7 +357,7 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         module="kinematics",
         measures=("kinematics",),
         records=tuple(
-            Recording(f"nearby_{model}", ("nearby", "--model", model, *_json()))
+            Recording(f"nearby_{model}", ("nearby", "--model", model, *JSON))
             for model in ("collisions_free_6r", "plane_fold_6r")
         ),
     ),
@@ -365,7 +371,7 @@ BENCHMARKS: tuple[Benchmark, ...] = (
                 "blas_matrix",
                 (),
                 (),
-                recipe_missing="scripts/blas-matrix.sh writes it with its own meta: run ./scripts/blas-matrix.sh",
+                recipe_missing="scripts/blas-matrix.sh writes it, with its own meta",
             ),
         ),
     ),
