@@ -19,6 +19,7 @@ from bench.registry import BENCHMARKS, Benchmark, Recording, benchmark, recordin
 
 
 def _list() -> int:
+    """Print every benchmark, how it runs, what it measures and its recordings."""
     for entry in BENCHMARKS:
         print(f"{entry.name}: {entry.summary}\n    run: {entry.command}\n    measures: {', '.join(entry.sources())}")
         for rec in entry.records:
@@ -46,6 +47,7 @@ def _recordings(names: list[str]) -> list[tuple[Benchmark, Recording]]:
 
 
 def _record(names: list[str]) -> int:
+    """Record the result files named (stems or benchmark names); stops at the first that cannot be."""
     from bench.record import DirtyTree, record  # imports ffrf (provenance): not needed by --list or stale
 
     if not names:
@@ -67,6 +69,7 @@ def _record(names: list[str]) -> int:
 
 
 def _stale() -> int:
+    """Print the stale result files with the reason; exit status 1 if any."""
     from bench.staleness import stale_results
 
     found = stale_results()
@@ -77,6 +80,7 @@ def _stale() -> int:
 
 
 def _run(name: str, args: list[str]) -> int:
+    """Run ``bench/NAME.py`` as ``__main__`` with ``args`` as its command line."""
     try:
         entry = benchmark(name)
     except KeyError as error:
@@ -91,6 +95,7 @@ def _run(name: str, args: list[str]) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The runner's command line (the module's docstring); its exit status."""
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] in ("-h", "--help"):
         print(__doc__)
