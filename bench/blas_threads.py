@@ -7,28 +7,22 @@ machine is quiet and costs when it is busy. ``python -m ffrf`` uses ``--blas-thr
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/blas_threads.py --json out/blas_threads.json
+    .venv/bin/python -m bench blas_threads --json out/blas_threads.json
 """
 
 from __future__ import annotations
 
 import argparse
 import multiprocessing
-import sys
 import time
 import warnings
 from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from bench_report import write_report  # noqa: E402
-
-from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
-from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
+from bench.report import write_report
+from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.scenes.linkage_run import run_linkage
 
 
 def best_times(scene, repeat: int) -> dict[str, float]:

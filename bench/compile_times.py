@@ -10,7 +10,7 @@ call, loaded with them from the cache, are not listed).
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/compile_times.py --json out/compile_times.json
+    .venv/bin/python -m bench compile_times --json out/compile_times.json
 """
 
 from __future__ import annotations
@@ -24,9 +24,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from bench_report import write_report  # noqa: E402
+from bench import ROOT
+from bench.report import write_report
 
-ROOT = Path(__file__).resolve().parents[1]
 COMMANDS = {
     "warmup": ["warmup"],
     "bennett": ["bennett", "--variant", "pla", "--out", "{out}"],
@@ -104,7 +104,17 @@ def main() -> int:
         cache = args.keep_cache or Path(folder) / "cache"
         raw = Path(folder) / "raw.json"
         env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT))
-        child = [sys.executable, __file__, "--json", str(args.json), "--command", args.command, "--child", str(raw)]
+        child = [
+            sys.executable,
+            "-m",
+            "bench.compile_times",
+            "--json",
+            str(args.json),
+            "--command",
+            args.command,
+            "--child",
+            str(raw),
+        ]
         started = time.perf_counter()
         subprocess.run(child, cwd=ROOT, env=env, check=True, stdout=subprocess.DEVNULL)
         process_s = time.perf_counter() - started

@@ -11,30 +11,24 @@ The default step of a dynamic run, 0.06 deg of drive per step (10 ms at 1 rpm,
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/dynamic_step_rule.py --json out/dynamic_step_rule.json
+    .venv/bin/python -m bench dynamic_step_rule --json out/dynamic_step_rule.json
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from bench_report import write_report  # noqa: E402
-from full_revolution import count_factorisations  # noqa: E402
-
 import ffrf.solvers.generalized_alpha as alpha  # noqa: E402
-from ffrf.scenes.assembly import assemble  # noqa: E402
-from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
-from ffrf.scenes.linkage_run import evaluate_sensors  # noqa: E402
+from bench.full_revolution import count_factorisations
+from bench.report import write_report
+from ffrf.scenes.assembly import assemble
+from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.scenes.linkage_run import evaluate_sensors
 
 #: Output rows every 0.08 s (a multiple of every step below).
 OUTPUT_INTERVAL = 0.08

@@ -27,9 +27,9 @@ output is cut off at the first non-finite row and reported, never written.
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/hard_cases.py --out out/hard_cases          # all, ~30 min
-    PYTHONPATH=. .venv/bin/python bench/hard_cases.py --quick --out out/hard_quick  # ~3 min
-    PYTHONPATH=. .venv/bin/python bench/hard_cases.py --cases near_rigid,speed --no-exudyn
+    .venv/bin/python -m bench hard_cases --out out/hard_cases          # all, ~30 min
+    .venv/bin/python -m bench hard_cases --quick --out out/hard_quick  # ~3 min
+    .venv/bin/python -m bench hard_cases --cases near_rigid,speed --no-exudyn
 
 Timings are wall-clock on a shared 2-core machine: noisy, compare them only within a run.
 """
@@ -40,18 +40,19 @@ import argparse
 import json
 import math
 import multiprocessing
-import sys
 import time
 import traceback
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+from bench import ROOT
+
+if TYPE_CHECKING:  # the solver is imported by each case's own process (spawned), not by this module
+    from ffrf.solvers.static_solver import StaticSolution
 
 #: Coarse discretisation for the cases that do not study the discretisation itself.
 COARSE = dict(h=6e-3, order=1, n_modes=4)
@@ -169,7 +170,7 @@ class Outcome:
     q: np.ndarray
     sensors: dict
     iterations: np.ndarray
-    assembly: object = None
+    assembly: StaticSolution | None = None
 
 
 def _finite_prefix(time_: np.ndarray, sensors: dict) -> int:
@@ -219,11 +220,18 @@ def simulate(
         return empty
     assembled = time.perf_counter()
     row.extra["assembly_s"] = assembled - started
-    q, qd, lam, times, iterations = None, None, None, None, []
+    # the run's outputs, arrays once it produced any
+    q: Any = None
+    qd: Any = None
+    lam: Any = None
+    times: Any = None
+    iterations: list[int] = []
     try:
         if mode == "quasi_static":
             grid = np.linspace(0.0, t_end, n_outputs)
-            qs, lams, done = [], [], []
+            qs: list[np.ndarray] = []
+            lams: list[np.ndarray] = []
+            done: list[float] = []
             start_q = assembly.q
             for part in np.array_split(np.arange(n_outputs), min(chunks, n_outputs)):
                 if time.perf_counter() - started > budget_s:
@@ -335,7 +343,8 @@ def _save(ctx: Context, run: str, times: np.ndarray, sensors: dict) -> None:
     directory = ctx.out / "runs" / ctx.case
     directory.mkdir(parents=True, exist_ok=True)
     safe = "".join(c if c.isalnum() or c in "-_.=" else "_" for c in run)
-    np.savez(directory / f"{safe}.npz", time=times, **{k: np.asarray(sensors[k]) for k in keep if k in sensors})
+    arrays: dict[str, Any] = {"time": times, **{k: np.asarray(sensors[k]) for k in keep if k in sensors}}
+    np.savez(directory / f"{safe}.npz", **arrays)
 
 
 def exudyn_dynamic(scene, t_end: float, step: float, rho_inf: float = 0.9) -> str:
@@ -946,7 +955,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
     for name in names:
         print(f"case {name} ...", flush=True)
         fresh[name] = run_case(name, args.quick, not args.no_exudyn, args.out)
-        results = [fresh.get(n, kept.get(n)) for n in CASES if n in fresh or n in kept]
+        results = [fresh[n] if n in fresh else kept[n] for n in CASES if n in fresh or n in kept]
         # rewrite after each case: an interrupted suite keeps what it has
         (args.out / "hard_cases.json").write_text(
             json.dumps({"quick": args.quick, "cases": results}, indent=1, default=_json_default)

@@ -14,13 +14,12 @@ numba (a jitted loop of ``--calls`` calls, best of five; no Python call overhead
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/iteration_cost.py --modes 4 8 16 32 --json out/iteration_cost.json
+    .venv/bin/python -m bench iteration_cost --modes 4 8 16 32 --json out/iteration_cost.json
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 import warnings
 from pathlib import Path
@@ -29,19 +28,14 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from bench_report import write_report  # noqa: E402
-
-from ffrf.scenes.assembly import assemble  # noqa: E402
-from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
-from ffrf.solvers.common import consistent_accelerations  # noqa: E402
-from ffrf.solvers.generalized_alpha import generalized_alpha  # noqa: E402
-from ffrf.solvers.newton_kernels import lu_solve  # noqa: E402
-from ffrf.system.packed_system import pack_system  # noqa: E402
-from ffrf.system.system_kernels import _body_residuals, _constraints, system_residual  # noqa: E402
+from bench.report import write_report
+from ffrf.scenes.assembly import assemble
+from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.solvers.common import consistent_accelerations
+from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.solvers.newton_kernels import lu_solve
+from ffrf.system.packed_system import pack_system
+from ffrf.system.system_kernels import _body_residuals, _constraints, system_residual
 
 
 @njit(cache=True)
@@ -95,6 +89,8 @@ def measure(modes: int, calls: int, t_end: float) -> dict:
     qd = np.zeros_like(q)
     qdd, lam = consistent_accelerations(system, q, qd)
     packed = pack_system(system)
+    if packed is None:
+        raise RuntimeError("the PLA Bennett scene has no packed form: ffrf.system.packed_system cannot time it")
     bodies, joints, q_, qd_, qdd_, lam_, gravity, phi = packed._kernel_arguments(q, qd, qdd, lam, 0.0)
     matrix = packed.iteration_matrix(q, qd, qdd, lam, 0.0, 1.0, 3e-5, 6e-3)
     lu, piv = scipy.linalg.lu_factor(matrix)

@@ -21,7 +21,7 @@ kernel have no such term.
 
 Usage::
 
-    PYTHONPATH=. OPENBLAS_NUM_THREADS=1 FFRF_CACHE_DIR=off .venv/bin/python bench/memory.py --json out/memory.json
+    OPENBLAS_NUM_THREADS=1 FFRF_CACHE_DIR=off .venv/bin/python -m bench memory --json out/memory.json
 """
 
 from __future__ import annotations
@@ -37,12 +37,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from bench_report import write_report
-from memory_probe import SETUP_STAGES as BUILD_STAGES
-from memory_probe import StagePeaks, count_allocations, nrt_counts, run_child, status_mb, stop_counting
 from numba import njit
 
-ROOT = Path(__file__).resolve().parents[1]
+from bench import ROOT
+from bench.memory_probe import SETUP_STAGES as BUILD_STAGES
+from bench.memory_probe import StagePeaks, count_allocations, nrt_counts, run_child, status_mb, stop_counting
+from bench.report import write_report
+
 MAIN_JOB = ["-m", "ffrf", "bennett", "--variant", "pla"]
 
 #: (module, function, stage): the build and its stages
@@ -82,7 +83,7 @@ def _measured_child(kind: str, *arguments: str) -> dict:
     reset of ``VmHWM``, which the kernel also uses for it."""
     with tempfile.TemporaryDirectory(prefix="ffrf-memory-") as folder:
         out = Path(folder) / "child.json"
-        command = [sys.executable, __file__, "--child", kind, str(out), *arguments]
+        command = [sys.executable, "-m", "bench.memory", "--child", kind, str(out), *arguments]
         code, _, wall = run_child(command, env=_environment(), cwd=ROOT, log=Path(folder) / "log.txt")
         if code != 0:
             raise RuntimeError(f"{kind} {arguments} exited with {code}:\n{(Path(folder) / 'log.txt').read_text()}")

@@ -8,13 +8,12 @@ misfit model's largest distance from the remeshed one, and their ratio (the issu
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/misfit_vs_remesh.py --json out/misfit_vs_remesh.json [--h 0.006]
+    .venv/bin/python -m bench misfit_vs_remesh --json out/misfit_vs_remesh.json [--h 0.006]
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 import warnings
 from dataclasses import replace
@@ -22,14 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from bench_report import write_report  # noqa: E402
-
-from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options  # noqa: E402
-from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
+from bench.report import write_report
+from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
+from ffrf.scenes.linkage_run import run_linkage
 
 
 def coupler_path(variant: str, model: str, h: float, order: int, modes: int, outputs: int) -> tuple[np.ndarray, float]:

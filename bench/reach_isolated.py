@@ -10,7 +10,7 @@ string's iterations and the wall times.
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/reach_isolated.py --json out/reach.json
+    .venv/bin/python -m bench reach_isolated --json out/reach.json
 
 Timings are wall-clock on a shared 2-core machine: compare them only within a run.
 """
@@ -25,11 +25,8 @@ import time
 import warnings
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from ffrf.cli import main as ffrf  # noqa: E402
+from bench.report import write_report
+from ffrf.cli import main as ffrf
 
 KEPT = (
     "barrier_J",
@@ -93,9 +90,7 @@ def main() -> int:
         "reach_s": reach["seconds"],
         "wall_time_s": wall,
     }
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps(summary, indent=1))
-    print(json.dumps(summary, indent=1))
+    write_report(summary, args.json)
     return 0
 
 

@@ -1,9 +1,8 @@
 """How far the default runs are from failing their own checks (ffrf.output.verification), and the exact distance to
 the ideal path against the polyline it replaced (issue #32).
 
-    .venv/bin/python scripts/record.py docs/results/run_checks.json --json out/run_checks.json --rows-by name \\
-        --rows-name runs -- \\
-        python bench/run_checks.py --json out/run_checks.json
+    .venv/bin/python -m bench record run_checks                     # docs/results/run_checks.json
+    .venv/bin/python -m bench run_checks --json out/run_checks.json  # the rows alone
 
 Runs, at the command line's defaults (961 outputs, 6 mm P2, 4 modes): the PLA and rigid Bennett linkages
 quasi-statically, PLA dynamically (10 ms steps), collisions_free_6r in PLA and rigid, and the stiff Bennett and
@@ -15,22 +14,17 @@ through the samples the old metric used (4000 for the Bennett, 720 for any loop)
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from bench_report import write_report  # noqa: E402
-
-from ffrf.output.path_distance import distance_to_curve  # noqa: E402
-from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
-from ffrf.scenes.linkage_file import load_linkage  # noqa: E402
-from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
+from bench.report import write_report
+from ffrf.output.path_distance import distance_to_curve
+from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.scenes.linkage_file import load_linkage
+from ffrf.scenes.linkage_run import run_linkage
 
 OUTPUTS = 961
 

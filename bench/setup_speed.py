@@ -9,7 +9,7 @@ import of the solver, outside the build.
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/setup_speed.py --json out/setup_speed.json
+    .venv/bin/python -m bench setup_speed --json out/setup_speed.json
 """
 
 from __future__ import annotations
@@ -26,10 +26,9 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from bench_report import write_report  # noqa: E402
-from memory_probe import SETUP_STAGES  # noqa: E402
-
-ROOT = Path(__file__).resolve().parents[1]
+from bench import ROOT
+from bench.memory_probe import SETUP_STAGES
+from bench.report import write_report
 
 #: (module, function, stage): the functions whose time makes the stages of a cold build (keys in s).
 STAGES = tuple((module, name, f"{stage}_s") for module, name, stage in SETUP_STAGES)
@@ -73,7 +72,12 @@ def run(cache: str) -> dict:
     """A build in a new process with ``FFRF_CACHE_DIR=cache``."""
     env = dict(os.environ, FFRF_CACHE_DIR=cache, PYTHONPATH=str(ROOT), OPENBLAS_NUM_THREADS="1")
     out = subprocess.run(
-        [sys.executable, __file__, "--child"], cwd=ROOT, env=env, check=True, capture_output=True, text=True
+        [sys.executable, "-m", "bench.setup_speed", "--child"],
+        cwd=ROOT,
+        env=env,
+        check=True,
+        capture_output=True,
+        text=True,
     )
     return json.loads(out.stdout.strip().splitlines()[-1])
 

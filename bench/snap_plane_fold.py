@@ -13,7 +13,7 @@ dynamic run snaps, to compare with the fold of the quasi-static path.
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/snap_plane_fold.py --json out/snap_plane_fold.json
+    .venv/bin/python -m bench snap_plane_fold --json out/snap_plane_fold.json
 
 Timings are wall-clock on a shared 2-core machine: compare them only within a run.
 """
@@ -22,24 +22,18 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from bench_report import write_report  # noqa: E402
-
-from ffrf.errors import StaticDivergence  # noqa: E402
-from ffrf.scenes.linkage_description import LinkageOptions  # noqa: E402
-from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
-from ffrf.scenes.linkage_scene import build_linkage  # noqa: E402
-from kinematics.rational_mechanism import load_model, loop_from_mechanism, regular_start  # noqa: E402
+from bench.report import write_report
+from ffrf.errors import StaticDivergence
+from ffrf.scenes.linkage_description import LinkageOptions
+from ffrf.scenes.linkage_run import LinkageResult, run_linkage
+from ffrf.scenes.linkage_scene import build_linkage
+from kinematics.rational_mechanism import load_model, loop_from_mechanism, regular_start
 
 
 def _scene(h_mm: float, order: int, modes: int):
@@ -144,6 +138,7 @@ def main() -> int:
             fold_point = monitored.sensors["coupler_point"][after - 1]
             landing_point = monitored.sensors["coupler_point"][after]
             started = time.perf_counter()
+            run: LinkageResult | None
             try:
                 run = run_linkage(scene, "dynamic", 2000, step=args.step, t_end=args.t_end)
                 stopped = None

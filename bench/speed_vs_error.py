@@ -48,8 +48,8 @@ Exudyn's and their ratio.
 
 Usage::
 
-    .venv/bin/python bench/speed_vs_error.py --out out/speed_vs_error      # full sweep (about an hour)
-    .venv/bin/python bench/speed_vs_error.py --quick --out /tmp/sve        # two coarse points, ours only
+    .venv/bin/python -m bench speed_vs_error --out out/speed_vs_error      # full sweep (about an hour)
+    .venv/bin/python -m bench speed_vs_error --quick --out /tmp/sve        # two coarse points, ours only
 """
 
 from __future__ import annotations
@@ -57,19 +57,14 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-for _folder in (ROOT, ROOT / "bench"):  # the solver and, when loaded by path, bench/memory_probe.py
-    if str(_folder) not in sys.path:
-        sys.path.insert(0, str(_folder))
-
-from memory_probe import memory_start, memory_stop  # noqa: E402
+from bench.memory_probe import memory_start, memory_stop
 
 QS_POINTS = [f"1,{h},{m}" for h in (0.006, 0.004, 0.003) for m in (2, 8)] + [f"2,0.006,{m}" for m in (4, 8)]
 _STEPS = (0.004, 0.002, 0.001, 0.0005)
@@ -406,10 +401,17 @@ def _warm_up() -> None:
     dynamic_solve(0.004, 0.9)(scene.system, q0, np.array([0.0, 0.008]))
 
 
-def _parse(spec: str) -> tuple:
+def _parse(spec: str) -> tuple[Any, bool]:
+    """``order,h,modes[,step,rho][,ours]`` -> (the numbers, 3 or 5 of them, as a tuple; whether ours only)."""
     parts = spec.split(",")
     values = [int(parts[0]), float(parts[1]), int(parts[2])] + [float(v) for v in parts[3:5]]
     return tuple(values), (len(parts) > 5 and parts[5] == "ours")
+
+
+def _mesh(spec: str) -> tuple[int, float, int]:
+    """``order,h,modes`` of a reference's mesh."""
+    order, h, modes = _parse(spec)[0][:3]
+    return order, h, modes
 
 
 def main(argv: list[str] | None = None) -> list[dict]:
@@ -445,9 +447,9 @@ def main(argv: list[str] | None = None) -> list[dict]:
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args(argv)
     if args.report_only:
-        points = json.loads((args.out / "results.json").read_text())
-        write_report(points, args.out, args.window)
-        return points
+        recorded: list[dict] = json.loads((args.out / "results.json").read_text())
+        write_report(recorded, args.out, args.window)
+        return recorded
     if args.quick:  # a smoke test of the whole pipeline, for the test suite
         args.qs_points, args.dyn_qs_points = ["1,0.01,2", "1,0.008,2"], []
         args.dyn_points = ["1,0.01,2,0.004,0.9,ours", "1,0.008,2,0.004,0.9,ours"]
@@ -455,7 +457,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
         args.fine_reference = ""
     args.out.mkdir(parents=True, exist_ok=True)
     exudyn = not args.no_exudyn
-    ref_spec = _parse(args.reference)[0]
+    ref_spec = _mesh(args.reference)
     points: list[dict] = []
     checks: dict = {
         "reference": dict(zip(("order", "h", "modes"), ref_spec, strict=True)),
@@ -507,7 +509,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
     cache.clear()
     if args.fine_reference:
         # Richardson: f(h) = f* + C h^p on the two meshes gives f*; the reference's own error is |f(h) - f*|
-        fine_spec = _parse(args.fine_reference)[0]
+        fine_spec = _mesh(args.fine_reference)
         print(
             f"finer reference {args.fine_reference}: Richardson extrapolation, order {args.richardson_order}",
             flush=True,
@@ -540,7 +542,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     # Quasi-static sweep ---------------------------------------------------------------------
     for spec in args.qs_points:
         parsed, ours_only = _parse(spec)
-        for solver, run in run_quasi_static(*parsed[:3], qs_times, exudyn and not ours_only).items():
+        order, h, modes = parsed[:3]
+        for solver, run in run_quasi_static(order, h, modes, qs_times, exudyn and not ours_only).items():
             p = _point(solver, "quasi_static", "quasi_static", parsed, run, _errors(run, reference), {"t_end": t_end})
             points.append(p)
             _log(p)
@@ -549,7 +552,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     # Dynamic window -------------------------------------------------------------------------
     for spec in args.dyn_points:
         parsed, ours_only = _parse(spec)
-        runs = run_dynamic(*parsed, args.window, exudyn and not ours_only)
+        order, h, modes, step, rho = parsed
+        runs = run_dynamic(order, h, modes, step, rho, args.window, exudyn and not ours_only)
         for solver, run in runs.items():
             extra = {
                 "t_end": args.window,
@@ -563,7 +567,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
         save()
     for spec in args.dyn_qs_points:
         parsed, ours_only = _parse(spec)
-        for solver, run in run_quasi_static(*parsed[:3], qs_window, exudyn and not ours_only).items():
+        order, h, modes = parsed[:3]
+        for solver, run in run_quasi_static(order, h, modes, qs_window, exudyn and not ours_only).items():
             p = _point(
                 solver,
                 "dynamic_window",

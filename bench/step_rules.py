@@ -20,35 +20,29 @@ Wall times are of the shared 2-core machine. Keys are stable: ``docs/*.md`` link
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/step_rules.py --json out/step_rules.json
+    .venv/bin/python -m bench step_rules --json out/step_rules.json
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import sys
 import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from bench_report import write_report  # noqa: E402
-
 import ffrf.scenes.linkage_run as linkage_run  # noqa: E402
-from ffrf.errors import NewtonDivergence, StaticDivergence  # noqa: E402
-from ffrf.fe.materials import PLA, RIGID  # noqa: E402
-from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
-from ffrf.scenes.linkage_description import drive_sign  # noqa: E402
-from ffrf.scenes.linkage_file import load_linkage  # noqa: E402
-from ffrf.scenes.linkage_steps import joint_rate_profile  # noqa: E402
-from kinematics import joint_rates  # noqa: E402
-from kinematics.single_loop import follow_driver  # noqa: E402
+from bench.report import write_report
+from ffrf.errors import NewtonDivergence, StaticDivergence
+from ffrf.fe.materials import PLA, RIGID
+from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.scenes.linkage_description import drive_sign
+from ffrf.scenes.linkage_file import load_linkage
+from ffrf.scenes.linkage_steps import joint_rate_profile
+from kinematics import joint_rates
+from kinematics.single_loop import follow_driver
 
 PARTS = ("interp_dynamic", "interp_unloaded", "plane_fold_pla", "plane_fold_rigid", "bennett")
 
@@ -71,8 +65,9 @@ def drive_rule_only():
     """Runs without the joint-rate rules: dynamic steps of the drive's rule alone (no (G7) limit) and the quasi-static
     path solved at the outputs (no (S10) path step), as before issue #32."""
     kept = linkage_run.dynamic_step_limit, linkage_run.quasi_static_path_step
-    linkage_run.dynamic_step_limit = lambda scene: None
-    linkage_run.quasi_static_path_step = lambda scene: None
+    # None is what the runs take for "no rule" (linkage_run passes it on), not what the rules' functions return
+    linkage_run.dynamic_step_limit = lambda scene: None  # type: ignore[return-value]
+    linkage_run.quasi_static_path_step = lambda scene: None  # type: ignore[return-value]
     try:
         yield
     finally:

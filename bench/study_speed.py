@@ -28,7 +28,7 @@ the default discretisation (P2, 6 mm, 4 modes).
 
 Usage::
 
-    PYTHONPATH=. OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/study_speed.py --json out/study_speed.json
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python -m bench study_speed --json out/study_speed.json
 """
 
 from __future__ import annotations
@@ -42,8 +42,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from bench_report import write_report  # noqa: E402
-
+from bench.report import write_report
 from ffrf.errors import StaticDivergence
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.scene_cache import PROCESS_CACHE
@@ -195,7 +194,10 @@ def through_dask(workers: int, variants: int, folder: Path, attempts: int) -> di
             run = run_study(study, folder / f"workers{workers}-{attempt}", client=client, progress=False)
             busy = _machine_busy_seconds() - busy
             ours = _cpu_seconds() + sum(client.run(_cpu_seconds).values()) - ours
-            rows = read_rows(folder / f"workers{workers}-{attempt}").to_pylist()
+            table = read_rows(folder / f"workers{workers}-{attempt}")
+            if table is None:
+                raise RuntimeError(f"the study in {folder} wrote no rows")
+            rows = table.to_pylist()
             other = (busy - ours) / run.wall_time_s
             if not kept or other < kept["other_processes_cpu_cores"]:
                 kept = {

@@ -11,7 +11,7 @@ The geometry, the closed forms and the chain model are ``tests/textbook_fixtures
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/textbook_buckling.py [--segments 1 2 4 8 16] [--json OUT.json]
+    .venv/bin/python -m bench textbook_buckling [--segments 1 2 4 8 16] [--json OUT.json]
 
 Timings are wall-clock on a shared machine (set OPENBLAS_NUM_THREADS=1 there).
 """
@@ -20,17 +20,15 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
-
-from textbook_fixtures import (  # noqa: E402
+from bench.report import write_report
+from ffrf.scenes.scene_file import load_scene, run_scene
+from tests.textbook_fixtures import (
     COLUMN_LOAD,
     EULER_LOAD,
     LOAD_RATE,
@@ -43,8 +41,6 @@ from textbook_fixtures import (  # noqa: E402
     truss_closed_form,
     write_truss_scene,
 )
-
-from ffrf.scenes.scene_file import load_scene, run_scene  # noqa: E402
 
 
 def truss(directory: Path) -> dict:
@@ -74,6 +70,7 @@ def column(n: int, directory: Path) -> dict:
         row["squared_frequency_change_at_2_euler"] = mu(2.0 * EULER_LOAD / COLUMN_LOAD) / mu(0.0) - 1.0
         row["buckling_load_N"] = None
     else:
+        assert beam is not None  # n > 1
         load = buckling_load(scene, EULER_LOAD)
         chain = chain_buckling_load(n, segment_stiffness(scene))
         row.update(
@@ -99,10 +96,10 @@ def main() -> None:
         {"from": a, "to": b, "rate": float(np.log(ea / eb) / np.log(b / a))}
         for (a, ea), (b, eb) in zip(errors, errors[1:], strict=False)
     ]
-    print(json.dumps(out, indent=1))
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(out, indent=1))
+        write_report(out, args.json)
+    else:
+        print(json.dumps(out, indent=1))
 
 
 if __name__ == "__main__":

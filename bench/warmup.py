@@ -6,7 +6,7 @@ reads its meshes, FE models and reductions from disk.
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/warmup.py --json out/warmup.json
+    .venv/bin/python -m bench warmup --json out/warmup.json
 """
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from bench_report import write_report  # noqa: E402
+from bench import ROOT
+from bench.report import write_report
 
-ROOT = Path(__file__).resolve().parents[1]
 WARMUP = [sys.executable, "-m", "ffrf", "warmup"]
 
 

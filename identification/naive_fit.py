@@ -12,8 +12,7 @@ does not see the length ``a_2`` at all: the closure misfit it creates is absorbe
 moving joints 0 and 1), so the Jacobian of the path with
 respect to the parameters is ill-conditioned and a least-squares fit wanders along those
 directions under noise. The geometric method identifies each axis from a circle instead,
-one well-posed fit at a time. :func:`naive_path_jacobian` measures this (see
-``bench/bench_identification_conditioning.py`` for a full naive fit).
+one well-posed fit at a time. :func:`naive_path_jacobian` measures this.
 """
 
 from __future__ import annotations

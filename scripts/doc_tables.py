@@ -65,7 +65,7 @@ DISCRETISATIONS = (
 
 
 def table_bennett_variants() -> str:
-    """The four variants at each recorded discretisation (``bench/bench_bennett_variants.py``)."""
+    """The four variants at each recorded discretisation (``bench/bennett_variants.py``)."""
     lines = _header(
         "discretisation",
         "variant",
@@ -176,7 +176,7 @@ def table_validation_refinement() -> str:
 
 
 def table_conservation() -> str:
-    """Momentum and energy of the free flexible bar over 10^4 steps (``bench/bench_conservation.py``)."""
+    """Momentum and energy of the free flexible bar over 10^4 steps (``bench/conservation.py``)."""
     lines = _header(
         "integrator",
         "h (s)",
@@ -295,7 +295,7 @@ def table_hard_cases() -> str:
 
 
 def table_fe_beam_convergence() -> str:
-    """Relative frequency errors of P1 and P2 prisms against beam theory (``bench/bench_fe_beam_convergence.py``)."""
+    """Relative frequency errors of P1 and P2 prisms against beam theory (``bench/fe_beam_convergence.py``)."""
     lines = _header("order", "h (mm)", "boundary", "bending thin (z)", "bending wide (y)", "torsion")
     for r in _results("fe_beam_convergence"):
         errors = r["errors_percent"]
@@ -313,7 +313,7 @@ def table_fe_beam_convergence() -> str:
 
 
 def table_fe_link() -> str:
-    """Mesh, assembly and modal-analysis cost of the coupler link (``bench/bench_fe_link.py``)."""
+    """Mesh, assembly and modal-analysis cost of the coupler link (``bench/fe_link.py``)."""
     lines = _header(
         "order",
         "h (mm)",

@@ -17,7 +17,8 @@ of mantissa decimals in scientific notation (``4.5e-10``).
 Tables that are whole outputs of one measurement are generated between ``<!-- table NAME -->`` and
 ``<!-- /table -->`` by the function ``table_NAME`` of ``scripts/doc_tables.py``; the check compares those blocks too.
 
-``tests/test_docs/test_doc_figures.py`` runs the check.
+``tests/test_docs/test_doc_figures.py`` runs the check. Whether the result files still agree with today's code is the
+other check: ``python -m bench stale`` (``bench/staleness.py``).
 """
 
 from __future__ import annotations

@@ -25,7 +25,7 @@ reproduced in our solver in :mod:`validation.exudyn_conventions`.
 Measured on the coarse PLA scene (h = 6 mm, 2 modes, from ``q_start``, h = 1e-3, 0.2 s):
 with Exudyn's Jacobian: coupler 1e-16 m, torque 1e-9 relative; production system (our exact
 Jacobian): coupler 2e-9 m (4e-5 of its motion), torque 2.4e-6 relative; marker-frame offsets:
-coupler 1.2e-6 m (3 %), torque 4 % (``bench/bench_bennett_vs_exudyn.py`` and the tests).
+coupler 1.2e-6 m (3 %), torque 4 % (``tests/test_validation/test_bennett_vs_exudyn.py``).
 
 ``exudyn`` is imported lazily.
 """

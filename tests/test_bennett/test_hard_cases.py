@@ -10,10 +10,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import hard_cases  # bench/hard_cases.py, on sys.path through this folder's conftest.py
 import numpy as np
 import pytest
 
+from bench import hard_cases
 from ffrf.fe.materials import PLA, RIGID, Material
 from ffrf.scenes.linkage_run import choose_mode
 from ffrf.solvers.static_solver import StaticDivergence

@@ -2,27 +2,17 @@
 numba's runtime (``bench/memory_probe.py``): the same number in every iteration, so that a step's allocations grow
 with its iterations and nothing else, and none left behind, so that a long run does not leak."""
 
-import importlib.util
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from bench import memory_probe
 from ffrf.scenes.bennett_scene import assemble, build_bennett
 from ffrf.solvers.common import consistent_accelerations
 from ffrf.solvers.generalized_alpha import AlphaParameters, _factor_iteration_matrix
 from ffrf.solvers.newton_kernels import EXHAUSTED, alpha_iterations
 from ffrf.system.packed_system import pack_system
-
-
-def _memory_probe():
-    path = Path(__file__).resolve().parents[2] / "bench" / "memory_probe.py"
-    spec = importlib.util.spec_from_file_location("memory_probe", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.fixture(scope="module")
@@ -51,15 +41,14 @@ def test_newton_iterations_allocate_alike_and_free_all(first_step):
     """With tolerance 0 (Newton never converges) and ``done`` far below the refactoring rule's fifth iteration, a call
     runs exactly ``max_iterations`` iterations: its allocations must be a fixed number plus the same number per
     iteration, and every allocation must be freed by the time the call returns."""
-    probe = _memory_probe()
     head, qdd, lam = first_step
     kernel: Callable[..., tuple] = alpha_iterations
 
     def run(iterations: int) -> tuple[int, int]:
         unknowns = (qdd.copy(), lam.copy())
-        before = probe.nrt_counts()
+        before = memory_probe.nrt_counts()
         status, used, _, _ = kernel(*head, *unknowns, 0.0, iterations, np.inf, -100)
-        after = probe.nrt_counts()
+        after = memory_probe.nrt_counts()
         assert (status, used) == (EXHAUSTED, iterations)
         return after[0] - before[0], after[1] - before[1]
 

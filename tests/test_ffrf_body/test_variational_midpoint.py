@@ -77,7 +77,7 @@ def test_kinetic_energy_and_its_gradient_match_the_mass_matrix_and_complex_step(
 
 def test_free_body_keeps_momentum_exactly_and_energy_without_drift():
     """The issue's case: spin, elastic excitation, no damping, 10^4 steps (generalized-alpha with
-    rho_inf = 1 drifts by 2e-4 in momentum here; bench/bench_conservation.py)."""
+    rho_inf = 1 drifts by 2e-4 in momentum here; bench/conservation.py)."""
     model, psi, _, body = free_bar()
     system, q0, qd0 = tumbling_start(body)
     result = variational_midpoint(system, q0, qd0, 0.1, 1e-5, output_every=10)

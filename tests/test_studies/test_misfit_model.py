@@ -3,12 +3,7 @@ misaligned link (issue #19: the difference below 5 % of the deviation the error 
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).parents[2] / "bench"))
-
-from misfit_vs_remesh import compare  # noqa: E402
+from bench.misfit_vs_remesh import compare
 
 
 def test_a_bore_twisted_up_to_2_deg_as_a_misfit_moves_the_coupler_as_the_remeshed_link_does():

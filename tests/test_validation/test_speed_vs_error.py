@@ -4,10 +4,11 @@ has the documented keys with finite numbers, and the coupler error shrinks from 
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 from pathlib import Path
+
+from bench import speed_vs_error
 
 KEYS = {
     "solver",
@@ -38,16 +39,8 @@ NUMBERS = (
 )
 
 
-def _bench():
-    path = Path(__file__).resolve().parents[2] / "bench" / "speed_vs_error.py"
-    spec = importlib.util.spec_from_file_location("speed_vs_error", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_quick_sweep_writes_complete_points_that_converge(tmp_path: Path) -> None:
-    _bench().main(["--quick", "--out", str(tmp_path)])
+    speed_vs_error.main(["--quick", "--out", str(tmp_path)])
     points = json.loads((tmp_path / "results.json").read_text())
     assert {p["sweep"] for p in points} == {"quasi_static", "dynamic_window"}
     for p in points:

@@ -16,23 +16,19 @@ the quasi-static run solves at exactly those times), and it reports
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/bench_quasi_static_vs_dynamic.py --json out/qs_vs_dyn.json --out out/qs_vs_dyn
-    PYTHONPATH=. .venv/bin/python bench/bench_quasi_static_vs_dynamic.py --order 1 --h 4e-3 --modes 8 --step 2e-3
+    .venv/bin/python -m bench quasi_static_vs_dynamic --json out/qs_vs_dyn.json --out out/qs_vs_dyn
+    .venv/bin/python -m bench quasi_static_vs_dynamic --order 1 --h 4e-3 --modes 8 --step 2e-3
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+from bench.report import write_report
 
 #: Window after the end of the ramp in which the start-up transient is measured (s).
 TRANSIENT_WINDOW = 5.0
@@ -165,8 +161,7 @@ def main(argv=None) -> dict:
     if args.out:
         write_outputs(args.out, quasi_static, dynamic)
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(report, indent=2))
+        write_report(report, args.json, echo=False)
     return report
 
 

@@ -16,7 +16,7 @@ Per run: largest relative change of linear and angular momentum, largest relativ
 error, energy drift (mean of the last tenth of the rows minus the first tenth), wall time and
 Newton iterations per step. Writes ``DIR/conservation.json`` and ``DIR/conservation.md``.
 
-Run: .venv/bin/python bench/bench_conservation.py [--steps 10000] [--sizes 1e-4 5e-5] --out out/bench/conservation
+Run: .venv/bin/python -m bench conservation [--steps 10000] [--sizes 1e-4 5e-5] --out out/bench/conservation
 """
 
 from __future__ import annotations
@@ -24,15 +24,10 @@ from __future__ import annotations
 import argparse
 import functools
 import json
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
-
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
 
 
 def momenta(body, q: np.ndarray, qd: np.ndarray) -> np.ndarray:

@@ -10,23 +10,19 @@ discrete equations and differ by round-off at every step.
 
 Usage::
 
-    .venv/bin/python bench/bench_validation_refinement.py                       # pla, h = 6 mm, 2 modes
-    .venv/bin/python bench/bench_validation_refinement.py --variant pla1 --exudyn-jacobian
-    .venv/bin/python bench/bench_validation_refinement.py --h 4e-3 --modes 8 --json out.json
+    .venv/bin/python -m bench validation_refinement                       # pla, h = 6 mm, 2 modes
+    .venv/bin/python -m bench validation_refinement --variant pla1 --exudyn-jacobian
+    .venv/bin/python -m bench validation_refinement --h 4e-3 --modes 8 --json out.json
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+from bench.report import write_report
 
 
 def _points(run) -> np.ndarray:
@@ -96,7 +92,7 @@ def main(argv=None) -> dict:
         )
     out = {"settings": vars(args) | {"json": None}, "rows": rows}
     if args.json:
-        args.json.write_text(json.dumps(out, indent=2, default=float))
+        write_report(out, args.json, echo=False)
     return out
 
 

@@ -15,17 +15,19 @@ BLAS threads: on a small shared machine OpenBLAS threads on ~100 x 100 matrices 
 other processes (a 105 x 105 SVD took 0.5 s instead of 8 ms); this script pins BLAS to one
 thread unless ``--blas-threads`` says otherwise.
 
-Run: .venv/bin/python bench/bench_bennett_speed.py [--h 0.006 --modes 4] [--cold] [--skip-quasi-static] [--json FILE]
+Run: .venv/bin/python -m bench bennett_speed [--h 0.006 --modes 4] [--cold] [--skip-quasi-static] [--json FILE]
 """
 
 import argparse
-import json
 import os
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
+
+from bench.report import write_report
 
 
 def _pin_blas(threads: int) -> None:
@@ -146,7 +148,7 @@ def main() -> None:
 
     if not args.skip_quasi_static:
         times = np.linspace(0.0, scene.t_end, args.outputs)
-        variants = {
+        variants: dict[str, dict[str, Any]] = {
             "reference": dict(fast_path=False),
             "fast, plain modified Newton": dict(predictor_order=0, secant=False),
             "fast, quadratic predictor": dict(predictor_order=2),
@@ -175,19 +177,18 @@ def main() -> None:
             },
             "speed_up": seconds["reference"] / seconds["fast"],
         }
-        ref, fast = solutions["reference"], solutions["fast"]
-        torque_difference = np.abs(fast.multipliers[:, -1] - ref.multipliers[:, -1]).max()
+        ref, fastest = solutions["reference"], solutions["fast"]
+        torque_difference = np.abs(fastest.multipliers[:, -1] - ref.multipliers[:, -1]).max()
         print(
             f"  speed-up {seconds['reference'] / seconds['fast']:.1f}x; max |q_fast - q_ref| = "
-            f"{np.abs(fast.q - ref.q).max():.1e}, driving torque relative "
+            f"{np.abs(fastest.q - ref.q).max():.1e}, driving torque relative "
             f"{torque_difference / np.abs(ref.multipliers[:, -1]).max():.1e}"
         )
     if args.cold:
         report["cold_compile_s"] = cold_compile_seconds(args.h, args.order, args.modes)
         print(f"numba cold compile (first residual + iteration matrix, empty cache): {report['cold_compile_s']:.1f} s")
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(report, indent=2))
+        write_report(report, args.json, echo=False)
 
 
 if __name__ == "__main__":

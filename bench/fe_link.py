@@ -2,9 +2,9 @@
 
 Usage (from the repository root)::
 
-    .venv/bin/python bench/bench_fe_link.py                 # link 2, P1, h = 4, 2, 1 mm
-    .venv/bin/python bench/bench_fe_link.py --order 2 --h 0.004 0.002
-    .venv/bin/python bench/bench_fe_link.py --json results.json
+    .venv/bin/python -m bench fe_link                 # link 2, P1, h = 4, 2, 1 mm
+    .venv/bin/python -m bench fe_link --order 2 --h 0.004 0.002
+    .venv/bin/python -m bench fe_link --json results.json
 
 Every case runs in a fresh subprocess so that the peak resident memory
 (``ru_maxrss``, which includes gmsh, scikit-fem and SuperLU allocations) is that
@@ -22,7 +22,8 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from bench import ROOT
+from bench.report import write_report
 
 
 def _peak_mib() -> float:
@@ -31,7 +32,6 @@ def _peak_mib() -> float:
 
 def run_case(link: int, h: float, order: int, n_modes: int) -> dict:
     """One benchmark case in this process (called in a subprocess by :func:`main`)."""
-    sys.path.insert(0, str(ROOT))
     from ffrf import PLA, FEModel, free_free_modes, mesh_link, paper_link_axes, quality_summary
 
     result: dict = {"link": link, "h_m": h, "order": order}
@@ -85,7 +85,8 @@ def main(argv=None) -> int:
         out = subprocess.run(
             [
                 sys.executable,
-                __file__,
+                "-m",
+                "bench.fe_link",
                 "--link",
                 str(args.link),
                 "--order",
@@ -111,7 +112,7 @@ def main(argv=None) -> int:
             flush=True,
         )
     if args.json:
-        args.json.write_text(json.dumps(results, indent=2))
+        write_report(results, args.json, echo=False)
     return 0
 
 

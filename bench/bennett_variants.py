@@ -10,22 +10,18 @@ overlays ``DIR/coupler_deviation.png`` and ``DIR/driving_torque.png``.
 
 Usage::
 
-    PYTHONPATH=. .venv/bin/python bench/bench_bennett_variants.py --json out/variants_default.json
-    PYTHONPATH=. .venv/bin/python bench/bench_bennett_variants.py --order 1 --h 0.002 --modes 32 \
+    .venv/bin/python -m bench bennett_variants --json out/variants_default.json
+    .venv/bin/python -m bench bennett_variants --order 1 --h 0.002 --modes 32 \
         --json out/variants_paper.json
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+from bench.report import write_report
 
 
 def run_variant(variant: str, h: float, order: int, modes: int, outputs: int, out: Path | None) -> dict:
@@ -41,6 +37,9 @@ def run_variant(variant: str, h: float, order: int, modes: int, outputs: int, ou
     if out is not None:
         write_results(result, out / variant)
     summary = result.summary()
+    assembly = result.assembly
+    if assembly is None:
+        raise RuntimeError(f"the {variant} run reports no assembly stress")
     return {
         "variant": variant,
         "result": result,
@@ -48,9 +47,9 @@ def run_variant(variant: str, h: float, order: int, modes: int, outputs: int, ou
         "max_distance_to_path_mm": 1e3 * summary["max_coupler_distance_to_path_m"],
         "paper_max_deviation_mm": PAPER_MAX_COUPLER_DEVIATION_MM[variant],
         "max_abs_driving_torque_Nmm": 1e3 * summary["max_abs_driving_torque_Nm"],
-        "assembly_max_von_mises_MPa": 1e-6 * result.assembly.as_dict()["max_von_mises_pa"],
-        "assembly_von_mises_per_link_MPa": [1e-6 * link.max_von_mises_pa for link in result.assembly.links],
-        "assembly_strain_energy_mJ": 1e3 * result.assembly.as_dict()["strain_energy_j"],
+        "assembly_max_von_mises_MPa": 1e-6 * assembly.as_dict()["max_von_mises_pa"],
+        "assembly_von_mises_per_link_MPa": [1e-6 * link.max_von_mises_pa for link in assembly.links],
+        "assembly_strain_energy_mJ": 1e3 * assembly.as_dict()["strain_energy_j"],
         "max_constraint_residual": summary["max_constraint_residual"],
         "energy_balance_relative": summary["energy_balance_relative"],
         "n_coordinates": scene.system.n_coordinates,
@@ -119,8 +118,7 @@ def main(argv=None) -> dict:
     print(table(rows))
     print(f"\ntotal wall time {report['total_wall_time_s']:.1f} s")
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(report, indent=2))
+        write_report(report, args.json, echo=False)
     return report
 
 
