@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ffrf.errors import FEInputError
 from ffrf.fe.materials import Material
-from ffrf.mesh.tet_mesh import TetMesh, check_mesh, oriented
+from ffrf.mesh.tet_mesh import TetMesh, check_mesh, orient_positive
 
 __all__ = ["FEModel", "rigid_body_modes"]
 
@@ -90,10 +90,12 @@ class FEModel:
     @classmethod
     def from_tet_mesh(cls, mesh: TetMesh, material: Material, order: int = 1) -> FEModel:
         """Assemble the model of a checked :class:`TetMesh` (see :func:`ffrf.mesh.tet_mesh.check_mesh`); a mesh in the
-        opposite node order is reoriented with a warning (:func:`ffrf.mesh.tet_mesh.oriented`)."""
+        opposite node order is reoriented with a warning (:func:`ffrf.mesh.tet_mesh.orient_positive`)."""
         if order not in (1, 2):
             raise FEInputError(f"{mesh.name}: element order {order!r} is not supported; use 1 (P1) or 2 (P2)")
-        mesh = oriented(mesh)
+        tets = orient_positive(mesh.points, mesh.tets, mixed_orders=False, name=mesh.name)
+        if not np.array_equal(tets, mesh.tets):
+            mesh = TetMesh(mesh.points, tets, dict(mesh.groups), mesh.name)
         check_mesh(mesh)
         nodes, mass, stiffness, edges = _assemble(mesh, material, order)
         logger.info("%s: P%d model with %d nodes, %d DOFs", mesh.name, order, len(nodes), 3 * len(nodes))

@@ -25,7 +25,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ffrf.errors import ReductionError
-from ffrf.numerics.eigen import factorize_spd, lowest_eigenpairs
+from ffrf.numerics.eigen import SHIFT_REL, eigenvalue_scale, factorize_spd, lowest_eigenpairs
 from ffrf.reduction.craig_bampton import checked_model, rigid_body_basis
 from ffrf.reduction.mode_basis import ReducedMatrices
 
@@ -33,9 +33,6 @@ __all__ = ["FreeFreeBasis", "free_free_basis", "rigid_body_coupling"]
 
 logger = logging.getLogger(__name__)
 
-# Shift s of (FF-1) as a fraction of the element eigenvalue scale mean(diag K) / mean(diag M):
-# small against any elastic eigenvalue of a sensible mesh, large against round-off in K R.
-_SHIFT_REL = 1e-6
 # |omega^2| below this fraction of the eigenvalue scale is zero (rigid modes: ~1e-15 of it) ...
 _ZERO_EIGENVALUE_REL = 1e-10
 # ... and zero modes must lie in span(R) to this M-norm residual (unit modes).
@@ -87,16 +84,6 @@ def rigid_body_coupling(nodes: NDArray, mass: sp.spmatrix, basis: NDArray) -> ND
     return normalised.T @ (mass @ basis)
 
 
-def _eigenvalue_scale(mass: sp.csr_matrix, stiffness: sp.csr_matrix) -> float:
-    """mean(diag K) / mean(diag M) (1/s^2): the eigenvalue of a single element, sets the shift."""
-    scale = float(stiffness.diagonal().mean() / mass.diagonal().mean())
-    if not (np.isfinite(scale) and scale > 0.0):
-        raise ReductionError(
-            f"eigenvalue scale mean(diag K)/mean(diag M) = {scale!r}; the stiffness or the mass matrix is zero"
-        )
-    return scale
-
-
 def _check_rigid_modes(nodes, mass, vectors: NDArray, values: NDArray, n_rigid: int, scale: float) -> None:
     """Exactly n_rigid of the computed modes have zero frequency, and they are rigid-body motions."""
     n_zero = int(np.count_nonzero(np.abs(values) <= _ZERO_EIGENVALUE_REL * scale))
@@ -145,8 +132,8 @@ def free_free_basis(fe_model: Any, n_modes: int, *, n_rigid: int = 6, verify_mod
             f"too many modes requested: {n_modes} + {n_rigid} rigid, but the model has {3 * len(nodes)} DOFs; "
             f"ask for at most {max(3 * len(nodes) - 1 - n_rigid, 0)} or refine the mesh"
         )
-    scale = _eigenvalue_scale(mass, stiffness)
-    shift = _SHIFT_REL * scale  # eq. (FF-1)
+    scale = eigenvalue_scale(mass, stiffness)
+    shift = SHIFT_REL * scale  # eq. (FF-1)
     shifted = sp.csc_matrix(stiffness + shift * mass)
     solve = factorize_spd(
         shifted,
