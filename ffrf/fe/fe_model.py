@@ -34,7 +34,13 @@ def rigid_body_modes(nodes: ArrayLike, center: ArrayLike | None = None) -> NDArr
     """The six infinitesimal rigid-body motions as columns of a (3N, 6) array.
 
     Columns 0-2 translate along x, y, z; columns 3-5 rotate about x, y, z
-    through ``center`` (default: the centroid of the nodes): u = omega x (p - c).
+    through ``center`` (default: the centroid of the nodes): u = omega x (p - c). For the nodes of
+    an interface about its centre this is the map T from interface motion [t; theta] to nodal
+    displacements of eq. (HCB-2); Exudyn uses Skew(x_j - p0) for the rotation block, i.e. the
+    opposite sign.
+
+    >>> rigid_body_modes([[1.0, 0.0, 0.0]], center=[0.0, 0.0, 0.0])[:, 5].tolist()  # about z: e_z x e_x = e_y
+    [0.0, 1.0, 0.0]
     """
     nodes = np.asarray(nodes, dtype=float)
     r = nodes - (nodes.mean(axis=0) if center is None else np.asarray(center, dtype=float))

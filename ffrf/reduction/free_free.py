@@ -25,8 +25,9 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ffrf.errors import ReductionError
+from ffrf.fe.fe_model import rigid_body_modes
 from ffrf.numerics.eigen import SHIFT_REL, eigenvalue_scale, factorize_spd, lowest_eigenpairs
-from ffrf.reduction.craig_bampton import checked_model, rigid_body_basis
+from ffrf.reduction.craig_bampton import checked_model
 from ffrf.reduction.mode_basis import ReducedMatrices
 
 __all__ = ["FreeFreeBasis", "free_free_basis", "rigid_body_coupling"]
@@ -77,7 +78,7 @@ class FreeFreeBasis(ReducedMatrices):
 def rigid_body_coupling(nodes: NDArray, mass: sp.spmatrix, basis: NDArray) -> NDArray[np.float64]:
     """R_hat^T M Psi (6, m) with R_hat the rigid-body modes, M-orthonormalised: zero when Psi
     satisfies the reference conditions (FF-3); entries are cosines if Psi is M-normalised."""
-    rigid = rigid_body_basis(nodes)
+    rigid = rigid_body_modes(nodes)
     gram = rigid.T @ (mass @ rigid)
     factor = np.linalg.cholesky(0.5 * (gram + gram.T))
     normalised = np.linalg.solve(factor, rigid.T).T  # R L^-T: M-orthonormal columns
@@ -99,7 +100,7 @@ def _check_rigid_modes(nodes, mass, vectors: NDArray, values: NDArray, n_rigid: 
             f"expected: the body is supported; pass n_rigid={n_zero}, or use craig_bampton for a supported body"
         )
     if n_rigid:
-        rigid = rigid_body_basis(nodes)
+        rigid = rigid_body_modes(nodes)
         m_rigid = mass @ rigid
         error = vectors[:, :n_rigid] - rigid @ np.linalg.solve(rigid.T @ m_rigid, m_rigid.T @ vectors[:, :n_rigid])
         residual = float(np.sqrt(np.max(np.einsum("ij,ij->j", error, mass @ error))))
