@@ -51,7 +51,11 @@ logger = logging.getLogger(__name__)
 
 
 def eigenvalue_scale(mass: sp.spmatrix, stiffness: sp.spmatrix) -> float:
-    """mean(diag K) / mean(diag M) (1/s^2): the eigenvalue of a single element; sets shifts and zero tolerances."""
+    """mean(diag K) / mean(diag M) (1/s^2): the eigenvalue of a single element; sets shifts and zero tolerances.
+
+    >>> eigenvalue_scale(np.eye(2), np.diag([4.0, 8.0]))
+    6.0
+    """
     scale = float(stiffness.diagonal().mean() / mass.diagonal().mean())
     if not (np.isfinite(scale) and scale > 0.0):
         raise ReductionError(
@@ -71,7 +75,11 @@ def fix_signs(vectors: NDArray) -> NDArray[np.float64]:
 
     "First within 1e-6 of the largest" rather than "the largest": symmetric meshes have mode
     shapes whose extreme entries come in mirrored pairs of opposite sign that round-off orders at
-    random."""
+    random.
+
+    >>> fix_signs([[-2.0, 1.0], [1.0, -1.0]]).tolist()  # column 0 turned; column 1: a tie, its first entry decides
+    [[2.0, 1.0], [-1.0, -1.0]]
+    """
     vectors = np.array(vectors, dtype=float)
     magnitude = np.abs(vectors)
     if vectors.size == 0:

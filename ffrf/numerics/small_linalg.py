@@ -62,7 +62,11 @@ def mat_mat(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 @njit(cache=True)
 def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``a x b`` of two 3-vectors (also fast from Python: ``np.cross`` spends ~20 us per call on
-    its axis handling)."""
+    its axis handling).
+
+    >>> cross3(np.array([1.0, 2.0, 3.0]), np.array([4.0, 5.0, 6.0])).tolist()  # (2*6 - 3*5, 3*4 - 1*6, 1*5 - 2*4)
+    [-3.0, 6.0, -3.0]
+    """
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
@@ -71,6 +75,10 @@ def skew(v: np.ndarray) -> np.ndarray:
     r"""Skew matrix :math:`\tilde v` with :math:`\tilde v w = v \times w`, in ``v``'s dtype.
 
     A numba kernel; from Python it takes any 1-D array of three floats or complex numbers.
+
+    >>> s = skew(np.array([1.0, 2.0, 3.0]))
+    >>> (s @ np.array([4.0, 5.0, 6.0])).tolist(), bool((s == -s.T).all())
+    ([-3.0, 6.0, -3.0], True)
     """
     out = np.zeros((3, 3), dtype=v.dtype)
     out[0, 1], out[0, 2] = -v[2], v[1]
