@@ -61,7 +61,7 @@ from ffrf.fe.matrix_import import (
     read_npz_model,
     write_npz_model,
 )
-from ffrf.fe.modal import Modes, clamped_modes, free_free_modes
+from ffrf.fe.modal import Modes, clamped_modes
 from ffrf.fe.node_selection import node_at_point, nodes_in_plane, surface_area_weights, surface_triangles
 from ffrf.geometry.joint_axes import PAPER_AXES, Axis, paper_link_axes
 from ffrf.geometry.link_geometry import LinkDesign, LinkGeometry, build_link, mesh_link
@@ -71,7 +71,6 @@ from ffrf.mesh.tet_mesh import (
     check_mesh,
     mesh_quality,
     orient_positive,
-    oriented,
     quality_summary,
     read_mesh,
     write_vtu,
@@ -148,7 +147,6 @@ __all__ = [
     "check_mesh",
     "mesh_quality",
     "orient_positive",
-    "oriented",
     "quality_summary",
     "read_mesh",
     "write_vtu",
@@ -156,7 +154,6 @@ __all__ = [
     "mesh_stl",
     "Modes",
     "clamped_modes",
-    "free_free_modes",
     "REFERENCE_CONDITIONS",
     "CraigBamptonBasis",
     "ReductionError",

@@ -73,7 +73,11 @@ class ClosureResidual(NamedTuple):
 
 
 def wrap_angle(angle: ArrayLike) -> NDArray[np.float64]:
-    """Angles wrapped to ``(-pi, pi]``."""
+    """Angles wrapped to ``(-pi, pi]``.
+
+    >>> bool(wrap_angle(-np.pi) == np.pi), bool(wrap_angle(3 * np.pi) == np.pi), float(wrap_angle(0.5))
+    (True, True, 0.5)
+    """
     angle = np.asarray(angle, dtype=float)
     wrapped = np.mod(angle + np.pi, 2.0 * np.pi) - np.pi
     return np.where(wrapped == -np.pi, np.pi, wrapped)
@@ -85,7 +89,13 @@ def _params(a: ArrayLike, alpha: ArrayLike, d: ArrayLike, theta: ArrayLike) -> t
 
 
 def dh_transform(a: ArrayLike, alpha: ArrayLike, d: ArrayLike, theta: ArrayLike) -> DualQuaternion:
-    r"""Eq. (DH) as a dual quaternion :math:`r_x(\alpha) t_x(a) t_z(d) r_z(\theta)` (broadcasts)."""
+    r"""Eq. (DH) as a dual quaternion :math:`r_x(\alpha) t_x(a) t_z(d) r_z(\theta)` (broadcasts).
+
+    The same displacement as :func:`dh_matrix`:
+
+    >>> bool(np.allclose(dh_transform(0.1, 0.3, 0.02, 1.2).to_matrix(), dh_matrix(0.1, 0.3, 0.02, 1.2)))
+    True
+    """
     a, alpha, d, theta = _params(a, alpha, d, theta)
     zero, one = np.zeros_like(a), np.ones_like(a)
     r_x = DualQuaternion(np.stack([np.cos(alpha / 2), np.sin(alpha / 2), zero, zero, zero, zero, zero, zero], -1))
@@ -96,7 +106,13 @@ def dh_transform(a: ArrayLike, alpha: ArrayLike, d: ArrayLike, theta: ArrayLike)
 
 
 def dh_matrix(a: ArrayLike, alpha: ArrayLike, d: ArrayLike, theta: ArrayLike) -> NDArray[np.float64]:
-    """Eq. (DH) as 4x4 matrices ``Rx(alpha) Tx(a) Tz(d) Rz(theta)`` (broadcasts)."""
+    """Eq. (DH) as 4x4 matrices ``Rx(alpha) Tx(a) Tz(d) Rz(theta)`` (broadcasts).
+
+    A twist of 90 degrees turns the next axis from z to -y; the common normal a = 0.1 shifts it along x:
+
+    >>> (dh_matrix(0.1, np.pi / 2, 0.0, 0.0).round(12) + 0.0).tolist()
+    [[1.0, 0.0, 0.0, 0.1], [0.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+    """
     a, alpha, d, theta = _params(a, alpha, d, theta)
     ca, sa, ct, st = np.cos(alpha), np.sin(alpha), np.cos(theta), np.sin(theta)
     m = np.zeros(a.shape + (4, 4))

@@ -43,7 +43,24 @@ __all__ = ["DualQuaternion"]
 
 @dataclass(frozen=True, eq=False)
 class DualQuaternion:
-    """Dual quaternion(s) ``p + eps d``, coefficients ``(..., 8)`` scalar first."""
+    """Dual quaternion(s) ``p + eps d``, coefficients ``(..., 8)`` scalar first.
+
+    A translation moves the origin by ``t``; products apply the right factor first, so a
+    translation by x followed by a quarter turn about z takes the origin to y:
+
+    >>> DualQuaternion.translation([1.0, 2.0, 3.0]).act([0.0, 0.0, 0.0]).tolist()
+    [1.0, 2.0, 3.0]
+    >>> quarter_turn = DualQuaternion.from_rotation_translation([[0, -1, 0], [1, 0, 0], [0, 0, 1]], [0, 0, 0])
+    >>> ((quarter_turn * DualQuaternion.translation([1.0, 0.0, 0.0])).act([0.0, 0.0, 0.0]).round(12) + 0.0).tolist()
+    [0.0, 1.0, 0.0]
+
+    A displacement satisfies the Study condition ``p . d = 0``:
+
+    >>> DualQuaternion([1, 0, 0, 0, 0, 0, 0, 1]).is_displacement()
+    True
+    >>> DualQuaternion([1, 0, 0, 0, 1, 0, 0, 0]).is_displacement()
+    False
+    """
 
     coeffs: NDArray[np.float64]
 
@@ -155,7 +172,12 @@ class DualQuaternion:
 
     def inverse(self) -> DualQuaternion:
         r""":math:`\sigma^{-1} = \tilde\sigma/(\sigma\tilde\sigma)`, with the dual-number division
-        :math:`1/(n_0 + \varepsilon n_1) = 1/n_0 - \varepsilon n_1/n_0^2`."""
+        :math:`1/(n_0 + \varepsilon n_1) = 1/n_0 - \varepsilon n_1/n_0^2`.
+
+        >>> sigma = DualQuaternion([2, 0, 0, 0, 0, -1, 0, 0])  # a translation by x, scaled by 2
+        >>> (sigma * sigma.inverse()).coeffs.tolist()
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        """
         n = self.norm()
         if np.any(n[..., 0] == 0.0):
             raise ZeroDivisionError("dual quaternion with zero primal part has no inverse")

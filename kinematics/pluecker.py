@@ -44,7 +44,23 @@ def _vector(x: ArrayLike, name: str) -> NDArray[np.float64]:
 
 @dataclass(frozen=True, eq=False)
 class Line:
-    """An oriented line: unit ``direction`` ``l`` and ``moment`` ``m = p x l`` (metres)."""
+    r"""An oriented line: unit ``direction`` ``l`` and ``moment`` ``m = p x l`` (metres).
+
+    The line through (0, 1, 0) along z has the moment (0, 1, 0) x (0, 0, 1) = (1, 0, 0), and
+    (3, 1, 5) lies 3 from it:
+
+    >>> line = Line.from_point_direction([0, 1, 0], [0, 0, 2])
+    >>> line.direction.tolist(), line.moment.tolist(), line.point.tolist()
+    ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    >>> float(line.distance_to_point([3, 1, 5]))
+    3.0
+
+    The half turn about it, :math:`\cos\frac\pi2 + \sin\frac\pi2 h` (module docstring), takes the
+    origin to (0, 2, 0):
+
+    >>> (line.to_dual_quaternion().act([0, 0, 0]) + 0.0).tolist()
+    [0.0, 2.0, 0.0]
+    """
 
     direction: NDArray[np.float64]
     moment: NDArray[np.float64]
@@ -171,6 +187,13 @@ def common_normal(
 
     ``reference`` (a point) fixes the feet of parallel lines: the normal through the
     projection of ``reference`` onto ``line0``.
+
+    The z-axis and the line through (0, 2, 5) along x are 2 apart, at height 5:
+
+    >>> z_axis = Line.from_point_direction([0, 0, 0], [0, 0, 1])
+    >>> normal = common_normal(z_axis, Line.from_point_direction([0, 2, 5], [1, 0, 0]))
+    >>> (normal.foot0 + 0.0).tolist(), (normal.foot1 + 0.0).tolist(), normal.distance, normal.kind
+    ([0.0, 0.0, 5.0], [0.0, 2.0, 5.0], 2.0, 'skew')
     """
     l0, m0 = line0.direction, line0.moment
     l1, m1 = line1.direction, line1.moment

@@ -30,7 +30,15 @@ __all__ = [
 
 def quaternion_product(p: ArrayLike, q: ArrayLike) -> NDArray[np.float64]:
     r"""Hamilton product :math:`pq = (p_0 q_0 - \mathbf p\cdot\mathbf q,\;
-    p_0\mathbf q + q_0\mathbf p + \mathbf p\times\mathbf q)`."""
+    p_0\mathbf q + q_0\mathbf p + \mathbf p\times\mathbf q)`.
+
+    Hamilton's rules :math:`ij = k = -ji`:
+
+    >>> quaternion_product([0, 1, 0, 0], [0, 0, 1, 0]).tolist()
+    [0.0, 0.0, 0.0, 1.0]
+    >>> quaternion_product([0, 0, 1, 0], [0, 1, 0, 0]).tolist()
+    [0.0, 0.0, 0.0, -1.0]
+    """
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
     p0, pv = p[..., :1], p[..., 1:]
@@ -50,7 +58,10 @@ def quaternion_conjugate(q: ArrayLike) -> NDArray[np.float64]:
 def quaternion_to_matrix(p: ArrayLike) -> NDArray[np.float64]:
     r"""Rotation matrix ``R`` with :math:`R x = p x \tilde p / (p \tilde p)`.
 
-    ``p`` need not be normalised; its norm is divided out.
+    ``p`` need not be normalised; its norm is divided out. A quarter turn about z takes x to y:
+
+    >>> quaternion_to_matrix(axis_angle_quaternion([0, 0, 1], np.pi / 2)).round(12).tolist()
+    [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
     """
     p = np.asarray(p, dtype=float)
     flat = p.reshape(-1, 4)

@@ -4,8 +4,9 @@ import numpy as np
 import skfem
 
 from ffrf import FEModel
-from ffrf.body.euler_parameters import g_bar, rotation_matrix, skew
+from ffrf.body.euler_parameters import g_bar, rotation_matrix
 from ffrf.mesh.tet_mesh import orient_positive
+from ffrf.numerics.small_linalg import skew
 
 
 def bar_model(order: int = 1, E: float = 2.1e11, rho: float = 7850.0):

@@ -38,8 +38,9 @@ def _exudyn_joint_class():
     """:class:`ffrf.system.joints.MarkerJoint` with Exudyn's marker rotation Jacobian (see
     :func:`exudyn_convention_system`)."""
     from ffrf.body.euler_parameters import rotation_matrix
+    from ffrf.numerics.small_linalg import skew
     from ffrf.system.joints import MarkerJoint, exp_so3_tangent, joint_side
-    from ffrf.system.markers import _skew, exp_so3
+    from ffrf.system.markers import exp_so3
 
     def axis_correction(marker, q, rotation):
         """Exudyn's minus the exact d(axis_k)/d zeta, k = 0..2: -A[(E w)~ - E w~] T Theta (3, 3, m)."""
@@ -49,7 +50,7 @@ def _exudyn_joint_class():
         out = []
         for k in range(3):
             w = rotation[:, k].astype(q.dtype)
-            out.append(-(a_body @ (_skew(turn @ w) - turn @ _skew(w)) @ tangent) @ marker.rotation_modes)
+            out.append(-(a_body @ (skew(turn @ w) - turn @ skew(w)) @ tangent) @ marker.rotation_modes)
         return out
 
     class ExudynMarkerJoint(MarkerJoint):

@@ -27,8 +27,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ffrf.body.euler_parameters import g_bar, rotation_matrix, skew
-from ffrf.numerics.small_linalg import dot, mat_mat, mat_vec, vec_mat
+from ffrf.body.euler_parameters import g_bar, rotation_matrix
+from ffrf.numerics.small_linalg import dot, mat_mat, mat_vec, skew, vec_mat
 
 __all__ = [
     "second_moment",

@@ -22,17 +22,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["rotation_matrix", "g_bar", "skew", "rotation_derivative"]
+from ffrf.numerics.small_linalg import skew
 
-
-@njit(cache=True)
-def skew(v: np.ndarray) -> np.ndarray:
-    r"""Skew matrix :math:`\tilde v` with :math:`\tilde v w = v \times w`."""
-    out = np.zeros((3, 3), dtype=v.dtype)
-    out[0, 1], out[0, 2] = -v[2], v[1]
-    out[1, 0], out[1, 2] = v[2], -v[0]
-    out[2, 0], out[2, 1] = -v[1], v[0]
-    return out
+__all__ = ["rotation_matrix", "g_bar", "rotation_derivative"]
 
 
 @njit(cache=True)

@@ -10,12 +10,11 @@ spans no area: its interfaces need their weights given (equal weights, as Exudyn
 
 from __future__ import annotations
 
-import numpy as np
 from numpy.typing import ArrayLike
 
 from ffrf.errors import InterfaceError
 from ffrf.fe.external_model import ExternalFEModel
-from ffrf.fe.interfaces import InterfaceNodes
+from ffrf.fe.interfaces import InterfaceNodes, checked_node_list, given_weights
 from ffrf.fe.node_selection import surface_area_weights, surface_triangles
 
 __all__ = ["external_interface"]
@@ -26,26 +25,10 @@ def external_interface(
 ) -> InterfaceNodes:
     """Interface ``name`` of ``model`` on ``nodes`` (0-based): given ``weights`` normalised to sum 1, else the
     surface-area weights of the model's elements; ``area`` is the spanned area (m^2), NaN with given weights."""
-    selected = np.asarray(nodes, dtype=np.int64).reshape(-1)
-    if selected.size == 0:
-        raise InterfaceError(f"interface {name!r} of {model.name}: no node selected; check the selection and the units")
-    if selected.min() < 0 or selected.max() >= model.n_nodes:
-        raise InterfaceError(
-            f"interface {name!r} of {model.name}: node index out of range [0, {model.n_nodes}); indices are 0-based"
-        )
-    unique, first = np.unique(selected, return_index=True)
-    if len(unique) != len(selected):
-        raise InterfaceError(
-            f"interface {name!r} of {model.name}: {len(selected) - len(unique)} duplicate nodes; pass each node once"
-        )
+    where = f"interface {name!r} of {model.name}"
+    unique, first = checked_node_list(nodes, model.n_nodes, where)
     if weights is not None:
-        w = np.asarray(weights, dtype=float).reshape(-1)
-        if w.shape != selected.shape or not np.all(np.isfinite(w)) or np.any(w < 0.0) or not w.sum() > 0.0:
-            raise InterfaceError(
-                f"interface {name!r} of {model.name}: weights must be {len(selected)} finite non-negative numbers "
-                "with a positive sum"
-            )
-        return InterfaceNodes(name, unique, w[first] / w.sum(), float("nan"))
+        return InterfaceNodes(name, unique, given_weights(weights, first, where), float("nan"))
     if not model.elements:
         raise InterfaceError(
             f"interface {name!r} of {model.name}: the model has no elements, so its nodes span no surface area; "

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ffrf.errors import FEInputError
 from ffrf.fe.materials import Material
-from ffrf.mesh.tet_mesh import TetMesh, check_mesh, oriented
+from ffrf.mesh.tet_mesh import TetMesh, check_mesh, orient_positive
 
 __all__ = ["FEModel", "rigid_body_modes"]
 
@@ -34,7 +34,13 @@ def rigid_body_modes(nodes: ArrayLike, center: ArrayLike | None = None) -> NDArr
     """The six infinitesimal rigid-body motions as columns of a (3N, 6) array.
 
     Columns 0-2 translate along x, y, z; columns 3-5 rotate about x, y, z
-    through ``center`` (default: the centroid of the nodes): u = omega x (p - c).
+    through ``center`` (default: the centroid of the nodes): u = omega x (p - c). For the nodes of
+    an interface about its centre this is the map T from interface motion [t; theta] to nodal
+    displacements of eq. (HCB-2); Exudyn uses Skew(x_j - p0) for the rotation block, i.e. the
+    opposite sign.
+
+    >>> rigid_body_modes([[1.0, 0.0, 0.0]], center=[0.0, 0.0, 0.0])[:, 5].tolist()  # about z: e_z x e_x = e_y
+    [0.0, 1.0, 0.0]
     """
     nodes = np.asarray(nodes, dtype=float)
     r = nodes - (nodes.mean(axis=0) if center is None else np.asarray(center, dtype=float))
@@ -90,10 +96,12 @@ class FEModel:
     @classmethod
     def from_tet_mesh(cls, mesh: TetMesh, material: Material, order: int = 1) -> FEModel:
         """Assemble the model of a checked :class:`TetMesh` (see :func:`ffrf.mesh.tet_mesh.check_mesh`); a mesh in the
-        opposite node order is reoriented with a warning (:func:`ffrf.mesh.tet_mesh.oriented`)."""
+        opposite node order is reoriented with a warning (:func:`ffrf.mesh.tet_mesh.orient_positive`)."""
         if order not in (1, 2):
             raise FEInputError(f"{mesh.name}: element order {order!r} is not supported; use 1 (P1) or 2 (P2)")
-        mesh = oriented(mesh)
+        tets = orient_positive(mesh.points, mesh.tets, mixed_orders=False, name=mesh.name)
+        if not np.array_equal(tets, mesh.tets):
+            mesh = TetMesh(mesh.points, tets, dict(mesh.groups), mesh.name)
         check_mesh(mesh)
         nodes, mass, stiffness, edges = _assemble(mesh, material, order)
         logger.info("%s: P%d model with %d nodes, %d DOFs", mesh.name, order, len(nodes), 3 * len(nodes))

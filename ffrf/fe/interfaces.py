@@ -36,6 +36,8 @@ from ffrf.mesh.tet_mesh import TetMesh
 __all__ = [
     "InterfaceNodes",
     "boundary_triangles",
+    "checked_node_list",
+    "given_weights",
     "interface_from_group",
     "interface_from_nodes",
     "interface_from_nodes_file",
@@ -174,32 +176,36 @@ def interface_from_nodes(
     listed nodes on no spanned triangle stay in the set with weight 0. Given
     ``weights`` are used as they are, normalised to sum 1.
     """
-    nodes = np.asarray(nodes, dtype=np.int64).reshape(-1)
-    if nodes.size == 0:
-        raise InterfaceError(
-            f"interface {name!r} of {model.mesh.name}: the node set is empty; "
-            "check the selection and the units (metres)"
-        )
-    if nodes.min() < 0 or nodes.max() >= len(model.nodes):
-        raise InterfaceError(
-            f"interface {name!r} of {model.mesh.name}: node index out of range "
-            f"[0, {len(model.nodes)}); indices are 0-based"
-        )
-    unique, first = np.unique(nodes, return_index=True)
-    if len(unique) != len(nodes):
-        raise InterfaceError(
-            f"interface {name!r} of {model.mesh.name}: {len(nodes) - len(unique)} duplicate nodes; pass each node once"
-        )
+    where = f"interface {name!r} of {model.mesh.name}"
+    unique, first = checked_node_list(nodes, len(model.nodes), where)
     if weights is None:
         return _area_weighted(model, name, unique)
+    w = given_weights(weights, first, where)
+    _check_not_collinear(name, model, unique[w > 0.0])
+    return InterfaceNodes(name, unique, w, float("nan"))
+
+
+def checked_node_list(nodes: ArrayLike, n_nodes: int, where: str) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """(sorted unique nodes, index of each in ``nodes``) of a node list of a model with ``n_nodes``
+    nodes; an empty list, an index outside [0, n_nodes) or a repeated node is refused, naming ``where``."""
+    nodes = np.asarray(nodes, dtype=np.int64).reshape(-1)
+    if nodes.size == 0:
+        raise InterfaceError(f"{where}: the node set is empty; check the selection and the units (metres)")
+    if nodes.min() < 0 or nodes.max() >= n_nodes:
+        raise InterfaceError(f"{where}: node index out of range [0, {n_nodes}); indices are 0-based")
+    unique, first = np.unique(nodes, return_index=True)
+    if len(unique) != len(nodes):
+        raise InterfaceError(f"{where}: {len(nodes) - len(unique)} duplicate nodes; pass each node once")
+    return unique, first
+
+
+def given_weights(weights: ArrayLike, first: NDArray[np.int64], where: str) -> NDArray[np.float64]:
+    """Weights given per listed node, checked and normalised to sum 1, in the order of the unique nodes
+    (``first`` from :func:`checked_node_list`)."""
     w = np.asarray(weights, dtype=float).reshape(-1)
-    if w.shape != nodes.shape or not np.all(np.isfinite(w)) or np.any(w < 0.0) or not w.sum() > 0.0:
-        raise InterfaceError(
-            f"interface {name!r} of {model.mesh.name}: weights must be {len(nodes)} finite "
-            "non-negative numbers with a positive sum"
-        )
-    _check_not_collinear(name, model, unique[w[first] > 0.0])
-    return InterfaceNodes(name, unique, w[first] / w.sum(), float("nan"))
+    if w.shape != first.shape or not np.all(np.isfinite(w)) or np.any(w < 0.0) or not w.sum() > 0.0:
+        raise InterfaceError(f"{where}: weights must be {len(first)} finite non-negative numbers with a positive sum")
+    return w[first] / w.sum()
 
 
 def _area_weighted(model: FEModel, name: str, nodes: NDArray[np.int64]) -> InterfaceNodes:

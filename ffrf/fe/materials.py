@@ -33,6 +33,17 @@ class Material:
     strength : float or None
         Stress (Pa) beyond which the material breaks (tensile strength), compared with the assembled links' peak
         von Mises stress (:mod:`ffrf.output.verification`); None: unknown, the comparison is skipped.
+
+    Examples
+    --------
+    A Poisson solid (nu = 1/4) has equal Lame parameters, G = lambda = E / 2.5:
+
+    >>> solid = Material(E=2.5e9, nu=0.25, rho=1000.0)
+    >>> solid.shear_modulus, solid.lame_lambda
+    (1000000000.0, 1000000000.0)
+    >>> Material(E=1.2e9, nu=0.5, rho=450.0)
+    Traceback (most recent call last):
+    ffrf.errors.MaterialError: Material 'material': Poisson's ratio nu=0.5 must lie in (-1, 0.5); ...
     """
 
     E: float

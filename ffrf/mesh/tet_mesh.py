@@ -31,7 +31,6 @@ __all__ = [
     "MAX_LINK_EXTENT_M",
     "signed_volumes",
     "orient_positive",
-    "oriented",
     "mesh_quality",
     "quality_summary",
     "check_mesh",
@@ -124,7 +123,11 @@ class MeshQuality:
 
 
 def signed_volumes(points: ArrayLike, tets: ArrayLike) -> NDArray[np.float64]:
-    """Signed tetrahedron volumes det[p1-p0, p2-p0, p3-p0] / 6."""
+    """Signed tetrahedron volumes det[p1-p0, p2-p0, p3-p0] / 6.
+
+    >>> signed_volumes([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2, 3], [0, 2, 1, 3]]) * 6
+    array([ 1., -1.])
+    """
     p = np.asarray(points, dtype=float)[np.asarray(tets)]
     return np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p[:, 3] - p[:, 0]) / 6.0
 
@@ -135,52 +138,58 @@ def _edge_lengths_squared(points: NDArray, tets: NDArray) -> NDArray[np.float64]
     return np.stack([np.sum((p[:, i] - p[:, j]) ** 2, axis=1) for i, j in pairs], axis=1)
 
 
-def orient_positive(points: ArrayLike, tets: ArrayLike) -> NDArray[np.int64]:
-    """Return ``tets`` with nodes 2 and 3 swapped where the signed volume is negative.
-
-    Use this for meshes written with the opposite node-order convention.
-    """
-    tets = np.array(tets, dtype=np.int64)
-    negative = signed_volumes(points, tets) < 0.0
-    tets[negative, 2], tets[negative, 3] = tets[negative, 3], tets[negative, 2].copy()
-    return tets
-
-
 def _degenerate(points: NDArray, tets: NDArray, volumes: NDArray) -> NDArray[np.bool_]:
     """Tetrahedra flatter than ``_DEGENERATE_REL_VOLUME`` (mean edge length)^3: no orientation, no stiffness."""
     mean_edge = float(np.sqrt(_edge_lengths_squared(points, tets)).mean())
     return np.abs(volumes) <= _DEGENERATE_REL_VOLUME * mean_edge**3
 
 
-def oriented(mesh: TetMesh) -> TetMesh:
-    """``mesh`` in the positive node order; an all-inverted mesh is flipped with a warning, a mix is refused.
+def orient_positive(
+    points: ArrayLike, tets: ArrayLike, *, mixed_orders: bool = True, name: str = "mesh"
+) -> NDArray[np.int64]:
+    """``tets`` (a copy) with nodes 2 and 3 swapped in the tetrahedra of negative signed volume.
 
-    A mesh written in the opposite convention (as NGsolve and some exporters do) has every
-    tetrahedron inverted: that is a convention, so it is fixed. A mesh with both signs is broken
-    (folded or tangled elements) and no node swap repairs it. Degenerate tetrahedra have no sign;
-    :func:`check_mesh` refuses them.
+    With ``mixed_orders=True`` (for meshes generated here, by gmsh or scikit-fem, whose node order
+    is not the convention; scikit-fem's tensor meshes mix both) each tetrahedron is turned on its
+    own, silently. With
+    ``mixed_orders=False`` (for a mesh read from a file) only a mesh whose every tetrahedron is
+    inverted is turned, with a warning: that is the opposite convention (as NGsolve and some
+    exporters write it). A mesh with both signs is then broken (folded or tangled elements) and
+    refused with :class:`MeshError`, since no node swap repairs it. Degenerate tetrahedra have no
+    sign and indices out of range are left alone; :func:`check_mesh` refuses them.
+
+    >>> points = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    >>> orient_positive(points, [[0, 1, 3, 2]]).tolist()
+    [[0, 1, 2, 3]]
     """
-    if len(mesh.tets) == 0 or mesh.tets.min() < 0 or mesh.tets.max() >= len(mesh.points):
-        return mesh  # check_mesh names these errors
-    volumes = signed_volumes(mesh.points, mesh.tets)
-    signed = ~_degenerate(mesh.points, mesh.tets, volumes)
-    inverted = signed & (volumes < 0.0)
-    if not inverted.any():
-        return mesh
-    if inverted.sum() < signed.sum():
-        first = np.flatnonzero(inverted)[:3]
-        centroids = mesh.points[mesh.tets[first]].mean(axis=1)
-        raise MeshError(
-            f"{mesh.name}: {int(inverted.sum())} of {int(signed.sum())} tetrahedra are inverted and "
-            f"the others are not (first {first.tolist()} at {np.round(centroids, 6).tolist()} m): a "
-            "folded or tangled mesh; remesh it"
+    tets = np.array(tets, dtype=np.int64)
+    if mixed_orders:
+        negative = signed_volumes(points, tets) < 0.0
+    else:
+        points = np.asarray(points, dtype=float)
+        if len(tets) == 0 or tets.min() < 0 or tets.max() >= len(points):
+            return tets  # check_mesh names these errors
+        volumes = signed_volumes(points, tets)
+        signed = ~_degenerate(points, tets, volumes)
+        inverted = signed & (volumes < 0.0)
+        if not inverted.any():
+            return tets
+        if inverted.sum() < signed.sum():
+            first = np.flatnonzero(inverted)[:3]
+            centroids = points[tets[first]].mean(axis=1)
+            raise MeshError(
+                f"{name}: {int(inverted.sum())} of {int(signed.sum())} tetrahedra are inverted and "
+                f"the others are not (first {first.tolist()} at {np.round(centroids, 6).tolist()} m): a "
+                "folded or tangled mesh; remesh it"
+            )
+        warnings.warn(
+            f"{name}: every tetrahedron has the opposite node order (negative volume); swapped nodes 2 and 3 of each",
+            UserWarning,
+            stacklevel=2,
         )
-    warnings.warn(
-        f"{mesh.name}: every tetrahedron has the opposite node order (negative volume); swapped nodes 2 and 3 of each",
-        UserWarning,
-        stacklevel=2,
-    )
-    return TetMesh(mesh.points, orient_positive(mesh.points, mesh.tets), dict(mesh.groups), mesh.name)
+        negative = volumes < 0.0
+    tets[negative, 2], tets[negative, 3] = tets[negative, 3], tets[negative, 2].copy()
+    return tets
 
 
 def mesh_quality(points: ArrayLike, tets: ArrayLike) -> NDArray[np.float64]:
@@ -189,6 +198,12 @@ def mesh_quality(points: ArrayLike, tets: ArrayLike) -> NDArray[np.float64]:
     q = 12 (3 ``|V|``)^(2/3) / sum of squared edge lengths, which is 1 for a regular
     tetrahedron and tends to 0 for flat ones (Liu & Joe, "Relationship between
     tetrahedron shape measures", BIT 34 (1994), eq. for eta).
+
+    The regular tetrahedron of alternate cube corners (edges 2 sqrt 2, volume 8/3) has q = 1:
+
+    >>> regular = [[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]
+    >>> mesh_quality(regular, [[0, 1, 2, 3]]).round(12).tolist()
+    [1.0]
     """
     points = np.asarray(points, dtype=float)
     tets = np.asarray(tets)
@@ -254,7 +269,7 @@ def check_mesh(mesh: TetMesh) -> None:
         raise MeshError(
             f"{mesh.name}: {inverted.size} of {len(vol)} tetrahedra are inverted (negative volume), "
             f"first {inverted[:5].tolist()}; if the whole mesh uses the opposite node order, "
-            "fix it with ffrf.mesh.tet_mesh.oriented(mesh) or ffrf.mesh.tet_mesh.orient_positive(points, tets)"
+            "fix it with ffrf.mesh.tet_mesh.orient_positive(points, tets)"
         )
     n_parts, labels = _face_adjacency_components(mesh.tets)
     if n_parts > 1:
@@ -266,7 +281,11 @@ def check_mesh(mesh: TetMesh) -> None:
 
 
 def unit_scale(unit: str | None = None, scale: float | None = None) -> float:
-    """Factor that converts input coordinates to metres, from ``unit`` or ``scale``."""
+    """Factor that converts input coordinates to metres, from ``unit`` or ``scale``.
+
+    >>> unit_scale("mm"), unit_scale(scale=0.0254), unit_scale()
+    (0.001, 0.0254, 1.0)
+    """
     if unit is not None and scale is not None:
         raise MeshError(f"give either unit={unit!r} or scale={scale!r}, not both")
     if unit is not None:

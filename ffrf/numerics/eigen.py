@@ -24,6 +24,8 @@ from scipy.sparse.linalg import LinearOperator, eigsh, splu
 from ffrf.errors import ReductionError
 
 __all__ = [
+    "SHIFT_REL",
+    "eigenvalue_scale",
     "fix_signs",
     "lanczos_start",
     "shift_invert_eigsh",
@@ -32,6 +34,10 @@ __all__ = [
     "lowest_eigenpairs",
 ]
 
+#: Shift of a pencil whose K is singular (free-free) or has rigid-like modes, as a fraction of
+#: :func:`eigenvalue_scale`: small against any elastic eigenvalue of a sensible mesh, large against
+#: round-off in K R (rigid modes come out at ~1e-15 of the scale).
+SHIFT_REL = 1e-6
 _START_SEED = 20261124
 # Below this many interior DOFs the fixed-interface problem is solved densely (exact and cheap).
 _DENSE_LIMIT = 600
@@ -42,6 +48,20 @@ _PIVOT_REL_TOL = 1e-13
 _SIGN_BAND = 1e-6  # entries this close (relative) to the largest magnitude compete for deciding the sign
 
 logger = logging.getLogger(__name__)
+
+
+def eigenvalue_scale(mass: sp.spmatrix, stiffness: sp.spmatrix) -> float:
+    """mean(diag K) / mean(diag M) (1/s^2): the eigenvalue of a single element; sets shifts and zero tolerances.
+
+    >>> eigenvalue_scale(np.eye(2), np.diag([4.0, 8.0]))
+    6.0
+    """
+    scale = float(stiffness.diagonal().mean() / mass.diagonal().mean())
+    if not (np.isfinite(scale) and scale > 0.0):
+        raise ReductionError(
+            f"eigenvalue scale mean(diag K)/mean(diag M) = {scale!r}; the stiffness or the mass matrix is zero"
+        )
+    return scale
 
 
 def lanczos_start(size: int) -> NDArray[np.float64]:
@@ -55,7 +75,11 @@ def fix_signs(vectors: NDArray) -> NDArray[np.float64]:
 
     "First within 1e-6 of the largest" rather than "the largest": symmetric meshes have mode
     shapes whose extreme entries come in mirrored pairs of opposite sign that round-off orders at
-    random."""
+    random.
+
+    >>> fix_signs([[-2.0, 1.0], [1.0, -1.0]]).tolist()  # column 0 turned; column 1: a tie, its first entry decides
+    [[2.0, 1.0], [-1.0, -1.0]]
+    """
     vectors = np.array(vectors, dtype=float)
     magnitude = np.abs(vectors)
     if vectors.size == 0:

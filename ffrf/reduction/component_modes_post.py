@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigh
 
 from ffrf.errors import ReductionError
+from ffrf.numerics.small_linalg import skew
 from ffrf.reduction.invariants import InertiaInvariants
 from ffrf.reduction.mode_basis import ModeBasis
 
@@ -32,10 +33,6 @@ __all__ = [
     "linearized_ffrf_matrices",
     "free_free_frequencies_hz",
 ]
-
-
-def _skew(v: NDArray) -> NDArray[np.float64]:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def mode_displacements(reduction: ModeBasis | NDArray, modes: ArrayLike | None = None) -> NDArray[np.float64]:
@@ -81,7 +78,7 @@ def linearized_ffrf_matrices(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(M_0, K_0) of the floating reduced body at rest (module docstring, eq. (INV-6))."""
     m, n = invariants.mass, invariants.n_modes
-    chi_tilde = _skew(invariants.center_of_mass)
+    chi_tilde = skew(invariants.center_of_mass)
     mass = np.zeros((6 + n, 6 + n))
     mass[:3, :3] = m * np.eye(3)
     mass[:3, 3:6] = -m * chi_tilde

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigh
 
 from ffrf.errors import InterfaceError, ReductionError
+from ffrf.fe.fe_model import rigid_body_modes
 from ffrf.numerics.eigen import factorize_spd, fix_signs, lowest_eigenpairs
 from ffrf.reduction.mode_basis import ReducedMatrices
 
@@ -33,9 +34,7 @@ __all__ = [
     "RigidInterface",
     "CraigBamptonBasis",
     "craig_bampton",
-    "rigid_interface_map",
     "rigid_interfaces",
-    "rigid_body_basis",
     "checked_model",
 ]
 
@@ -124,27 +123,6 @@ def checked_model(fe_model: Any) -> tuple[NDArray[np.float64], sp.csr_matrix, sp
     return nodes, matrices[0], matrices[1]
 
 
-def rigid_interface_map(nodes: ArrayLike, center: ArrayLike) -> NDArray[np.float64]:
-    """(3n, 6) map T from interface motion [t; theta] to nodal displacements (eq. (HCB-2)).
-
-    u_j = t + theta x (x_j - p0): columns 0-2 unit translations, 3-5 unit
-    rotations about x, y, z through ``center`` (right-hand rule). Exudyn uses
-    Skew(x_j - p0) for the rotation block, i.e. the opposite sign.
-    """
-    r = np.asarray(nodes, dtype=float) - np.asarray(center, dtype=float)
-    t = np.zeros((len(r), 3, 6))
-    t[:, :, :3] = np.eye(3)
-    for axis in range(3):
-        t[:, :, 3 + axis] = np.cross(np.eye(3)[axis], r)
-    return t.reshape(-1, 6)
-
-
-def rigid_body_basis(nodes: ArrayLike) -> NDArray[np.float64]:
-    """(3N, 6) rigid-body motions of all nodes about their centroid (translations, rotations)."""
-    nodes = np.asarray(nodes, dtype=float)
-    return rigid_interface_map(nodes, nodes.mean(axis=0))
-
-
 def rigid_interfaces(
     nodes: NDArray[np.float64], interfaces: Sequence[Any], weights: Sequence[ArrayLike] | None = None
 ) -> tuple[RigidInterface, ...]:
@@ -195,7 +173,7 @@ def rigid_interfaces(
 def _check_restraint(nodes: NDArray, boundary_dofs: NDArray[np.int64]) -> None:
     """Raise if a rigid motion leaves every interface node at rest: for a connected body K_ii is
     regular iff the rigid modes restricted to the boundary DOFs have rank 6."""
-    rigid = rigid_body_basis(nodes)
+    rigid = rigid_body_modes(nodes)
     rigid[:, 3:] /= max(np.ptp(nodes, axis=0).max(), np.finfo(float).tiny)  # rotations in length units
     s = np.linalg.svd(rigid[boundary_dofs], compute_uv=False)
     if len(s) < 6 or s[-1] <= _RESTRAINT_RANK_TOL * s[0]:
@@ -204,7 +182,7 @@ def _check_restraint(nodes: NDArray, boundary_dofs: NDArray[np.int64]) -> None:
 
 def _mean_axis_projection(basis: NDArray, mass: sp.csr_matrix, nodes: NDArray) -> NDArray[np.float64]:
     """Remove the M-projection onto the rigid modes: Phi_t^T M Psi = 0 and x~^T M Psi = 0 (eq. (HCB-6))."""
-    rigid = rigid_body_basis(nodes)
+    rigid = rigid_body_modes(nodes)
     m_rigid = mass @ rigid
     return basis - rigid @ np.linalg.solve(rigid.T @ m_rigid, m_rigid.T @ basis)
 
@@ -263,7 +241,7 @@ def craig_bampton(
     offsets = np.cumsum([0] + [len(itf.dofs) for itf in rigid])
     t_all = np.zeros((len(boundary), 6 * len(kept)))
     for col, k in enumerate(kept):
-        t_all[offsets[k] : offsets[k + 1], 6 * col : 6 * col + 6] = rigid_interface_map(
+        t_all[offsets[k] : offsets[k + 1], 6 * col : 6 * col + 6] = rigid_body_modes(
             nodes[rigid[k].nodes], rigid[k].center
         )
     n_static = t_all.shape[1]

@@ -25,17 +25,15 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ffrf.errors import ReductionError
-from ffrf.numerics.eigen import factorize_spd, lowest_eigenpairs
-from ffrf.reduction.craig_bampton import checked_model, rigid_body_basis
+from ffrf.fe.fe_model import rigid_body_modes
+from ffrf.numerics.eigen import SHIFT_REL, eigenvalue_scale, factorize_spd, lowest_eigenpairs
+from ffrf.reduction.craig_bampton import checked_model
 from ffrf.reduction.mode_basis import ReducedMatrices
 
 __all__ = ["FreeFreeBasis", "free_free_basis", "rigid_body_coupling"]
 
 logger = logging.getLogger(__name__)
 
-# Shift s of (FF-1) as a fraction of the element eigenvalue scale mean(diag K) / mean(diag M):
-# small against any elastic eigenvalue of a sensible mesh, large against round-off in K R.
-_SHIFT_REL = 1e-6
 # |omega^2| below this fraction of the eigenvalue scale is zero (rigid modes: ~1e-15 of it) ...
 _ZERO_EIGENVALUE_REL = 1e-10
 # ... and zero modes must lie in span(R) to this M-norm residual (unit modes).
@@ -80,21 +78,11 @@ class FreeFreeBasis(ReducedMatrices):
 def rigid_body_coupling(nodes: NDArray, mass: sp.spmatrix, basis: NDArray) -> NDArray[np.float64]:
     """R_hat^T M Psi (6, m) with R_hat the rigid-body modes, M-orthonormalised: zero when Psi
     satisfies the reference conditions (FF-3); entries are cosines if Psi is M-normalised."""
-    rigid = rigid_body_basis(nodes)
+    rigid = rigid_body_modes(nodes)
     gram = rigid.T @ (mass @ rigid)
     factor = np.linalg.cholesky(0.5 * (gram + gram.T))
     normalised = np.linalg.solve(factor, rigid.T).T  # R L^-T: M-orthonormal columns
     return normalised.T @ (mass @ basis)
-
-
-def _eigenvalue_scale(mass: sp.csr_matrix, stiffness: sp.csr_matrix) -> float:
-    """mean(diag K) / mean(diag M) (1/s^2): the eigenvalue of a single element, sets the shift."""
-    scale = float(stiffness.diagonal().mean() / mass.diagonal().mean())
-    if not (np.isfinite(scale) and scale > 0.0):
-        raise ReductionError(
-            f"eigenvalue scale mean(diag K)/mean(diag M) = {scale!r}; the stiffness or the mass matrix is zero"
-        )
-    return scale
 
 
 def _check_rigid_modes(nodes, mass, vectors: NDArray, values: NDArray, n_rigid: int, scale: float) -> None:
@@ -112,7 +100,7 @@ def _check_rigid_modes(nodes, mass, vectors: NDArray, values: NDArray, n_rigid: 
             f"expected: the body is supported; pass n_rigid={n_zero}, or use craig_bampton for a supported body"
         )
     if n_rigid:
-        rigid = rigid_body_basis(nodes)
+        rigid = rigid_body_modes(nodes)
         m_rigid = mass @ rigid
         error = vectors[:, :n_rigid] - rigid @ np.linalg.solve(rigid.T @ m_rigid, m_rigid.T @ vectors[:, :n_rigid])
         residual = float(np.sqrt(np.max(np.einsum("ij,ij->j", error, mass @ error))))
@@ -145,8 +133,8 @@ def free_free_basis(fe_model: Any, n_modes: int, *, n_rigid: int = 6, verify_mod
             f"too many modes requested: {n_modes} + {n_rigid} rigid, but the model has {3 * len(nodes)} DOFs; "
             f"ask for at most {max(3 * len(nodes) - 1 - n_rigid, 0)} or refine the mesh"
         )
-    scale = _eigenvalue_scale(mass, stiffness)
-    shift = _SHIFT_REL * scale  # eq. (FF-1)
+    scale = eigenvalue_scale(mass, stiffness)
+    shift = SHIFT_REL * scale  # eq. (FF-1)
     shifted = sp.csc_matrix(stiffness + shift * mass)
     solve = factorize_spd(
         shifted,

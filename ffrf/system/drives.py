@@ -20,13 +20,27 @@ __all__ = ["CosineRamp", "RampedAngle", "rpm"]
 
 
 def rpm(value: float) -> float:
-    """Revolutions per minute in rad/s."""
+    """Revolutions per minute in rad/s.
+
+    >>> bool(np.isclose(rpm(60.0), 2 * np.pi))  # one revolution per second
+    True
+    """
     return 2.0 * np.pi * value / 60.0
 
 
 @dataclass(frozen=True)
 class CosineRamp:
-    """Eq. (D1): final rate ``omega`` (rad/s) reached after ``ramp_time`` (s)."""
+    """Eq. (D1): final rate ``omega`` (rad/s) reached after ``ramp_time`` (s).
+
+    With omega = 2 rad/s over 1 s: half the rate at mid-ramp, omega t_r / 2 = 1 rad turned by the
+    end of the ramp, 2 rad/s after it, so 5 rad at t = 3 s:
+
+    >>> drive = CosineRamp(omega=2.0, ramp_time=1.0)
+    >>> round(float(drive.rate(0.5)), 12), float(drive.angle(1.0)), float(drive.rate(2.0)), float(drive.angle(3.0))
+    (1.0, 1.0, 2.0, 5.0)
+    >>> drive.time_for_angle(5.0)
+    3.0
+    """
 
     omega: float
     ramp_time: float

@@ -20,8 +20,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ffrf.body.euler_parameters import rotation_derivative, rotation_matrix, skew
-from ffrf.numerics.small_linalg import dot, mat_mat, mat_vec, vec_mat
+from ffrf.body.euler_parameters import rotation_derivative, rotation_matrix
+from ffrf.numerics.small_linalg import dot, mat_mat, mat_vec, skew, vec_mat
 
 __all__ = ["exp_so3_kernel", "exp_so3_tangent_kernel", "marker_frame", "exp_so3_hessian", "marker_frame_hessian"]
 

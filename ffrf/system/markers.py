@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ffrf.body.euler_parameters import rotation_derivative, rotation_matrix
+from ffrf.numerics.small_linalg import skew
 from ffrf.system.marker_kernels import exp_so3_kernel
 
 __all__ = [
@@ -40,10 +41,6 @@ __all__ = [
 
 #: Where a joint point's offset from its marker lives (see :func:`attach_joint_point`).
 JOINT_OFFSETS = ("body", "marker")
-
-
-def _skew(v: NDArray) -> NDArray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]], dtype=np.result_type(v, float))
 
 
 def exp_so3(theta: NDArray) -> NDArray:
@@ -122,7 +119,7 @@ def rigid_interface_marker(
     rel = nodes[indices] - centre
     modes = basis.reshape(nodes.shape[0], 3, -1)[indices]  # (n_i, 3, m)
     position_modes = np.einsum("i,iam->am", w, modes)
-    skews = np.array([_skew(r) for r in rel])
+    skews = np.array([skew(r) for r in rel])
     w_matrix = -np.einsum("i,iab,ibc->ac", w, skews, skews)
     if np.linalg.cond(w_matrix) > 1e12:
         raise ValueError(

@@ -21,7 +21,7 @@ from ffrf_reference import (
     torsion_frequencies,
 )
 
-from ffrf import PLA, FEModel, clamped_modes, free_free_modes
+from ffrf import PLA, FEModel, clamped_modes, free_free_basis
 
 LENGTH, WIDTH, THICK = 0.2, 0.012, 0.008  # x, y, z
 E, NU, RHO = PLA.E, PLA.nu, PLA.rho
@@ -47,13 +47,14 @@ def fe_first_frequencies(h, order, bc, n_modes=8):
     points, tets = prism_mesh(LENGTH, WIDTH, THICK, h)
     model = FEModel.from_mesh(points, tets, E, NU, RHO, order=order)
     if bc == "clamped-free":
-        modes = clamped_modes(model, np.flatnonzero(np.repeat(model.nodes[:, 0] < 1e-12, 3)), n_modes)
+        clamped = clamped_modes(model, np.flatnonzero(np.repeat(model.nodes[:, 0] < 1e-12, 3)), n_modes)
+        frequencies, shapes = clamped.frequencies, clamped.shapes
     else:
-        modes = free_free_modes(model, n_modes)
-        assert modes.rigid_shapes.shape[1] == 6
+        free = free_free_basis(model, n_modes)  # checks that 6 rigid-body modes were left out
+        frequencies, shapes = free.frequencies_hz, free.basis
     first = {}
-    for i, f in enumerate(modes.frequencies):
-        kind = classify_mode(model.nodes, model.mass, modes.shapes[:, i], LENGTH, (WIDTH / 2, THICK / 2))
+    for i, f in enumerate(frequencies):
+        kind = classify_mode(model.nodes, model.mass, shapes[:, i], LENGTH, (WIDTH / 2, THICK / 2))
         first.setdefault(kind, f)
     return first
 

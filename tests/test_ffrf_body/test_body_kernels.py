@@ -5,8 +5,9 @@ import pytest
 from body_fixtures import bar_model, nodal_jacobian, nodal_velocities, random_state
 
 from ffrf.body.body_kernels import gravity_force, mass_matrix, quadratic_velocity
-from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix, skew
+from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix
 from ffrf.body.modal_moments import modal_moments
+from ffrf.numerics.small_linalg import skew
 
 
 @pytest.fixture(scope="module")

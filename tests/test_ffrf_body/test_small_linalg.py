@@ -4,7 +4,7 @@
 import numpy as np
 import pytest
 
-from ffrf.numerics.small_linalg import cross3, dot, mat_mat, mat_vec, vec_mat
+from ffrf.numerics.small_linalg import cross3, dot, mat_mat, mat_vec, skew, vec_mat
 
 
 @pytest.mark.parametrize("dtype", [np.float64, np.complex128])
@@ -32,3 +32,17 @@ def test_cross3_is_the_cross_product():
     rng = np.random.default_rng(5)
     a, b = rng.normal(size=3), rng.normal(size=3)
     np.testing.assert_allclose(cross3(a, b), np.cross(a, b), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.complex128])
+def test_skew_matrix_applies_the_cross_product(rng, dtype):
+    """skew(a) @ b = a x b (numpy's cross), skew(a) = -skew(a)^T, skew(a) @ a = 0; in a's dtype."""
+    a, b = rng.standard_normal(3).astype(dtype), rng.standard_normal(3).astype(dtype)
+    if dtype is np.complex128:
+        a, b = a + 1j * rng.standard_normal(3), b - 1j * rng.standard_normal(3)
+    s = skew(a)
+    assert s.dtype == dtype
+    np.testing.assert_allclose(s @ b, np.cross(a, b), rtol=1e-14, atol=1e-14)
+    np.testing.assert_array_equal(s, -s.T)
+    np.testing.assert_allclose(s @ a, np.zeros(3), atol=1e-14)
+    np.testing.assert_array_equal(skew(np.stack([a, b], axis=1)[:, 0]), s)  # a strided column
