@@ -15,8 +15,9 @@ import argparse
 import numpy as np
 import scipy.sparse as sp
 
-from ffrf import FEModel, craig_bampton, interface_from_group, mesh_link, paper_link_axes
+from ffrf import FEModel, craig_bampton, interface_from_group, mesh_link
 from ffrf.fe.materials import PLA
+from ffrf.paper.axes import paper_link_axes
 from validation.exudyn_ffrf import run_exudyn, run_ffrf
 from validation.reduced_body import ReducedBody
 from validation.single_body_scenes import pendulum_scene

@@ -27,7 +27,7 @@ if str(ROOT) not in sys.path:
 
 from bench_report import write_report  # noqa: E402
 
-from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
+from ffrf.paper.bennett_scene import build_bennett  # noqa: E402
 from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
 
 

@@ -32,8 +32,8 @@ from bench_report import write_report  # noqa: E402
 from full_revolution import count_factorisations  # noqa: E402
 
 import ffrf.solvers.generalized_alpha as alpha  # noqa: E402
+from ffrf.paper.bennett_scene import build_bennett  # noqa: E402
 from ffrf.scenes.assembly import assemble  # noqa: E402
-from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
 from ffrf.scenes.linkage_run import evaluate_sensors  # noqa: E402
 
 #: Output rows every 0.08 s (a multiple of every step below).

@@ -35,8 +35,8 @@ if str(ROOT) not in sys.path:
 
 from bench_report import write_report  # noqa: E402
 
+from ffrf.paper.bennett_scene import build_bennett  # noqa: E402
 from ffrf.scenes.assembly import assemble  # noqa: E402
-from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
 from ffrf.solvers.common import consistent_accelerations  # noqa: E402
 from ffrf.solvers.generalized_alpha import generalized_alpha  # noqa: E402
 from ffrf.solvers.newton_kernels import lu_solve  # noqa: E402

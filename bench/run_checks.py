@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench_report import write_report  # noqa: E402
 
 from ffrf.output.path_distance import distance_to_curve  # noqa: E402
-from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
+from ffrf.paper.bennett_scene import build_bennett  # noqa: E402
 from ffrf.scenes.linkage_file import load_linkage  # noqa: E402
 from ffrf.scenes.linkage_run import run_linkage  # noqa: E402
 

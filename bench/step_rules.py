@@ -43,7 +43,7 @@ from bench_report import write_report  # noqa: E402
 import ffrf.scenes.linkage_run as linkage_run  # noqa: E402
 from ffrf.errors import NewtonDivergence, StaticDivergence  # noqa: E402
 from ffrf.fe.materials import PLA, RIGID  # noqa: E402
-from ffrf.scenes.bennett_scene import build_bennett  # noqa: E402
+from ffrf.paper.bennett_scene import build_bennett  # noqa: E402
 from ffrf.scenes.linkage_description import drive_sign  # noqa: E402
 from ffrf.scenes.linkage_file import load_linkage  # noqa: E402
 from ffrf.scenes.linkage_steps import joint_rate_profile  # noqa: E402
