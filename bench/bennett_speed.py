@@ -38,7 +38,7 @@ def _pin_blas(threads: int) -> None:
 _COLD = """
 import time, numpy as np
 started = time.perf_counter()
-from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.system.packed_system import pack_system
 scene = build_bennett("pla", h={h}, order={order}, n_modes={modes})
 built = time.perf_counter()
@@ -88,7 +88,7 @@ def main() -> None:
 
     import numpy as np
 
-    from ffrf.scenes.bennett_scene import assemble, build_bennett
+    from ffrf.paper.bennett_scene import assemble, build_bennett
     from ffrf.solvers.generalized_alpha import generalized_alpha
     from ffrf.solvers.static_solver import quasi_static
     from ffrf.system.packed_system import pack_system

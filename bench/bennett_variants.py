@@ -26,7 +26,7 @@ from bench.report import write_report
 
 def run_variant(variant: str, h: float, order: int, modes: int, outputs: int, out: Path | None) -> dict:
     """Build and run one variant quasi-statically; the row of the table (SI and display units)."""
-    from ffrf.scenes.bennett_scene import PAPER_MAX_COUPLER_DEVIATION_MM, build_bennett
+    from ffrf.paper.bennett_scene import PAPER_MAX_COUPLER_DEVIATION_MM, build_bennett
     from ffrf.scenes.linkage_run import run_linkage, write_results
 
     clock = time.perf_counter()
@@ -65,7 +65,7 @@ def table(rows: list[dict]) -> str:
         "| assembly max von Mises (MPa) | build (s) | run (s) |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    from ffrf.scenes.bennett_scene import paper_max_coupler_deviation
+    from ffrf.paper.bennett_scene import paper_max_coupler_deviation
 
     for r in rows:
         lines.append(
@@ -101,7 +101,7 @@ def main(argv=None) -> dict:
             flush=True,
         )
     if args.out is not None:
-        from ffrf.output.bennett_figures import plot_coupler_deviation, plot_driving_torque
+        from ffrf.output.linkage_figures import plot_coupler_deviation, plot_driving_torque
 
         runs = {r["variant"]: r["result"] for r in rows}
         plot_coupler_deviation(runs, args.out / "coupler_deviation.png")

@@ -21,7 +21,7 @@ from pathlib import Path
 from threadpoolctl import threadpool_limits
 
 from bench.report import write_report
-from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.linkage_run import run_linkage
 
 

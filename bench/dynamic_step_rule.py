@@ -26,8 +26,8 @@ import numpy as np
 import ffrf.solvers.generalized_alpha as alpha  # noqa: E402
 from bench.full_revolution import count_factorisations
 from bench.report import write_report
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.assembly import assemble
-from ffrf.scenes.bennett_scene import build_bennett
 from ffrf.scenes.linkage_run import evaluate_sensors
 
 #: Output rows every 0.08 s (a multiple of every step below).

@@ -32,7 +32,8 @@ def _peak_mib() -> float:
 
 def run_case(link: int, h: float, order: int, n_modes: int) -> dict:
     """One benchmark case in this process (called in a subprocess by :func:`main`)."""
-    from ffrf import PLA, FEModel, free_free_basis, mesh_link, paper_link_axes, quality_summary
+    from ffrf import PLA, FEModel, free_free_basis, mesh_link, quality_summary
+    from ffrf.paper.axes import paper_link_axes
 
     result: dict = {"link": link, "h_m": h, "order": order}
     a, b, names = paper_link_axes(link)

@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> dict:
     args = parser.parse_args(argv)
 
     from bench.speed_vs_error import run_dynamic
-    from ffrf.scenes.bennett_scene import build_bennett
+    from ffrf.paper.bennett_scene import build_bennett
 
     counter = count_factorisations()
     t_end = args.t_end if args.t_end is not None else build_bennett("pla", h=6e-3, order=1, n_modes=2).t_end

@@ -141,12 +141,12 @@ def _fmt(value: float | None, digits: int = 2) -> str:
 
 
 def make_scene(material=None, alpha3_deg: float = 90.0, **kwargs):
-    """:func:`ffrf.scenes.bennett_scene.build_bennett` with any material and base twist.
+    """:func:`ffrf.paper.bennett_scene.build_bennett` with any material and base twist.
 
     ``build_bennett`` takes both from its ``VARIANTS`` table only, so the pair is registered
     under a temporary name for the call (the scene keeps it in ``settings['variant']``)."""
     from ffrf.fe.materials import PLA
-    from ffrf.scenes import bennett_scene
+    from ffrf.paper import bennett_scene
 
     material = PLA if material is None else material
     name = f"hard:E={material.E:g}:alpha3={alpha3_deg:g}"
@@ -201,7 +201,7 @@ def simulate(
     Quasi-static runs go in ``chunks`` so that a failure keeps the equilibria before it;
     dynamic runs keep the partial result of :class:`ffrf.solvers.generalized_alpha.NewtonDivergence`."""
     from ffrf.errors import NewtonDivergence, StaticDivergence
-    from ffrf.scenes.bennett_scene import assemble
+    from ffrf.paper.bennett_scene import assemble
     from ffrf.scenes.linkage_run import evaluate_sensors
     from ffrf.solvers.generalized_alpha import generalized_alpha
     from ffrf.solvers.static_solver import quasi_static
@@ -350,7 +350,7 @@ def _save(ctx: Context, run: str, times: np.ndarray, sensors: dict) -> None:
 def exudyn_dynamic(scene, t_end: float, step: float, rho_inf: float = 0.9) -> str:
     """Our generalized-alpha against the Exudyn twin from the same assembled state (Exudyn's
     simplified gravity in both): largest coupler difference and driving-torque difference."""
-    from ffrf.scenes.bennett_scene import assemble
+    from ffrf.paper.bennett_scene import assemble
     from validation.bennett_trajectory import compare, run_ffrf_bennett
     from validation.exudyn_bennett import run_exudyn_bennett
 
@@ -538,7 +538,7 @@ def case_misalignment(ctx: Context) -> None:
 
 def exudyn_assembly(scene, ours) -> str:
     """Exudyn's own static assembly with continuation against ours (simplified gravity in both)."""
-    from ffrf.scenes.bennett_scene import assemble
+    from ffrf.paper.bennett_scene import assemble
     from validation.bennett_trajectory import system_points
     from validation.exudyn_bennett import assemble_exudyn_bennett
 

@@ -29,8 +29,8 @@ import scipy.linalg
 from numba import njit
 
 from bench.report import write_report
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.assembly import assemble
-from ffrf.scenes.bennett_scene import build_bennett
 from ffrf.solvers.common import consistent_accelerations
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.newton_kernels import lu_solve

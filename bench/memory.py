@@ -47,7 +47,7 @@ from bench.report import write_report
 MAIN_JOB = ["-m", "ffrf", "bennett", "--variant", "pla"]
 
 #: (module, function, stage): the build and its stages
-SETUP_STAGES = (("ffrf.scenes.bennett_scene", "build_bennett", "build_bennett"), *BUILD_STAGES)
+SETUP_STAGES = (("ffrf.paper.bennett_scene", "build_bennett", "build_bennett"), *BUILD_STAGES)
 #: ... and the run's: static assembly, its stresses, the solver, the sensors, the files
 RUN_STAGES = (
     ("ffrf.scenes.linkage_run", "run_linkage", "run_linkage"),
@@ -57,8 +57,8 @@ RUN_STAGES = (
     ("ffrf.scenes.linkage_run", "evaluate_sensors", "sensors"),
     ("ffrf.scenes.linkage_run", "write_results", "write_results"),
     ("ffrf.output.assembly_stress", "write_assembly_vtu", "write_assembly_vtu"),
-    ("ffrf.output.bennett_figures", "plot_coupler_deviation", "plot_coupler_deviation"),
-    ("ffrf.output.bennett_figures", "plot_driving_torque", "plot_driving_torque"),
+    ("ffrf.output.linkage_figures", "plot_coupler_deviation", "plot_coupler_deviation"),
+    ("ffrf.output.linkage_figures", "plot_driving_torque", "plot_driving_torque"),
 )
 
 
@@ -135,7 +135,8 @@ def scene_sizes(scene) -> dict:
 def child_scene(out: Path, order: int, h: float, short_run: float) -> None:
     """The default scene at ``(order, h)``, a quasi-static run over its first ``short_run`` s, stages measured."""
     peaks = _staged()
-    from ffrf.scenes import bennett_scene, linkage_run
+    from ffrf.paper import bennett_scene
+    from ffrf.scenes import linkage_run
 
     started = time.perf_counter()
     scene = bennett_scene.build_bennett("pla", h=h, order=order)
@@ -295,8 +296,8 @@ def residual_breakdown(packed, q, qd, qdd, lam, phi) -> dict:
 
 def child_allocations(out: Path, dynamic_end: float, static_end: float) -> None:
     """Allocations per iteration, step and pose of the default scene, per kernel function, and their time."""
+    from ffrf.paper.bennett_scene import build_bennett
     from ffrf.scenes.assembly import assemble, dynamic_step, quasi_static_step
-    from ffrf.scenes.bennett_scene import build_bennett
     from ffrf.solvers import generalized_alpha, static_solver
     from ffrf.solvers.newton_kernels import alpha_iterations
     from ffrf.solvers.simulate import simulate

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.report import write_report
-from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
+from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
 from ffrf.scenes.linkage_run import run_linkage
 
 

@@ -3,7 +3,7 @@
 The paper (Sect. "Simulation Setup") integrates its Exudyn model dynamically (generalized-alpha);
 our default run is quasi-static because the drive is slow against the links' vibrations
 (:func:`ffrf.scenes.linkage_run.choose_mode`). This bench measures what that choice costs: both runs
-start from the same static assembly (:func:`ffrf.scenes.bennett_scene.assemble`) and share their
+start from the same static assembly (:func:`ffrf.paper.bennett_scene.assemble`) and share their
 output times (the dynamic run writes every ``round(t_end / step / (outputs - 1))``-th step;
 the quasi-static run solves at exactly those times), and it reports
 
@@ -95,7 +95,7 @@ def main(argv=None) -> dict:
     )
     args = parser.parse_args(argv)
 
-    from ffrf.scenes.bennett_scene import build_bennett
+    from ffrf.paper.bennett_scene import build_bennett
     from ffrf.scenes.linkage_run import run_linkage
 
     started = time.perf_counter()
@@ -167,7 +167,7 @@ def main(argv=None) -> dict:
 
 def write_outputs(directory: Path, quasi_static, dynamic) -> None:
     """Both runs' results and the differences over the drive angle (um and N mm)."""
-    from ffrf.output.bennett_figures import plot_over_drive_angle
+    from ffrf.output.linkage_figures import plot_over_drive_angle
     from ffrf.scenes.linkage_run import write_results
 
     write_results(quasi_static, directory / "quasi_static")

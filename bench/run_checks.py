@@ -22,7 +22,7 @@ import numpy as np
 
 from bench.report import write_report
 from ffrf.output.path_distance import distance_to_curve
-from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.linkage_file import load_linkage
 from ffrf.scenes.linkage_run import run_linkage
 

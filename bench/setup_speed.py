@@ -57,7 +57,7 @@ def _timed_stages() -> dict[str, float]:
 def child() -> None:
     """One build in this process; print its times and the cache's counts as JSON."""
     started = time.perf_counter()
-    from ffrf.scenes.bennett_scene import build_bennett
+    from ffrf.paper.bennett_scene import build_bennett
     from ffrf.scenes.scene_cache import PROCESS_CACHE
 
     imported = time.perf_counter()

@@ -76,7 +76,7 @@ def _kinetic_around(result, t_fold: float) -> dict:
 
 def _bennett_monitoring_cost(outputs: int) -> dict:
     """The default PLA Bennett scene (no fold): a quasi-static revolution without and with stability monitoring."""
-    from ffrf.scenes.bennett_scene import build_bennett
+    from ffrf.paper.bennett_scene import build_bennett
 
     scene = build_bennett("pla")
     run_linkage(scene, "quasi_static", 5, t_end=0.5)  # compile and warm the kernels outside the timings

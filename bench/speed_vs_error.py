@@ -87,7 +87,7 @@ THRESHOLDS_M = (1e-3, 1e-4, 1e-5, 1e-6)
 
 
 def _build(order: int, h: float, modes: int):
-    from ffrf.scenes.bennett_scene import build_bennett
+    from ffrf.paper.bennett_scene import build_bennett
 
     started = time.perf_counter()
     scene = build_bennett("pla", h=h, order=order, n_modes=modes)
@@ -178,7 +178,7 @@ def run_dynamic(
     scene_cache: dict | None = None,
 ) -> dict:
     """Both solvers' generalized-alpha runs from their own static assembly at rest, one row per step."""
-    from ffrf.scenes.bennett_scene import assemble
+    from ffrf.paper.bennett_scene import assemble
     from validation.bennett_validation import dynamic_solve, run_ours
 
     out = {}
@@ -391,7 +391,7 @@ def _log(p: dict) -> None:
 
 def _warm_up() -> None:
     """Load (or compile) the numba kernels once, so that no point's time includes it."""
-    from ffrf.scenes.bennett_scene import assemble
+    from ffrf.paper.bennett_scene import assemble
     from ffrf.scenes.linkage_run import run_linkage
     from validation.bennett_validation import dynamic_solve
 

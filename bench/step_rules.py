@@ -37,7 +37,7 @@ import ffrf.scenes.linkage_run as linkage_run  # noqa: E402
 from bench.report import write_report
 from ffrf.errors import NewtonDivergence, StaticDivergence
 from ffrf.fe.materials import PLA, RIGID
-from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.linkage_description import drive_sign
 from ffrf.scenes.linkage_file import load_linkage
 from ffrf.scenes.linkage_steps import joint_rate_profile

@@ -44,6 +44,7 @@ from typing import Any
 
 from bench.report import write_report
 from ffrf.errors import StaticDivergence
+from ffrf.paper.bennett_scene import STUDY_BASES
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.scene_cache import PROCESS_CACHE
 from ffrf.studies.runner import _client, _worker_variant, read_rows, run_study
@@ -82,7 +83,8 @@ def bennett_study(samples: int, seed: int, outputs: int = 121) -> Study:
                     "normal": {"mean": 0.0, "std": 0.1},
                 },
             ],
-        }
+        },
+        bases=STUDY_BASES,
     )
 
 

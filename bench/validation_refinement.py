@@ -47,7 +47,7 @@ def main(argv=None) -> dict:
     parser.add_argument("--json", type=Path)
     args = parser.parse_args(argv)
 
-    from ffrf.scenes.bennett_scene import assemble, build_bennett
+    from ffrf.paper.bennett_scene import assemble, build_bennett
     from validation.bennett_validation import dynamic_solve, from_exudyn, run_ours
     from validation.exudyn_bennett import assemble_exudyn_bennett, bennett_bodies, run_exudyn_bennett
     from validation.exudyn_conventions import exudyn_convention_system

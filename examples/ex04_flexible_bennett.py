@@ -17,7 +17,7 @@ the converged path.
 
 import numpy as np
 
-from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.linkage_run import run_linkage
 
 

@@ -10,7 +10,7 @@ or nodes and matrices from another FE program (:mod:`ffrf.fe.matrix_import`) -> 
 (:mod:`ffrf.system.multibody`) -> generalized-alpha, variational midpoint or static solution
 (:mod:`ffrf.solvers.generalized_alpha`, :mod:`ffrf.solvers.variational_midpoint`, :mod:`ffrf.solvers.static_solver`)
 -> scenes: one builder from a description (:mod:`ffrf.scenes.builder`) for scene files
-(:mod:`ffrf.scenes.scene_file`) and the paper's Bennett scenes (:mod:`ffrf.scenes.bennett_scene`,
+(:mod:`ffrf.scenes.scene_file`) and the paper's Bennett scenes (:mod:`ffrf.paper.bennett_scene`,
 runs and sensors in :mod:`ffrf.scenes.linkage_run`). Layers and where to change what:
 ``docs/architecture.md``.
 The equations are derived in ``docs/formulation.md``.
@@ -63,7 +63,7 @@ from ffrf.fe.matrix_import import (
 )
 from ffrf.fe.modal import Modes, clamped_modes
 from ffrf.fe.node_selection import node_at_point, nodes_in_plane, surface_area_weights, surface_triangles
-from ffrf.geometry.joint_axes import PAPER_AXES, Axis, paper_link_axes
+from ffrf.geometry.joint_axes import Axis
 from ffrf.geometry.link_geometry import LinkDesign, LinkGeometry, build_link, mesh_link
 from ffrf.geometry.meshing import gmsh_session, mesh_stl
 from ffrf.mesh.tet_mesh import (
@@ -133,13 +133,11 @@ __all__ = [
     "interface_from_triangles",
     "interface_from_nodes_file",
     "interface_in_cylinder",
-    "PAPER_AXES",
     "Axis",
     "LinkDesign",
     "LinkGeometry",
     "build_link",
     "mesh_link",
-    "paper_link_axes",
     "PLA",
     "RIGID",
     "Material",

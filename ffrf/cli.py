@@ -25,9 +25,9 @@ from threadpoolctl import threadpool_limits
 from ffrf.fe.fe_model import FEModel
 from ffrf.fe.interfaces import interface_from_group
 from ffrf.fe.materials import PLA
-from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
 from ffrf.geometry.link_geometry import LinkDesign, mesh_link
 from ffrf.mesh.tet_mesh import quality_summary, write_vtu
+from ffrf.paper.axes import bennett_axes, paper_link_axes
 from ffrf.scenes.limits import MAX_OUTPUTS, MAX_TIME_STEPS, linkage_run_steps, steps_problem
 from ffrf.scenes.scene_cache import CACHE_DIR_VARIABLE
 from ffrf.scenes.scene_schema import PARAMETRIC_H_RANGE
@@ -262,7 +262,8 @@ def _run_and_report(
     import time
 
     from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
-    from ffrf.output.bennett_figures import plot_coupler_deviation, plot_driving_torque
+    from ffrf.output.linkage_figures import plot_coupler_deviation, plot_driving_torque
+    from ffrf.paper.figures import VARIANT_COLORS
     from ffrf.scenes.linkage_run import choose_mode, run_linkage, write_results
 
     auto = options["mode"] == "auto"
@@ -326,8 +327,8 @@ def _run_and_report(
     assembly = result.assembly
     assert assembly is not None  # run_linkage always records the assembled state
     write_assembly_vtu(out / "assembly.vtu", scene, assembly)
-    plot_coupler_deviation({label: result}, out / "coupler_deviation.png")
-    plot_driving_torque({label: result}, out / "driving_torque.png")
+    plot_coupler_deviation({label: result}, out / "coupler_deviation.png", colors=VARIANT_COLORS)
+    plot_driving_torque({label: result}, out / "driving_torque.png", colors=VARIANT_COLORS)
     if "stability" in result.metadata:
         _write_stability(result, out)
         if result.critical is not None:
@@ -403,7 +404,7 @@ def _report_verification(verification: dict | None) -> int:
 
 def _write_stability(result, out: Path) -> None:
     """``stability.json`` (per output: time, drive angle, squared frequencies of Eq. (B1)) and ``stability.png``."""
-    from ffrf.output.bennett_figures import plot_stability
+    from ffrf.output.linkage_figures import plot_stability
 
     values = result.sensors["stability_squared_frequencies"]
     angle = result.sensors["drive_angle"]
@@ -440,7 +441,7 @@ def _write_stability(result, out: Path) -> None:
 def _run_bennett(args: argparse.Namespace) -> int:
     import time
 
-    from ffrf.scenes.bennett_scene import build_bennett, paper_max_coupler_deviation
+    from ffrf.paper.bennett_scene import build_bennett, paper_max_coupler_deviation
 
     started = time.perf_counter()
     _check_run_length(args)
@@ -742,9 +743,10 @@ _element_edge = number_in(*PARAMETRIC_H_RANGE, unit=" m")
 
 
 def _run_study(args: argparse.Namespace) -> int:
+    from ffrf.paper.bennett_scene import STUDY_BASES
     from ffrf.studies.spec import load_study
 
-    study = load_study(args.study)  # checked before any worker starts
+    study = load_study(args.study, STUDY_BASES)  # checked before any worker starts
     if args.scheduler is not None and args.workers is not None:
         raise SceneError("--workers sizes the local cluster; a scheduler (--scheduler) has its own workers")
     out = _output_folder(args.out)
@@ -793,7 +795,7 @@ def _run_warmup(args: argparse.Namespace) -> int:
     validation's dynamic window) are left to their first use: the main job never calls them (issue #22)."""
     import time
 
-    from ffrf.scenes.bennett_scene import build_bennett
+    from ffrf.paper.bennett_scene import build_bennett
     from ffrf.scenes.linkage_run import run_linkage
 
     print(

@@ -57,8 +57,24 @@ def write_tet_matrices(tmp_path):
     np.savetxt(tmp_path / "tri_nodes.txt", np.eye(3))
 
 
+def paper_link_axes_toml(link: int) -> str:
+    """The two axes of the paper's link ``link`` (:func:`ffrf.paper.axes.paper_link_axes`) as a scene file's
+    ``axes = [...]`` of a parametric link (TOML text; floats written exactly)."""
+    from ffrf.paper.axes import bennett_axes, paper_link_axes
+
+    first, second, names = paper_link_axes(link, bennett_axes(90.0))
+    return (
+        "["
+        + ", ".join(
+            f'{{name = "{name}", point = {axis.point.tolist()}, direction = {axis.direction.tolist()}}}'
+            for axis, name in ((first, names[0]), (second, names[1]))
+        )
+        + "]"
+    )
+
+
 def driven_link_scene(axis: str, t_end: float, outputs: int, modes: int, sensor: bool = False) -> str:
-    """Quasi-static parametric PLA link 1 driven at its first bore about ``axis`` (TOML list text)."""
+    """Quasi-static parametric PLA link 1 of the paper driven at its first bore about ``axis`` (TOML list text)."""
     text = f"""
 [scene]
 name = "driven link"
@@ -68,7 +84,7 @@ outputs = {outputs}
 beta = 0.005
 [[bodies]]
 name = "link1"
-parametric = {{link = 1, h = 0.008}}
+parametric = {{axes = {paper_link_axes_toml(1)}, h = 0.008}}
 material = {{E = 1.2e9, nu = 0.33, rho = 450.0}}
 order = 1
 modes = {modes}

@@ -147,7 +147,7 @@ def validate_bennett(
     """Build the variant, run every comparison of the module docstring, compute the metrics."""
     import exudyn
 
-    from ffrf.scenes.bennett_scene import assemble, build_bennett
+    from ffrf.paper.bennett_scene import assemble, build_bennett
 
     from .bennett_metrics import bennett_metrics
     from .exudyn_bennett import (

@@ -2,7 +2,7 @@ r"""The Exudyn twin of the flexible Bennett scene and its runs: dynamic, static,
 assembly and the quasi-static sweep, each returning a
 :class:`validation.bennett_trajectory.BennettTrajectory` as our runs do.
 
-The twin is built from a :class:`ffrf.scenes.bennett_scene.BennettScene` only (identical input in both
+The twin is built from a :class:`ffrf.paper.bennett_scene.BennettScene` only (identical input in both
 solvers):
 
 * four ``ObjectFFRFreducedOrder`` bodies (``FEMinterface`` with our nodes, consistent M, K and
@@ -184,7 +184,7 @@ def static_exudyn_bennett(
 def assemble_exudyn_bennett(
     scene, bases: list[TwinBasis] | None = None, steps: int | None = None, tolerance: float = 1e-10
 ):
-    """Exudyn's own static assembly at t = 0, as :func:`ffrf.scenes.bennett_scene.assemble`: gravity from
+    """Exudyn's own static assembly at t = 0, as :func:`ffrf.paper.bennett_scene.assemble`: gravity from
     ``scene.q_start``, then the misalignment in ``steps`` increments, each a new twin of
     ``scene.with_misalignment(k / steps)`` started from the previous equilibrium. Returns the
     static result of :func:`static_exudyn_bennett` at full misalignment."""

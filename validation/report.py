@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ffrf.scenes.bennett_scene import paper_max_coupler_deviation
+from ffrf.paper.bennett_scene import paper_max_coupler_deviation
 
 from . import figures
 from .bennett_metrics import TARGETS

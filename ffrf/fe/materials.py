@@ -1,8 +1,8 @@
 """Linear isotropic elastic materials (SI units).
 
-The two constants are those of the paper on flexible Bennett linkages:
-printed PLA (E = 1.2 GPa, nu = 0.33, rho = 450 kg/m^3, 15 % infill) and an
-"ideally rigid" reference material used to switch flexibility off.
+Two constants: printed PLA (E = 1.2 GPa, nu = 0.33, rho = 450 kg/m^3, 15 % infill; the values of the
+paper, Sect. "Simulation Setup"), the default material of linkages, and an "ideally rigid" reference
+material used to switch flexibility off.
 """
 
 from __future__ import annotations

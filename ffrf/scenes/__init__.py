@@ -1,1 +1,1 @@
-"""Scenes: the scene-file schema and builder, the paper's Bennett scenes and their runs."""
+"""Scenes: the scene-file schema and builder, single-loop linkages and their runs."""

@@ -5,7 +5,7 @@ scene builder and keeps what a linkage run needs besides the system: the loop (:
 the nominal design), the driven joint and its drive, the start, the run's end and the tool link. The ideal
 coupler point at a drive angle is the tool link's point moved by the rigid loop's motion at that angle
 (Eq. (L1), followed by :func:`kinematics.follow_driver`); for the paper's Bennett linkage
-(:class:`ffrf.scenes.bennett_scene.BennettScene`) it comes from the motion polynomial instead, which is
+(:class:`ffrf.paper.bennett_scene.BennettScene`) it comes from the motion polynomial instead, which is
 the same curve (``tests/test_kinematics/test_single_loop.py``).
 """
 

@@ -4,13 +4,13 @@ A file with a ``[linkage]`` table instead describes a whole single-loop linkage 
 axes or a Rational Linkages model (:mod:`ffrf.scenes.linkage_file`); the rest of this docstring is about
 scenes of bodies and joints.
 
-A scene lists bodies (a mesh file or one of the paper's parametric links), their material,
+A scene lists bodies (a mesh file or a parametric link on two axes), their material,
 element order, number of modes and interfaces; joints between interfaces (or the ground);
 an optional drive; gravity, damping, solver settings and sensors. All lengths are metres
 unless a body says ``unit = "mm"`` for its mesh. Joint axes and points, interfaces and sensor points
 are given where the meshes are (mesh coordinates); bodies start there unless a ``pose`` moves
 them. The file is a scene description for the one builder, :mod:`ffrf.scenes.builder`, which also
-builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_description`)::
+builds the descriptions code generates (:func:`ffrf.scenes.linkage_description.linkage_description`)::
 
     [scene]
     name = "hinged link"
@@ -31,8 +31,8 @@ builds the paper's Bennett scenes (:func:`ffrf.scenes.bennett_scene.bennett_desc
     [[bodies]]
     name = "link"
     mesh = "link.msh"                 # any meshio volume mesh, or a closed STL surface filled with tetrahedra of
-                                      # edge h = 0.006 (m; a scan or CAD export); or: parametric = {link = 1, ...}
-                                      # or a link on any two skew axes (housings at the joint points,
+                                      # edge h = 0.006 (m; a scan or CAD export); or a parametric link
+                                      # on any two skew axes (housings at the joint points,
                                       # default the feet of their common normal; cranked arm otherwise):
                                       # parametric = {axes = [{name = "a", point = [...], direction = [...],
                                       #   joint_point = [...]}, {name = "b", ...}], h = 0.006, mount = false,

@@ -72,10 +72,8 @@ LINK_AXIS = {
 #: The parametric link's dimensions (m), :class:`ffrf.geometry.link_geometry.LinkDesign`; the rest keep defaults.
 LINK_DESIGN = {name: Key("number", False, positive) for name in LINK_DESIGN_FIELDS}
 PARAMETRIC = {
-    "link": Key("integer", False, one_of((0, 1, 2, 3))),
     "design": Key("table", keys=LINK_DESIGN),
-    "alpha3_deg": Key("number"),
-    "axes": Key("tables", keys=LINK_AXIS),
+    "axes": Key("tables", True, keys=LINK_AXIS),
     "mount": Key("boolean"),
     "h": Key("number", False, between(*PARAMETRIC_H_RANGE, closed=True)),
 }
@@ -230,7 +228,7 @@ def _check_body(body: dict, where: str) -> None:
     sources = [key for key in ("mesh", "parametric", "matrices") if key in body]
     if len(sources) != 1:
         raise SceneError(
-            f'{where}: give exactly one of mesh = "file", parametric = {{link = ...}} or matrices = {{format = ...}}, '
+            f'{where}: give exactly one of mesh = "file", parametric = {{axes = ...}} or matrices = {{format = ...}}, '
             f"got {sources or 'none'}"
         )
     if body.get("reduction") == "free_free" and body.get("modes", 4) < 1:
@@ -244,15 +242,8 @@ def _check_body(body: dict, where: str) -> None:
     if "material" not in body:
         raise SceneError(f"{where}: missing required key 'material' (a table {{E, nu, rho}} for the mesh)")
     spec = body.get("parametric")
-    if spec is not None and ("link" in spec) == ("axes" in spec):
-        raise SceneError(
-            f"{where}, parametric: give exactly one of link = 0..3 (the paper's link) or axes = [{{name, point, "
-            "direction}, {...}] (any two skew axes)"
-        )
-    if spec is not None and "axes" in spec and len(spec["axes"]) != 2:
+    if spec is not None and len(spec["axes"]) != 2:
         raise SceneError(f"{where}, parametric: a link has exactly two axes, got {len(spec['axes'])}")
-    if spec is not None and "axes" in spec and "alpha3_deg" in spec:
-        raise SceneError(f"{where}, parametric: alpha3_deg belongs to the paper's links (link = ...), not to axes")
     if "h" in body and not str(body.get("mesh", "")).lower().endswith(".stl"):
         raise SceneError(
             f"{where}: 'h' sizes the tetrahedra that fill an STL surface (mesh = \"part.stl\"); a volume mesh keeps "

@@ -10,8 +10,8 @@ r"""Study files (TOML): a base linkage, the parameters a study varies and how it
     # max_variants = 200000      # a design above 100000 variants is refused unless lifted here (ffrf.scenes.limits)
 
     [base]
-    bennett = "pla"              # a built-in variant of the paper's Bennett linkage, or
-    # linkage = "my_linkage.toml"  # a linkage file (ffrf.scenes.linkage_file), relative to this file
+    linkage = "my_linkage.toml"  # a linkage file (ffrf.scenes.linkage_file), relative to this file, or a
+    # KEY = "NAME"               # named base of the application's catalogue (NamedBases, e.g. the paper's)
     h = 0.012                    # optional: element edge (m), order, modes, mode ("auto", "quasi_static",
     order = 1                    #   "dynamic"), outputs, revolutions, rpm
     modes = 2
@@ -34,6 +34,10 @@ bore's own axis (mm, the joint's DH offset d), added to any error the base alrea
 (Pa) or ``rho`` (kg/m^3); the drive's ``rpm``; the element edge ``h`` (m) or the fixed-interface ``modes`` per
 link (rounded to an integer). :func:`load_study` checks a file before anything runs: a misspelt key, a wrong
 type or an impossible value is one :class:`~ffrf.errors.SceneError` line naming the key, where it is and the fix.
+
+**Named bases.** An application may offer built-in base linkages by name (:class:`NamedBases`, passed to
+:func:`load_study`): its ``key`` in ``[base]`` names one of them, whose options and scene builder the application
+gives (:mod:`ffrf.paper.bennett_scene` offers the paper's variants so).
 """
 
 from __future__ import annotations
@@ -42,17 +46,29 @@ import hashlib
 import json
 import math
 import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from ffrf.errors import SceneError
-from ffrf.scenes.bennett_scene import VARIANTS
 from ffrf.scenes.limits import MAX_OUTPUTS, linkage_run_steps, steps_problem, variants_problem
-from ffrf.scenes.linkage_description import BORE_ERROR_MODELS
+from ffrf.scenes.linkage_description import BORE_ERROR_MODELS, LinkageOptions
+from ffrf.scenes.linkage_scene import LinkageScene
+from ffrf.scenes.scene_cache import SceneCache
 from ffrf.scenes.schema_keys import Key, at_least, between, check_table, one_of, positive
 
-__all__ = ["METHODS", "TARGETS", "Base", "Parameter", "Study", "design_size", "load_study", "study_from_document"]
+__all__ = [
+    "METHODS",
+    "TARGETS",
+    "Base",
+    "NamedBases",
+    "Parameter",
+    "Study",
+    "design_size",
+    "load_study",
+    "study_from_document",
+]
 
 #: Sampling methods (:mod:`ffrf.studies.sampling`).
 METHODS = ("grid", "monte_carlo", "lhs", "sobol", "saltelli")
@@ -82,7 +98,6 @@ _STUDY = {
     "max_variants": Key("integer", False, at_least(1)),
 }
 _BASE = {
-    "bennett": Key("string", False, one_of(tuple(VARIANTS))),
     "linkage": Key("string"),
     "h": Key("number", False, positive),
     "order": Key("integer", False, one_of((1, 2))),
@@ -106,11 +121,30 @@ _PARAMETER = {
     "normal": Key("table", keys=_NORMAL),
     "values": Key("numbers"),
 }
-SCHEMA = {
-    "study": Key("table", True, keys=_STUDY),
-    "base": Key("table", True, keys=_BASE),
-    "parameters": Key("tables", True, keys=_PARAMETER),
-}
+
+
+@dataclass(frozen=True)
+class NamedBases:
+    """Base linkages an application offers by name: ``[base]`` says ``key = "NAME"`` (one of ``names``, loops
+    of ``n_joints`` joints) instead of a linkage file; ``options(NAME)`` gives its linkage options and
+    ``build(options, NAME, cache)`` builds its scene with any options (a variant's), e.g. with its own ideal
+    path. Module-level functions, so that a study pickles to the workers."""
+
+    key: str
+    names: tuple[str, ...]
+    n_joints: int
+    options: Callable[[str], LinkageOptions]
+    build: Callable[[LinkageOptions, str, SceneCache | None], LinkageScene]
+
+
+def _schema(bases: NamedBases | None) -> dict[str, Key]:
+    """The study file's keys, with the named bases' key in ``[base]``."""
+    named = {} if bases is None else {bases.key: Key("string", False, one_of(bases.names))}
+    return {
+        "study": Key("table", True, keys=_STUDY),
+        "base": Key("table", True, keys=named | _BASE),
+        "parameters": Key("tables", True, keys=_PARAMETER),
+    }
 
 
 @dataclass(frozen=True)
@@ -129,14 +163,21 @@ class Parameter:
 
 @dataclass(frozen=True)
 class Base:
-    """The base linkage: a Bennett ``variant`` or a linkage file's parsed ``document`` (with its path, for
-    messages), and the run and discretisation settings that replace the base's own (``None``: keep)."""
+    """The base linkage: a ``named`` base of ``bases`` or a linkage file's parsed ``document`` (with its path,
+    for messages), and the run and discretisation settings that replace the base's own (``None``: keep);
+    ``bases``: the named bases the study was read with."""
 
-    bennett: str | None
+    named: str | None
     linkage: str | None
     document: dict | None
     overrides: dict[str, Any] = field(default_factory=dict)
     bore_error_model: str = "misfit"
+    bases: NamedBases | None = None
+
+    def description(self) -> dict[str, Any]:
+        """What a study's results say of its base: the named base (under its key), the linkage file, overrides."""
+        named = {} if self.bases is None else {self.bases.key: self.named}
+        return named | {"linkage": self.linkage} | self.overrides
 
 
 @dataclass(frozen=True)
@@ -203,13 +244,11 @@ def _parameter(entry: dict, where: str, method: str) -> Parameter:
     return Parameter(name, target, kind, arguments, entry.get("joint"), entry.get("link"))
 
 
-def _base(table: dict, directory: Path, where: str) -> Base:
-    sources = [key for key in ("bennett", "linkage") if key in table]
+def _base(table: dict, directory: Path, where: str, bases: NamedBases | None) -> Base:
+    sources = [key for key in ((bases.key,) if bases else ()) + ("linkage",) if key in table]
     if len(sources) != 1:
-        raise SceneError(
-            f'{where}: give exactly one base: bennett = "pla" (a built-in variant) or linkage = "FILE.toml", '
-            f"got {sources or 'none'}"
-        )
+        choice = f'{bases.key} = "NAME" (one of {", ".join(bases.names)}) or ' if bases else ""
+        raise SceneError(f'{where}: give exactly one base: {choice}linkage = "FILE.toml", got {sources or "none"}')
     document = None
     if "linkage" in table:
         path = directory / table["linkage"]
@@ -219,7 +258,7 @@ def _base(table: dict, directory: Path, where: str) -> Base:
             raise SceneError(f"{where}: cannot read the linkage file {path} ({error})") from error
         if "linkage" not in document:
             raise SceneError(f"{where}: {path} has no [linkage] table; a study's base is a linkage file")
-    if "revolutions" in table or "rpm" in table:  # the Bennett base's drive: 1 rpm after a 1 s ramp
+    if "revolutions" in table or "rpm" in table:  # the base's drive: 1 rpm after a 1 s ramp
         steps = linkage_run_steps(
             2.0 * math.pi * table.get("rpm", 1.0) / 60.0, 1.0, table.get("revolutions", 1.0), table.get("mode", "auto")
         )
@@ -230,9 +269,8 @@ def _base(table: dict, directory: Path, where: str) -> Base:
     overrides = {key: table[key] for key in keys if key in table}
     if overrides.get("stability") and overrides.get("mode") == "dynamic":
         raise SceneError(f'{where}: stability is judged at equilibria: drop mode = "dynamic" or stability = true')
-    return Base(
-        table.get("bennett"), table.get("linkage"), document, overrides, table.get("bore_error_model", "misfit")
-    )
+    named = table.get(bases.key) if bases else None
+    return Base(named, table.get("linkage"), document, overrides, table.get("bore_error_model", "misfit"), bases)
 
 
 def _check_bores(parameters: tuple[Parameter, ...], n: int, where: str) -> None:
@@ -248,9 +286,12 @@ def _check_bores(parameters: tuple[Parameter, ...], n: int, where: str) -> None:
             )
 
 
-def study_from_document(document: dict, directory: Path = Path("."), where: str = "study") -> Study:
-    """Check a parsed study file and return its :class:`Study`; linkage files are read from ``directory``."""
-    check_table(document, SCHEMA, where)
+def study_from_document(
+    document: dict, directory: Path = Path("."), where: str = "study", bases: NamedBases | None = None
+) -> Study:
+    """Check a parsed study file and return its :class:`Study`; linkage files are read from ``directory``;
+    ``bases``: the named bases its ``[base]`` may choose from (module docstring)."""
+    check_table(document, _schema(bases), where)
     head = document["study"]
     method = head["method"]
     samples = int(head.get("samples", 0 if method == "grid" else 64))
@@ -271,8 +312,12 @@ def study_from_document(document: dict, directory: Path = Path("."), where: str 
     problem = variants_problem(design_size(method, samples, parameters), len(parameters), head.get("max_variants"))
     if problem is not None:
         raise SceneError(f"{where}, study: {problem}")
-    base = _base(document["base"], directory, f"{where}, base")
-    n = 4 if base.document is None else _loop_size(base.document)
+    base = _base(document["base"], directory, f"{where}, base", bases)
+    if base.document is not None:
+        n = _loop_size(base.document)
+    else:
+        assert bases is not None  # _base took a named base
+        n = bases.n_joints
     _check_bores(parameters, n, where)
     fingerprint = hashlib.sha256(
         json.dumps({"base": document["base"], "document": base.document}, sort_keys=True, default=str).encode()
@@ -297,11 +342,11 @@ def _loop_size(document: dict) -> int:
     return loop.n
 
 
-def load_study(path: str | Path) -> Study:
-    """Read and check a study file (module docstring)."""
+def load_study(path: str | Path, bases: NamedBases | None = None) -> Study:
+    """Read and check a study file (module docstring); ``bases``: the named bases it may choose from."""
     path = Path(path)
     try:
         document = tomllib.loads(path.read_text(encoding="utf-8-sig"))  # a BOM (Windows editors) is no TOML
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         raise SceneError(f"{path}: cannot read the study ({error})") from error
-    return study_from_document(document, path.parent, path.name)
+    return study_from_document(document, path.parent, path.name, bases)

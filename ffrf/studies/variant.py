@@ -30,14 +30,13 @@ from dataclasses import replace
 from typing import Any
 
 from ffrf.errors import AssemblyDivergence, FEInputError, NewtonDivergence, StaticDivergence
-from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions
 from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_run import LinkageResult, run_linkage
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_cache import SceneCache
 from ffrf.studies.sampling import Variant
-from ffrf.studies.spec import Study
+from ffrf.studies.spec import NamedBases, Study
 from ffrf.system.drives import rpm
 
 __all__ = [
@@ -77,13 +76,20 @@ def row_names(study: Study) -> tuple[str, ...]:
     return head + study.parameter_names + output_names(study.n_links, study.stability) + ("wall_time_s", "worker")
 
 
+def _named(study: Study) -> NamedBases:
+    """The named bases a study without a linkage file chose its base from."""
+    if study.base.bases is None:
+        raise ValueError(f"study {study.name!r} has neither a linkage file nor named bases to build its base from")
+    return study.base.bases
+
+
 def _base_options(study: Study) -> tuple[Any, LinkageOptions, dict]:
-    """The base's loop (``None`` for the paper's Bennett), its options and run settings, with the overrides."""
+    """The base's loop (``None`` for a named base), its options and run settings, with the overrides."""
     base = study.base
     if base.document is not None:
         loop, options, run = linkage_options(base.document, str(base.linkage))
     else:
-        loop, options, run = None, bennett_options(base.bennett or "pla"), {}
+        loop, options, run = None, _named(study).options(str(base.named)), {}
     o = base.overrides
     options = replace(
         options,
@@ -120,7 +126,7 @@ def _with_bore_errors(
 
 
 def variant_options(study: Study, values: dict[str, float]) -> tuple[Any, LinkageOptions, dict]:
-    """The loop (``None``: the paper's Bennett), the linkage options and run settings of one variant."""
+    """The loop (``None``: a named base), the linkage options and run settings of one variant."""
     loop, options, run = _base_options(study)
     material, design, changes = options.material, options.design, dict[str, Any]()
     added: dict[tuple[int, int], dict[str, float]] = {}
@@ -151,7 +157,7 @@ def build_variant(study: Study, values: dict[str, float], cache: SceneCache | No
     the process's :data:`~ffrf.scenes.scene_cache.PROCESS_CACHE`, which a Dask worker keeps between variants)."""
     loop, options, run = variant_options(study, values)
     if loop is None:
-        return build_bennett_from_options(options, study.base.bennett or "pla", cache), run
+        return _named(study).build(options, str(study.base.named), cache), run
     return build_linkage(loop, options, where=f"{study.name}, variant", cache=cache), run
 
 

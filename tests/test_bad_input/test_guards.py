@@ -24,6 +24,7 @@ from test_study_input import GRID_1000_BY_1000
 from ffrf.cli import main
 from ffrf.errors import FEInputError, MeshError, SceneError
 from ffrf.mesh.tet_mesh import TetMesh, read_mesh
+from ffrf.paper.bennett_scene import STUDY_BASES
 from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.scene_file import load_scene
 from ffrf.scenes.scene_schema import check_scene
@@ -102,7 +103,7 @@ def test_a_bore_error_of_1e300_deg_on_the_command_line_is_one_line_before_the_ou
 
 
 def test_max_steps_lifts_the_limit_of_the_command_line(tmp_path, capsys, monkeypatch):
-    import ffrf.scenes.bennett_scene as bennett_scene
+    import ffrf.paper.bennett_scene as bennett_scene
 
     def built(*args, **kwargs):
         raise SceneError("the scene would be built now")
@@ -147,7 +148,7 @@ def test_size_limits_are_lifted_by_their_keys(tmp_path):
     check_scene(scene)  # 1e8 steps, below the lifted limit
     lifted = GRID_1000_BY_1000.replace("\n\n[base]", "\nmax_variants = 1000000\n\n[base]")
     grid = STUDY[: STUDY.index('method = "sobol"')] + lifted
-    study = study_from_document(tomllib.loads(grid))
+    study = study_from_document(tomllib.loads(grid), bases=STUDY_BASES)
     assert design_size(study.method, study.samples, study.parameters) == 1000 * 1000
 
 
@@ -157,7 +158,11 @@ def test_a_byte_order_mark_is_read_as_the_text_it_precedes(tmp_path, kind):
     text, load, words = {
         "scene": (PENDULUM.replace("gravity", "gravty"), load_scene, "did you mean 'gravity'"),
         "linkage": (LINKAGE.replace("driver", "drver"), load_scene, "did you mean 'driver'"),
-        "study": (STUDY.replace('"sobol"', '"random"'), load_study, "'method' must be one of"),
+        "study": (
+            STUDY.replace('"sobol"', '"random"'),
+            lambda path: load_study(path, STUDY_BASES),
+            "'method' must be one of",
+        ),
     }[kind]
     (tmp_path / "file.toml").write_bytes(BOM + text.encode())
     with pytest.raises(SceneError, match=words):
@@ -166,7 +171,7 @@ def test_a_byte_order_mark_is_read_as_the_text_it_precedes(tmp_path, kind):
 
 def test_a_valid_study_with_a_byte_order_mark_loads(tmp_path):
     (tmp_path / "study.toml").write_bytes(BOM + STUDY.encode())
-    assert load_study(tmp_path / "study.toml").samples == 8
+    assert load_study(tmp_path / "study.toml", bases=STUDY_BASES).samples == 8
 
 
 def test_a_nan_node_coordinate_is_a_mesh_error(tmp_path):
@@ -347,7 +352,7 @@ def test_any_sample_count_is_refused_in_one_line_or_within_the_limit(method, sam
     hand (N, or N (d + 2) for Saltelli with d = 1), has at most 1e5 variants."""
     text = STUDY.replace('method = "sobol"', f'method = "{method}"').replace("samples = 8", f"samples = {samples}")
     try:
-        study = study_from_document(tomllib.loads(text))
+        study = study_from_document(tomllib.loads(text), bases=STUDY_BASES)
     except SceneError as error:
         assert "\n" not in str(error)
         return

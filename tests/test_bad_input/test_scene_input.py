@@ -278,7 +278,7 @@ PARAMETRIC_BODY = {
 AXIS_A = {"name": "a", "point": [0.0, 0.0, 0.0], "direction": [0.0, 0.0, 1.0]}
 AXIS_B = {"name": "b", "point": [0.1, 0.0, 0.0], "direction": [0.0, 1.0, 0.0]}
 PARAMETRIC_CASES = {
-    "paper link and axes": ({"link": 1, "axes": [AXIS_A, AXIS_B]}, "give exactly one of link = 0..3"),
+    "link without axes": ({"h": 0.012}, "parametric: missing required key 'axes'"),
     "three axes on a link": ({"axes": [AXIS_A, AXIS_B, AXIS_B]}, "a link has exactly two axes, got 3"),
     "joint point off its axis": (
         {"axes": [dict(AXIS_A, joint_point=[0.0, 0.01, 0.0]), AXIS_B], "h": 0.012},

@@ -91,6 +91,7 @@ def test_an_out_folder_of_another_study_is_refused(tmp_path, capsys):
     study's: refused before anything runs, naming the fix; the same study, or more samples of it, is accepted."""
     import json
 
+    from ffrf.paper.bennett_scene import STUDY_BASES
     from ffrf.studies.runner import _check_same_study, _description
     from ffrf.studies.spec import load_study
 
@@ -99,13 +100,13 @@ def test_an_out_folder_of_another_study_is_refused(tmp_path, capsys):
     second.write_text(GOOD.replace('bennett = "pla"', 'bennett = "pla1"').replace("[study]", '[study]\nname = "other"'))
     out = tmp_path / "out"
     out.mkdir()
-    (out / "study.json").write_text(json.dumps(_description(load_study(first))))
+    (out / "study.json").write_text(json.dumps(_description(load_study(first, bases=STUDY_BASES))))
     (out / "rows").mkdir()
     assert main(["study", str(second), "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "holds the rows of another study" in err and "another output folder (--out), or delete" in err, err
     assert len(err.strip().splitlines()) == 1
     assert json.loads((out / "study.json").read_text())["name"] == "study"  # untouched
-    _check_same_study(load_study(first), out)  # its own folder
+    _check_same_study(load_study(first, bases=STUDY_BASES), out)  # its own folder
     first.write_text(GOOD.replace("samples = 8", "samples = 16"))
-    _check_same_study(load_study(first), out)  # more samples of the same study
+    _check_same_study(load_study(first, bases=STUDY_BASES), out)  # more samples of the same study

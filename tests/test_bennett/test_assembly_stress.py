@@ -20,7 +20,7 @@ from ffrf.output.assembly_stress import (
     scene_assembly_stress,
     write_assembly_vtu,
 )
-from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.paper.bennett_scene import assemble, build_bennett
 from ffrf.scenes.linkage_run import run_linkage
 
 COARSE = dict(h=6e-3, order=1, n_modes=2)

@@ -1,11 +1,12 @@
-"""Paper-style figures (ffrf.output.bennett_figures): files are written and the plotted data are the inputs
-(angles from the start in degrees, deviations in mm, torques in N mm), including extra series."""
+"""Paper-style figures (ffrf.output.linkage_figures): files are written and the plotted data are the inputs
+(angles from the start in degrees, deviations in mm, torques in N mm), including extra series; the paper's
+colours (ffrf.paper.figures) are the given labels' only."""
 
 import numpy as np
 import pytest
 
 from ffrf import cli
-from ffrf.output.bennett_figures import (
+from ffrf.output.linkage_figures import (
     coupler_deviation_series,
     driving_torque_series,
     plot_coupler_deviation,
@@ -54,6 +55,20 @@ def test_torque_plot_magnitude_and_signed(tmp_path, rng):
     assert np.allclose(lines_by_label(ax)["rigid"][1], 20.0 * np.sin(run.sensors["drive_angle"]), rtol=1e-12)
     angle, values = driving_torque_series(run, magnitude=False)
     assert angle[0] == 0.0 and angle[-1] == pytest.approx(2 * np.pi + 0.05)
+
+
+def test_given_colours_colour_their_labels_only(rng):
+    from matplotlib.colors import to_hex
+
+    from ffrf.paper.figures import VARIANT_COLORS
+
+    runs = {"rigid": synthetic_result(1e-4, rng), "mine": synthetic_result(1e-4, rng)}
+    _, ax = plot_coupler_deviation(runs, colors=VARIANT_COLORS)
+    colours = {line.get_label(): to_hex(line.get_color()) for line in ax.lines}
+    assert colours["rigid"] == to_hex("tab:orange")
+    assert colours["mine"] == to_hex("tab:blue")  # the colour cycle's first: no colour of its own
+    _, ax = plot_driving_torque(runs)
+    assert to_hex(ax.lines[0].get_color()) == to_hex("tab:blue")  # without colours, the cycle's
 
 
 def test_generic_plot_and_series(rng):

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from ffrf.scenes.bennett_scene import PAPER_MAX_COUPLER_DEVIATION_MM, build_bennett, paper_max_coupler_deviation
+from ffrf.paper.bennett_scene import PAPER_MAX_COUPLER_DEVIATION_MM, build_bennett, paper_max_coupler_deviation
 from ffrf.scenes.linkage_run import run_linkage, write_results
 
 COARSE = dict(h=6e-3, order=1, n_modes=2)

@@ -19,8 +19,8 @@ import numpy as np
 
 from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.output.sensors import node_sensors
+from ffrf.paper.bennett_scene import bennett_description, build_bennett
 from ffrf.scenes.assembly import assemble, quasi_static_step
-from ffrf.scenes.bennett_scene import bennett_description, build_bennett
 from ffrf.scenes.builder import Scene, build_scene
 from ffrf.solvers.static_solver import quasi_static, static_equilibrium
 from ffrf.system.forces import SpringDamperJoint

@@ -178,7 +178,7 @@ def test_only_the_base_is_misaligned_and_continuation_starts_closed():
 def test_long_quasi_static_steps_reach_the_same_equilibria_as_short_ones():
     """Seven equilibria over a whole revolution (60 deg of drive apart) must be the ones a fine
     sequence passes through: a predictor or tangent update must not jump to another equilibrium."""
-    from ffrf.scenes.bennett_scene import assemble, build_bennett
+    from ffrf.paper.bennett_scene import assemble, build_bennett
     from ffrf.solvers.static_solver import quasi_static
 
     scene = build_bennett("pla", h=0.006, order=1, n_modes=2)  # where Broyden updates once jumped (secant=True)

@@ -11,7 +11,7 @@ import pytest
 from body_fixtures import five_point_slope, potential_energy
 
 from ffrf.body.euler_parameters import rotation_matrix
-from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.paper.bennett_scene import assemble, build_bennett
 from ffrf.solvers.static_solver import quasi_static
 from ffrf.system.reactions import joint_reactions
 

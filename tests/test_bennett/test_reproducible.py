@@ -4,7 +4,7 @@ arrays (ARPACK starts from a fixed vector, mode signs follow one rule: ffrf/nume
 import numpy as np
 
 from ffrf.numerics.eigen import fix_signs, lanczos_start
-from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.paper.bennett_scene import assemble, build_bennett
 from ffrf.solvers.static_solver import quasi_static
 
 

@@ -94,7 +94,7 @@ def test_a_sharp_turn_of_the_path_without_a_fold_is_bridged_onto_the_branch_the_
     from dataclasses import replace
 
     from ffrf.errors import StaticDivergence
-    from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
+    from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
     from ffrf.scenes.linkage_description import BoreError
     from ffrf.solvers.static_solver import static_equilibrium
 

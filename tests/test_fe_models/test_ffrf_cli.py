@@ -72,7 +72,7 @@ def test_bad_arguments_give_a_clear_error(tmp_path, capsys):
 
 def test_paper_axes_agree_with_kinematics_dh():
     """The hard-coded home-configuration axes against the kinematics package's DH chain."""
-    from ffrf.geometry.joint_axes import PAPER_AXES, bennett_axes
+    from ffrf.paper.axes import PAPER_AXES, bennett_axes
 
     for ours, theirs in zip(PAPER_AXES, bennett_axes(90.0), strict=True):
         np.testing.assert_allclose(theirs.point, ours.point, atol=1e-12)

@@ -15,10 +15,10 @@ from ffrf import (
     interface_from_group,
     interface_in_cylinder,
     mesh_link,
-    paper_link_axes,
     quality_summary,
 )
 from ffrf.geometry.joint_axes import common_normal_feet
+from ffrf.paper.axes import paper_link_axes
 
 H = 0.006  # coarse on purpose: tests check geometry, not accuracy
 DESIGN = LinkDesign()

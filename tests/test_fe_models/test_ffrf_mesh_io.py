@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from ffrf_reference import prism_mesh
 
-from ffrf import MeshError, TetMesh, mesh_link, mesh_stl, paper_link_axes, read_mesh, write_vtu
+from ffrf import MeshError, TetMesh, mesh_link, mesh_stl, read_mesh, write_vtu
+from ffrf.paper.axes import paper_link_axes
 
 
 @pytest.fixture(scope="module")

@@ -12,9 +12,9 @@ from ffrf import (
     clamped_modes,
     free_free_basis,
     mesh_link,
-    paper_link_axes,
     rigid_body_modes,
 )
+from ffrf.paper.axes import paper_link_axes
 
 
 @pytest.fixture(scope="module")

@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from ffrf import PLA, FEModel, mesh_link, paper_link_axes
+from ffrf import PLA, FEModel, mesh_link
 from ffrf.geometry.meshing import configure_meshing, gmsh_session, mesh_current_model
+from ffrf.paper.axes import paper_link_axes
 
 #: Largest relative entry difference, about 100x the largest measured over the four cases on 2026-11-24
 #: (AMD EPYC; the same under OPENBLAS_CORETYPE=Sandybridge and Prescott).

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from bench import memory_probe
-from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.paper.bennett_scene import assemble, build_bennett
 from ffrf.solvers.common import consistent_accelerations
 from ffrf.solvers.generalized_alpha import AlphaParameters, _factor_iteration_matrix
 from ffrf.solvers.newton_kernels import EXHAUSTED, alpha_iterations

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.paper.bennett_scene import assemble, build_bennett
 from ffrf.solvers.common import consistent_accelerations
 from ffrf.solvers.generalized_alpha import AlphaParameters, _Newton, _State, _step
 from ffrf.solvers.newton_kernels import lu_solve, static_rhs, static_update

@@ -10,7 +10,7 @@ import pytest
 from body_fixtures import two_bar_chain
 from pendulum_fixtures import pendulum
 
-from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.paper.bennett_scene import assemble, build_bennett
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.static_solver import quasi_static, static_equilibrium
 from ffrf.system.joints import MarkerJoint

@@ -15,7 +15,7 @@ from pendulum_fixtures import pendulum
 
 from ffrf.errors import StaticDivergence
 from ffrf.numerics.rank_revealing import equilibration, factor, rank_tolerance, singular_values
-from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.paper.bennett_scene import assemble, build_bennett
 from ffrf.solvers.static_solver import static_equilibrium
 
 ROUND_OFF = 1e-15  # relative perturbation of every entry: what another BLAS kernel's rounding can change

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ffrf.scenes.bennett_scene import BennettScene, bennett_options, build_bennett_from_options
+from ffrf.paper.bennett_scene import BennettScene, bennett_options, build_bennett_from_options
 from ffrf.scenes.scene_cache import _MISSING, CACHE_DIR_VARIABLE, DiskStore, SceneCache
 
 

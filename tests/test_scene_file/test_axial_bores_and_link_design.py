@@ -8,8 +8,8 @@ from dataclasses import replace
 import numpy as np
 
 from ffrf.geometry.link_geometry import LinkDesign
+from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
 from ffrf.scenes.assembly import assemble
-from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, linkage_description
 from kinematics.rational_mechanism import load_model, loop_from_mechanism
 

@@ -1,5 +1,5 @@
 """The one scene builder (``ffrf.scenes.builder``): start poses, as-built joints closed by the
-assembly continuation, and the paper's Bennett scenes as plain scene descriptions.
+assembly continuation, parametric links on two axes, and the paper's Bennett scenes as plain scene descriptions.
 
 Truth is independent of the builder: a rotated start pose with rotated gravity must give the rotated
 motion (the equations are frame-invariant), and a body held by one fixed joint whose two sides
@@ -11,8 +11,8 @@ import numpy as np
 from scene_fixtures import PENDULUM, write_bar
 from scipy.spatial.transform import Rotation
 
+from ffrf.paper.bennett_scene import VARIANTS, bennett_description
 from ffrf.scenes.assembly import assemble
-from ffrf.scenes.bennett_scene import VARIANTS, bennett_description
 from ffrf.scenes.builder import build_scene
 from ffrf.scenes.scene_file import load_scene, sensor_arrays, simulate_scene
 from ffrf.scenes.scene_schema import check_scene
@@ -171,23 +171,12 @@ def _axes_link(first, second, names, joint_points=None) -> dict:
     }
 
 
-def test_a_parametric_link_from_two_axes_is_the_papers_link_from_the_same_axes():
-    from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
-
-    first, second, names = paper_link_axes(1, bennett_axes(90.0))  # as the builder makes link = 1
-    by_axes = build_scene({"bodies": [_axes_link(first, second, names)]}).bodies[0]
-    by_index = build_scene(
-        {"bodies": [dict(_axes_link(first, second, names), parametric={"link": 1, "h": 0.012})]}
-    ).bodies[0]
-    np.testing.assert_array_equal(by_axes.fe.nodes, by_index.fe.nodes)
-    np.testing.assert_array_equal(by_axes.reduction.basis, by_index.reduction.basis)
-
-
 def test_a_cranked_link_puts_its_housings_at_the_given_joint_points():
     """DH offsets d != 0: the joint point on each axis is given, 15 mm from the common normal's foot;
     each bore (interface) centre lies on its axis, the housing offset s from its joint point."""
-    from ffrf.geometry.joint_axes import common_normal_feet, paper_link_axes
+    from ffrf.geometry.joint_axes import common_normal_feet
     from ffrf.geometry.link_geometry import LinkDesign
+    from ffrf.paper.axes import paper_link_axes
 
     first, second, names = paper_link_axes(2)
     feet = common_normal_feet(first, second)
@@ -222,7 +211,7 @@ def test_a_joint_point_sensor_of_a_hinge_stays_on_the_ground(tmp_path):
 def test_a_bore_found_from_its_axis_is_the_meshed_bore():
     """``axis = {point, direction}`` finds the same bore as the mesher's named group: same nodes, same
     area weights (the selection is independent: radii and extents of the boundary vertices)."""
-    from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
+    from ffrf.paper.axes import bennett_axes, paper_link_axes
 
     first, second, names = paper_link_axes(1, bennett_axes(90.0))
     by_group = _axes_link(first, second, names)
@@ -247,8 +236,8 @@ def test_an_stl_surface_in_millimetres_is_filled_and_its_bores_found_from_the_ax
     import meshio
 
     from ffrf.fe.interfaces import boundary_triangles
-    from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
     from ffrf.geometry.link_geometry import mesh_link
+    from ffrf.paper.axes import bennett_axes, paper_link_axes
 
     first, second, names = paper_link_axes(1, bennett_axes(90.0))
     source, _ = mesh_link(first, second, h=0.012, names=names)

@@ -1,12 +1,12 @@
 """Clearance between links along a motion (ffrf.output.clearance): closed forms on spheres, and the paper's
-parametric Bennett links, whose arms overlap in the folded home pose (ffrf.scenes.bennett_scene)."""
+parametric Bennett links, whose arms overlap in the folded home pose (ffrf.paper.bennett_scene)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from ffrf.output.clearance import link_clearance
-from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.paper.bennett_scene import build_bennett
 
 
 def _sphere(radius: float, n: int = 4000) -> np.ndarray:

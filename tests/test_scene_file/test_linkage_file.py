@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from ffrf.cli import main
-from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.scene_file import load_scene
 from kinematics import BennettLinkage
@@ -79,7 +79,7 @@ def test_a_stiff_rational_linkages_4r_from_the_command_line_follows_its_ideal_mo
 def test_a_measured_bore_axis_is_the_same_as_built_as_its_twist(tmp_path):
     """The base's joint-3 bore given as the line it is on (the paper's alpha_3 = 91 deg axis h3, in mm) builds the
     same description as the 1 deg twist error: bores, joints and start poses agree to round-off (measured 1.1e-16)."""
-    from ffrf.geometry.joint_axes import bennett_axes
+    from ffrf.paper.axes import bennett_axes
 
     h3 = bennett_axes(91.0)[3]
     point = ", ".join(f"{1e3 * x:.17g}" for x in h3.point)

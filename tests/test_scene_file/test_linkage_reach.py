@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from scipy.optimize import root
 
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.assembly import assemble
-from ffrf.scenes.bennett_scene import build_bennett
 from ffrf.scenes.linkage_description import LinkageOptions, drive_sign
 from ffrf.scenes.linkage_reach import drive_work, linkage_energy
 from ffrf.scenes.linkage_scene import build_linkage

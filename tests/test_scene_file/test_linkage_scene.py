@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from ffrf.fe.materials import RIGID
-from ffrf.geometry.joint_axes import bennett_axes, paper_link_axes
 from ffrf.output.sensors import scene_sensors
+from ffrf.paper.axes import bennett_axes, paper_link_axes
+from ffrf.paper.bennett_scene import VARIANTS, bennett_description
 from ffrf.scenes.assembly import start_state
-from ffrf.scenes.bennett_scene import VARIANTS, bennett_description
 from ffrf.scenes.builder import build_scene
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, drive_sign, joint_points, linkage_description
 from ffrf.scenes.linkage_scene import build_linkage

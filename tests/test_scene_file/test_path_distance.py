@@ -10,7 +10,7 @@ import pytest
 
 from ffrf.fe.materials import RIGID
 from ffrf.output.path_distance import ExactCurve, distance_to_curve
-from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.linkage_description import LinkageOptions, joint_points
 from ffrf.scenes.linkage_scene import build_linkage
 from kinematics import SingleLoop

@@ -13,7 +13,7 @@ import meshio
 import numpy as np
 from scene_fixtures import PENDULUM, write_bar
 
-from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
+from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
 from ffrf.scenes.builder import build_scene
 from ffrf.scenes.linkage_description import BoreError
 from ffrf.scenes.linkage_run import PATH_SENSORS, run_linkage

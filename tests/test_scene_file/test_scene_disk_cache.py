@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from ffrf.scenes.bennett_scene import BennettScene, bennett_options, build_bennett_from_options
+from ffrf.paper.bennett_scene import BennettScene, bennett_options, build_bennett_from_options
 from ffrf.scenes.linkage_description import BoreError
 from ffrf.scenes.scene_cache import CACHE_DIR_VARIABLE, SceneCache, _evict, cache_directory
 

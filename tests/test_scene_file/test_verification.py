@@ -16,7 +16,7 @@ from ffrf.fe.materials import PLA, Material
 from ffrf.output import verification
 from ffrf.output.energy_balance import energy_scale, relative_balance
 from ffrf.output.verification import Check, Verification
-from ffrf.scenes.bennett_scene import build_bennett
+from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.linkage_file import load_linkage
 from ffrf.scenes.linkage_run import LinkageResult, run_linkage
 from ffrf.solvers.generalized_alpha import generalized_alpha

@@ -5,6 +5,7 @@ model's standardised regression coefficients."""
 import numpy as np
 import pytest
 
+from ffrf.paper.bennett_scene import STUDY_BASES
 from ffrf.studies.report import saltelli_outputs
 from ffrf.studies.sampling import study_design
 from ffrf.studies.sensitivity import sobol_indices, standardised_regression
@@ -40,7 +41,7 @@ def _study(seed: int):
         "base": {"bennett": "pla"},
         "parameters": parameters,
     }
-    return study_from_document(document)
+    return study_from_document(document, bases=STUDY_BASES)
 
 
 @pytest.mark.parametrize("seed", range(10))

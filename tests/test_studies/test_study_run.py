@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from dask.distributed import Client, LocalCluster
 
-from ffrf.scenes.bennett_scene import bennett_options, build_bennett_from_options
+from ffrf.paper.bennett_scene import STUDY_BASES, bennett_options, build_bennett_from_options
 from ffrf.scenes.linkage_description import BoreError
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.studies.report import write_report
@@ -33,7 +33,8 @@ def _study(twists: list[float], h: list[float]):
                 {"name": "twist", "target": "bore_twist_deg", "joint": 3, "link": 0, "values": twists},
                 {"name": "edge", "target": "h", "values": h},
             ],
-        }
+        },
+        bases=STUDY_BASES,
     )
 
 
@@ -141,7 +142,8 @@ def test_twenty_random_variants_equal_standalone_runs_of_their_scenes(client, tm
                     "normal": {"mean": 0.0, "std": 0.1},
                 },
             ],
-        }
+        },
+        bases=STUDY_BASES,
     )
     run = run_study(study, tmp_path, client=client, progress=False)
     assert (run.design, run.ok) == (20, 20)
@@ -174,7 +176,8 @@ def test_dh_offset_and_section_parameters_set_the_bore_and_the_links_design():
                 {"name": "width", "target": "arm_width_mm", "values": [20.0]},
                 {"name": "thickness", "target": "arm_thickness_mm", "values": [9.0]},
             ],
-        }
+        },
+        bases=STUDY_BASES,
     )
     _, options, _ = variant_options(study, {"d3": 0.2, "twist": 1.0, "width": 20.0, "thickness": 9.0})
     (bore,) = options.bore_errors
@@ -236,7 +239,8 @@ def test_a_study_with_stability_monitoring_reports_what_a_standalone_stability_r
             "study": {"name": "stable", "method": "grid"},
             "base": dict(BASE, stability=True),
             "parameters": [{"name": "twist", "target": "bore_twist_deg", "joint": 3, "link": 0, "values": [0.0, 1.0]}],
-        }
+        },
+        bases=STUDY_BASES,
     )
     run_study(study, tmp_path / "out", workers=1, progress=False)
     for row in read_rows(tmp_path / "out").to_pylist():

@@ -26,7 +26,7 @@ from functools import cache
 
 import numpy as np
 
-from ffrf.scenes.bennett_scene import assemble, build_bennett
+from ffrf.paper.bennett_scene import assemble, build_bennett
 from validation.bennett_trajectory import compare, run_ffrf_bennett, static_ffrf_bennett
 from validation.exudyn_bennett import run_exudyn_bennett, static_exudyn_bennett
 from validation.exudyn_conventions import exudyn_convention_system, probe_marker_offset

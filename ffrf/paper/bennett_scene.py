@@ -43,6 +43,7 @@ from ffrf.scenes.assembly import assemble
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, linkage_description
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_cache import SceneCache
+from ffrf.studies.spec import NamedBases
 from ffrf.system.drives import rpm
 from ffrf.system.markers import JOINT_OFFSETS
 from ffrf.system.multibody import MultibodySystem
@@ -57,6 +58,7 @@ __all__ = [
     "bennett_options",
     "build_bennett",
     "build_bennett_from_options",
+    "STUDY_BASES",
     "assemble",
 ]
 
@@ -221,3 +223,7 @@ def build_bennett_from_options(
     )
     built = {f.name: getattr(scene, f.name) for f in fields(LinkageScene)}
     return BennettScene(**dict(built, settings=settings), variant=variant, linkage=BennettLinkage(PAPER_A, PAPER_ALPHA))
+
+
+#: The paper's variants as a study's named bases: ``[base] bennett = "pla"`` (:mod:`ffrf.studies.spec`).
+STUDY_BASES = NamedBases("bennett", tuple(VARIANTS), 4, bennett_options, build_bennett_from_options)

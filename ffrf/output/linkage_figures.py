@@ -1,6 +1,6 @@
-"""Figures of Bennett runs in the layout of the paper's Fig. "deviation_errors": (a) the coupler's
-deviation from the ideal path (motion polynomial, Eq. (motion)) and (b) the driving torque at
-joint 3, both over the drive angle, one curve per run (the paper overlays its variants).
+"""Figures of linkage runs in the layout of the paper's Fig. "deviation_errors": (a) the coupler's
+deviation from the ideal path (the rigid motion, Eq. (L1)) and (b) the driving torque at the
+driven joint, both over the drive angle, one curve per run.
 
 The x axis is the drive angle turned since the start of the run (degrees; the ramp's 3 deg plus
 one revolution), so runs and other solvers' curves that start at the same pose line up.
@@ -12,11 +12,12 @@ Entry points (all return ``(fig, ax)``, a bare matplotlib ``Figure`` rendered wi
   the generic plot; values are drawn as given (already in display units);
 * :func:`plot_coupler_deviation` ``(runs, path=None, extra=None)``: ``|coupler_deviation|`` in mm;
 * :func:`plot_driving_torque` ``(runs, path=None, extra=None, magnitude=True)``: N mm, the
-  magnitude as in the paper ("joint torque magnitude at joint 3") or signed.
+  magnitude as in the paper ("joint torque magnitude") or signed.
 
 ``runs`` maps a label to a :class:`~ffrf.scenes.linkage_run.LinkageResult`, a ``results.npz`` file or a
 directory holding one; ``extra`` maps labels to further ``(angle_rad, values)`` series in display
-units (e.g. the Exudyn twin's curve: angle from its start in rad, deviation in mm), drawn dashed.
+units (e.g. the Exudyn twin's curve: angle from its start in rad, deviation in mm), drawn dashed;
+``colors`` maps labels to matplotlib colours (the others take the colour cycle's).
 :func:`coupler_deviation_series` and :func:`driving_torque_series` give the curves as plotted.
 """
 
@@ -36,7 +37,6 @@ from ffrf.output.tables import read_arrays
 __all__ = [
     "Series",
     "Run",
-    "PAPER_COLORS",
     "plot_over_drive_angle",
     "plot_stability",
     "run_sensors",
@@ -60,9 +60,6 @@ class HasSensors(Protocol):
 #: A run: a LinkageResult, a results.npz file, or a directory holding results.npz.
 Run = HasSensors | str | os.PathLike[str]
 
-#: The paper's colours (orange: stiff, blue: PLA) and two more for the misaligned variants.
-PAPER_COLORS = {"rigid": "tab:orange", "pla": "tab:blue", "pla1": "tab:green", "pla2": "tab:red"}
-
 
 def run_sensors(run: Run) -> Mapping[str, NDArray]:
     """Sensors of a run (``drive_angle``, ``coupler_deviation``, ``driving_torque``, ...), SI units."""
@@ -83,7 +80,7 @@ def coupler_deviation_series(run: Run) -> tuple[NDArray[np.float64], NDArray[np.
 
 
 def driving_torque_series(run: Run, magnitude: bool = True) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """(drive angle since start in rad, driving torque at joint 3 in N mm, its magnitude by default)."""
+    """(drive angle since start in rad, driving torque at the driven joint in N mm, its magnitude by default)."""
     sensors = run_sensors(run)
     torque = 1e3 * np.asarray(sensors["driving_torque"], dtype=float)
     return _angle_from_start(sensors), np.abs(torque) if magnitude else torque
@@ -95,9 +92,10 @@ def plot_over_drive_angle(
     path: str | Path | None = None,
     title: str | None = None,
     dashed: tuple[str, ...] = (),
+    colors: Mapping[str, str] | None = None,
 ):
-    """One line per ``label: (angle_rad, values)``, x in degrees; labels in ``dashed`` drawn dashed.
-    Known variant labels (``rigid``, ``pla``, ...) get :data:`PAPER_COLORS`."""
+    """One line per ``label: (angle_rad, values)``, x in degrees; labels in ``dashed`` drawn dashed, labels in
+    ``colors`` in their colour."""
     # A bare Figure renders with the Agg canvas: no pyplot state, no display, no global backend switch.
     fig = Figure(figsize=(6.4, 4.0), layout="constrained")
     ax = fig.subplots()
@@ -107,7 +105,7 @@ def plot_over_drive_angle(
             np.degrees(np.asarray(angle, dtype=float)),
             np.asarray(values, dtype=float),
             style,
-            color=PAPER_COLORS.get(label),
+            color=(colors or {}).get(label),
             label=label,
             linewidth=1.4,
         )
@@ -131,7 +129,10 @@ def _overlay(runs: Mapping[str, Run], extract, extra: Mapping[str, Series] | Non
 
 
 def plot_coupler_deviation(
-    runs: Mapping[str, Run], path: str | Path | None = None, extra: Mapping[str, Series] | None = None
+    runs: Mapping[str, Run],
+    path: str | Path | None = None,
+    extra: Mapping[str, Series] | None = None,
+    colors: Mapping[str, str] | None = None,
 ):
     """Paper's Fig. "deviation error": coupler deviation from the ideal path (mm) over the drive angle."""
     return plot_over_drive_angle(
@@ -140,6 +141,7 @@ def plot_coupler_deviation(
         path,
         "Deviation from the ideal trajectory",
         dashed=tuple(extra or ()),
+        colors=colors,
     )
 
 
@@ -148,15 +150,17 @@ def plot_driving_torque(
     path: str | Path | None = None,
     extra: Mapping[str, Series] | None = None,
     magnitude: bool = True,
+    colors: Mapping[str, str] | None = None,
 ):
-    """Paper's Fig. "joint torque magnitude at joint 3" (N mm) over the drive angle."""
-    label = "driving torque magnitude at joint 3 (N mm)" if magnitude else "driving torque at joint 3 (N mm)"
+    """Paper's Fig. "joint torque magnitude" at the driven joint (N mm) over the drive angle."""
+    label = "driving torque magnitude (N mm)" if magnitude else "driving torque (N mm)"
     return plot_over_drive_angle(
         _overlay(runs, lambda run: driving_torque_series(run, magnitude), extra),
         label,
         path,
         "Driving torque",
         dashed=tuple(extra or ()),
+        colors=colors,
     )
 
 
