@@ -28,7 +28,11 @@ import numpy as np
 
 
 def build_link(h_mm: float, link: int):
-    from ffrf import PLA, FEModel, interface_from_group, mesh_link, paper_link_axes
+    from ffrf.fe.fe_model import FEModel
+    from ffrf.fe.interfaces import interface_from_group
+    from ffrf.fe.materials import PLA
+    from ffrf.geometry.joint_axes import paper_link_axes
+    from ffrf.geometry.link_geometry import mesh_link
 
     axis_a, axis_b, names = paper_link_axes(link)
     mesh, _ = mesh_link(axis_a, axis_b, h=h_mm * 1e-3, names=names)

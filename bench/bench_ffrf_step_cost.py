@@ -15,8 +15,12 @@ import argparse
 import numpy as np
 import scipy.sparse as sp
 
-from ffrf import FEModel, craig_bampton, interface_from_group, mesh_link, paper_link_axes
+from ffrf.fe.fe_model import FEModel
+from ffrf.fe.interfaces import interface_from_group
 from ffrf.fe.materials import PLA
+from ffrf.geometry.joint_axes import paper_link_axes
+from ffrf.geometry.link_geometry import mesh_link
+from ffrf.reduction.craig_bampton import craig_bampton
 from validation.exudyn_ffrf import run_exudyn, run_ffrf
 from validation.reduced_body import ReducedBody
 from validation.single_body_scenes import pendulum_scene

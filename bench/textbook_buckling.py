@@ -44,13 +44,15 @@ from textbook_fixtures import (  # noqa: E402
     write_truss_scene,
 )
 
-from ffrf.scenes.scene_file import load_scene, run_scene  # noqa: E402
+from ffrf import load  # noqa: E402
 
 
 def truss(directory: Path) -> dict:
     """The truss's snap from a scene-file run against the closed form."""
     started = time.perf_counter()
-    metadata = run_scene(load_scene(write_truss_scene(directory)), directory / "out")
+    result = load(write_truss_scene(directory)).run()
+    result.save(directory / "out")
+    metadata = result.metadata
     snap = metadata["stability"]["snaps"][0]
     closed = truss_closed_form()
     return {

@@ -51,6 +51,7 @@ from ffrf.scenes.bennett_scene import VARIANTS
 from ffrf.scenes.limits import MAX_OUTPUTS, linkage_run_steps, steps_problem, variants_problem
 from ffrf.scenes.linkage_description import BORE_ERROR_MODELS
 from ffrf.scenes.schema_keys import Key, at_least, between, check_table, one_of, positive
+from ffrf.solvers.stability import check_judged_at_equilibria
 
 __all__ = ["METHODS", "TARGETS", "Base", "Parameter", "Study", "design_size", "load_study", "study_from_document"]
 
@@ -228,8 +229,8 @@ def _base(table: dict, directory: Path, where: str) -> Base:
             raise SceneError(f"{where}: {problem}")
     keys = ("h", "order", "modes", "mode", "outputs", "revolutions", "rpm", "stability")
     overrides = {key: table[key] for key in keys if key in table}
-    if overrides.get("stability") and overrides.get("mode") == "dynamic":
-        raise SceneError(f'{where}: stability is judged at equilibria: drop mode = "dynamic" or stability = true')
+    remedy = 'drop mode = "dynamic" or stability = true'
+    check_judged_at_equilibria(overrides.get("mode", "auto"), overrides.get("stability", False), remedy, where)
     return Base(
         table.get("bennett"), table.get("linkage"), document, overrides, table.get("bore_error_model", "misfit")
     )

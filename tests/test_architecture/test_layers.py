@@ -26,9 +26,10 @@ FFRF_LAYERS: dict[str, int] = {
     "output": 7,
     "scenes": 8,
     "studies": 9,
-    "cli": 10,
-    "__init__": 10,
-    "__main__": 10,
+    "model": 10,
+    "cli": 12,
+    "__init__": 12,
+    "__main__": 12,
 }
 #: Packages of the project, lowest first.
 PACKAGES: dict[str, int] = {"kinematics": 0, "ffrf": 1, "identification": 2, "validation": 3}

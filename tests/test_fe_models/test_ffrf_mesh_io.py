@@ -7,7 +7,11 @@ import numpy as np
 import pytest
 from ffrf_reference import prism_mesh
 
-from ffrf import MeshError, TetMesh, mesh_link, mesh_stl, paper_link_axes, read_mesh, write_vtu
+from ffrf import MeshError
+from ffrf.geometry.joint_axes import paper_link_axes
+from ffrf.geometry.link_geometry import mesh_link
+from ffrf.geometry.meshing import mesh_stl
+from ffrf.mesh.tet_mesh import TetMesh, read_mesh, write_vtu
 
 
 @pytest.fixture(scope="module")

@@ -5,16 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ffrf import (
-    PLA,
-    FEInputError,
-    FEModel,
-    clamped_modes,
-    free_free_modes,
-    mesh_link,
-    paper_link_axes,
-    rigid_body_modes,
-)
+from ffrf import FEInputError
+from ffrf.fe.fe_model import FEModel, rigid_body_modes
+from ffrf.fe.materials import PLA
+from ffrf.fe.modal import clamped_modes, free_free_modes
+from ffrf.geometry.joint_axes import paper_link_axes
+from ffrf.geometry.link_geometry import mesh_link
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from ffrf import PLA, FEModel, mesh_link, paper_link_axes
+from ffrf.fe.fe_model import FEModel
+from ffrf.fe.materials import PLA
+from ffrf.geometry.joint_axes import paper_link_axes
+from ffrf.geometry.link_geometry import mesh_link
 from ffrf.geometry.meshing import configure_meshing, gmsh_session, mesh_current_model
 
 #: Largest relative entry difference, about 100x the largest measured over the four cases on 2026-11-24
