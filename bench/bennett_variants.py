@@ -27,7 +27,7 @@ from bench.report import write_report
 def run_variant(variant: str, h: float, order: int, modes: int, outputs: int, out: Path | None) -> dict:
     """Build and run one variant quasi-statically; the row of the table (SI and display units)."""
     from ffrf.paper.bennett_scene import PAPER_MAX_COUPLER_DEVIATION_MM, build_bennett
-    from ffrf.scenes.linkage_run import run_linkage, write_results
+    from ffrf.scenes.linkage_run import run_linkage
 
     clock = time.perf_counter()
     scene = build_bennett(variant, h=h, order=order, n_modes=modes)
@@ -35,7 +35,7 @@ def run_variant(variant: str, h: float, order: int, modes: int, outputs: int, ou
     result = run_linkage(scene, mode="quasi_static", n_outputs=outputs)
     ran = time.perf_counter()
     if out is not None:
-        write_results(result, out / variant)
+        result.write_tables(out / variant)
     summary = result.summary()
     assembly = result.assembly
     if assembly is None:

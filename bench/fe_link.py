@@ -32,8 +32,12 @@ def _peak_mib() -> float:
 
 def run_case(link: int, h: float, order: int, n_modes: int) -> dict:
     """One benchmark case in this process (called in a subprocess by :func:`main`)."""
-    from ffrf import PLA, FEModel, free_free_basis, mesh_link, quality_summary
+    from ffrf.fe.fe_model import FEModel
+    from ffrf.fe.materials import PLA
+    from ffrf.geometry.link_geometry import mesh_link
+    from ffrf.mesh.tet_mesh import quality_summary
     from ffrf.paper.axes import paper_link_axes
+    from ffrf.reduction.free_free import free_free_basis
 
     result: dict = {"link": link, "h_m": h, "order": order}
     a, b, names = paper_link_axes(link)

@@ -50,13 +50,13 @@ MAIN_JOB = ["-m", "ffrf", "bennett", "--variant", "pla"]
 SETUP_STAGES = (("ffrf.paper.bennett_scene", "build_bennett", "build_bennett"), *BUILD_STAGES)
 #: ... and the run's: static assembly, its stresses, the solver, the sensors, the files
 RUN_STAGES = (
-    ("ffrf.scenes.linkage_run", "run_linkage", "run_linkage"),
+    ("ffrf.model", "run_linkage", "run_linkage"),
     ("ffrf.scenes.linkage_run", "assemble", "static_assembly"),
     ("ffrf.scenes.linkage_run", "scene_assembly_stress", "assembly_stress"),
     ("ffrf.scenes.linkage_run", "simulate", "simulate"),
     ("ffrf.scenes.linkage_run", "evaluate_sensors", "sensors"),
-    ("ffrf.scenes.linkage_run", "write_results", "write_results"),
-    ("ffrf.output.assembly_stress", "write_assembly_vtu", "write_assembly_vtu"),
+    ("ffrf.output.result", "write_results", "write_results"),
+    ("ffrf.output.result", "write_assembly_vtu", "write_assembly_vtu"),
     ("ffrf.output.linkage_figures", "plot_coupler_deviation", "plot_coupler_deviation"),
     ("ffrf.output.linkage_figures", "plot_driving_torque", "plot_driving_torque"),
 )

@@ -11,7 +11,7 @@ the quasi-static run solves at exactly those times), and it reports
   the largest elastic deviation of the quasi-static coupler from the motion polynomial),
 * the largest difference of the driving torque relative to its largest magnitude,
 * the transient at the end of the ramp (t in [ramp, ramp + 5 s]) against the rest,
-* the energy balance of both runs (:meth:`ffrf.scenes.linkage_run.LinkageResult.summary`),
+* the energy balance of both runs (:meth:`ffrf.output.result.Result.summary`),
 * wall times.
 
 Usage::
@@ -35,7 +35,7 @@ TRANSIENT_WINDOW = 5.0
 
 
 def compare(quasi_static, dynamic, ramp_time: float) -> dict:
-    """Differences of two :class:`~ffrf.scenes.linkage_run.LinkageResult` with the same output times."""
+    """Differences of two :class:`~ffrf.output.result.Result` with the same output times."""
     if quasi_static.time.shape != dynamic.time.shape or np.abs(quasi_static.time - dynamic.time).max() > 1e-9:
         raise ValueError("the runs must share their output times; use the same t_end and outputs")
     qs, dyn = quasi_static.sensors, dynamic.sensors
@@ -168,10 +168,9 @@ def main(argv=None) -> dict:
 def write_outputs(directory: Path, quasi_static, dynamic) -> None:
     """Both runs' results and the differences over the drive angle (um and N mm)."""
     from ffrf.output.linkage_figures import plot_over_drive_angle
-    from ffrf.scenes.linkage_run import write_results
 
-    write_results(quasi_static, directory / "quasi_static")
-    write_results(dynamic, directory / "dynamic")
+    quasi_static.write_tables(directory / "quasi_static")
+    dynamic.write_tables(directory / "dynamic")
     angle = quasi_static.sensors["drive_angle"] - quasi_static.sensors["drive_angle"][0]
     coupler = 1e6 * np.linalg.norm(dynamic.sensors["coupler_point"] - quasi_static.sensors["coupler_point"], axis=1)
     torque = 1e3 * (dynamic.sensors["driving_torque"] - quasi_static.sensors["driving_torque"])

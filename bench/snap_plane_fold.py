@@ -30,8 +30,9 @@ import numpy as np
 
 from bench.report import write_report
 from ffrf.errors import StaticDivergence
+from ffrf.output.result import Result
 from ffrf.scenes.linkage_description import LinkageOptions
-from ffrf.scenes.linkage_run import LinkageResult, run_linkage
+from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import build_linkage
 from kinematics.rational_mechanism import load_model, loop_from_mechanism, regular_start
 
@@ -138,7 +139,7 @@ def main() -> int:
             fold_point = monitored.sensors["coupler_point"][after - 1]
             landing_point = monitored.sensors["coupler_point"][after]
             started = time.perf_counter()
-            run: LinkageResult | None
+            run: Result | None
             try:
                 run = run_linkage(scene, "dynamic", 2000, step=args.step, t_end=args.t_end)
                 stopped = None

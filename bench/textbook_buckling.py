@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.report import write_report
-from ffrf.scenes.scene_file import load_scene, run_scene
+from ffrf import load
 from tests.textbook_fixtures import (
     COLUMN_LOAD,
     EULER_LOAD,
@@ -46,7 +46,9 @@ from tests.textbook_fixtures import (
 def truss(directory: Path) -> dict:
     """The truss's snap from a scene-file run against the closed form."""
     started = time.perf_counter()
-    metadata = run_scene(load_scene(write_truss_scene(directory)), directory / "out")
+    result = load(write_truss_scene(directory)).run()
+    result.save(directory / "out")
+    metadata = result.metadata
     snap = metadata["stability"]["snaps"][0]
     closed = truss_closed_form()
     return {

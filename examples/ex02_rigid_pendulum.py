@@ -11,17 +11,14 @@ modal moments, the hinge as a revolute joint to the ground, and integrate 0.3 s.
 import numpy as np
 import skfem
 
-from ffrf import (
-    FEModel,
-    FlexibleBody,
-    GroundFrame,
-    MultibodySystem,
-    frame_marker,
-    generalized_alpha,
-    modal_moments,
-    revolute_joint,
-)
+from ffrf.body.flexible_body import FlexibleBody
+from ffrf.body.modal_moments import modal_moments
+from ffrf.fe.fe_model import FEModel
 from ffrf.mesh.tet_mesh import orient_positive
+from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.system.joints import GroundFrame, revolute_joint
+from ffrf.system.markers import frame_marker
+from ffrf.system.multibody import MultibodySystem
 
 
 def main() -> float:

@@ -12,17 +12,15 @@ does not. The momentum is summed node by node with the full FE mass matrix, outs
 import numpy as np
 import skfem
 
-from ffrf import (
-    FEModel,
-    FlexibleBody,
-    MultibodySystem,
-    craig_bampton,
-    generalized_alpha,
-    modal_moments,
-    variational_midpoint,
-)
 from ffrf.body.euler_parameters import g_bar, rotation_matrix
+from ffrf.body.flexible_body import FlexibleBody
+from ffrf.body.modal_moments import modal_moments
+from ffrf.fe.fe_model import FEModel
 from ffrf.mesh.tet_mesh import orient_positive
+from ffrf.reduction.craig_bampton import craig_bampton
+from ffrf.solvers.generalized_alpha import generalized_alpha
+from ffrf.solvers.variational_midpoint import variational_midpoint
+from ffrf.system.multibody import MultibodySystem
 
 
 def angular_momentum(model, basis, q, qd):

@@ -17,13 +17,14 @@ the converged path.
 
 import numpy as np
 
+import ffrf
 from ffrf.paper.bennett_scene import build_bennett
-from ffrf.scenes.linkage_run import run_linkage
 
 
 def main() -> dict:
-    scene = build_bennett("pla", h=8e-3, order=1, n_modes=2)
-    result = run_linkage(scene, mode="quasi_static", n_outputs=489)  # every 0.125 s: the ramp ends on a row
+    model = ffrf.load(build_bennett("pla", h=8e-3, order=1, n_modes=2))
+    result = model.run(mode="quasi_static", outputs=489)  # every 0.125 s: the ramp ends on a row
+    scene = model.scene
     s = result.sensors
 
     weight = 9.81 * sum(link.fe.total_mass for link in scene.links)

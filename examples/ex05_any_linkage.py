@@ -14,9 +14,8 @@ A coarse mesh (linear tetrahedra at 12 mm, 2 modes) keeps the example fast.
 
 import numpy as np
 
-from ffrf.scenes.linkage_description import BoreError, LinkageOptions
-from ffrf.scenes.linkage_run import run_linkage
-from ffrf.scenes.linkage_scene import build_linkage
+import ffrf
+from ffrf import BoreError, LinkageOptions
 from kinematics import explain_mobility
 from kinematics.rational_mechanism import load_model, loop_from_mechanism, regular_start, tool_link
 
@@ -26,7 +25,7 @@ def main() -> dict:
     loop = loop_from_mechanism(mechanism, scale=0.1)
     print(explain_mobility(loop).summary())
     start = regular_start(mechanism, loop)
-    scene = build_linkage(
+    model = ffrf.load(
         loop,
         LinkageOptions(
             name="collisions_free_6r, bore 5 on the base 0.5 deg off",
@@ -40,7 +39,8 @@ def main() -> dict:
             tool_link=tool_link(mechanism),
         ),
     )
-    result = run_linkage(scene, mode="quasi_static", n_outputs=245)  # every 0.25 s: the ramp ends on a row
+    result = model.run(mode="quasi_static", outputs=245)  # every 0.25 s: the ramp ends on a row
+    scene = model.scene
     s = result.sensors
 
     weight = 9.81 * sum(link.fe.total_mass for link in scene.links)

@@ -3,8 +3,8 @@
 import numpy as np
 import skfem
 
-from ffrf import FEModel
 from ffrf.body.euler_parameters import g_bar, rotation_matrix
+from ffrf.fe.fe_model import FEModel
 from ffrf.mesh.tet_mesh import orient_positive
 from ffrf.numerics.small_linalg import skew
 

@@ -19,7 +19,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ffrf.cli import count_at_least, number_in
+from ffrf.cli.arguments import count_at_least, number_in
 from ffrf.scenes.limits import MAX_OUTPUTS
 from ffrf.scenes.scene_schema import PARAMETRIC_H_RANGE
 

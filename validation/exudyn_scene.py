@@ -23,6 +23,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ffrf.output.result import Result
+from ffrf.scenes.builder import Scene
+from ffrf.scenes.scene_file import sensor_arrays
+
 from .modes import compare_modes
 
 __all__ = [
@@ -128,11 +132,19 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
     return out, setup, solve
 
 
+def _twin_sensors(scene: Scene, run: Result) -> dict[str, NDArray]:
+    """The sensors of ``run`` both solvers measure (:func:`ffrf.scenes.scene_file.sensor_arrays`)."""
+    if run.multipliers is None:  # every run of a scene records them; a Result read from files has none
+        raise ValueError(f"{scene.name}: the run has no multipliers to evaluate the sensors from")
+    return sensor_arrays(scene, run.q, run.multipliers)
+
+
 def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
     """Load the scene, run ours (Exudyn's gravity model, and the exact one) and Exudyn's, compare."""
     import exudyn
 
-    from ffrf.scenes.scene_file import load_scene, sensor_arrays, simulate_scene
+    from ffrf import load
+    from ffrf.scenes.scene_file import load_scene
 
     from .exudyn_conventions import exudyn_convention_system
     from .twin_bases import twin_bases
@@ -148,18 +160,17 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
         if tb.source == "exudyn"
     }
     started = time.perf_counter()
-    run = simulate_scene(equivalent)
-    times, q, lam = run.time, run.q, run.multipliers
+    run = load(equivalent).run()
+    times = run.time
     solve_ours = time.perf_counter() - started
-    ours = sensor_arrays(equivalent, q, lam)
+    ours = _twin_sensors(equivalent, run)
     # Exudyn's marker rotation Jacobian copied into ours (validation.exudyn_conventions): what remains is the
     # solvers' own difference; the production difference above adds Exudyn's approximation.
     convention = replace(equivalent, system=exudyn_convention_system(equivalent.system))
-    run_convention = simulate_scene(convention)
-    convention_arrays = sensor_arrays(convention, run_convention.q, run_convention.multipliers)
-    run_exact = simulate_scene(exact)
-    q_exact, lam_exact = run_exact.q, run_exact.multipliers
-    exact_arrays = sensor_arrays(exact, q_exact, lam_exact)
+    run_convention = load(convention).run()
+    convention_arrays = _twin_sensors(convention, run_convention)
+    run_exact = load(exact).run()
+    exact_arrays = _twin_sensors(exact, run_exact)
     theirs, setup_exudyn, solve_exudyn = run_exudyn_scene(scene, bases, times)
 
     metrics: dict = {

@@ -92,7 +92,7 @@ def bar_body(
     """
     import skfem
 
-    from ffrf import FEModel
+    from ffrf.fe.fe_model import FEModel
     from ffrf.mesh.tet_mesh import orient_positive
     from ffrf.reduction.craig_bampton import craig_bampton
 

@@ -14,7 +14,7 @@ Entry points (all return ``(fig, ax)``, a bare matplotlib ``Figure`` rendered wi
 * :func:`plot_driving_torque` ``(runs, path=None, extra=None, magnitude=True)``: N mm, the
   magnitude as in the paper ("joint torque magnitude") or signed.
 
-``runs`` maps a label to a :class:`~ffrf.scenes.linkage_run.LinkageResult`, a ``results.npz`` file or a
+``runs`` maps a label to a :class:`~ffrf.output.result.Result`, a ``results.npz`` file or a
 directory holding one; ``extra`` maps labels to further ``(angle_rad, values)`` series in display
 units (e.g. the Exudyn twin's curve: angle from its start in rad, deviation in mm), drawn dashed;
 ``colors`` maps labels to matplotlib colours (the others take the colour cycle's).
@@ -51,13 +51,13 @@ Series = tuple[ArrayLike, ArrayLike]
 
 
 class HasSensors(Protocol):
-    """Anything with sensors by name, e.g. a :class:`ffrf.scenes.linkage_run.LinkageResult`."""
+    """Anything with sensors by name, e.g. a :class:`ffrf.output.result.Result`."""
 
     @property
     def sensors(self) -> Mapping[str, NDArray]: ...
 
 
-#: A run: a LinkageResult, a results.npz file, or a directory holding results.npz.
+#: A run: a Result, a results.npz file, or a directory holding results.npz.
 Run = HasSensors | str | os.PathLike[str]
 
 

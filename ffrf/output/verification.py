@@ -255,7 +255,7 @@ def _near_dead_cause(poses) -> str:
 
 
 def verify_run(result: Any, scene: Any) -> Verification:
-    """The checks of the module docstring for a linkage run (:class:`ffrf.scenes.linkage_run.LinkageResult` of
+    """The checks of the module docstring for a linkage run (:class:`ffrf.output.result.Result` of
     :class:`ffrf.scenes.linkage_scene.LinkageScene`); those whose sensors the run did not evaluate are left out."""
     sensors, metadata = result.sensors, result.metadata
     length = scene_length(scene)

@@ -16,9 +16,10 @@ paper's Bennett), giving ``coupler_deviation`` (same drive angle) and ``coupler_
 
 An energy balance closes the books: the drive's work against the changes of kinetic,
 gravity and strain energy plus the damping dissipation (``energy_balance_residual``).
-Results are written as ``DIR/results.npz`` (``time`` and one array per sensor, SI units)
-and ``DIR/metadata.json`` (scene settings, versions, timings, summary, and under ``assembly``
-the stress state of the assembled links, :mod:`ffrf.output.assembly_stress`).
+A run is a :class:`ffrf.output.result.Result` (metadata: scene settings, versions, timings, summary, and under
+``assembly`` the stress state of the assembled links, :mod:`ffrf.output.assembly_stress`); its ``save`` writes
+``DIR/results.npz`` (``time`` and one array per sensor, SI units), ``DIR/metadata.json`` and the figures. Users
+call it through the facade, :func:`ffrf.load` ``(scene).run()`` (:mod:`ffrf.model`); studies call it directly.
 """
 
 from __future__ import annotations
@@ -27,19 +28,16 @@ import logging
 import platform
 import time as wallclock
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.errors import Interrupted, NewtonDivergence, StaticDivergence
-from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress
-from ffrf.output.energy_balance import energy_scale, relative_balance
+from ffrf.output.assembly_stress import scene_assembly_stress
 from ffrf.output.path_distance import distance_to_curve
+from ffrf.output.result import Result
 from ffrf.output.sensors import path_sensors, scene_sensors
-from ffrf.output.tables import write_results as write_tables
-from ffrf.output.verification import Verification, verify_run, weight_energy
+from ffrf.output.verification import verify_run, weight_energy
 from ffrf.reduction.craig_bampton import CraigBamptonBasis
 from ffrf.scenes.assembly import assemble, dynamic_step, quasi_static_step
 from ffrf.scenes.linkage_scene import LinkageScene
@@ -52,61 +50,24 @@ from ffrf.scenes.linkage_steps import (
 )
 from ffrf.solvers.simulate import MODES, Run, simulate
 from ffrf.solvers.snap_through import SnapThrough, run_critical_pose, snap_summary
-from ffrf.solvers.stability import (
-    CriticalPose,
-    stability_along,
-    stability_summary,
-)
+from ffrf.solvers.stability import check_judged_at_equilibria, stability_along, stability_summary
 from ffrf.system.joints import MarkerJoint
 
 __all__ = [
-    "LinkageResult",
     "run_linkage",
     "evaluate_sensors",
     "PATH_SENSORS",
     "SENSOR_SETS",
     "choose_mode",
     "inertia_number",
-    "write_results",
 ]
 
 log = logging.getLogger(__name__)
 
 
-@dataclass
-class LinkageResult:
-    """Output times, sensors (name -> array), the coordinates ``q`` (rows = times), metadata and
-    the stress state of the static assembly the run started from."""
-
-    time: NDArray[np.float64]
-    sensors: dict[str, NDArray[np.float64]]
-    q: NDArray[np.float64]
-    metadata: dict = field(default_factory=dict)
-    assembly: AssemblyStress | None = None
-    critical: CriticalPose | None = None  # with stability: the fold, or the least stable output
-    verification: Verification | None = None  # the run's checks of itself (ffrf.output.verification)
-
-    def summary(self) -> dict[str, float]:
-        """The largest coupler deviation (same drive angle), distance to the ideal path, ``|driving torque|``, and,
-        when their sensors were evaluated (``sensors="all"``), constraint residual and energy balance: its largest
-        residual relative to the energy scale of Eq. (C2) (:func:`ffrf.output.energy_balance.energy_scale`, with the
-        metadata's ``energy_floor_j``), never the 0/0 of a residual relative to a drive that does no work."""
-        s = self.sensors
-        out = {
-            "max_coupler_deviation_m": float(np.max(np.linalg.norm(s["coupler_deviation"], axis=1))),
-            "max_coupler_distance_to_path_m": float(np.max(s["coupler_distance_to_path"])),
-            "max_abs_driving_torque_Nm": float(np.max(np.abs(s["driving_torque"]))),
-        }
-        if "constraint_residual" in s:
-            out["max_constraint_residual"] = float(np.max(s["constraint_residual"]))
-            scale = energy_scale(s, float(self.metadata.get("energy_floor_j", 0.0)))
-            out["energy_balance_relative"] = relative_balance(s["energy_balance_residual"], scale)
-        return out
-
-
 #: What :func:`run_linkage` evaluates: every sensor, or only the coupler's path and the drive's (:data:`PATH_SENSORS`).
 SENSOR_SETS = ("all", "path")
-#: The sensors of ``sensors="path"``: what :meth:`LinkageResult.summary` reads of the path (a study's row).
+#: The sensors of ``sensors="path"``: what :meth:`ffrf.output.result.Result.summary` reads of the path (a study's row).
 PATH_SENSORS = (
     "drive_angle",
     "driving_torque",
@@ -188,7 +149,7 @@ def run_linkage(
     stability: bool = False,
     sensors: str = "all",
     error_tolerance: float | None = None,
-) -> LinkageResult:
+) -> Result:
     """Assemble (static, with misalignment continuation), then run over the drive's ramp and
     revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
     generalized-alpha with ``step`` (s; default :func:`ffrf.scenes.assembly.dynamic_step`, 10 ms at 1 rpm) starting
@@ -198,7 +159,8 @@ def run_linkage(
     shortens the run (default: the scene's ramp plus revolutions). A run that stops raises the solver's error
     (:class:`ffrf.errors.StaticDivergence` or :class:`ffrf.errors.NewtonDivergence`; :class:`ffrf.errors.Interrupted`
     when ``progress`` asked it to stop, ``stopped.reason`` then ``"interrupted"``) with ``partial``, the
-    :class:`LinkageResult` up to its last output (its metadata's ``stopped`` says where and why), when there is one.
+    :class:`~ffrf.output.result.Result` up to its last output (its metadata's ``stopped`` says where and why), when
+    there is one.
     With ``stability`` (quasi-static runs) every equilibrium's three smallest squared frequencies of Eq. (B1) are
     the sensor ``stability_squared_frequencies`` (rad^2/s^2) and the metadata's ``stability`` sums them up.
     ``sensors``: ``"all"``, or ``"path"`` for only the coupler's path and the drive's (:data:`PATH_SENSORS`, what a
@@ -209,8 +171,7 @@ def run_linkage(
     mode = chosen if mode == "auto" else mode
     if mode not in MODES:
         raise ValueError(f"mode must be 'auto', 'quasi_static' or 'dynamic', got {mode!r}")
-    if stability and mode != "quasi_static":
-        raise ValueError("stability is judged at equilibria: run quasi-statically (mode='quasi_static') to monitor it")
+    check_judged_at_equilibria(mode, stability, "run quasi-statically (mode='quasi_static') to monitor it")
     started = wallclock.perf_counter()
     assembly = assemble(scene)
     stress = scene_assembly_stress(scene, assembly.q, assembly.multipliers)
@@ -245,7 +206,7 @@ def run_linkage(
                     f"turns steadily through this pose, or run more slowly. The solver said: {error}",
                 )
         if error.partial is None or len(error.partial.time) < 2:
-            error.partial = None  # too little to evaluate: no LinkageResult to write
+            error.partial = None  # too little to evaluate: no Result to write
             raise
         run, stopped = error.partial, error
     times, q, qd, lam = run.time, run.q, run.qd, run.multipliers
@@ -279,7 +240,7 @@ def run_linkage(
         modes_per_link=[link.reduction.n_modes for link in scene.links],
         assembly=stress.as_dict(),
     )
-    out = LinkageResult(times, values, q, metadata, stress)
+    out = Result(times, values, q, metadata, stress, qd=qd, multipliers=lam, kind="linkage", scene=scene)
     out.metadata["summary"] = out.summary()
     out.metadata["near_dead_poses"] = near_dead_poses(
         scene, values["drive_angle"], np.linalg.norm(values["coupler_deviation"], axis=1)
@@ -350,9 +311,3 @@ def _snap_report(scene: LinkageScene, snap: SnapThrough) -> dict:
         if snap.return_t is None
         else float(np.degrees(scene.drive_angle(snap.return_t))),
     }
-
-
-def write_results(result: LinkageResult, directory: str | Path) -> Path:
-    """``DIR/results.npz`` (time, sensors and the coordinates ``q``), the sensors as ``DIR/results.csv``
-    and ``DIR/metadata.json`` (:func:`ffrf.output.tables.write_results`)."""
-    return write_tables(directory, {"time": result.time, **result.sensors}, result.metadata, coordinates=result.q)

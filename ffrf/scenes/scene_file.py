@@ -1,4 +1,5 @@
-"""Scenes as TOML files: run a linkage built from your own meshes without writing Python.
+"""Scenes as TOML files: run a linkage built from your own meshes without writing Python (``python -m ffrf run``,
+or :func:`ffrf.load` ``(path).run()`` in Python: :mod:`ffrf.model`).
 
 A file with a ``[linkage]`` table instead describes a whole single-loop linkage by its DH table, joint
 axes or a Rational Linkages model (:mod:`ffrf.scenes.linkage_file`); the rest of this docstring is about
@@ -125,28 +126,28 @@ mode moves).
 
 from __future__ import annotations
 
-import json
 import logging
 import time as wallclock
 import tomllib
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.errors import Interrupted, NewtonDivergence, SceneError, StaticDivergence
-from ffrf.output.assembly_stress import scene_assembly_stress, write_assembly_vtu
+from ffrf.output.assembly_stress import scene_assembly_stress
+from ffrf.output.result import Result
 from ffrf.output.sensors import node_sensors, scene_sensors
-from ffrf.output.tables import write_results
 from ffrf.output.verification import verify_scene_run
 from ffrf.scenes.assembly import assemble, quasi_static_path_step, start_state, starts_static
 from ffrf.scenes.builder import Scene, build_scene
 from ffrf.scenes.linkage_file import load_linkage
 from ffrf.solvers.simulate import Run, simulate
 from ffrf.solvers.snap_through import run_critical_pose, snap_summary
-from ffrf.solvers.stability import stability_along, stability_summary
+from ffrf.solvers.stability import CriticalPose, stability_along, stability_summary
 
-__all__ = ["SceneError", "load_scene", "run_scene", "simulate_scene", "start_state", "sensor_arrays"]
+__all__ = ["SceneError", "load_scene", "run_scene", "start_state", "sensor_arrays"]
 
 log = logging.getLogger(__name__)
 
@@ -182,28 +183,66 @@ def sensor_arrays(scene: Scene, q: NDArray, multipliers: NDArray) -> dict[str, N
     return arrays
 
 
-def simulate_scene(scene: Scene, q0: NDArray | None = None, progress=None) -> Run:
-    """The scene's dynamic or quasi-static run from ``q0`` (default :func:`start_state`); with ``stability`` a
-    quasi-static run goes on past folds of its equilibrium path (:func:`ffrf.solvers.simulate.simulate`). A
-    quasi-static path is followed on its own steps (:func:`ffrf.scenes.assembly.quasi_static_path_step`, Eq. (S10))
-    and the outputs are solved from it: they do not change the equilibria or where the path stops or snaps."""
-    s = scene.settings
-    q0 = start_state(scene) if q0 is None else q0
-    mode, t_end = s.get("mode", "dynamic"), float(s.get("t_end", 1.0))
-    return simulate(
-        scene.system,
-        q0,
-        mode,
-        t_end,
-        int(s.get("outputs", 101)),
-        step=float(s.get("step", 1e-3)),
-        rho_inf=float(s.get("rho_inf", 0.9)),
-        progress=progress,
-        qd0=scene.qd_initial,
-        through_snaps=bool(s.get("stability", False)),
-        static_path_step=quasi_static_path_step(scene, t_end) if mode == "quasi_static" else None,
-        static_path_breaks=_table_corners(scene),
+def run_scene(scene: Scene, progress: Callable[[float, float], None] | None = None) -> Result:
+    """The run of the module docstring, as :class:`~ffrf.output.result.Result` (``kind="scene"``): static assembly
+    when the scene starts static (:func:`ffrf.scenes.assembly.starts_static`; its stress state in the metadata under
+    ``assembly``), then the dynamic or quasi-static run (:func:`ffrf.solvers.simulate.simulate`; with ``stability`` a
+    quasi-static run goes on past folds of its equilibrium path), the sensors, the stability monitor and the run's
+    checks of itself. A quasi-static path is followed on its own steps
+    (:func:`ffrf.scenes.assembly.quasi_static_path_step`, Eq. (S10)) and the outputs are solved from it: they do not
+    change the equilibria or where the path stops or snaps. A run that stops raises the solver's error with
+    ``partial``, the Result up to its last output (its metadata's ``stopped`` says where and why), when it reached
+    one. Users call it through the facade, :func:`ffrf.load` ``(scene).run()``."""
+    started = wallclock.perf_counter()
+    metadata = dict(
+        scene=scene.name,
+        settings=scene.settings,
+        bodies=[b.name for b in scene.bodies],
+        modes=[b.reduction.n_modes for b in scene.bodies],
+        n_coordinates=scene.system.n_coordinates,
     )
+    q0, stress = scene.q_initial.copy(), None
+    if starts_static(scene):
+        assembly = assemble(scene)
+        q0 = assembly.q
+        stress = scene_assembly_stress(scene, assembly.q, assembly.multipliers)
+        metadata["assembly"] = stress.as_dict()
+    s = scene.settings
+    mode, t_end = s.get("mode", "dynamic"), float(s.get("t_end", 1.0))
+    try:
+        run = simulate(
+            scene.system,
+            q0,
+            mode,
+            t_end,
+            int(s.get("outputs", 101)),
+            step=float(s.get("step", 1e-3)),
+            rho_inf=float(s.get("rho_inf", 0.9)),
+            progress=progress,
+            qd0=scene.qd_initial,
+            through_snaps=bool(s.get("stability", False)),
+            static_path_step=quasi_static_path_step(scene, t_end) if mode == "quasi_static" else None,
+            static_path_breaks=_table_corners(scene),
+        )
+        stopped = None
+    except (StaticDivergence, NewtonDivergence, Interrupted) as error:  # hand over what was computed, then say so
+        if error.partial is None or len(error.partial.time) == 0:
+            error.partial = None
+            raise
+        run, stopped = error.partial, error
+    sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
+    critical = None
+    if s.get("stability", False):
+        metadata["stability"], critical = _monitor_stability(scene, run, sensors)
+    metadata["verification"] = verify_scene_run(scene, sensors, metadata).as_dict()
+    metadata["wall_time_s"] = wallclock.perf_counter() - started
+    result = Result(run.time, sensors, run.q, metadata, stress, critical, None, run.qd, run.multipliers, "scene", scene)
+    if stopped is not None:
+        reason = "interrupted" if isinstance(stopped, Interrupted) else str(stopped)
+        metadata["stopped"] = {"time_s": float(run.time[-1]), "reason": reason, "message": str(stopped)}
+        stopped.partial = result
+        raise stopped
+    return result
 
 
 def _table_corners(scene: Scene) -> tuple[float, ...]:
@@ -213,53 +252,9 @@ def _table_corners(scene: Scene) -> tuple[float, ...]:
     return tuple(sorted({float(t) for table in tables for t in table["time"]}))
 
 
-def run_scene(scene: Scene, directory: str | Path, progress=None) -> dict:
-    """The run of the module docstring: static assembly when the scene starts static (its stress
-    state in the metadata under ``assembly`` and as ``assembly.vtu``), then the dynamic or
-    quasi-static run; writes ``results.npz``, ``results.csv`` and ``metadata.json``."""
-    started = wallclock.perf_counter()
-    directory = Path(directory)
-    metadata = dict(
-        scene=scene.name,
-        settings=scene.settings,
-        bodies=[b.name for b in scene.bodies],
-        modes=[b.reduction.n_modes for b in scene.bodies],
-        n_coordinates=scene.system.n_coordinates,
-    )
-    q0 = scene.q_initial.copy()
-    if starts_static(scene):
-        assembly = assemble(scene)
-        q0 = assembly.q
-        stress = scene_assembly_stress(scene, assembly.q, assembly.multipliers)
-        metadata["assembly"] = stress.as_dict()
-        directory.mkdir(parents=True, exist_ok=True)
-        write_assembly_vtu(directory / "assembly.vtu", scene, stress)
-    try:
-        run = simulate_scene(scene, q0, progress=progress)
-        stopped = None
-    except (StaticDivergence, NewtonDivergence, Interrupted) as error:  # write what was computed, then say so
-        if error.partial is None or len(error.partial.time) == 0:
-            raise
-        run, stopped = error.partial, error
-    sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
-    if scene.settings.get("stability", False):
-        metadata["stability"] = _monitor_stability(scene, run, sensors, directory)
-    metadata["verification"] = verify_scene_run(scene, sensors, metadata).as_dict()
-    metadata["wall_time_s"] = wallclock.perf_counter() - started
-    if stopped is not None:
-        reason = "interrupted" if isinstance(stopped, Interrupted) else str(stopped)
-        metadata["stopped"] = {"time_s": float(run.time[-1]), "reason": reason, "message": str(stopped)}
-    write_results(directory, {"time": run.time, **sensors}, metadata, coordinates=run.q)
-    if stopped is not None:
-        stopped.args = (f"{stopped} (the results up to t = {run.time[-1]:.6g} s are in {directory})",)
-        raise stopped
-    return metadata
-
-
-def _monitor_stability(scene: Scene, run: Run, sensors: dict, directory: Path) -> dict:
+def _monitor_stability(scene: Scene, run: Run, sensors: dict) -> tuple[dict, CriticalPose]:
     """Eq. (B1) at every output (the sensor ``stability_squared_frequencies``), the snaps the run went through, and
-    the critical pose: its summary, ``stability.json`` (per output: time, squared frequencies) and
-    ``stability_critical.vtu`` (the pose with its mode)."""
+    the critical pose: its summary (``stability.json`` and ``stability_critical.vtu`` when the Result is saved)."""
     judged = stability_along(scene.system, run.time, run.q, run.multipliers, count=3)
     values = np.array([s.squared_frequencies for s in judged])
     sensors["stability_squared_frequencies"] = values
@@ -267,9 +262,4 @@ def _monitor_stability(scene: Scene, run: Run, sensors: dict, directory: Path) -
     summary["snaps"] = [snap_summary(scene.system, snap) for snap in run.snaps]
     critical = run_critical_pose(scene.system, run.time, run.q, run.multipliers, values, run.snaps)
     summary["critical"] = critical.summary(scene.system)
-    directory.mkdir(parents=True, exist_ok=True)
-    table = {"summary": summary, "time_s": run.time.tolist(), "squared_frequencies_rad2_per_s2": values.tolist()}
-    (directory / "stability.json").write_text(json.dumps(table, indent=1))
-    stress = scene_assembly_stress(scene, critical.q, critical.multipliers)
-    write_assembly_vtu(directory / "stability_critical.vtu", scene, stress, {"critical_mode": critical.mode})
-    return summary
+    return summary, critical

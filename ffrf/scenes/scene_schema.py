@@ -32,6 +32,7 @@ from ffrf.scenes.schema_keys import (
     unique,
     unit_quaternion,
 )
+from ffrf.solvers.stability import check_judged_at_equilibria
 from ffrf.system.markers import JOINT_OFFSETS
 
 __all__ = [
@@ -346,8 +347,8 @@ def check_scene(document: dict, where: str = "scene") -> None:
     check_table(document, SCHEMA, where)
     _check_run_size(document.get("scene", {}), f"{where}, scene")
     settings = document.get("scene", {})
-    if settings.get("stability", False) and settings.get("mode", "dynamic") == "dynamic":
-        raise SceneError(f'{where}, scene: stability is judged at equilibria; set mode = "quasi_static"')
+    stability, mode = settings.get("stability", False), settings.get("mode", "dynamic")
+    check_judged_at_equilibria(mode, stability, 'set mode = "quasi_static"', f"{where}, scene")
     bodies, joints, sensors = document["bodies"], document.get("joints", []), document.get("sensors", [])
     if not bodies:
         raise SceneError(f"{where}: no [[bodies]]; a scene needs at least one body")

@@ -20,10 +20,12 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import eigh
 
+from ffrf.errors import SceneError
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
 
 __all__ = [
+    "check_judged_at_equilibria",
     "CriticalPose",
     "EquilibriumStability",
     "critical_pose",
@@ -32,6 +34,15 @@ __all__ = [
     "stability_along",
     "stability_summary",
 ]
+
+
+def check_judged_at_equilibria(mode: str, stability: bool, remedy: str, where: str = "") -> None:
+    """The rule of every run with stability: Eq. (B1) holds at a static equilibrium, so stability is judged along a
+    quasi-static run only; a ``dynamic`` ``mode`` with ``stability`` is a :class:`ffrf.errors.SceneError` (after
+    ``where``, ending with ``remedy``: what to change where the settings came from). ``auto`` and ``quasi_static``
+    pass."""
+    if stability and mode == "dynamic":
+        raise SceneError(f"{where + ': ' if where else ''}stability is judged at equilibria: {remedy}")
 
 
 @dataclass(frozen=True)

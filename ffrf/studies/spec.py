@@ -57,6 +57,7 @@ from ffrf.scenes.linkage_description import BORE_ERROR_MODELS, LinkageOptions
 from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.scenes.scene_cache import SceneCache
 from ffrf.scenes.schema_keys import Key, at_least, between, check_table, one_of, positive
+from ffrf.solvers.stability import check_judged_at_equilibria
 
 __all__ = [
     "METHODS",
@@ -267,8 +268,8 @@ def _base(table: dict, directory: Path, where: str, bases: NamedBases | None) ->
             raise SceneError(f"{where}: {problem}")
     keys = ("h", "order", "modes", "mode", "outputs", "revolutions", "rpm", "stability")
     overrides = {key: table[key] for key in keys if key in table}
-    if overrides.get("stability") and overrides.get("mode") == "dynamic":
-        raise SceneError(f'{where}: stability is judged at equilibria: drop mode = "dynamic" or stability = true')
+    remedy = 'drop mode = "dynamic" or stability = true'
+    check_judged_at_equilibria(overrides.get("mode", "auto"), overrides.get("stability", False), remedy, where)
     named = table.get(bases.key) if bases else None
     return Base(named, table.get("linkage"), document, overrides, table.get("bore_error_model", "misfit"), bases)
 

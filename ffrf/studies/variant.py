@@ -30,9 +30,10 @@ from dataclasses import replace
 from typing import Any
 
 from ffrf.errors import AssemblyDivergence, FEInputError, NewtonDivergence, StaticDivergence
+from ffrf.output.result import Result
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions
 from ffrf.scenes.linkage_file import linkage_options
-from ffrf.scenes.linkage_run import LinkageResult, run_linkage
+from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_cache import SceneCache
 from ffrf.studies.sampling import Variant
@@ -161,7 +162,7 @@ def build_variant(study: Study, values: dict[str, float], cache: SceneCache | No
     return build_linkage(loop, options, where=f"{study.name}, variant", cache=cache), run
 
 
-def _outputs(result: LinkageResult | None, n_links: int, path: bool, stability: bool = False) -> dict[str, float]:
+def _outputs(result: Result | None, n_links: int, path: bool, stability: bool = False) -> dict[str, float]:
     """The output columns of a run's result (NaN where not computed: no result, or a path that stopped; the snaps
     of a path that stopped count those before the stop)."""
     out = dict.fromkeys(output_names(n_links, stability), math.nan)

@@ -128,15 +128,13 @@ def test_ffrf_refuses_a_non_finite_twist_with_exit_2(tmp_path, capsys):
 @pytest.mark.parametrize("command", [["bennett"], ["run", "scene.toml"]])
 def test_ffrf_checks_the_output_folder_before_the_run(tmp_path, capsys, monkeypatch, command):
     """An unwritable ``--out`` is refused before any simulation, so no run is lost to it."""
-    import ffrf.scenes.linkage_run
-    import ffrf.scenes.scene_file
     from ffrf.cli import main
+    from ffrf.model import Model
 
     def must_not_run(*args, **kwargs):
         raise AssertionError("the run started before --out was checked")
 
-    monkeypatch.setattr(ffrf.scenes.linkage_run, "run_linkage", must_not_run)
-    monkeypatch.setattr(ffrf.scenes.scene_file, "run_scene", must_not_run)
+    monkeypatch.setattr(Model, "run", must_not_run)
     write_bar(tmp_path)
     (tmp_path / "scene.toml").write_text(PENDULUM)
     (tmp_path / "out").write_text("a file, not a folder")

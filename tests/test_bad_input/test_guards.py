@@ -103,12 +103,12 @@ def test_a_bore_error_of_1e300_deg_on_the_command_line_is_one_line_before_the_ou
 
 
 def test_max_steps_lifts_the_limit_of_the_command_line(tmp_path, capsys, monkeypatch):
-    import ffrf.paper.bennett_scene as bennett_scene
+    import ffrf.cli.bennett as bennett_command
 
     def built(*args, **kwargs):
         raise SceneError("the scene would be built now")
 
-    monkeypatch.setattr(bennett_scene, "build_bennett", built)
+    monkeypatch.setattr(bennett_command, "build_bennett", built)
     argv = ["bennett", "--dynamic", "--dt", "1e-9", "--max-steps", "100000000000", "--out", str(tmp_path / "o")]
     assert main(argv) == 2
     assert "error: the scene would be built now" in capsys.readouterr().err

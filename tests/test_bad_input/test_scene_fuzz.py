@@ -13,8 +13,9 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from scene_fixtures import PENDULUM, write_bar
 
+from ffrf import load
 from ffrf.errors import FEInputError, NewtonDivergence, StaticDivergence
-from ffrf.scenes.scene_file import load_scene, run_scene
+from ffrf.scenes.scene_file import load_scene
 
 PROJECT_ERRORS = (FEInputError, NewtonDivergence, StaticDivergence)
 VALID = tomllib.loads(PENDULUM)
@@ -127,7 +128,7 @@ def test_mutated_scene_gives_a_scene_or_a_project_error(tmp_path, data):
         event("built, too long to run here")
         return
     try:
-        run_scene(scene, tmp_path / "out")
+        load(scene).run().save(tmp_path / "out")
     except PROJECT_ERRORS as error:
         event(f"run stopped: {type(error).__name__}")
         return

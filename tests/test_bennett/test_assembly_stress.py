@@ -11,6 +11,7 @@ import pytest
 import skfem
 from scipy.spatial.transform import Rotation
 
+from ffrf import load
 from ffrf.body.euler_parameters import rotation_matrix
 from ffrf.output.assembly_stress import (
     element_von_mises,
@@ -21,7 +22,6 @@ from ffrf.output.assembly_stress import (
     write_assembly_vtu,
 )
 from ffrf.paper.bennett_scene import assemble, build_bennett
-from ffrf.scenes.linkage_run import run_linkage
 
 COARSE = dict(h=6e-3, order=1, n_modes=2)
 
@@ -129,7 +129,7 @@ def test_pure_helpers():
 
 
 def test_run_linkage_reports_the_assembly():
-    result = run_linkage(build_bennett("pla", **COARSE), mode="quasi_static", n_outputs=3, t_end=0.5)
+    result = load(build_bennett("pla", **COARSE)).run(mode="quasi_static", outputs=3, t_end=0.5)
     report = json.loads(json.dumps(result.metadata["assembly"]))
     assert [link["link"] for link in report["links"]] == [0, 1, 2, 3]
     assert report["max_von_mises_pa"] == max(link["max_von_mises_pa"] for link in report["links"]) > 0

@@ -13,17 +13,17 @@ from ffrf.output.linkage_figures import (
     plot_driving_torque,
     plot_over_drive_angle,
 )
-from ffrf.scenes.linkage_run import LinkageResult
+from ffrf.output.result import Result
 
 
-def synthetic_result(scale: float, rng) -> LinkageResult:
+def synthetic_result(scale: float, rng) -> Result:
     angle = np.radians(90.0) + np.linspace(0.0, 2 * np.pi + 0.05, 50)
     sensors = {
         "drive_angle": angle,
         "coupler_deviation": scale * rng.normal(size=(50, 3)),
         "driving_torque": scale * np.sin(angle),
     }
-    return LinkageResult(np.linspace(0.0, 61.0, 50), sensors, np.zeros((50, 1)))
+    return Result(np.linspace(0.0, 61.0, 50), sensors, np.zeros((50, 1)))
 
 
 def lines_by_label(ax) -> dict:
@@ -81,10 +81,10 @@ def test_generic_plot_and_series(rng):
 
 def test_bennett_command_writes_figures_and_assembly(tmp_path, monkeypatch, capsys):
     """The bennett subcommand on a short run (t_end shortened to 2 s; its other options unchanged)."""
-    import ffrf.scenes.linkage_run as linkage_run
+    from ffrf.model import Model
 
-    full_run = linkage_run.run_linkage
-    monkeypatch.setattr(linkage_run, "run_linkage", lambda scene, **kw: full_run(scene, **kw, t_end=2.0))
+    full_run = Model.run
+    monkeypatch.setattr(Model, "run", lambda model, *args, **kw: full_run(model, *args, **kw, t_end=2.0))
     code = cli.main(
         [
             "bennett",

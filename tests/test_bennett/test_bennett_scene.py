@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
+from ffrf import load
 from ffrf.paper.bennett_scene import PAPER_MAX_COUPLER_DEVIATION_MM, build_bennett, paper_max_coupler_deviation
-from ffrf.scenes.linkage_run import run_linkage, write_results
 
 COARSE = dict(h=6e-3, order=1, n_modes=2)
 
@@ -16,7 +16,7 @@ COARSE = dict(h=6e-3, order=1, n_modes=2)
 @pytest.fixture(scope="module")
 def runs():
     return {
-        variant: run_linkage(build_bennett(variant, **COARSE), mode="quasi_static", n_outputs=13)
+        variant: load(build_bennett(variant, **COARSE)).run(mode="quasi_static", outputs=13)
         for variant in ("rigid", "pla", "pla2")
     }
 
@@ -46,7 +46,7 @@ def test_misalignment_increases_deviation_and_constraints_hold(runs):
 
 
 def test_results_are_written_with_metadata(runs, tmp_path):
-    write_results(runs["pla"], tmp_path)
+    runs["pla"].write_tables(tmp_path)
     data = np.load(tmp_path / "results.npz")
     assert data["time"].shape == (13,) and data["coupler_point"].shape == (13, 3)
     assert data["link2_node1"].shape == (13, 3) and data["joint_angles"].shape == (13, 4)
@@ -63,7 +63,7 @@ def test_energy_balance_closes_quasi_statically():
     """Drive work = change of gravity + strain energy (no inertia, no damping) over the revolution.
     The work is a Simpson integral over the outputs (fourth order): measured 2.4e-6 with 241
     outputs, 1.2e-7 with 481."""
-    result = run_linkage(build_bennett("pla", **COARSE), mode="quasi_static", n_outputs=481)
+    result = load(build_bennett("pla", **COARSE)).run(mode="quasi_static", outputs=481)
     assert result.summary()["energy_balance_relative"] < 1e-6
     assert result.summary()["max_constraint_residual"] < 1e-10
 
@@ -118,9 +118,9 @@ def test_a_dynamic_run_steps_by_drive_angle_and_reports_its_local_error_estimate
     assert dynamic_step(scenes[1.0]) == pytest.approx(0.01, rel=1e-12)
     assert dynamic_step(scenes[0.5]) == 0.01
     assert dynamic_step(scenes[2.0]) == pytest.approx(0.005, rel=1e-12)
-    default = run_linkage(scenes[2.0], mode="dynamic", n_outputs=7, t_end=1.5)
+    default = load(scenes[2.0]).run(mode="dynamic", outputs=7, t_end=1.5)
     assert default.metadata["step"] == pytest.approx(0.005, rel=1e-12)
-    halved = run_linkage(scenes[2.0], mode="dynamic", n_outputs=7, t_end=1.5, step=0.0025)
+    halved = load(scenes[2.0]).run(mode="dynamic", outputs=7, t_end=1.5, step=0.0025)
     estimate, finer = default.metadata["step_error_estimate"], halved.metadata["step_error_estimate"]
     assert 5.0 < estimate["median_m"] / finer["median_m"] < 11.0
     assert estimate["largest_m"] >= estimate["median_m"] > 0.0

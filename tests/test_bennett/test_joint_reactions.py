@@ -95,10 +95,10 @@ def test_reactions_are_not_trivially_zero():
 def test_run_linkage_writes_reactions_in_joint_frames():
     """The ``joint_reactions`` sensor: the drive's torque about its axis is the driving torque,
     and the clamp carries the linkage's weight (vertical in the clamp's frame, the world's)."""
-    from ffrf.scenes.linkage_run import run_linkage
+    from ffrf import load
 
     scene = build_bennett("pla", h=6e-3, order=1, n_modes=2)
-    result = run_linkage(scene, mode="quasi_static", n_outputs=5)
+    result = load(scene).run(mode="quasi_static", outputs=5)
     reactions = result.sensors["joint_reactions"]
     names = result.metadata["joint_reaction_names"]
     assert reactions.shape == (5, 5, 6) and names[0] == "clamp" and names[-1] == "joint3 (drive)"

@@ -9,9 +9,9 @@ import meshio
 import numpy as np
 import pytest
 
+from ffrf import load
 from ffrf.cli import main
 from ffrf.scenes.linkage_description import LinkageOptions
-from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import build_linkage
 from kinematics.rational_mechanism import load_model, loop_from_mechanism, regular_start
 
@@ -52,7 +52,7 @@ def test_a_coarse_plane_fold_6r_snaps_at_a_fold_where_its_critical_mode_loses_it
     origin = regular_start(model, loop)
     options = LinkageOptions(h=12e-3, order=1, n_modes=2, start_angle=float(origin[0]), origin=origin, tool_link=3)
     scene = build_linkage(loop, options)
-    result = run_linkage(scene, mode="quasi_static", n_outputs=51, t_end=26.0, stability=True)
+    result = load(scene).run(mode="quasi_static", outputs=51, t_end=26.0, stability=True)
     (snap,) = result.metadata["stability"]["snaps"]
     assert snap["landed"] and snap["energy_released_J"] > 0.0
     assert -3.0 < snap["drive_angle_deg"] < 1.0  # within a few degrees of the rigid loop's flat fold at 0
@@ -101,11 +101,11 @@ def test_a_sharp_turn_of_the_path_without_a_fold_is_bridged_onto_the_branch_the_
     errors = tuple(BoreError(j, k, np.radians(twist), 1e-3 * offset) for j, k, twist, offset in SHARP_PRINT)
     scene = build_bennett_from_options(replace(bennett_options("pla"), bore_errors=errors, bore_error_model="misfit"))
     with pytest.raises(StaticDivergence) as stopped:
-        run_linkage(scene, "quasi_static", 121)
+        load(scene).run("quasi_static", outputs=121)
     t_stop = float(stopped.value.partial.time[-1])
-    bridged = run_linkage(scene, "quasi_static", 121, stability=True)
+    bridged = load(scene).run("quasi_static", outputs=121, stability=True)
     assert bridged.metadata["stability"]["snaps"] == [] and bridged.time[-1] == pytest.approx(scene.t_end)
     row = int(np.searchsorted(bridged.time, t_stop)) + 1  # the first output after the stop: bridged
-    dynamic = run_linkage(scene, "dynamic", 121, step=5e-3, t_end=float(bridged.time[row]))
+    dynamic = load(scene).run("dynamic", outputs=121, step=5e-3, t_end=float(bridged.time[row]))
     from_dynamics = static_equilibrium(scene.system, dynamic.q[-1], float(bridged.time[row]))
     assert np.max(np.abs(from_dynamics.q - bridged.q[row])) < 1e-8

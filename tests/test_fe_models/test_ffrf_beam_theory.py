@@ -21,7 +21,10 @@ from ffrf_reference import (
     torsion_frequencies,
 )
 
-from ffrf import PLA, FEModel, clamped_modes, free_free_basis
+from ffrf.fe.fe_model import FEModel
+from ffrf.fe.materials import PLA
+from ffrf.fe.modal import clamped_modes
+from ffrf.reduction.free_free import free_free_basis
 
 LENGTH, WIDTH, THICK = 0.2, 0.012, 0.008  # x, y, z
 E, NU, RHO = PLA.E, PLA.nu, PLA.rho

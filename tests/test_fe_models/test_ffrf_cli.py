@@ -11,8 +11,8 @@ import meshio
 import numpy as np
 import pytest
 
-from ffrf import PLA
 from ffrf.cli import main
+from ffrf.fe.materials import PLA
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 from ffrf_reference import prism_mesh
 
-from ffrf import PLA, FEModel, Material, rigid_body_modes
+from ffrf import Material
+from ffrf.fe.fe_model import FEModel, rigid_body_modes
+from ffrf.fe.materials import PLA
 from ffrf.geometry.meshing import configure_meshing, gmsh_session, mesh_current_model
 from ffrf.mesh.tet_mesh import signed_volumes
 

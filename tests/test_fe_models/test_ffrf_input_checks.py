@@ -6,19 +6,11 @@ import numpy as np
 import pytest
 from ffrf_reference import prism_mesh
 
-from ffrf import (
-    PLA,
-    RIGID,
-    FEInputError,
-    FEModel,
-    InterfaceError,
-    Material,
-    MaterialError,
-    MeshError,
-    interface_from_nodes,
-    orient_positive,
-)
-from ffrf.mesh.tet_mesh import TetMesh, check_mesh, mesh_quality
+from ffrf import FEInputError, InterfaceError, Material, MaterialError, MeshError
+from ffrf.fe.fe_model import FEModel
+from ffrf.fe.interfaces import interface_from_nodes
+from ffrf.fe.materials import PLA, RIGID
+from ffrf.mesh.tet_mesh import TetMesh, check_mesh, mesh_quality, orient_positive
 
 UNIT_TET = (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * 0.01, np.array([[0, 1, 2, 3]]))
 

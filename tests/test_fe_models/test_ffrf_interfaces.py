@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 from ffrf_reference import prism_mesh
 
-from ffrf import FEModel, InterfaceError, TetMesh, boundary_triangles, interface_from_group, interface_from_triangles
-from ffrf.fe.interfaces import interface_in_cylinder
+from ffrf import InterfaceError
+from ffrf.fe.fe_model import FEModel
+from ffrf.fe.interfaces import boundary_triangles, interface_from_group, interface_from_triangles, interface_in_cylinder
+from ffrf.mesh.tet_mesh import TetMesh
 
 A, B, C = 0.03, 0.02, 0.01  # box [0, A] x [0, B] x [0, C]
 

@@ -5,19 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ffrf import (
-    PLA,
-    Axis,
-    FEModel,
-    GeometryError,
-    LinkDesign,
-    check_mesh,
-    interface_from_group,
-    interface_in_cylinder,
-    mesh_link,
-    quality_summary,
-)
-from ffrf.geometry.joint_axes import common_normal_feet
+from ffrf import GeometryError, LinkDesign
+from ffrf.fe.fe_model import FEModel
+from ffrf.fe.interfaces import interface_from_group, interface_in_cylinder
+from ffrf.fe.materials import PLA
+from ffrf.geometry.joint_axes import Axis, common_normal_feet
+from ffrf.geometry.link_geometry import mesh_link
+from ffrf.mesh.tet_mesh import check_mesh, quality_summary
 from ffrf.paper.axes import paper_link_axes
 
 H = 0.006  # coarse on purpose: tests check geometry, not accuracy

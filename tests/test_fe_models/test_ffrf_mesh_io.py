@@ -7,7 +7,10 @@ import numpy as np
 import pytest
 from ffrf_reference import prism_mesh
 
-from ffrf import MeshError, TetMesh, mesh_link, mesh_stl, read_mesh, write_vtu
+from ffrf import MeshError
+from ffrf.geometry.link_geometry import mesh_link
+from ffrf.geometry.meshing import mesh_stl
+from ffrf.mesh.tet_mesh import TetMesh, read_mesh, write_vtu
 from ffrf.paper.axes import paper_link_axes
 
 

@@ -5,16 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ffrf import (
-    PLA,
-    FEInputError,
-    FEModel,
-    clamped_modes,
-    free_free_basis,
-    mesh_link,
-    rigid_body_modes,
-)
+from ffrf import FEInputError
+from ffrf.fe.fe_model import FEModel, rigid_body_modes
+from ffrf.fe.materials import PLA
+from ffrf.fe.modal import clamped_modes
+from ffrf.geometry.link_geometry import mesh_link
 from ffrf.paper.axes import paper_link_axes
+from ffrf.reduction.free_free import free_free_basis
 
 
 @pytest.fixture(scope="module")

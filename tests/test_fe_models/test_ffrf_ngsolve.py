@@ -12,7 +12,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from ffrf import PLA, FEModel, mesh_link
+from ffrf.fe.fe_model import FEModel
+from ffrf.fe.materials import PLA
+from ffrf.geometry.link_geometry import mesh_link
 from ffrf.geometry.meshing import configure_meshing, gmsh_session, mesh_current_model
 from ffrf.paper.axes import paper_link_axes
 

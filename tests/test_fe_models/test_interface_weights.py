@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import skfem
 
-from ffrf import FEModel
 from ffrf.errors import InterfaceError
+from ffrf.fe.fe_model import FEModel
 from ffrf.fe.interfaces import boundary_triangles, interface_from_nodes, interface_from_nodes_file
 from ffrf.mesh.tet_mesh import orient_positive
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import skfem
 
-from ffrf import FEModel
 from ffrf.errors import MeshError
+from ffrf.fe.fe_model import FEModel
 from ffrf.fe.materials import Material
 from ffrf.mesh.tet_mesh import TetMesh, orient_positive, signed_volumes
 

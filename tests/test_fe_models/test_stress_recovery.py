@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import skfem
 
-from ffrf import FEModel
+from ffrf.fe.fe_model import FEModel
 from ffrf.mesh.tet_mesh import orient_positive
 from ffrf.output.assembly_stress import element_von_mises
 from ffrf.reduction.component_modes_post import von_mises_stress

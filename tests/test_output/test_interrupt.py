@@ -171,9 +171,9 @@ def test_the_first_signal_in_a_run_is_noted_and_a_second_one_or_one_outside_stop
     """``ffrf.cli``'s handling of SIGINT in-process (a signal to this process runs its handler before the next line):
     outside a run a signal raises at once; inside one the first is
     noted (the next step's check raises) and a second raises at once; the handlers before are restored after."""
-    from ffrf.cli import _StopRequest
+    from ffrf.cli.stop import StopRequest
 
-    stop = _StopRequest()
+    stop = StopRequest()
     before = signal.getsignal(signal.SIGINT)
     with stop.installed():
         with pytest.raises(Interrupted, match="interrupted by SIGINT"):

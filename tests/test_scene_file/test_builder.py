@@ -11,10 +11,11 @@ import numpy as np
 from scene_fixtures import PENDULUM, write_bar
 from scipy.spatial.transform import Rotation
 
+from ffrf import load
 from ffrf.paper.bennett_scene import VARIANTS, bennett_description
 from ffrf.scenes.assembly import assemble
 from ffrf.scenes.builder import build_scene
-from ffrf.scenes.scene_file import load_scene, sensor_arrays, simulate_scene
+from ffrf.scenes.scene_file import load_scene, sensor_arrays
 from ffrf.scenes.scene_schema import check_scene
 from ffrf.system.joints import frame_from_axis
 
@@ -22,7 +23,7 @@ from ffrf.system.joints import frame_from_axis
 def _pendulum_tip(tmp_path, name: str, text: str):
     (tmp_path / name).write_text(text)
     scene = load_scene(tmp_path / name)
-    run = simulate_scene(scene)
+    run = load(scene).run()
     return scene, sensor_arrays(scene, run.q, run.multipliers)["tip"]
 
 
@@ -197,7 +198,7 @@ def test_a_joint_point_sensor_of_a_hinge_stays_on_the_ground(tmp_path):
     text = PENDULUM + '\n[[sensors]]\nname = "pin"\nbody = "bar"\njoints = ["hinge"]\n'
     (tmp_path / "pin.toml").write_text(text)
     scene = load_scene(tmp_path / "pin.toml")
-    run = simulate_scene(scene)
+    run = load(scene).run()
     from ffrf.output.sensors import scene_sensors
 
     sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)

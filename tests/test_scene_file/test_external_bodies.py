@@ -18,13 +18,14 @@ import scipy.linalg
 from body_fixtures import bar_model
 from scene_fixtures import PENDULUM, write_bar
 
+from ffrf import load
 from ffrf.body.euler_parameters import g_bar, rotation_matrix
 from ffrf.errors import InterfaceError
 from ffrf.fe.external_model import ExternalFEModel
 from ffrf.fe.matrix_import import write_npz_model
 from ffrf.output.sensors import node_sensors
 from ffrf.scenes.builder import build_scene
-from ffrf.scenes.scene_file import load_scene, run_scene, simulate_scene
+from ffrf.scenes.scene_file import load_scene
 from validation.testmodels import model_named
 from validation.testmodels.fe_data import BLOCKS, DATA
 from validation.testmodels.spec import STORED_TOLERANCE
@@ -64,7 +65,7 @@ def test_a_body_from_its_matrices_runs_as_from_its_mesh(tmp_path, route):
     _write_matrices(tmp_path, from_mesh.bodies[0].fe)
     (tmp_path / "matrices.toml").write_text(pendulum.replace(MESH_BODY, f"matrices = {table}\n"))
     from_matrices = load_scene(tmp_path / "matrices.toml")
-    ours, theirs = simulate_scene(from_mesh), simulate_scene(from_matrices)
+    ours, theirs = load(from_mesh).run(), load(from_matrices).run()
     travel = np.abs(ours.q - ours.q[0]).max()  # the pendulum swings: its largest change of a coordinate
     assert travel > 1e-2
     np.testing.assert_allclose(theirs.q, ours.q, rtol=0, atol=1e-12 * travel)
@@ -79,7 +80,9 @@ def test_a_body_from_matrices_reports_strain_energy_and_no_stress(tmp_path):
     text = PENDULUM.replace(MESH_BODY, 'matrices = {format = "npz", file = "bar.npz"}\n')
     text = text.replace('mode = "dynamic"', 'mode = "quasi_static"').replace('type = "revolute"', 'type = "fixed"')
     (tmp_path / "scene.toml").write_text(text.replace("outputs = 101", "outputs = 2"))
-    metadata = run_scene(load_scene(tmp_path / "scene.toml"), tmp_path / "out")
+    result = load(tmp_path / "scene.toml").run()
+    result.save(tmp_path / "out")
+    metadata = result.metadata
     body = metadata["assembly"]["links"][0]
     assert body["max_von_mises_pa"] is None and metadata["assembly"]["max_von_mises_pa"] is None
     assert body["strain_energy_j"] > 0.0
@@ -140,7 +143,7 @@ def test_free_free_body_tumbling_freely_keeps_its_angular_momentum(tmp_path):
     model = bar_model(E=1e8, rho=450.0)
     _write_matrices(tmp_path, model)
     scene = build_scene(_free_bar(model, 4), tmp_path)
-    run = simulate_scene(scene)
+    run = load(scene).run()
     basis = scene.bodies[0].reduction.basis
     momentum = np.array([_angular_momentum(model, basis, q, qd) for q, qd in zip(run.q, run.qd, strict=True)])
     assert np.linalg.norm(momentum[0]) > 0.0
@@ -193,7 +196,7 @@ def test_abaqus_blocks_as_a_scene_file_reproduce_exudyns_stored_value(tmp_path):
     testmodels`` judges it by (measured: 6.8e-13 relative)."""
     (tmp_path / "blocks.toml").write_text(_abaqus_scene(DATA))
     scene = load_scene(tmp_path / "blocks.toml")
-    run = simulate_scene(scene)
+    run = load(scene).run()
     assert run.time[-1] == pytest.approx(5e-3)
     positions = node_sensors(scene, run.q[-1:])
     result = 0.0

@@ -11,9 +11,9 @@ import json
 import numpy as np
 import pytest
 
+from ffrf import load
 from ffrf.cli import main
 from ffrf.paper.bennett_scene import build_bennett
-from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.scene_file import load_scene
 from kinematics import BennettLinkage
 
@@ -45,7 +45,7 @@ def _axes_file() -> str:
 @pytest.fixture(scope="module")
 def paper_pla1():
     scene = build_bennett("pla1", h=0.012, order=1, n_modes=2)
-    return run_linkage(scene, mode="quasi_static", n_outputs=9)
+    return load(scene).run(mode="quasi_static", outputs=9)
 
 
 @pytest.mark.parametrize("source", ["dh", "axes"])
@@ -54,7 +54,7 @@ def test_the_papers_misaligned_bennett_from_a_linkage_file_runs_as_the_built_in_
     and driving torque as build_bennett('pla1') (measured 0 m: the same description)."""
     path = tmp_path / "bennett.toml"
     path.write_text(DH_FILE if source == "dh" else _axes_file())
-    ours = run_linkage(load_scene(path), mode="quasi_static", n_outputs=9)
+    ours = load(load_scene(path)).run(mode="quasi_static", outputs=9)
     assert np.max(np.abs(ours.sensors["coupler_point"] - paper_pla1.sensors["coupler_point"])) < 1e-10
     assert np.max(np.abs(ours.sensors["driving_torque"] - paper_pla1.sensors["driving_torque"])) < 1e-10
     assert ours.summary()["max_coupler_deviation_m"] > 5e-4  # a real misfit, not a closable loop
@@ -130,7 +130,7 @@ def test_the_plane_fold_6r_stops_where_its_path_ends_whatever_the_outputs():
     stops = []
     for outputs in (61, 241, 961):
         with pytest.raises(StaticDivergence) as stopped:
-            run_linkage(scene, mode="quasi_static", n_outputs=outputs, t_end=30.0, sensors="path")
+            load(scene).run(mode="quasi_static", outputs=outputs, t_end=30.0, sensors="path")
         stops.append(stopped.value.partial.metadata["stopped"]["drive_angle_deg"])
     assert -3.0 < stops[0] < 5.0  # home, the fold, is at 0 deg
     assert stops[1] == pytest.approx(stops[0], abs=3.0 / 2**8) and stops[2] == pytest.approx(stops[0], abs=3.0 / 2**8)
@@ -152,7 +152,7 @@ def test_near_rigid_interp_4poses_6r_without_load_follows_rational_linkages_thro
         "linkage": {"name": "interp_4poses_6r rigid", "model": "interp_4poses_6r", "material": material},
         "scene": {"gravity": [0.0, 0.0, 0.0]},
     }
-    result = run_linkage(load_linkage(document), mode="quasi_static", n_outputs=31, t_end=9.0, sensors="path")
+    result = load(load_linkage(document)).run(mode="quasi_static", outputs=31, t_end=9.0, sensors="path")
     angles = np.degrees(result.sensors["drive_angle"])
     assert angles.min() < -16.45 < angles.max()
     assert np.max(np.linalg.norm(result.sensors["coupler_deviation"], axis=1)) < 1e-10

@@ -224,10 +224,10 @@ def test_a_stiff_goldberg_5r_follows_its_rigid_motion():
     point follows the rigid motion over ramp and revolution (measured 6.6e-15 m), and every joint closes."""
     from kinematics_reference import goldberg_5r
 
-    from ffrf.scenes.linkage_run import run_linkage
+    from ffrf import load
 
     goldberg = goldberg_5r(0.1, np.radians(75.0), np.radians(45.0), np.radians(100.0), theta0=0.7)
     loop = SingleLoop.from_points_directions(goldberg.points, goldberg.directions)
     options = LinkageOptions(material=RIGID, h=12e-3, order=1, n_modes=2, gravity=(0.0, 0.0, 0.0))
-    summary = run_linkage(build_linkage(loop, options), mode="quasi_static", n_outputs=25).summary()
+    summary = load(build_linkage(loop, options)).run(mode="quasi_static", outputs=25).summary()
     assert summary["max_coupler_deviation_m"] < 1e-12 and summary["max_constraint_residual"] < 1e-10

@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 from scene_fixtures import driven_link_scene
 
+from ffrf import load
 from ffrf.body.euler_parameters import rotation_matrix
 from ffrf.scenes.assembly import MAX_DRIVE_STEP, quasi_static_path_step
-from ffrf.scenes.scene_file import load_scene, sensor_arrays, simulate_scene
+from ffrf.scenes.scene_file import load_scene, sensor_arrays
 
 #: s: the cosine ramp (1 s) and 4.4 s at 1 rpm, 29 deg; the path steps 0.5 s, the outputs 0.9, 0.45, 0.18 s
 T_END = 5.4
@@ -24,7 +25,7 @@ def _run(tmp_path, outputs: int):
     path = tmp_path / f"link_{outputs}.toml"
     path.write_text(driven_link_scene("[0.0, 1.0, 0.0]", t_end=T_END, outputs=outputs, modes=3))
     scene = load_scene(path)
-    return scene, simulate_scene(scene)
+    return scene, load(scene).run()
 
 
 def test_the_path_step_of_a_driven_scene_turns_its_drive_3_deg(tmp_path):

@@ -13,10 +13,11 @@ import meshio
 import numpy as np
 from scene_fixtures import PENDULUM, write_bar
 
+from ffrf import load
 from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
 from ffrf.scenes.builder import build_scene
 from ffrf.scenes.linkage_description import BoreError
-from ffrf.scenes.linkage_run import PATH_SENSORS, run_linkage
+from ffrf.scenes.linkage_run import PATH_SENSORS
 from ffrf.scenes.linkage_scene import build_linkage
 from ffrf.scenes.scene_cache import LRUCache, SceneCache, content_key
 from kinematics import BennettLinkage, SingleLoop
@@ -62,7 +63,7 @@ def test_a_variant_built_from_a_warm_cache_equals_one_built_afresh():
     cold = build_bennett_from_options(_options(-0.4), cache=SceneCache(enabled=False))
     np.testing.assert_array_equal(warm.q_initial, cold.q_initial)
     np.testing.assert_array_equal(warm.start_phi, cold.start_phi)
-    runs = [run_linkage(scene, mode="quasi_static", n_outputs=9) for scene in (warm, cold)]
+    runs = [load(scene).run(mode="quasi_static", outputs=9) for scene in (warm, cold)]
     assert runs[0].sensors.keys() == runs[1].sensors.keys()
     for name, values in runs[0].sensors.items():
         np.testing.assert_array_equal(values, runs[1].sensors[name], err_msg=name)
@@ -100,8 +101,8 @@ def test_the_path_sensors_equal_those_of_a_whole_evaluation():
     """``sensors="path"`` (a study's row) evaluates the coupler's path and the drive only: the same values as
     every sensor's evaluation, and the same summary of them."""
     scene = build_bennett_from_options(_options(0.5))
-    whole = run_linkage(scene, mode="quasi_static", n_outputs=9)
-    path = run_linkage(scene, mode="quasi_static", n_outputs=9, sensors="path")
+    whole = load(scene).run(mode="quasi_static", outputs=9)
+    path = load(scene).run(mode="quasi_static", outputs=9, sensors="path")
     assert sorted(path.sensors) == sorted(PATH_SENSORS)
     for name in PATH_SENSORS:
         np.testing.assert_array_equal(path.sensors[name], whole.sensors[name], err_msg=name)

@@ -6,8 +6,9 @@ import pytest
 from pendulum_fixtures import pendulum, tip_position
 from scene_fixtures import PENDULUM, driven_link_scene, write_bar
 
+from ffrf import load
 from ffrf.cli import main
-from ffrf.scenes.scene_file import SceneError, load_scene, run_scene
+from ffrf.scenes.scene_file import SceneError, load_scene
 from ffrf.solvers.generalized_alpha import generalized_alpha
 
 
@@ -24,8 +25,7 @@ def test_file_pendulum_equals_the_python_pendulum(tmp_path):
 
 def test_driven_parametric_link(tmp_path):
     (tmp_path / "link.toml").write_text(driven_link_scene("[0.0, 0.0, 1.0]", t_end=5.0, outputs=6, modes=2))
-    scene = load_scene(tmp_path / "link.toml")
-    run_scene(scene, tmp_path / "out")
+    load(tmp_path / "link.toml").run().save(tmp_path / "out")
     torque = np.load(tmp_path / "out" / "results.npz")["motor_torque"]
     # Turning about the vertical axis h0 does no work against gravity: the drive torque vanishes.
     assert torque.shape == (6,) and np.abs(torque).max() < 1e-9

@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 from scene_fixtures import PENDULUM, write_bar
 
+from ffrf import load
 from ffrf.errors import SceneError
 from ffrf.fe.fe_model import rigid_body_modes
 from ffrf.output.sensors import scene_sensors
-from ffrf.scenes.scene_file import load_scene, simulate_scene
+from ffrf.scenes.scene_file import load_scene
 
 SPRING = """
 [[forces]]
@@ -49,7 +50,7 @@ def test_a_bar_hanging_from_a_spring_damper_sinks_by_its_weight_over_the_stiffne
     text = PENDULUM.replace('mode = "dynamic"', 'mode = "quasi_static"').replace("outputs = 101", "outputs = 2")
     text = text[: text.index("[[joints]]")] + SPRING
     scene = _scene(tmp_path, text)
-    run = simulate_scene(scene)
+    run = load(scene).run()
     mass = scene.bodies[0].fe.total_mass
     hinge = scene.bodies[0].markers["hinge"]
     sag = hinge.position(run.q[-1]) - hinge.position(scene.q_initial)
@@ -75,7 +76,7 @@ force = [0.0, 0.0, -1e-3]
 table = {time = [0.0, 0.05], scale = [0.0, 1.0]}
 """
     scene = _scene(tmp_path, text)
-    run = simulate_scene(scene)
+    run = load(scene).run()
     body = scene.bodies[0]
     tip = body.markers["tip"]
     ritz = np.linalg.solve(body.reduction.reduced_stiffness, tip.position_modes.T @ np.array([0.0, 0.0, -1e-3]))
@@ -104,7 +105,7 @@ stall_torque = 2e-4
 no_load_speed = 3.0
 """
     scene = _scene(tmp_path, text)
-    run = simulate_scene(scene)
+    run = load(scene).run()
     angle = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)["hinge_angle"]
     fe = scene.bodies[0].fe
     rotation = rigid_body_modes(fe.nodes, scene.bodies[0].markers["hinge"].point)[:, 4]
@@ -127,7 +128,7 @@ def test_a_body_started_turning_in_a_scene_file_keeps_turning(tmp_path):
     )
     scene = _scene(tmp_path, text)
     np.testing.assert_allclose(scene.bodies[0].markers["hinge"].point, hinge, atol=1e-15)
-    run = simulate_scene(scene)
+    run = load(scene).run()
     angle = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)["hinge_angle"]
     assert np.max(np.abs(angle - 2.0 * run.time)) < 1e-6
 
@@ -155,7 +156,7 @@ stiffness = [20.0]
 damping = [0.05]
 """
     scene = _scene(tmp_path, text)
-    run = simulate_scene(scene)
+    run = load(scene).run()
     sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
     elements = sensors["energy_elements_work"]
     drive = sensors["energy_drive_work"]
@@ -198,7 +199,7 @@ stiffness = [{k}]
         return weight * arm * np.cos(angle) + (end[2] * force[0] - end[0] * force[2])
 
     expected = brentq(moment, 0.0, 1.0, xtol=1e-15)
-    run = simulate_scene(scene)
+    run = load(scene).run()
     p = run.q[-1, 3:7]
     angle = 2.0 * np.arctan2(p[2], p[0])
     assert expected > 0.05  # the spring holds the bar well above hanging

@@ -11,14 +11,15 @@ import numpy as np
 import pytest
 from scene_fixtures import driven_link_scene
 
+from ffrf import load
 from ffrf.cli import main
 from ffrf.fe.materials import PLA, Material
 from ffrf.output import verification
 from ffrf.output.energy_balance import energy_scale, relative_balance
+from ffrf.output.result import Result
 from ffrf.output.verification import Check, Verification
 from ffrf.paper.bennett_scene import build_bennett
 from ffrf.scenes.linkage_file import load_linkage
-from ffrf.scenes.linkage_run import LinkageResult, run_linkage
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.static_solver import quasi_static
 
@@ -31,7 +32,7 @@ def test_an_unloaded_stiff_run_is_on_its_ideal_path_and_does_no_work():
     balance, relative to the links' weight-length energy, is closed to 1e-4 (measured 5.8e-6), not the 0/0 = 1.0
     of a residual relative to the drive's net work. The run verifies itself, stiff following rigid included."""
     scene = build_bennett("rigid", h=0.012, order=1, n_modes=2, gravity=(0.0, 0.0, 0.0))
-    result = run_linkage(scene, mode="quasi_static", n_outputs=13)
+    result = load(scene).run(mode="quasi_static", outputs=13)
     summary = result.summary()
     assert summary["max_coupler_distance_to_path_m"] < 1e-9
     assert summary["max_coupler_deviation_m"] < 1e-9
@@ -60,7 +61,7 @@ def test_the_energy_balance_of_a_run_where_nothing_moves_is_zero_not_nan_or_one(
     strain = np.linspace(0.0, 2e-3, rows)
     assert relative_balance(-strain, energy_scale({**sensors, "energy_strain": strain})) == pytest.approx(1.0)
     assert relative_balance(-strain, 0.0) == np.inf
-    result = LinkageResult(
+    result = Result(
         sensors["drive_angle"],
         {
             **sensors,
@@ -109,13 +110,13 @@ def test_a_print_stressed_beyond_its_strength_when_assembled_is_warned_about():
     64 MPa von Mises (PLA breaks at 53 MPa): a warning names the link, the stress and the strength, and the run
     still verifies (a warning is not a failed check); with a 1 deg twist (pla1) no link comes near it."""
     scene = load_linkage(_bore_twist(90.0), where="twisted bore")
-    result = run_linkage(scene, mode="quasi_static", n_outputs=3, t_end=0.05)
+    result = load(scene).run(mode="quasi_static", outputs=3, t_end=0.05)
     peak = result.metadata["assembly"]["max_von_mises_pa"]
     assert peak > PLA.strength
     (warning,) = result.metadata["verification"]["warnings"]
     assert warning.startswith("assembly_strength: link") and f"{1e-6 * peak:.4g} MPa" in warning and "53 MPa" in warning
     assert result.metadata["verification"]["verified"]
-    mild = run_linkage(load_linkage(_bore_twist(1.0), where="pla1"), mode="quasi_static", n_outputs=3, t_end=0.05)
+    mild = load(load_linkage(_bore_twist(1.0), where="pla1")).run(mode="quasi_static", outputs=3, t_end=0.05)
     assert mild.metadata["assembly"]["max_von_mises_pa"] < PLA.strength
     assert mild.metadata["verification"]["warnings"] == []
 

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from dask.distributed import Client, LocalCluster
 
+from ffrf import load
 from ffrf.paper.bennett_scene import STUDY_BASES, bennett_options, build_bennett_from_options
 from ffrf.scenes.linkage_description import BoreError
-from ffrf.scenes.linkage_run import run_linkage
 from ffrf.studies.report import write_report
 from ffrf.studies.runner import read_rows, run_study
 from ffrf.studies.spec import study_from_document
@@ -52,7 +52,7 @@ def _standalone(twist_deg: float) -> dict:
         bore_errors=(BoreError(joint=3, link=0, twist=math.radians(twist_deg)),),
         bore_error_model="misfit",
     )
-    return run_linkage(build_bennett_from_options(options), mode="quasi_static", n_outputs=9).summary()
+    return load(build_bennett_from_options(options)).run(mode="quasi_static", outputs=9).summary()
 
 
 def test_a_tiny_study_runs_on_two_workers_resumes_and_equals_standalone_runs(client, tmp_path):
@@ -156,7 +156,7 @@ def test_twenty_random_variants_equal_standalone_runs_of_their_scenes(client, tm
             ),
             bore_error_model="misfit",
         )
-        reference = run_linkage(build_bennett_from_options(options), mode="quasi_static", n_outputs=9).summary()
+        reference = load(build_bennett_from_options(options)).run(mode="quasi_static", outputs=9).summary()
         for name in OUTPUTS[:3]:
             assert row[name] == pytest.approx(reference[name], rel=1e-12, abs=0.0), (name, row["id"])
 
@@ -249,7 +249,7 @@ def test_a_study_with_stability_monitoring_reports_what_a_standalone_stability_r
             bore_errors=(BoreError(joint=3, link=0, twist=math.radians(row["twist"])),),
             bore_error_model="misfit",
         )
-        alone = run_linkage(build_bennett_from_options(options), mode="quasi_static", n_outputs=9, stability=True)
+        alone = load(build_bennett_from_options(options)).run(mode="quasi_static", outputs=9, stability=True)
         assert row["status"] == "ok" and row["snaps"] == 0 and row["snap_energy_released_J"] == 0
         assert row["min_frequency_hz"] > 1.0
         assert abs(row["min_frequency_hz"] - alone.metadata["stability"]["min_frequency_hz"]) < 1e-9

@@ -20,10 +20,11 @@ import pytest
 from scipy.optimize import brentq
 from textbook_fixtures import HALF_SPAN, LOAD_RATE, RISE, truss_closed_form, truss_load, write_truss_scene
 
+from ffrf import load
 from ffrf.cli import main
 from ffrf.errors import StaticDivergence
 from ffrf.scenes.assembly import PATH_STEPS_WITHOUT_DRIVE, quasi_static_path_step
-from ffrf.scenes.scene_file import load_scene, simulate_scene
+from ffrf.scenes.scene_file import load_scene
 
 
 def test_the_bars_axial_stiffness_is_ea_over_l_and_their_euler_load_is_far(tmp_path):
@@ -99,9 +100,10 @@ def test_the_fold_and_the_landing_do_not_depend_on_the_outputs(tmp_path):
         (tmp_path / str(outputs)).mkdir()
         scene = load_scene(write_truss_scene(tmp_path / str(outputs), outputs=outputs))
         assert quasi_static_path_step(scene, 1.5)(0.3) == pytest.approx(1.5 / PATH_STEPS_WITHOUT_DRIVE, rel=1e-12)
-        run = simulate_scene(scene)
-        assert run.time.shape == (outputs,) and len(run.snaps) == 1
-        folds.append(run.snaps[0].fold_t)
+        run = load(scene).run()
+        snaps = run.metadata["stability"]["snaps"]
+        assert run.time.shape == (outputs,) and len(snaps) == 1
+        folds.append(snaps[0]["time_s"])
         ends.append(run.q[-1])
     print("fold loads", [t * LOAD_RATE / c["limit_load"] - 1.0 for t in folds])
     assert folds[0] * LOAD_RATE == pytest.approx(c["limit_load"], rel=1e-6)
@@ -123,7 +125,7 @@ def test_without_monitoring_the_run_stops_at_the_fold_whatever_the_outputs(tmp_p
         path = write_truss_scene(tmp_path / str(outputs), outputs=outputs)
         path.write_text(path.read_text().replace("stability = true", ""))
         with pytest.raises(StaticDivergence) as stopped:
-            simulate_scene(load_scene(path))
+            load(load_scene(path)).run()
         stops.append(float(stopped.value.partial.time[-1]))
     limit_time = c["limit_load"] / LOAD_RATE
     print("stops", stops, "limit time", limit_time)
