@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ffrf_reference import prism_mesh
+from test_fe_models.ffrf_reference import prism_mesh
 
 from ffrf import FEModel, InterfaceError, TetMesh, boundary_triangles, interface_from_group, interface_from_triangles
 from ffrf.fe.interfaces import interface_in_cylinder

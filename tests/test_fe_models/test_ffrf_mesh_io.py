@@ -5,7 +5,7 @@ from __future__ import annotations
 import meshio
 import numpy as np
 import pytest
-from ffrf_reference import prism_mesh
+from test_fe_models.ffrf_reference import prism_mesh
 
 from ffrf import MeshError, TetMesh, mesh_link, mesh_stl, paper_link_axes, read_mesh, write_vtu
 
