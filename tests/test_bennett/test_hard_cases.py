@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-# bench/hard_cases.py, on sys.path through this folder's conftest.py, which mypy does not run
+# bench/hard_cases.py: on sys.path at run time (this folder's conftest.py), not to mypy
 import hard_cases  # type: ignore[import-not-found]
 import numpy as np
 import pytest
