@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The tests marked `slow` (long studies, 20-40 min on a loaded 2-core machine), which the default
+# The tests marked `slow` (long studies, together far beyond the CI budget), which the default
 # suite and CI leave out: run them before a release and weekly. From a clean tree the outcome is
 # recorded in docs/results/slow_tests.json (counts per outcome, failing tests, duration, commit).
 # Extra arguments go to pytest. Exits with pytest's status.
