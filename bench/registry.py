@@ -254,7 +254,7 @@ BENCHMARKS: tuple[Benchmark, ...] = (
     Benchmark(
         "textbook_buckling",
         "von Mises truss and Euler column against their closed forms",
-        measures=(*ENGINE, "tests/textbook_fixtures.py"),
+        measures=(*ENGINE, "validation/textbook_cases.py"),
         records=(Recording("textbook_buckling"),),
     ),
     Benchmark(

@@ -7,7 +7,7 @@
    of the same structure (beam-theory segments: the structure's error; the FE segment's condensed stiffness:
    the FE segment's and our implementation's), with the observed rate log2(e_n / e_2n).
 
-The geometry, the closed forms and the chain model are ``tests/textbook_fixtures.py``. Prints one JSON object.
+The geometry, the closed forms and the chain model are ``validation/textbook_cases.py``. Prints one JSON object.
 
 Usage::
 
@@ -28,7 +28,7 @@ import numpy as np
 
 from bench.report import write_report
 from ffrf import load
-from tests.textbook_fixtures import (
+from validation.textbook_cases import (
     COLUMN_LOAD,
     EULER_LOAD,
     LOAD_RATE,

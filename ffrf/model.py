@@ -1,9 +1,12 @@
 """The front door: :func:`load` a model from what describes it, :meth:`Model.run` it, :meth:`Result.save` the run.
 
->>> import ffrf
->>> model = ffrf.load("examples/scenes/pendulum.toml")  # doctest: +SKIP
->>> result = model.run()  # doctest: +SKIP
->>> result.save("out")  # doctest: +SKIP
+::
+
+    import ffrf
+
+    model = ffrf.load("linkage.toml")  # a scene or linkage file
+    result = model.run()  # quasi-static or dynamic, as the scene says; the run checks itself
+    result.save("out")  # results, metadata, assembly stresses, figures
 
 ``source`` is a scene file or a linkage file (TOML, told apart by its ``[linkage]`` table,
 :mod:`ffrf.scenes.scene_file`), the same as a mapping (a parsed file), a single loop of :mod:`kinematics` (built with

@@ -81,9 +81,9 @@ def test_every_ffrf_module_sits_in_a_known_layer():
 def test_ffrf_module_imports_no_higher_layer(path: Path):
     own = path.parent.name if path.parent.name != "ffrf" else path.stem
     violations = [
-        f"line {line}: {module} ({_layer(module)}, rank {FFRF_LAYERS[_layer(module)]})"
+        f"line {line}: {module} ({layer}, rank {FFRF_LAYERS[layer]})"
         for line, module in _imports(path)
-        if _layer(module) in FFRF_LAYERS and FFRF_LAYERS[_layer(module)] > FFRF_LAYERS[own]
+        if (layer := _layer(module)) is not None and layer in FFRF_LAYERS and FFRF_LAYERS[layer] > FFRF_LAYERS[own]
     ]
     assert not violations, (
         f"{path.relative_to(ROOT)} (layer {own}, rank {FFRF_LAYERS[own]}) imports upwards: {violations}"

@@ -68,6 +68,11 @@ def _write(tmp_path: Path, name: str, text: str) -> Path:
     return tmp_path / name
 
 
+def _npz(tmp_path: Path, **arrays: np.ndarray) -> Path:
+    np.savez(tmp_path / "m.npz", allow_pickle=False, **arrays)  # plain arrays: nothing to pickle
+    return tmp_path / "m.npz"
+
+
 def _inp(tmp_path: Path, old: str, new: str) -> Path:
     assert old in INP
     return _write(tmp_path, "bar.inp", INP.replace(old, new, 1))
@@ -203,12 +208,12 @@ CASES: dict[str, tuple[Callable[[Path], object], type[FEInputError], list[str]]]
         ["not an .npz archive", "write_npz_model"],
     ),
     "npz without nodes": (
-        lambda p: (np.savez(p / "m.npz", mass=np.eye(3)), read_npz_model(p / "m.npz")),
+        lambda p: read_npz_model(_npz(p, mass=np.eye(3))),
         ExternalFEError,
         ["no 'nodes' array", "['mass']"],
     ),
     "npz without stiffness": (
-        lambda p: (np.savez(p / "m.npz", nodes=np.zeros((1, 3)), mass=np.eye(3)), read_npz_model(p / "m.npz")),
+        lambda p: read_npz_model(_npz(p, nodes=np.zeros((1, 3)), mass=np.eye(3))),
         ExternalFEError,
         ["no 'stiffness' and no ['stiffness_row', 'stiffness_col', 'stiffness_value']"],
     ),

@@ -13,6 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from ffrf import load
 from ffrf.body.euler_parameters import rotation_matrix
+from ffrf.fe.fe_model import FEModel
 from ffrf.output.assembly_stress import (
     element_von_mises,
     joint_reactions,
@@ -57,6 +58,7 @@ def stress_errors(variant: str, gravity) -> list[float]:
     stress = scene_assembly_stress(scene, solution.q, solution.multipliers)
     errors = []
     for link, reduced in zip(scene.links, stress.links, strict=True):
+        assert isinstance(link.fe, FEModel)  # the Bennett's links are meshed by gmsh, not read from another program
         full = full_static_displacement(link, solution.q[scene.system.block(link.index)], np.asarray(gravity, float))
         truth = element_von_mises(link.fe.nodes, link.fe.mesh.tets, full, link.fe.material.E, link.fe.material.nu)
         errors.append(float(np.abs(reduced.element_von_mises - truth).max() / truth.max()))

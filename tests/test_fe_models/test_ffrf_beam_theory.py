@@ -13,7 +13,7 @@ import itertools
 
 import numpy as np
 import pytest
-from ffrf_reference import (
+from test_fe_models.ffrf_reference import (
     classify_mode,
     prism_mesh,
     rectangle_torsion_constant,

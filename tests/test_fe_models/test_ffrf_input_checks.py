@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ffrf_reference import prism_mesh
+from test_fe_models.ffrf_reference import prism_mesh
 
 from ffrf import FEInputError, InterfaceError, Material, MaterialError, MeshError
 from ffrf.fe.fe_model import FEModel

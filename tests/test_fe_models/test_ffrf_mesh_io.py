@@ -5,7 +5,7 @@ from __future__ import annotations
 import meshio
 import numpy as np
 import pytest
-from ffrf_reference import prism_mesh
+from test_fe_models.ffrf_reference import prism_mesh
 
 from ffrf import MeshError
 from ffrf.geometry.link_geometry import mesh_link

@@ -130,7 +130,7 @@ def _hanging_pair(rigid: bool, stiffness: float | None):
         bushing = spring_damper(joint, [stiffness] * 3 + [stiffness * LEVER**2] * 2)
         system = MultibodySystem((bar0, bar1), (clamp,), gravity=np.zeros(3), forces=(load, bushing))
     start = markers["far0"].point - rotation_matrix(turn) @ markers["near1"].point
-    q0 = system.initial_state(positions=[[0.0, 0.0, 0.0], start], rotations=[[1.0, 0.0, 0.0, 0.0], turn])
+    q0 = system.initial_state(positions=[np.zeros(3), start], rotations=[np.array([1.0, 0.0, 0.0, 0.0]), turn])
     return system, q0, markers["far1"]
 
 

@@ -221,9 +221,13 @@ def rigid_interface_transformation(model: SmallFEModel, rigid_sets, weights, cla
             # w x r = [w1 r2 - w2 r1, w2 r0 - w0 r2, w0 r1 - w1 r0]
             cross = {0: [(1, r[2]), (2, -r[1])], 1: [(2, r[0]), (0, -r[2])], 2: [(0, r[1]), (1, -r[0])]}
             for c in range(3):
-                rows.append(3 * node + c), cols.append(base + c), vals.append(1.0)
+                rows.append(3 * node + c)
+                cols.append(base + c)
+                vals.append(1.0)
                 for axis, value in cross[c]:
-                    rows.append(3 * node + c), cols.append(base + 3 + axis), vals.append(value)
+                    rows.append(3 * node + c)
+                    cols.append(base + 3 + axis)
+                    vals.append(value)
     return sp.csr_matrix((vals, (rows, cols)), shape=(n_dofs, len(free) + 6 * len(rigid_sets)))
 
 
@@ -253,7 +257,8 @@ def symmetric_bar_model(n_length: int = 8, n_side: int = 2, cube: float = 0.01) 
             others = [a for a in range(3) if a != axis]
             angle = np.arctan2(corners[on, others[1]] - 0.5, corners[on, others[0]] - 0.5)
             faces.append(on[np.argsort(angle)])
-    points, tets = [], []
+    points: list[np.ndarray] = []
+    tets: list[list[int]] = []
     offset = np.array([0.0, -n_side / 2, -n_side / 2])
     for i in range(n_length):
         for j in range(n_side):
@@ -268,6 +273,6 @@ def symmetric_bar_model(n_length: int = 8, n_side: int = 2, cube: float = 0.01) 
                         p, q = len(points), len(points) + 1
                         points.extend([base + corners[face[a]], base + corners[face[(a + 1) % 4]]])
                         tets.append([centre, fc, p, q])
-    points = np.array(points) * cube
-    unique, inverse = np.unique(np.round(points / cube * 2).astype(np.int64), axis=0, return_inverse=True)
+    coordinates = np.array(points) * cube
+    unique, inverse = np.unique(np.round(coordinates / cube * 2).astype(np.int64), axis=0, return_inverse=True)
     return assemble(unique * cube / 2, inverse.reshape(-1)[np.array(tets)])

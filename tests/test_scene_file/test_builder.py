@@ -24,6 +24,7 @@ def _pendulum_tip(tmp_path, name: str, text: str):
     (tmp_path / name).write_text(text)
     scene = load_scene(tmp_path / name)
     run = load(scene).run()
+    assert run.multipliers is not None  # a dynamic run keeps its multipliers
     return scene, sensor_arrays(scene, run.q, run.multipliers)["tip"]
 
 

@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import numpy as np
 import pytest
@@ -21,7 +22,7 @@ from ffrf.system.reactions import driving_torques
 from kinematics import trace_motion
 from kinematics.rational_mechanism import load_model, loop_from_mechanism, regular_start
 
-COARSE = dict(h=12e-3, order=1, n_modes=2)
+COARSE: dict[str, Any] = dict(h=12e-3, order=1, n_modes=2)
 
 
 def _six_r(gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)):

@@ -5,6 +5,8 @@ its motion polynomial)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
@@ -88,7 +90,7 @@ def test_the_distance_to_a_curve_with_an_inner_loop_is_that_of_a_dense_search_re
     assert np.max(np.abs(found.distance - np.array(truth))) < 1e-12
 
 
-def _four_bar() -> tuple[SingleLoop, float, callable]:
+def _four_bar() -> tuple[SingleLoop, float, Callable[[np.ndarray], np.ndarray]]:
     """test_linkage_scene's crank-rocker (parallel axes, m): its loop, start angle and the closed-form coupler point
     (mean of the coupler's two joints, circles about the crank pin and the rocker's pivot) at a crank angle."""
     ground, crank, coupler, rocker = 0.4, 0.1, 0.35, 0.3

@@ -8,6 +8,7 @@ a bore error remeshes only the link that carries it; a mesh file rewritten under
 import math
 import tomllib
 from dataclasses import replace
+from typing import Any
 
 import meshio
 import numpy as np
@@ -23,7 +24,7 @@ from ffrf.scenes.scene_cache import LRUCache, SceneCache, content_key
 from kinematics import BennettLinkage, SingleLoop
 
 #: Coarse links (h = 12 mm, P1, 2 modes): the cache does not care about the discretisation.
-COARSE = {"h": 0.012, "order": 1, "n_modes": 2}
+COARSE: dict[str, Any] = {"h": 0.012, "order": 1, "n_modes": 2}
 
 
 def _options(twist_deg: float = 0.0, model: str = "misfit"):

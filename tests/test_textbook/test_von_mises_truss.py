@@ -5,7 +5,7 @@ and to each other at the apex (revolute joints about y on the end faces' centres
 carry a dead load growing at the apex. Pinned at both ends and loaded only there, each bar is a two-force member:
 its frame (attached to the foot face) turns onto the line of the pins and the bar only stretches, by N L0 / (EA)
 exactly (linear elasticity in the frame, the large rotation in the frame). So the FFRF truss has the closed form of
-the textbook truss of axial springs k = EA/L0 (``textbook_fixtures.truss_closed_form``): limit load
+the textbook truss of axial springs k = EA/L0 (``validation.textbook_cases.truss_closed_form``): limit load
 P_max = 2 k (L0 - L*) z* / L*, L* = (L0 a^2)^(1/3), z* = sqrt(L*^2 - a^2). The bars' own Euler load
 pi^2 EI / L0^2 = 1.7e7 N is 6.6 times their largest compression along the path (flat, 2.6e6 N; 1.8e6 N at the
 limit point), so the bars do not buckle first (our linear bodies could not show it: see docs/formulation.md, (B1)).
@@ -18,19 +18,19 @@ import json
 import numpy as np
 import pytest
 from scipy.optimize import brentq
-from textbook_fixtures import HALF_SPAN, LOAD_RATE, RISE, truss_closed_form, truss_load, write_truss_scene
 
 from ffrf import load
 from ffrf.cli import main
 from ffrf.errors import StaticDivergence
 from ffrf.scenes.assembly import PATH_STEPS_WITHOUT_DRIVE, quasi_static_path_step
 from ffrf.scenes.scene_file import load_scene
+from validation.textbook_cases import HALF_SPAN, LOAD_RATE, RISE, truss_closed_form, truss_load, write_truss_scene
 
 
 def test_the_bars_axial_stiffness_is_ea_over_l_and_their_euler_load_is_far(tmp_path):
-    """With nu = 0 the uniform axial strain is an exact FE state with rigid end faces (module docstring of
-    ``textbook_fixtures``), and Craig-Bampton's static modes of the apex face contain it: the condensed stiffness
-    along the bar, 1 / (d^T C d) with C the apex face's translational compliance (moment free), is EA/L0
+    """With nu = 0 the uniform axial strain is an exact FE state with rigid end faces (the module docstring of
+    ``validation.textbook_cases``), and Craig-Bampton's static modes of the apex face contain it: the condensed
+    stiffness along the bar, 1 / (d^T C d) with C the apex face's translational compliance (moment free), is EA/L0
     (measured 1.1e-14 relative). The bars' Euler load exceeds their largest compression 6.6 times."""
     c = truss_closed_form()
     assert c["euler_load"] > 5.0 * max(c["force_flat"], c["force_at_limit"])

@@ -34,6 +34,7 @@ from validation.testmodels.spec import (
     FREQUENCY_TOLERANCE,
     STORED_TOLERANCE,
     Example,
+    TestModel,
     judge,
     judge_example,
     relative,
@@ -55,7 +56,9 @@ MEASURED = {
 
 @cache
 def evaluated(name: str) -> dict:
-    return testmodels_report.evaluate(model_named(name))
+    model = model_named(name)
+    assert isinstance(model, TestModel), f"{name} is an example: judge_example checks those"
+    return testmodels_report.evaluate(model)
 
 
 def _params():

@@ -79,7 +79,8 @@ def rigid_pendulum_tip(
     J phi'' = m g c_x cos(phi) with J = int (x^2 + z^2) dm, c = first moment / m; phi is the
     rotation about +y (x -> (cos phi, 0, -sin phi)).
     """
-    assert np.allclose(scene.hinge.axis, (0.0, 1.0, 0.0)) and np.allclose(body.frame_center, 0.0, atol=1e-12)
+    assert scene.hinge is not None and np.allclose(scene.hinge.axis, (0.0, 1.0, 0.0))
+    assert np.allclose(body.frame_center, 0.0, atol=1e-12)
     mass, first, second = mass_moments(body)
     inertia = second[0, 0] + second[2, 2]
     g = -scene.gravity[2]
