@@ -1,14 +1,14 @@
 """Euler's cantilever from flexible segments joined rigidly, Eq. (B1) (issue #20).
 
-A linear FFRF body has no geometric stiffness of its own: its deformation is linear in its frame, and an axial
-load does not soften its bending. A column of n Craig-Bampton segments joined by fixed joints gets geometric
-stiffness only from the turning of the segments' frames under the dead load. Its buckling load (where the smallest
-squared frequency of Eq. (B1) at the straight equilibrium reaches zero) is that of a discrete chain
-(``chain_buckling_load`` of :mod:`validation.textbook_cases`), which misses the load's work on each segment's own
-bending and so lies above Euler's pi^2 EI / (4 L^2), by 0.83 / n^2 relative for large n. A steel column
-L = 1 m, 25 x 25 mm (L/b = 40), P2 tetrahedra 12.5 mm long, nu = 0, no fixed-interface modes. Two errors are
-separated: the chain's (n segments of exact beam theory against Euler: the structure) and the FE segment's (our column against the chain
-built on the segment's own condensed FE stiffness: shear and mesh, and our implementation).
+A linear FFRF body has no geometric stiffness of its own: its deformation is linear in its frame, and an axial load
+does not soften its bending. A column of n Craig-Bampton segments joined by fixed joints gets geometric stiffness
+only from the turning of the segments' frames under the dead load. Its buckling load (where the smallest squared
+frequency of Eq. (B1) at the straight equilibrium reaches zero) is that of a discrete chain (``chain_buckling_load``
+of :mod:`validation.textbook_cases`), which misses the load's work on each segment's own bending and so lies above
+Euler's pi^2 EI / (4 L^2), by 0.83 / n^2 relative for large n. A steel column L = 1 m, 25 x 25 mm (L/b = 40), P2
+tetrahedra 12.5 mm long, nu = 0, no fixed-interface modes. Two errors are separated: the chain's (n segments of
+exact beam theory against Euler: the structure) and the FE segment's (our column against the chain built on the
+segment's own condensed FE stiffness: shear and mesh, and our implementation).
 """
 
 from __future__ import annotations
