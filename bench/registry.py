@@ -375,6 +375,22 @@ BENCHMARKS: tuple[Benchmark, ...] = (
             ),
         ),
     ),
+    Benchmark(
+        "slow_tests",
+        "the tests marked slow (long studies), which CI leaves out",
+        module="scripts/run-slow-tests.sh",
+        measures=(*WITH_VALIDATION, "tests", "scripts/record_tests.py"),
+        records=(
+            Recording("slow_tests", (), (), recipe_missing="scripts/run-slow-tests.sh writes it, with its own meta"),
+        ),
+    ),
+    Benchmark(
+        "coverage",
+        "statement coverage of the packages by the tests, numba's JIT off",
+        module="scripts/coverage.sh",
+        measures=(*WITH_VALIDATION, "tests", "scripts/record_tests.py"),
+        records=(Recording("coverage", (), (), recipe_missing="scripts/coverage.sh writes it, with its own meta"),),
+    ),
 )
 
 

@@ -145,7 +145,7 @@ def test_linkage_reach_writes_barriers_that_climb_to_a_saddle_of_v(tmp_path):
 
     out = tmp_path / "out"
     args = ["linkage", "--model", "collisions_free_6r", "--h", "0.012", "--order", "1", "--modes", "2"]
-    assert main([*args, "--outputs", "25", "--reach", "--reach-images", "7", "--out", str(out)]) == 0
+    assert main([*args, "--outputs", "61", "--reach", "--reach-images", "7", "--out", str(out)]) == 0
     table = json.loads((out / "reach.json").read_text())
     assert len(table["assemblies"]) == 2
     scene = _six_r()
