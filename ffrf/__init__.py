@@ -33,6 +33,11 @@ import os
 # (``bench/compile_times.py``, ``docs/speed_vs_error.md``). Read by numba when it is first imported.
 os.environ.setdefault("NUMBA_OPT", "2")
 
+from ffrf.numerics.kernel_cache import default_kernel_cache  # imports no numba
+
+# Before numba is imported: compiled kernels in a folder named by their sources (a stale callee cannot survive).
+os.environ.setdefault("NUMBA_CACHE_DIR", default_kernel_cache())
+
 from ffrf.errors import (
     AssemblyDivergence,
     ExternalFEError,
