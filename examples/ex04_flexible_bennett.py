@@ -18,7 +18,7 @@ the converged path.
 import numpy as np
 
 import ffrf
-from ffrf.paper.bennett_scene import build_bennett
+from ffrf.paper import build_bennett
 
 
 def main() -> dict:

@@ -5,3 +5,7 @@ Its axes (:mod:`ffrf.paper.axes`), its four simulation variants (rigid, PLA, PLA
 figures (:mod:`ffrf.paper.figures`). The layer sits above :mod:`ffrf.studies` and below the command line; nothing
 of the engine below it names the paper (``tests/test_architecture/test_engine_knows_no_paper.py``).
 """
+
+from ffrf.paper.bennett_scene import VARIANTS, build_bennett
+
+__all__ = ["VARIANTS", "build_bennett"]
