@@ -4,4 +4,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-venv.sh
+rm -rf docs/api/generated  # autosummary writes it afresh: a module renamed since the last build must not linger
 exec .venv/bin/python -m sphinx -b html -W --keep-going -q docs docs/_build/html "$@"
