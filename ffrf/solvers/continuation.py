@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from ffrf.errors import StaticDivergence
 from ffrf.numerics.rank_revealing import factor
+from ffrf.solvers.static_solver import path_rate, residual_rate
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
 
@@ -79,9 +80,7 @@ class _Model:
 
     def jacobians(self, q: NDArray, lam: NDArray, t: float) -> tuple[NDArray, NDArray]:
         matrix = self.model.iteration_matrix(q, self.zeros, self.zeros, lam, t, 0.0, 1.0, 0.0)
-        h = 1e-6 * max(1.0, abs(t))
-        rate = (self.residual(q, lam, t + h) - self.residual(q, lam, t - h)) / (2.0 * h)
-        return matrix, rate
+        return matrix, residual_rate(self.model, q, lam, t)
 
 
 def _bordered(matrix: NDArray, rate: NDArray, tangent_q: NDArray, tangent_t: float, weight: float, n: int):
@@ -179,8 +178,7 @@ def _speed(rate_of_change: NDArray, n: int) -> float:
 
 def path_speed(system: MultibodySystem, q: NDArray, multipliers: NDArray, t: float) -> float:
     """c of Eq. (S5) at an equilibrium: how fast the coordinates move with t there (largest ``|dq/dt|``)."""
-    matrix, rate = _Model(system).jacobians(q, multipliers, t)
-    return _speed(factor(matrix, what="static tangent").solve(-rate), system.n_coordinates)
+    return _speed(path_rate(newton_model(system), q, multipliers, t)[0], system.n_coordinates)
 
 
 def continue_path(

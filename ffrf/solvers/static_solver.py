@@ -12,8 +12,8 @@ mechanism or an unconstrained body): the error says so and names the remedy.
 
 Quasi-static sequences start each Newton solve from the polynomial through the last equilibria
 (Eq. (S2)); Broyden's secant updates of the kept tangent between refactorisations (Eq. (S3)) are
-an option, off by default (see :func:`quasi_static`). Both change the iterates, not the
-equations solved.
+an option, off by default (see :func:`quasi_static`). A step whose correction leaves the path (Eq. (S4)) is
+halved and its rest predicted along the path's tangent. These change the iterates, not the equations solved.
 """
 
 from __future__ import annotations
@@ -34,7 +34,16 @@ from ffrf.solvers.newton_kernels import CONVERGED, NOT_FINITE, REFACTOR, static_
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import PackedSystem, contiguous, newton_model
 
-__all__ = ["StaticDivergence", "StaticSolution", "path_times", "quasi_static", "refined_times", "static_equilibrium"]
+__all__ = [
+    "StaticDivergence",
+    "StaticSolution",
+    "path_rate",
+    "path_times",
+    "quasi_static",
+    "refined_times",
+    "residual_rate",
+    "static_equilibrium",
+]
 
 log = logging.getLogger(__name__)
 
@@ -300,12 +309,34 @@ def _path_departure(q: NDArray, predicted: NDArray, previous: NDArray, tolerance
     return correction, step
 
 
+def residual_rate(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float) -> NDArray[np.float64]:
+    """F_t of Eq. (S1)'s residual F = [r; g] at fixed ``(q, lam)``: a central difference in t (step
+    1e-6 max(1, |t|)), as the time laws are user functions (Eqs. (S4), (S5))."""
+    zeros = np.zeros(model.n_coordinates)
+    h = 1e-6 * max(1.0, abs(t))
+    ahead, behind = model.residual(q, zeros, zeros, lam, t + h), model.residual(q, zeros, zeros, lam, t - h)
+    return (np.concatenate(ahead) - np.concatenate(behind)) / (2.0 * h)
+
+
+def path_rate(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float) -> tuple[NDArray, NDArray]:
+    """The path's rate ``(dq/dt, dlambda/dt)`` at the equilibrium ``(q, lam, t)``: ``F_y y_t = -F_t`` with Eq. (S1)'s
+    tangent F_y factored there (Eqs. (S4), (S5))."""
+    rate = _factor_tangent(model, q, lam, t).solve(-residual_rate(model, q, lam, t))
+    return rate[: model.n_coordinates], rate[model.n_coordinates :]
+
+
 def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: int, tangent, secant: bool):
     """Equilibrium at ``t_to`` from the path's newest one; a step that fails to converge or leaves the path
     (Eq. (S4)) is retried without secant updates, then halved, up to :data:`MAX_HALVINGS` times, each
-    part predicted from the equilibria before it. Returns the Newton iterations spent and the kept tangent."""
+    part predicted from the equilibria before it (Eq. (S2)); once a try left the path, the rest of the step is
+    predicted along the path's tangent at its last equilibrium instead (Eq. (S4)). Returns the Newton iterations
+    spent and the kept tangent."""
     iterations, halvings, t_from, parts = 0, 0, path.times[-1], 0
     failure: StaticDivergence | None = None
+    # (t, dq/dt, dlambda/dt) at the path's last equilibrium, once a try left the path: a polynomial through
+    # equilibria a whole step apart misses the path by a fixed fraction of any shorter step (Eq. (S4))
+    along: tuple[float, NDArray, NDArray] | None = None
+    left_path = False
     while True:
         t_try = t_from + (t_to - t_from) / 2.0**halvings
         if t_try == t_from or parts >= MAX_PARTS:
@@ -315,7 +346,13 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
                 f"t = {t_from:.9g} s); {_PATH_ADVICE}"
             )
         q, lam = path.q[-1], path.lam[-1]
-        predicted = path.predict(t_try)
+        predicted: tuple[NDArray, NDArray] | None
+        if left_path:
+            if along is None or along[0] != t_from:
+                along = (t_from, *path_rate(model, q, lam, t_from))
+            predicted = (q + (t_try - t_from) * along[1], lam + (t_try - t_from) * along[2])
+        else:
+            predicted = path.predict(t_try)
         q_guess, lam_guess = (q, lam) if predicted is None else predicted
         attempts = [(tangent, secant)] + ([(None, False)] if secant else [])
         advice = _PATH_ADVICE if halvings >= MAX_HALVINGS else _START_ADVICE
@@ -336,6 +373,7 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
             if departure is None:
                 failure = None
                 break
+            left_path = True
             failure = StaticDivergence(
                 f"Newton's correction {departure[0]:.3g} from the predicted state exceeds half the predicted step "
                 f"{departure[1]:.3g} at t = {t_try:.6g} s (Eq. (S4)): the path turns sharper than the steps follow, "
@@ -375,7 +413,8 @@ def quasi_static(
     (not returned): long steps can let Newton reach an equilibrium of another assembly branch.
     ``fast_path`` as in :func:`static_equilibrium`. Newton starts from the polynomial of degree
     ``predictor_order`` through the last equilibria (Eq. (S2); 0: the previous equilibrium), and a
-    step whose correction leaves the predicted path (Eq. (S4)) is halved. With ``secant``, Newton
+    step whose correction leaves the predicted path (Eq. (S4)) is halved, its rest predicted along the path's
+    tangent. With ``secant``, Newton
     Broyden-updates the kept tangent (Eq. (S3)). ``secant`` is off by default:
     on long steps (60 deg of drive between equilibria, coarse Bennett links) its updates led
     Newton to a wrong equilibrium (driving torque -16.5 N m instead of 0.018 N m) that plain

@@ -186,3 +186,26 @@ def test_long_quasi_static_steps_reach_the_same_equilibria_as_short_ones():
     fine = quasi_static(scene.system, start, np.linspace(0.0, 61.0, 241))
     coarse = quasi_static(scene.system, start, np.linspace(0.0, 61.0, 7))
     np.testing.assert_allclose(coarse.q, fine.q[::40], atol=1e-8)
+
+
+def test_a_quick_turn_behind_the_path_steps_does_not_end_a_mild_misfit_run():
+    """A variant of the 20-variant study (bore twist 0.143 deg on link 0 joint 3, offset -0.171 mm on link 2 joint 1,
+    12 mm P1 links) whose path turns quickly near t = 45.6 s, between two of its own steps (0.5 s): the polynomial
+    (S2) through them then misses the path after the turn by 0.79 of any shorter step, so halving alone never met
+    Eq. (S4) and the run stopped at t = 46.5 s. Finished along the path's tangent, the run completes, checks itself
+    (its energy balance closes on 121 outputs, which sample the turn's torque) and its outputs are the equilibria of
+    the same path on steps a fifth as long (where Eq. (S4) never fires)."""
+    from dataclasses import replace
+
+    from ffrf import load
+    from ffrf.paper.bennett_scene import assemble, bennett_options, build_bennett_from_options
+    from ffrf.scenes.linkage_description import BoreError
+    from ffrf.solvers.static_solver import quasi_static
+
+    errors = (BoreError(joint=3, link=0, twist=np.radians(0.14297214456910937)), BoreError(1, 2, offset=-1.70667e-4))
+    options = bennett_options("pla", h=0.012, order=1, n_modes=2)
+    scene = build_bennett_from_options(replace(options, bore_errors=errors, bore_error_model="misfit"))
+    run = load(scene).run(mode="quasi_static", outputs=121)
+    assert run.time[-1] == pytest.approx(scene.t_end) and run.verification.verified, run.verification.reasons
+    finer = quasi_static(scene.system, assemble(scene).q, run.time, path_step=lambda t: 0.1)
+    np.testing.assert_allclose(run.q, finer.q, rtol=0, atol=1e-8)

@@ -73,8 +73,8 @@ def test_stability_of_a_dynamic_run_is_refused(tmp_path, capsys):
 
 
 #: One print of the paper's PLA Bennett with every bore off (joint, link, twist deg, offset mm), drawn by the
-#: 2000-print study (examples/study_bennett_pla_2000.toml): near the pose where all four joints pass 180 deg its
-#: equilibrium path turns within one quasi-static step, and plain quasi-static steps stop there (at 15.76 s).
+#: 2000-print study (examples/study_bennett_pla_2000.toml): near the pose where all four joints pass 180 deg (t = 16 s)
+#: its equilibrium path turns within one quasi-static step.
 SHARP_PRINT = (
     (0, 0, 0.4342, -0.0363),
     (0, 1, 0.0822, 0.0057),
@@ -87,19 +87,24 @@ SHARP_PRINT = (
 )
 
 
-def test_a_sharp_turn_of_the_path_without_a_fold_is_bridged_onto_the_branch_the_dynamics_follow():
-    """``stability`` runs bridge a stretch the quasi-static steps cannot follow by continuation (Eq. (S5)): the run
-    completes with no snap, and the bridged equilibrium is the one Newton finds from the state of a dynamic run of
-    the same print at that time (an independent path to it: the linkage at 1 rpm stays near equilibrium)."""
+def test_a_sharp_turn_of_the_path_without_a_fold_is_followed_onto_the_branch_the_dynamics_follow(monkeypatch):
+    """Plain quasi-static steps follow the sharp turn along the path's tangent (Eq. (S4)); steps that may not be
+    halved stop at it, and a ``stability`` run then bridges the stretch by continuation (Eq. (S5)) and completes
+    with no snap. Both reach the equilibrium Newton finds from the state of a dynamic run of the same print at that
+    time (an independent path to it: the linkage at 1 rpm stays near equilibrium)."""
     from dataclasses import replace
 
     from ffrf.errors import StaticDivergence
     from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
     from ffrf.scenes.linkage_description import BoreError
+    from ffrf.solvers import static_solver
     from ffrf.solvers.static_solver import static_equilibrium
 
     errors = tuple(BoreError(j, k, np.radians(twist), 1e-3 * offset) for j, k, twist, offset in SHARP_PRINT)
     scene = build_bennett_from_options(replace(bennett_options("pla"), bore_errors=errors, bore_error_model="misfit"))
+    followed = load(scene).run("quasi_static", outputs=121)
+    assert followed.time[-1] == pytest.approx(scene.t_end)
+    monkeypatch.setattr(static_solver, "MAX_HALVINGS", 0)
     with pytest.raises(StaticDivergence) as stopped:
         load(scene).run("quasi_static", outputs=121)
     t_stop = float(stopped.value.partial.time[-1])
@@ -109,3 +114,4 @@ def test_a_sharp_turn_of_the_path_without_a_fold_is_bridged_onto_the_branch_the_
     dynamic = load(scene).run("dynamic", outputs=121, step=5e-3, t_end=float(bridged.time[row]))
     from_dynamics = static_equilibrium(scene.system, dynamic.q[-1], float(bridged.time[row]))
     assert np.max(np.abs(from_dynamics.q - bridged.q[row])) < 1e-8
+    assert np.max(np.abs(from_dynamics.q - followed.q[row])) < 1e-8
