@@ -23,6 +23,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from threadpoolctl import threadpool_limits
+
 from ffrf.errors import SceneError
 from ffrf.output.result import Result
 from ffrf.scenes.builder import Scene, build_scene
@@ -123,6 +125,7 @@ class Model:
         progress: Callable[[float, float], None] | None = None,
         sensors: str = "all",
         error_tolerance: float | None = None,
+        blas_threads: int | None = 1,
     ) -> Result:
         """Run the model; what is not given comes from the scene (:meth:`settings`). ``mode``: ``auto`` (linkages),
         ``quasi_static`` or ``dynamic``; ``outputs``: output rows; ``step``: the dynamic time step (s); ``t_end``
@@ -130,12 +133,29 @@ class Model:
         equilibrium of a quasi-static run, which then goes on past folds; ``progress(t, t_end)``: called as the run
         goes, may raise :class:`ffrf.errors.Interrupted` to stop it; ``sensors`` (linkages): ``"all"`` or
         ``"path"`` (:data:`ffrf.scenes.linkage_run.SENSOR_SETS`); ``error_tolerance`` (linkages, m): the dynamic
-        step's local error bound (Eq. (G8)).
+        step's local error bound (Eq. (G8)); ``blas_threads``: the BLAS library's threads during the run (default 1,
+        as ``python -m ffrf`` and a study's workers run: our dense matrices are small, and under some OpenBLAS
+        kernels, Haswell's among them, a dense solve's last digits depend on the thread count; ``None`` keeps the
+        process's setting).
 
         A run checks itself (the metadata's ``verification``). A run that stops raises the solver's error
         (:class:`ffrf.errors.StaticDivergence`, :class:`ffrf.errors.NewtonDivergence`,
         :class:`ffrf.errors.Interrupted`) with ``partial``, the :class:`Result` up to its last output, when there is
         one."""
+        if blas_threads is not None:
+            with threadpool_limits(limits=blas_threads, user_api="blas"):
+                return self.run(
+                    mode,
+                    outputs=outputs,
+                    step=step,
+                    t_end=t_end,
+                    rho_inf=rho_inf,
+                    stability=stability,
+                    progress=progress,
+                    sensors=sensors,
+                    error_tolerance=error_tolerance,
+                    blas_threads=None,
+                )
         chosen, _ = self.choose_mode(mode, stability)  # refuses stability with a dynamic run
         s = self.settings(outputs=outputs, step=step, t_end=t_end, rho_inf=rho_inf, stability=stability)
         if isinstance(self.scene, LinkageScene):

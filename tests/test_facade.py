@@ -130,3 +130,25 @@ def test_a_scene_result_saves_its_sensors_and_its_stress_free_start(tmp_path):
     arrays, metadata = read_results(result.save(tmp_path / "out"))
     assert np.array_equal(arrays["tip"], result.sensors["tip"]) and metadata["scene"] == "bar pendulum"
     assert not (tmp_path / "out" / "assembly.vtu").exists()  # the pendulum starts from its poses, unassembled
+
+
+def test_a_run_uses_one_blas_thread_unless_told_otherwise(tmp_path):
+    """Under some OpenBLAS kernels (Haswell) a dense solve's last digits depend on the thread count: a library run
+    uses one BLAS thread, as the command line and a study's workers do, so the three agree to the bit; ``None``
+    keeps the process's own setting. Read from inside the run by its progress callback."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    write_bar(tmp_path)
+    (tmp_path / "pendulum.toml").write_text(PENDULUM)
+    model = load(tmp_path / "pendulum.toml")
+
+    def blas_threads() -> set[int]:
+        return {pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"}
+
+    seen: list[set[int]] = []
+    with threadpool_limits(limits=2, user_api="blas"):
+        model.run(t_end=0.01, outputs=3, progress=lambda t, t_end: seen.append(blas_threads()))
+        assert seen and all(threads == {1} for threads in seen)
+        seen.clear()
+        model.run(t_end=0.01, outputs=3, progress=lambda t, t_end: seen.append(blas_threads()), blas_threads=None)
+        assert seen and all(threads == {2} for threads in seen)

@@ -50,7 +50,12 @@ def run_and_report(
     try:
         with STOP.deferred():
             result = model.run(
-                mode, outputs=options["outputs"], step=options["step"], progress=progress_printer(), stability=stability
+                mode,
+                outputs=options["outputs"],
+                step=options["step"],
+                progress=progress_printer(),
+                stability=stability,
+                blas_threads=None,
             )
         stopped = None
     except (StaticDivergence, NewtonDivergence, Interrupted) as error:  # write what was computed, then say so

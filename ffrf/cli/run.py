@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     )
     with STOP.deferred():
         try:
-            result = model.run(progress=progress_printer())
+            result = model.run(progress=progress_printer(), blas_threads=None)  # --blas-threads holds
         except (StaticDivergence, NewtonDivergence, Interrupted) as error:  # write what was computed, then say so
             if error.partial is None:
                 raise

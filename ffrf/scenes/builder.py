@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import NamedTuple, Self
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 from numpy.typing import NDArray
 
 from ffrf.body.flexible_body import FlexibleBody
@@ -208,8 +209,11 @@ def build_scene(
     base = Path(base)
     settings = dict(description.get("scene", {}))
     cache = PROCESS_CACHE if cache is None else cache
-    meshed = [_meshed(entry, base, cache) for entry in description["bodies"]]
-    bodies = tuple(_body(k, entry, meshed[k], settings, cache) for k, entry in enumerate(description["bodies"]))
+    # One BLAS thread, as in a study's workers and the command line: under some OpenBLAS kernels (Haswell) the
+    # reductions' dense factorisations differ in their last digits with the thread count.
+    with threadpool_limits(limits=1, user_api="blas"):
+        meshed = [_meshed(entry, base, cache) for entry in description["bodies"]]
+        bodies = tuple(_body(k, entry, meshed[k], settings, cache) for k, entry in enumerate(description["bodies"]))
     index = {b.name: b.index for b in bodies}
     joints = tuple(joint_geometry(spec, index, bodies) for spec in description.get("joints", []))
     offsets = settings.get("joint_offsets", "body")
