@@ -32,8 +32,8 @@ from pathlib import Path
 from typing import NamedTuple, Self
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 from numpy.typing import NDArray
+from threadpoolctl import threadpool_limits
 
 from ffrf.body.flexible_body import FlexibleBody
 from ffrf.body.modal_moments import ModalMoments, modal_moments
