@@ -311,7 +311,7 @@ def _path_departure(q: NDArray, predicted: NDArray, previous: NDArray, tolerance
 
 def residual_rate(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float) -> NDArray[np.float64]:
     """F_t of Eq. (S1)'s residual F = [r; g] at fixed ``(q, lam)``: a central difference in t (step
-    1e-6 max(1, |t|)), as the time laws are user functions (Eqs. (S4), (S5))."""
+    ``1e-6 max(1, abs(t))``), as the time laws are user functions (Eqs. (S4), (S5))."""
     zeros = np.zeros(model.n_coordinates)
     h = 1e-6 * max(1.0, abs(t))
     ahead, behind = model.residual(q, zeros, zeros, lam, t + h), model.residual(q, zeros, zeros, lam, t - h)
