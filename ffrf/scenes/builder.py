@@ -67,7 +67,7 @@ from ffrf.scenes.scene_schema import check_scene
 from ffrf.system.markers import BodyMarker, rigid_interface_marker
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["MeshedBody", "SceneBody", "JointGeometry", "Scene", "build_scene"]
+__all__ = ["MeshedBody", "SceneBody", "JointGeometry", "Scene", "build_scene", "parametric_link"]
 
 log = logging.getLogger(__name__)
 
@@ -263,7 +263,12 @@ def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | 
             return mesh_stl(path, h=entry.get("h"), unit=entry.get("unit")), None
         return read_mesh(path, unit=entry.get("unit")), None
     spec = entry["parametric"]
-    h = float(spec.get("h", 6e-3))
+    return mesh_link(**parametric_link(spec, where), h=float(spec.get("h", 6e-3)), name=entry["name"])
+
+
+def parametric_link(spec: dict, where: str = "scene") -> dict:
+    """The arguments of :func:`~ffrf.geometry.link_geometry.build_link` (``axis_a``, ``axis_b``, ``design``,
+    ``names``, ``mount``, ``joint_points``) that a body's ``parametric`` table gives."""
     design = _link_design(spec, where)
     a, b = spec["axes"]
     joint_points = None
@@ -272,16 +277,14 @@ def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | 
     elif "joint_point" in a or "joint_point" in b:
         feet = common_normal_feet(Axis.of((a["point"], a["direction"])), Axis.of((b["point"], b["direction"])))
         joint_points = [a.get("joint_point", feet[0]), b.get("joint_point", feet[1])]
-    return mesh_link(
-        (a["point"], a["direction"]),
-        (b["point"], b["direction"]),
-        h=h,
-        design=design,
-        names=(a["name"], b["name"]),
-        mount=spec.get("mount", False),
-        name=entry["name"],
-        joint_points=joint_points,
-    )
+    return {
+        "axis_a": (a["point"], a["direction"]),
+        "axis_b": (b["point"], b["direction"]),
+        "design": design,
+        "names": (a["name"], b["name"]),
+        "mount": spec.get("mount", False),
+        "joint_points": joint_points,
+    }
 
 
 def _interface(fe: FEModel | ExternalFEModel, spec: dict, base: Path) -> InterfaceNodes:
