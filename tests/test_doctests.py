@@ -26,6 +26,7 @@ MODULES = (
     "ffrf.mesh.tet_mesh",
     "ffrf.fe.fe_model",
     "ffrf.fe.materials",
+    "ffrf.geometry.link_cad",
     "ffrf.system.drives",
 )
 OPTIONS = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
