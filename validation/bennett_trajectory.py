@@ -4,7 +4,7 @@ system's own joints by :func:`system_points`), our solver's runs as :class:`~ffr
 comparison of two runs (:func:`compare`). The Exudyn twin's runs (:mod:`validation.exudyn_bennett`) are
 :class:`validation.twin_run.TwinRun` s with the same sensors.
 
-Sensors (names as :func:`ffrf.scenes.linkage_run.evaluate_sensors`'): ``drive_angle`` (rad), ``driving_torque``
+Sensors (named as in :func:`ffrf.scenes.linkage_run.evaluate_sensors`): ``drive_angle`` (rad), ``driving_torque``
 (N m; the multiplier of the drive's x0'.y1 equation, dynamic sign: the constraint force is -C_q^T lambda),
 ``coupler_point`` (mean of link 2's two joint points, m) and ``link{k}_node{j}`` (three tracked nodes of each of
 links 1..3, m; :data:`TRACKED`).

@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 
 from ffrf.output.result import Result
 
-from .twin_run import ComparedRun
+from .twin_run import ComparedRun, solution_time
 
 __all__ = [
     "ValidationSettings",
@@ -125,12 +125,6 @@ def _add_timings(run: ComparedRun, setup_s: float = 0.0, assembly_s: float = 0.0
     timings["assembly"] = assembly_s
 
 
-def _solution_s(run: ComparedRun) -> float:
-    """A run's wall time of its solution, with the assembly it started from (s)."""
-    timings = run.metadata["timings_s"]
-    return timings["solve"] + timings.get("assembly", 0.0)
-
-
 def validate_bennett(
     settings: ValidationSettings = ValidationSettings(), progress: Callable[[str], None] = _progress_default
 ) -> BennettValidation:
@@ -185,13 +179,13 @@ def validate_bennett(
         assembly_s = time.perf_counter() - t0
         qs[label] = run_ours(label, scene, system, times, q0, setup_ours, quasi_static_solve)
         _add_timings(qs[label], assembly_s=assembly_s)
-        progress(f"[{settings.variant}] ours ({label}): quasi-static revolution in {_solution_s(qs[label]):.1f} s")
+        progress(f"[{settings.variant}] ours ({label}): quasi-static revolution in {solution_time(qs[label]):.1f} s")
     t0 = time.perf_counter()
     start = assemble_exudyn_bennett(production, bases)
     assembly_exudyn = time.perf_counter() - t0
     qs["exudyn"] = quasi_static_exudyn_bennett(production, start, times, bases=bases)
     _add_timings(qs["exudyn"], setup_bases, assembly_exudyn)
-    progress(f"[{settings.variant}] Exudyn: quasi-static revolution in {_solution_s(qs['exudyn']):.1f} s")
+    progress(f"[{settings.variant}] Exudyn: quasi-static revolution in {solution_time(qs['exudyn']):.1f} s")
 
     # Dynamic window ---------------------------------------------------------------------------
     dyn: dict[str, ComparedRun] = {}
@@ -207,12 +201,12 @@ def validate_bennett(
             setup_ours,
             dynamic_solve(settings.step, settings.rho_inf),
         )
-        progress(f"[{settings.variant}] ours: {n_steps} dynamic steps in {_solution_s(dyn['equivalent']):.1f} s")
+        progress(f"[{settings.variant}] ours: {n_steps} dynamic steps in {solution_time(dyn['equivalent']):.1f} s")
         dyn["exudyn"] = run_exudyn_bennett(
             production, start[4], settings.dynamic_t_end, settings.step, settings.rho_inf, bases=bases
         )
         _add_timings(dyn["exudyn"], setup_bases)
-        progress(f"[{settings.variant}] Exudyn: {n_steps} dynamic steps in {_solution_s(dyn['exudyn']):.1f} s")
+        progress(f"[{settings.variant}] Exudyn: {n_steps} dynamic steps in {solution_time(dyn['exudyn']):.1f} s")
 
     ideal = production.ideal_coupler_points(qs["production"].sensors["drive_angle"])
     metrics = bennett_metrics(settings, production, equivalent, modes, qs, dyn, ideal, exudyn.__version__)

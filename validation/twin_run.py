@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from ffrf.output.result import Result
 
-__all__ = ["TwinRun", "ComparedRun", "run_metadata", "twin_run"]
+__all__ = ["TwinRun", "ComparedRun", "run_metadata", "solution_time", "twin_run"]
 
 
 @dataclass(frozen=True)
@@ -45,6 +45,13 @@ def run_metadata(label: str, solver: str, setup_s: float, solve_s: float, newton
         "timings_s": {"setup": setup_s, "solve": solve_s},
         "newton_iterations": newton_iterations,
     }
+
+
+def solution_time(run: ComparedRun) -> float:
+    """A run's wall time of its solution with the assembly it started from, where one is recorded
+    (``timings_s["assembly"]``), in s."""
+    timings = run.metadata["timings_s"]
+    return timings["solve"] + timings.get("assembly", 0.0)
 
 
 def twin_run(
