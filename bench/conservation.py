@@ -9,7 +9,7 @@ Exudyn's on this scene to 1e-12 m (``tests/test_validation/test_ffrf_vs_exudyn.p
 drift is the scheme's, not ours.
 
 ``--exudyn`` also runs Exudyn's generalized-alpha (rho_inf = 1 and 0.8) at the largest step on the
-same scene and records whether it completes and its time (its TrajectoryResult has no
+same scene and records whether it completes and its time (its twin run, a ``validation.twin_run.TwinRun``, has no
 velocities, so no momenta).
 
 Per run: largest relative change of linear and angular momentum, largest relative energy

@@ -364,7 +364,7 @@ def exudyn_dynamic(scene, t_end: float, step: float, rho_inf: float = 0.9) -> st
     d = compare(ours, theirs)
     return (
         f"coupler {d['coupler_m']:.1e} m, torque {d['torque_relative']:.1e} rel. "
-        f"(Exudyn {theirs.integration_time:.1f} s, ours {ours.integration_time:.1f} s)"
+        f"(Exudyn {theirs.metadata['timings_s']['solve']:.1f} s, ours {ours.metadata['timings_s']['solve']:.1f} s)"
     )
 
 

@@ -155,14 +155,15 @@ def run_quasi_static(
         trajectory = quasi_static_exudyn_bennett(scene, start, times, bases=bases)
         solve = time.perf_counter() - started
         # the twin's build inside the sweep is set-up, as for the dynamic runs
+        twin_setup = trajectory.metadata["timings_s"]["setup"]
         out["exudyn"] = {
-            "setup_s": setup + trajectory.setup_time,
-            "integration_s": solve - trajectory.setup_time,
+            "setup_s": setup + twin_setup,
+            "integration_s": solve - twin_setup,
             "assembly_s": assembly,
             **memory_stop(mem),
             "time": trajectory.time,
-            "coupler": trajectory.coupler,
-            "torque": trajectory.torque,
+            "coupler": trajectory.sensors["coupler_point"],
+            "torque": trajectory.sensors["driving_torque"],
         }
     return out
 
@@ -191,26 +192,27 @@ def run_dynamic(
     run = run_ours("ffrf", scene, scene.system, times, q0, setup, dynamic_solve(step, rho))
     out["ffrf"] = {
         "setup_s": setup,
-        "integration_s": assembly + run.solve_s,
+        "integration_s": assembly + run.metadata["timings_s"]["solve"],
         "assembly_s": assembly,
         **memory_stop(mem),
         "time": run.time,
-        "coupler": run.coupler,
-        "torque": run.torque,
+        "coupler": run.sensors["coupler_point"],
+        "torque": run.sensors["driving_torque"],
     }
     if exudyn:
         from validation.exudyn_bennett import run_exudyn_bennett
 
         mem, bases, setup, start, assembly, _ = _exudyn_assembled(scene)
         trajectory = run_exudyn_bennett(scene, start[4], t_end, step, rho, bases=bases)
+        timings = trajectory.metadata["timings_s"]
         out["exudyn"] = {
-            "setup_s": setup + trajectory.setup_time,
-            "integration_s": assembly + trajectory.integration_time,
+            "setup_s": setup + timings["setup"],
+            "integration_s": assembly + timings["solve"],
             "assembly_s": assembly,
             **memory_stop(mem),
             "time": trajectory.time,
-            "coupler": trajectory.coupler,
-            "torque": trajectory.torque,
+            "coupler": trajectory.sensors["coupler_point"],
+            "torque": trajectory.sensors["driving_torque"],
         }
     return out
 

@@ -26,7 +26,9 @@ from bench.report import write_report
 
 
 def _points(run) -> np.ndarray:
-    return np.concatenate([run.coupler[:, None, :], run.tracked], axis=1)
+    from validation.bennett_trajectory import tracked_nodes
+
+    return np.concatenate([run.sensors["coupler_point"][:, None, :], tracked_nodes(run)], axis=1)
 
 
 def _diff_at_common_times(fine, coarse) -> float:
@@ -48,7 +50,7 @@ def main(argv=None) -> dict:
     args = parser.parse_args(argv)
 
     from ffrf.paper.bennett_scene import assemble, build_bennett
-    from validation.bennett_validation import dynamic_solve, from_exudyn, run_ours
+    from validation.bennett_validation import dynamic_solve, run_ours
     from validation.exudyn_bennett import assemble_exudyn_bennett, bennett_bodies, run_exudyn_bennett
     from validation.exudyn_conventions import exudyn_convention_system
     from validation.twin_bases import twin_bases
@@ -64,9 +66,7 @@ def main(argv=None) -> dict:
     for h in steps:
         times = h * np.arange(int(round(args.t_end / h)) + 1)
         ours[h] = run_ours("equivalent", scene, system, times, q_ours, 0.0, dynamic_solve(h, args.rho_inf))
-        theirs[h] = from_exudyn(
-            "exudyn", scene, run_exudyn_bennett(scene, start[4], args.t_end, h, args.rho_inf, bases=bases), 0.0
-        )
+        theirs[h] = run_exudyn_bennett(scene, start[4], args.t_end, h, args.rho_inf, bases=bases)
     rows = []
     print(
         f"{args.variant}, h = {args.h} m, {args.modes} modes, {args.t_end} s, exudyn_jacobian = {args.exudyn_jacobian}"
@@ -79,8 +79,8 @@ def main(argv=None) -> dict:
         row = {
             "step": h,
             "ours_vs_exudyn_m": float(np.linalg.norm(_points(ours[h]) - _points(theirs[h]), axis=2).max()),
-            "ours_s": ours[h].solve_s,
-            "exudyn_s": theirs[h].solve_s,
+            "ours_s": ours[h].metadata["timings_s"]["solve"],
+            "exudyn_s": theirs[h].metadata["timings_s"]["solve"],
         }
         if h / 2 in ours:
             row["ours_self_m"] = _diff_at_common_times(ours[h / 2], ours[h])

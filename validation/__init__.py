@@ -6,7 +6,8 @@ in :mod:`validation.exudyn_ffrf`), whole systems (:mod:`validation.exudyn_twin`,
 :mod:`validation.twin_bases`), the Bennett linkage (:mod:`validation.exudyn_bennett`,
 :mod:`validation.bennett_trajectory`, :mod:`validation.exudyn_conventions`) and scene files
 (:mod:`validation.exudyn_scene`); mode-by-mode and trajectory-by-trajectory comparisons
-(:mod:`validation.modes`, :mod:`validation.bennett_validation`, :mod:`validation.bennett_metrics`)
+(:mod:`validation.modes`, :mod:`validation.bennett_validation`, :mod:`validation.bennett_metrics`; our runs are
+:class:`ffrf.output.result.Result` s, Exudyn's :class:`validation.twin_run.TwinRun` s)
 and readable reports (:mod:`validation.report`, ``python -m validation``). Exudyn's own regression
 models with modal flexible bodies, against the values Exudyn stores: :mod:`validation.testmodels`
 (``python -m validation testmodels``). Exudyn is imported lazily; ``ffrf`` never imports it."""

@@ -11,7 +11,8 @@ import platform
 import numpy as np
 from numpy.typing import NDArray
 
-from .solver_run import SolverRun
+from .bennett_trajectory import TRACKED, tracked_nodes
+from .twin_run import ComparedRun, solution_time
 
 __all__ = ["TARGETS", "SCALE_FLOOR_M", "bennett_metrics"]
 
@@ -24,14 +25,15 @@ TARGETS = {"freq": 1e-8, "mac": 1e-6, "torque": 1e-4, "trajectory": 1e-3}
 SCALE_FLOOR_M = 1e-6
 
 
-def _trajectory_metrics(a: SolverRun, b: SolverRun, scale_m: float) -> dict:
+def _trajectory_metrics(a: ComparedRun, b: ComparedRun, scale_m: float) -> dict:
     """Max and RMS differences per sensor (coupler and the nine tracked nodes), torque."""
     if a.time.shape != b.time.shape or np.abs(a.time - b.time).max() > 1e-9 * max(1.0, a.time[-1]):
-        raise ValueError(f"{a.label} and {b.label} have different output times")
+        raise ValueError(f"{a.metadata['label']} and {b.metadata['label']} have different output times")
     out = {}
-    names = ["coupler_point"] + [f"link{k}_node{j}" for k in (1, 2, 3) for j in range(3)]
-    series_a = [a.coupler] + [a.tracked[:, i] for i in range(9)]
-    series_b = [b.coupler] + [b.tracked[:, i] for i in range(9)]
+    names = ["coupler_point", *TRACKED]
+    tracked_a, tracked_b = tracked_nodes(a), tracked_nodes(b)
+    series_a = [a.sensors["coupler_point"]] + [tracked_a[:, i] for i in range(len(TRACKED))]
+    series_b = [b.sensors["coupler_point"]] + [tracked_b[:, i] for i in range(len(TRACKED))]
     for name, xa, xb in zip(names, series_a, series_b, strict=True):
         distance = np.linalg.norm(xa - xb, axis=1)
         out[name] = {
@@ -39,13 +41,14 @@ def _trajectory_metrics(a: SolverRun, b: SolverRun, scale_m: float) -> dict:
             "rms_diff_m": float(np.sqrt(np.mean(distance**2))),
             "relative_to_elastic_deviation": float(distance.max() / scale_m),
         }
-    torque_scale = float(np.abs(b.torque).max())
-    torque = {"max_abs_diff_Nm": float(np.abs(a.torque - b.torque).max()), "max_abs_Nm": torque_scale}
+    torque_a, torque_b = a.sensors["driving_torque"], b.sensors["driving_torque"]
+    torque_scale = float(np.abs(torque_b).max())
+    torque = {"max_abs_diff_Nm": float(np.abs(torque_a - torque_b).max()), "max_abs_Nm": torque_scale}
     torque["max_rel_diff"] = torque["max_abs_diff_Nm"] / max(torque_scale, 1e-300)
     return {"trajectories": out, "torque": torque}
 
 
-def _energy_balance(scene, system, run: SolverRun, qd: NDArray | None = None) -> float:
+def _energy_balance(scene, system, run: ComparedRun, qd: NDArray | None = None) -> float:
     """Drive work minus the change of stored energy, relative to the work (Simpson over the rows)."""
     from ffrf.output.energy_balance import energy_balance
 
@@ -53,7 +56,7 @@ def _energy_balance(scene, system, run: SolverRun, qd: NDArray | None = None) ->
         system.energies(q, np.zeros_like(q) if qd is None else v)
         for q, v in zip(run.q, run.q if qd is None else qd, strict=True)
     ]
-    sensors = {"driving_torque": run.torque, "drive_angle": run.drive_angle}
+    sensors = {name: run.sensors[name] for name in ("driving_torque", "drive_angle")}
     for kind in ("kinetic", "potential", "strain"):
         sensors[f"energy_{kind}"] = np.array([e[kind] for e in energies])
     balance = energy_balance(system, run.time, sensors, qd)
@@ -62,16 +65,18 @@ def _energy_balance(scene, system, run: SolverRun, qd: NDArray | None = None) ->
     )
 
 
-def _constraint_residual(system, run: SolverRun) -> float:
+def _constraint_residual(system, run: ComparedRun) -> float:
     return float(max(np.abs(system.constraint_values(q, float(t))).max() for q, t in zip(run.q, run.time, strict=True)))
 
 
 def bennett_metrics(settings, production, equivalent, modes, qs, dyn, ideal, exudyn_version: str) -> dict:
     """The metrics of one variant's runs (:func:`validation.bennett_validation.validate_bennett`):
-    ``qs``/``dyn`` the quasi-static and dynamic :class:`validation.solver_run.SolverRun` s
-    by label, ``ideal`` the ideal coupler points at the quasi-static rows, ``modes`` the mode
-    comparisons; with the checks against :data:`TARGETS` and the verdict ``passed``."""
-    deviation = {label: float(np.linalg.norm(run.coupler - ideal, axis=1).max()) for label, run in qs.items()}
+    ``qs``/``dyn`` the quasi-static and dynamic runs by label (ours :class:`~ffrf.output.result.Result` s, the
+    twin's a :class:`validation.twin_run.TwinRun`), ``ideal`` the ideal coupler points at the quasi-static rows,
+    ``modes`` the mode comparisons; with the checks against :data:`TARGETS` and the verdict ``passed``."""
+    deviation = {
+        label: float(np.linalg.norm(run.sensors["coupler_point"] - ideal, axis=1).max()) for label, run in qs.items()
+    }
     scale = max(deviation["exudyn"], SCALE_FLOOR_M)  # the coupler's elastic deviation from the ideal path
     headline = _trajectory_metrics(qs["equivalent"], qs["exudyn"], scale)
     m: dict = {
@@ -98,7 +103,9 @@ def bennett_metrics(settings, production, equivalent, modes, qs, dyn, ideal, exu
             "inhouse": _constraint_residual(equivalent.system, qs["equivalent"]),
             "exudyn": _constraint_residual(equivalent.system, qs["exudyn"]),
         },
-        "max_abs_driving_torque_Nm": {label: float(np.abs(run.torque).max()) for label, run in qs.items()},
+        "max_abs_driving_torque_Nm": {
+            label: float(np.abs(run.sensors["driving_torque"]).max()) for label, run in qs.items()
+        },
         "timing_s": {
             "inhouse": _timing(qs["equivalent"], dyn.get("equivalent")),
             "exudyn": _timing(qs["exudyn"], dyn.get("exudyn")),
@@ -123,7 +130,7 @@ def bennett_metrics(settings, production, equivalent, modes, qs, dyn, ideal, exu
     return m
 
 
-def _trajectory_summary(a: SolverRun, b: SolverRun, scale: float) -> dict:
+def _trajectory_summary(a: ComparedRun, b: ComparedRun, scale: float) -> dict:
     full = _trajectory_metrics(a, b, scale)
     worst = max(v["max_abs_diff_m"] for v in full["trajectories"].values())
     return {
@@ -134,15 +141,14 @@ def _trajectory_summary(a: SolverRun, b: SolverRun, scale: float) -> dict:
     }
 
 
-def _timing(quasi_static: SolverRun, dynamic: SolverRun | None) -> dict:
-    out = {
-        "setup": quasi_static.setup_s,
-        "integration": quasi_static.solve_s,
-        "total": quasi_static.setup_s + quasi_static.solve_s,
-    }
+def _timing(quasi_static: ComparedRun, dynamic: ComparedRun | None) -> dict:
+    """Wall times (s): building (``setup``), the quasi-static revolution with the assembly it started from
+    (``integration``), the dynamic window, and their ``total``."""
+    setup, solution = quasi_static.metadata["timings_s"]["setup"], solution_time(quasi_static)
+    out = {"setup": setup, "integration": solution, "total": setup + solution}
     if dynamic is not None:
-        out["dynamic_window"] = dynamic.solve_s
-        out["total"] += dynamic.solve_s
+        out["dynamic_window"] = dynamic.metadata["timings_s"]["solve"]
+        out["total"] += out["dynamic_window"]
     return out
 
 

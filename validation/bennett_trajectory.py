@@ -1,18 +1,29 @@
-r"""A run on the Bennett scene as plain time histories (:class:`BennettTrajectory`), our solver's
-runs of it (dynamic and static, on any of our systems of the scene), their sensors read from the
-system's own joints (:func:`system_points`), and the comparison of two runs (:func:`compare`).
-The Exudyn twin's runs (:mod:`validation.exudyn_bennett`) return the same trajectories.
+r"""Runs on the Bennett scene: the sensors the cross-validation compares (:func:`bennett_sensors`, read from the
+system's own joints by :func:`system_points`), our solver's runs as :class:`~ffrf.output.result.Result` s
+(:func:`bennett_result`, :func:`run_ffrf_bennett`, dynamic and static, on any of our systems of the scene) and the
+comparison of two runs (:func:`compare`). The Exudyn twin's runs (:mod:`validation.exudyn_bennett`) are
+:class:`validation.twin_run.TwinRun` s with the same sensors.
+
+Sensors (named as in :func:`ffrf.scenes.linkage_run.evaluate_sensors`): ``drive_angle`` (rad), ``driving_torque``
+(N m; the multiplier of the drive's x0'.y1 equation, dynamic sign: the constraint force is -C_q^T lambda),
+``coupler_point`` (mean of link 2's two joint points, m) and ``link{k}_node{j}`` (three tracked nodes of each of
+links 1..3, m; :data:`TRACKED`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 from numpy.typing import NDArray
 
+from ffrf.output.result import Result
+
+from .twin_run import ComparedRun, run_metadata
+
 __all__ = [
-    "BennettTrajectory",
+    "TRACKED",
+    "bennett_sensors",
+    "bennett_result",
+    "tracked_nodes",
     "system_points",
     "modal_coordinates",
     "run_ffrf_bennett",
@@ -20,28 +31,47 @@ __all__ = [
     "compare",
 ]
 
+#: The tracked nodes' sensors, in the order of :func:`system_points`' rows: links 1..3, three nodes each.
+TRACKED = tuple(f"link{k}_node{j}" for k in (1, 2, 3) for j in range(3))
 
-@dataclass
-class BennettTrajectory:
-    """Time histories (rows = output times, t = 0 included) of one solver on the Bennett scene.
 
-    ``q``: coordinates in our layout (absolute; Euler parameters with our sign); ``coupler``:
-    (n, 3) mean of link 2's two joint points; ``tracked``: (n, 9, 3) links 1..3, three nodes
-    each; ``torque``: (n,) multiplier of the drive's x0'.y1 equation (dynamic sign: the
-    constraint force is -C_q^T lambda); ``zeta``: list of (n, m_k) per link.
-    """
+def bennett_sensors(scene, system, time: NDArray, q: NDArray, torque: NDArray) -> dict[str, NDArray]:
+    """The sensors of the module docstring at coordinate rows ``q`` (our layout and basis) at ``time``, with the
+    drive's multiplier ``torque``; the joints' points by ``system``'s joints (:func:`system_points`)."""
+    coupler, tracked = system_points(scene, system, q)
+    sensors = {
+        "drive_angle": np.array([scene.drive_angle(float(t)) for t in time]),
+        "driving_torque": torque,
+        "coupler_point": coupler,
+    }
+    return sensors | {name: tracked[:, i] for i, name in enumerate(TRACKED)}
 
-    time: NDArray[np.float64]
-    q: NDArray[np.float64]
-    coupler: NDArray[np.float64]
-    tracked: NDArray[np.float64]
-    torque: NDArray[np.float64]
-    zeta: list
-    setup_time: float
-    integration_time: float
-    newton_iterations: int
-    solver: str
-    extra: dict = field(default_factory=dict)
+
+def bennett_result(
+    label: str,
+    scene,
+    system,
+    time: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+    setup_s: float,
+    solve_s: float,
+    newton_iterations: int,
+    qd: NDArray | None = None,
+) -> Result:
+    """Our run of ``system`` (``scene.system`` or a variant of it, e.g.
+    :func:`validation.exudyn_conventions.exudyn_convention_system`) as a :class:`~ffrf.output.result.Result`: rows
+    ``q`` and ``multipliers`` (the drive's last) at ``time``, the velocities ``qd`` of a dynamic run, the
+    :func:`bennett_sensors` and :func:`validation.twin_run.run_metadata` (``label``; wall times in s)."""
+    time = np.asarray(time)
+    sensors = bennett_sensors(scene, system, time, q, multipliers[:, -1])
+    metadata = run_metadata(label, "ffrf", setup_s, solve_s, newton_iterations)
+    return Result(time, sensors, q, metadata, qd=qd, multipliers=multipliers, kind="linkage", scene=scene)
+
+
+def tracked_nodes(run: ComparedRun) -> NDArray[np.float64]:
+    """The tracked nodes of a run, (n, 9, 3) in the order of :data:`TRACKED`."""
+    return np.stack([run.sensors[name] for name in TRACKED], axis=1)
 
 
 def _joints(system):
@@ -87,26 +117,17 @@ def run_ffrf_bennett(
     rho_inf: float = 0.9,
     tolerance: float = 1e-12,
     label: str = "ffrf",
-) -> BennettTrajectory:
+) -> Result:
     """Our generalized-alpha on ``system`` (``scene.system`` or
-    :func:`validation.exudyn_conventions.exudyn_convention_system`) from ``q0`` at rest."""
+    :func:`validation.exudyn_conventions.exudyn_convention_system`) from ``q0`` at rest (:func:`bennett_result`)."""
     from ffrf.solvers.generalized_alpha import generalized_alpha
 
     result = generalized_alpha(
         system, np.asarray(q0, float), np.zeros_like(q0), t_end, step, rho_inf=rho_inf, tolerance=tolerance
     )
-    coupler, tracked = system_points(scene, system, result.q)
-    return BennettTrajectory(
-        result.time,
-        result.q,
-        coupler,
-        tracked,
-        result.multipliers[:, -1],
-        modal_coordinates(system, result.q),
-        0.0,
-        result.wall_time,
-        int(result.newton_iterations.sum()),
-        label,
+    iterations = int(result.newton_iterations.sum())
+    return bennett_result(
+        label, scene, system, result.time, result.q, result.multipliers, 0.0, result.wall_time, iterations, result.qd
     )
 
 
@@ -119,20 +140,26 @@ def static_ffrf_bennett(scene, system, q0: NDArray, t: float = 0.0, load_steps: 
     return solution.q, float(solution.multipliers[-1]), coupler[0], tracked[0]
 
 
-def compare(a: BennettTrajectory, b: BennettTrajectory, elastic: BennettTrajectory | None = None) -> dict[str, float]:
-    """Max differences between two runs (same output times). ``elastic``: a run whose coupler
-    motion away from its start measures the elastic deviation scale (default ``b``)."""
-    assert a.time.shape == b.time.shape and np.abs(a.time - b.time).max() < 1e-9
+def compare(a: Result, b: ComparedRun, elastic: ComparedRun | None = None) -> dict[str, float]:
+    """Max differences between our run ``a`` and a run ``b`` (ours or the twin's, same output times; modal
+    coordinates by ``a``'s scene's layout). ``elastic``: a run whose coupler motion away from its start measures the
+    elastic deviation scale (default ``b``)."""
+    if a.time.shape != b.time.shape or np.abs(a.time - b.time).max() >= 1e-9:
+        raise ValueError(f"{a.metadata['label']} and {b.metadata['label']} have different output times")
     ref = b if elastic is None else elastic
+    zeta_a, zeta_b = (modal_coordinates(a.scene.system, run.q) for run in (a, b))
+    coupler_a, coupler_b, coupler_ref = (run.sensors["coupler_point"] for run in (a, b, ref))
+    torque_a, torque_b = a.sensors["driving_torque"], b.sensors["driving_torque"]
+    tracked_ref = tracked_nodes(ref)
     out = {
-        "coupler_m": float(np.abs(a.coupler - b.coupler).max()),
-        "tracked_m": float(np.abs(a.tracked - b.tracked).max()),
-        "zeta": float(max(np.abs(za - zb).max() for za, zb in zip(a.zeta, b.zeta, strict=True))),
-        "zeta_scale": float(max(np.abs(zb).max() for zb in b.zeta)),
-        "torque_Nm": float(np.abs(a.torque - b.torque).max()),
-        "torque_scale_Nm": float(np.abs(b.torque).max()),
-        "coupler_motion_m": float(np.linalg.norm(ref.coupler - ref.coupler[0], axis=1).max()),
-        "tracked_motion_m": float(np.linalg.norm(ref.tracked - ref.tracked[0], axis=2).max()),
+        "coupler_m": float(np.abs(coupler_a - coupler_b).max()),
+        "tracked_m": float(np.abs(tracked_nodes(a) - tracked_nodes(b)).max()),
+        "zeta": float(max(np.abs(za - zb).max() for za, zb in zip(zeta_a, zeta_b, strict=True))),
+        "zeta_scale": float(max(np.abs(zb).max() for zb in zeta_b)),
+        "torque_Nm": float(np.abs(torque_a - torque_b).max()),
+        "torque_scale_Nm": float(np.abs(torque_b).max()),
+        "coupler_motion_m": float(np.linalg.norm(coupler_ref - coupler_ref[0], axis=1).max()),
+        "tracked_motion_m": float(np.linalg.norm(tracked_ref - tracked_ref[0], axis=2).max()),
     }
     out["torque_relative"] = out["torque_Nm"] / max(out["torque_scale_Nm"], 1e-300)
     out["zeta_relative"] = out["zeta"] / max(out["zeta_scale"], 1e-300)

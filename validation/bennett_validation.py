@@ -36,17 +36,17 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .solver_run import SolverRun
+from ffrf.output.result import Result
+
+from .twin_run import ComparedRun, solution_time
 
 __all__ = [
     "ValidationSettings",
-    "SolverRun",
     "BennettValidation",
     "validate_bennett",
     "run_ours",
     "quasi_static_solve",
     "dynamic_solve",
-    "from_exudyn",
 ]
 
 
@@ -70,12 +70,13 @@ class ValidationSettings:
 
 @dataclass
 class BennettValidation:
-    """All runs, the mode comparisons and the metrics of one variant."""
+    """All runs, the mode comparisons and the metrics of one variant. Runs by label: ours are
+    :class:`~ffrf.output.result.Result` s, Exudyn's (``exudyn``) a :class:`validation.twin_run.TwinRun`."""
 
     settings: ValidationSettings
     modes: dict  # link name -> validation.modes.ModeComparison
-    quasi_static: dict[str, SolverRun]  # production, equivalent, exudyn_jacobian, exudyn
-    dynamic: dict[str, SolverRun]  # equivalent, exudyn (empty if skipped)
+    quasi_static: dict[str, ComparedRun]  # production, equivalent, exudyn_jacobian, exudyn
+    dynamic: dict[str, ComparedRun]  # equivalent, exudyn (empty if skipped)
     ideal_coupler: NDArray[np.float64]  # at the quasi-static rows
     metrics: dict
 
@@ -84,16 +85,16 @@ def _progress_default(message: str) -> None:
     print(message, flush=True)
 
 
-def run_ours(label, scene, system, times, q0, setup_s, solve) -> SolverRun:
-    """Our run of ``system`` from ``q0`` at ``times`` with ``solve(system, q0, times) -> (q, torque, extra)``."""
-    from .bennett_trajectory import system_points
+def run_ours(label, scene, system, times, q0, setup_s, solve) -> Result:
+    """Our run of ``system`` from ``q0`` at ``times`` with ``solve(system, q0, times) -> (q, multipliers, qd,
+    newton_iterations)`` (``qd``: ``None`` for equilibria), as a
+    :func:`validation.bennett_trajectory.bennett_result`."""
+    from .bennett_trajectory import bennett_result
 
     started = time.perf_counter()
-    q, torque, extra = solve(system, q0, times)
+    q, multipliers, qd, iterations = solve(system, q0, times)
     solve_s = time.perf_counter() - started
-    coupler, tracked = system_points(scene, system, q)
-    angles = np.array([scene.drive_angle(float(t)) for t in times])
-    return SolverRun(label, np.asarray(times), angles, q, coupler, tracked, torque, setup_s, solve_s, extra)
+    return bennett_result(label, scene, system, times, q, multipliers, setup_s, solve_s, iterations, qd)
 
 
 def quasi_static_solve(system, q0, times):
@@ -101,7 +102,7 @@ def quasi_static_solve(system, q0, times):
     from ffrf.solvers.static_solver import quasi_static
 
     solution = quasi_static(system, q0, times)
-    return solution.q, solution.multipliers[:, -1], {"newton_iterations": int(sum(solution.iterations))}
+    return solution.q, solution.multipliers, None, int(sum(solution.iterations))
 
 
 def dynamic_solve(step, rho_inf):
@@ -111,34 +112,17 @@ def dynamic_solve(step, rho_inf):
         from ffrf.solvers.generalized_alpha import generalized_alpha
 
         result = generalized_alpha(system, q0, np.zeros_like(q0), float(times[-1]), step, rho_inf=rho_inf)
-        return (
-            result.q,
-            result.multipliers[:, -1],
-            {"newton_iterations": int(result.newton_iterations.sum()), "qd": result.qd},
-        )
+        return result.q, result.multipliers, result.qd, int(result.newton_iterations.sum())
 
     return solve
 
 
-def from_exudyn(label, scene, trajectory, setup_s) -> SolverRun:
-    """A :class:`SolverRun` from an Exudyn :class:`validation.bennett_trajectory.BennettTrajectory`."""
-    angles = np.array([scene.drive_angle(float(t)) for t in trajectory.time])
-    return SolverRun(
-        label,
-        trajectory.time,
-        angles,
-        trajectory.q,
-        trajectory.coupler,
-        trajectory.tracked,
-        trajectory.torque,
-        setup_s,
-        trajectory.integration_time,
-        {
-            "solver": trajectory.solver,
-            "notes": trajectory.extra.get("notes", []),
-            "newton_iterations": trajectory.newton_iterations,
-        },
-    )
+def _add_timings(run: ComparedRun, setup_s: float = 0.0, assembly_s: float = 0.0) -> None:
+    """Add to a run's wall times what was done for it before: building the twin's bases (``setup``), the assembly
+    its run started from (``assembly``; the validation counts it with the solution)."""
+    timings = run.metadata["timings_s"]
+    timings["setup"] += setup_s
+    timings["assembly"] = assembly_s
 
 
 def validate_bennett(
@@ -183,7 +167,7 @@ def validate_bennett(
 
     # Quasi-static revolution ------------------------------------------------------------------
     times = np.linspace(0.0, production.t_end, settings.outputs)
-    qs: dict[str, SolverRun] = {}
+    qs: dict[str, ComparedRun] = {}
     for label, scene, convert in (
         ("production", production, None),
         ("equivalent", equivalent, None),
@@ -194,18 +178,17 @@ def validate_bennett(
         q0 = assemble(scene, convert=convert).q
         assembly_s = time.perf_counter() - t0
         qs[label] = run_ours(label, scene, system, times, q0, setup_ours, quasi_static_solve)
-        qs[label].solve_s += assembly_s
-        progress(f"[{settings.variant}] ours ({label}): quasi-static revolution in {qs[label].solve_s:.1f} s")
+        _add_timings(qs[label], assembly_s=assembly_s)
+        progress(f"[{settings.variant}] ours ({label}): quasi-static revolution in {solution_time(qs[label]):.1f} s")
     t0 = time.perf_counter()
     start = assemble_exudyn_bennett(production, bases)
     assembly_exudyn = time.perf_counter() - t0
-    trajectory = quasi_static_exudyn_bennett(production, start, times, bases=bases)
-    qs["exudyn"] = from_exudyn("exudyn", production, trajectory, setup_bases + trajectory.setup_time)
-    qs["exudyn"].solve_s += assembly_exudyn
-    progress(f"[{settings.variant}] Exudyn: quasi-static revolution in {qs['exudyn'].solve_s:.1f} s")
+    qs["exudyn"] = quasi_static_exudyn_bennett(production, start, times, bases=bases)
+    _add_timings(qs["exudyn"], setup_bases, assembly_exudyn)
+    progress(f"[{settings.variant}] Exudyn: quasi-static revolution in {solution_time(qs['exudyn']):.1f} s")
 
     # Dynamic window ---------------------------------------------------------------------------
-    dyn: dict[str, SolverRun] = {}
+    dyn: dict[str, ComparedRun] = {}
     if settings.dynamic_t_end > 0:
         n_steps = int(round(settings.dynamic_t_end / settings.step))
         dyn_times = settings.step * np.arange(n_steps + 1)
@@ -218,13 +201,13 @@ def validate_bennett(
             setup_ours,
             dynamic_solve(settings.step, settings.rho_inf),
         )
-        progress(f"[{settings.variant}] ours: {n_steps} dynamic steps in {dyn['equivalent'].solve_s:.1f} s")
-        trajectory = run_exudyn_bennett(
+        progress(f"[{settings.variant}] ours: {n_steps} dynamic steps in {solution_time(dyn['equivalent']):.1f} s")
+        dyn["exudyn"] = run_exudyn_bennett(
             production, start[4], settings.dynamic_t_end, settings.step, settings.rho_inf, bases=bases
         )
-        dyn["exudyn"] = from_exudyn("exudyn", production, trajectory, setup_bases + trajectory.setup_time)
-        progress(f"[{settings.variant}] Exudyn: {n_steps} dynamic steps in {dyn['exudyn'].solve_s:.1f} s")
+        _add_timings(dyn["exudyn"], setup_bases)
+        progress(f"[{settings.variant}] Exudyn: {n_steps} dynamic steps in {solution_time(dyn['exudyn']):.1f} s")
 
-    ideal = production.ideal_coupler_points(qs["production"].drive_angle)
+    ideal = production.ideal_coupler_points(qs["production"].sensors["drive_angle"])
     metrics = bennett_metrics(settings, production, equivalent, modes, qs, dyn, ideal, exudyn.__version__)
     return BennettValidation(settings, modes, qs, dyn, ideal, metrics)

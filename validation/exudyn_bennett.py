@@ -1,6 +1,6 @@
 r"""The Exudyn twin of the flexible Bennett scene and its runs: dynamic, static, Exudyn's own
-assembly and the quasi-static sweep, each returning a
-:class:`validation.bennett_trajectory.BennettTrajectory` as our runs do.
+assembly and the quasi-static sweep, each returning a :class:`validation.twin_run.TwinRun` with the sensors of our
+runs (:mod:`validation.bennett_trajectory`).
 
 The twin is built from a :class:`ffrf.paper.bennett_scene.BennettScene` only (identical input in both
 solvers):
@@ -37,7 +37,7 @@ import time
 import numpy as np
 from numpy.typing import NDArray
 
-from .bennett_trajectory import BennettTrajectory, modal_coordinates
+from .bennett_trajectory import TRACKED
 from .exudyn_solvers import (
     check_output_times,
     dynamic_settings,
@@ -48,6 +48,7 @@ from .exudyn_solvers import (
 )
 from .exudyn_twin import ExudynTwin, add_marker_sensor, add_node_sensor, build_twin, q_from_twin, read_twin
 from .twin_bases import TwinBasis, to_twin_layout
+from .twin_run import TwinRun, run_metadata, twin_run
 
 __all__ = [
     "bennett_bodies",
@@ -103,26 +104,31 @@ def _read_trajectory(
     setup: float,
     integration: float,
     iterations: int,
-) -> BennettTrajectory:
-    """Rows of every Bennett sensor of a run of ``twin``: q (our basis; the twin's basis in
-    ``extra["twin_q"]``), coupler, tracked nodes and the drive multiplier (dynamic sign)."""
+    start_torque: float | None = None,
+) -> TwinRun:
+    """The twin's run: rows of every Bennett sensor (:mod:`validation.bennett_trajectory`) of a run of ``twin``, ``q``
+    in our basis, the drive multiplier with the dynamic sign. ``start_torque``: a static sweep's, whose multipliers
+    have the opposite sign of Exudyn's dynamic ones (and ours) and whose first row, the start state given by its
+    equilibrium at t = 0, the sweep never computed."""
     import exudyn as exu
 
     data = read_twin(twin, scene.system, q0)
     check_output_times(data["time"], expected_times, what)
-    return BennettTrajectory(
-        data["time"],
-        data["q"],
-        0.5 * (data["coupler_a"] + data["coupler_b"]),
-        np.stack([data[f"node{i}"] for i in range(9)], axis=1),
-        data["torque"][:, 2],
-        modal_coordinates(scene.system, data["q"]),
-        setup,
-        integration,
-        iterations,
-        f"exudyn {exu.__version__}" + (" (symbolic drive)" if twin.symbolic else " (Python drive)"),
-        {"symbolic": twin.symbolic, "twin_q": data["twin_q"], "notes": twin.notes},
-    )
+    torque = data["torque"][:, 2]
+    solver = f"exudyn {exu.__version__}" + (" (symbolic drive)" if twin.symbolic else " (Python drive)")
+    if start_torque is not None:
+        torque = -torque
+        torque[0] = start_torque
+        solver += ", SolveStatic"
+    sensors = {
+        "drive_angle": np.array([scene.drive_angle(float(t)) for t in data["time"]]),
+        "driving_torque": torque,
+        "coupler_point": 0.5 * (data["coupler_a"] + data["coupler_b"]),
+    }
+    sensors |= {name: data[f"node{i}"] for i, name in enumerate(TRACKED)}
+    metadata = run_metadata("exudyn", solver, setup, integration, iterations)
+    metadata |= {"symbolic": twin.symbolic, "notes": twin.notes}
+    return twin_run(data["time"], data["q"], sensors, metadata)
 
 
 def run_exudyn_bennett(
@@ -134,7 +140,7 @@ def run_exudyn_bennett(
     tolerance: float = 1e-10,
     symbolic: bool = True,
     bases: list[TwinBasis] | None = None,
-) -> BennettTrajectory:
+) -> TwinRun:
     """Build the twin at ``q0`` (at rest; modal part in ``bases``), integrate to ``t_end`` with
     generalized-alpha and read every step back (``q`` in our basis)."""
     started = time.perf_counter()
@@ -210,7 +216,7 @@ def assemble_exudyn_bennett(
 
 def quasi_static_exudyn_bennett(
     scene, start: tuple, times: NDArray, tolerance: float = 1e-10, bases: list[TwinBasis] | None = None
-) -> BennettTrajectory:
+) -> TwinRun:
     """Static equilibria at equally spaced ``times`` (from 0) with one ``SolveStatic``: the load
     steps' quasi-time turns the drive (``useLoadFactor=False``: gravity is always on).
     ``start``: the equilibrium at t = 0 (:func:`assemble_exudyn_bennett`), the first row."""
@@ -225,10 +231,4 @@ def quasi_static_exudyn_bennett(
     started = time.perf_counter()
     solve_static(twin.mbs, settings)
     integration = time.perf_counter() - started
-    trajectory = _read_trajectory(twin, scene, q0, times, "static sweep", setup, integration, -1)
-    trajectory.solver += ", SolveStatic"
-    # Exudyn's static multipliers have the opposite sign of its dynamic ones (and ours); the
-    # first row is the start state, whose multipliers the sweep never computed.
-    trajectory.torque = -trajectory.torque
-    trajectory.torque[0] = start[1]
-    return trajectory
+    return _read_trajectory(twin, scene, q0, times, "static sweep", setup, integration, -1, start_torque=start[1])

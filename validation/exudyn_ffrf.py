@@ -26,17 +26,22 @@ Conventions matched (see the report in ``docs`` / the tests):
 * Force elements and loads: :mod:`validation.single_body_forces`.
 * Newton: full Newton, fixed steps, no adaptive step, consistent initial accelerations.
 
+Both runs have rows at the output times (t = 0 included), ``q`` in our layout ``[R (3), Euler parameters (4,
+scalar first), zeta (m)]`` and the sensor ``tracked_nodes``, (n, k, 3) world positions of
+``SingleBodyScene.tracked_nodes``: ours a :class:`~ffrf.output.result.Result`, Exudyn's a
+:class:`validation.twin_run.TwinRun` (its docstring says why), both with :func:`validation.twin_run.run_metadata`.
+
 ``exudyn`` is imported lazily, so that our solver's runs work where Exudyn is missing.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+
+from ffrf.output.result import Result
 
 from .exudyn_items import (
     add_coordinates_sensor,
@@ -50,43 +55,12 @@ from .exudyn_items import (
 from .exudyn_solvers import check_output_times, dynamic_settings, solve_dynamic
 from .single_body_forces import add_exudyn_force_items, ffrf_force_elements
 from .single_body_scenes import Hinge, SingleBodyScene
+from .twin_run import TwinRun, run_metadata, twin_run
 
 if TYPE_CHECKING:
     from ffrf.system.constraints import Constraint
 
-__all__ = ["TrajectoryResult", "run_exudyn", "run_ffrf", "ffrf_system"]
-
-
-@dataclass
-class TrajectoryResult:
-    """Time histories (rows = output times, including t = 0) of one solver run.
-
-    Attributes
-    ----------
-    time : (n,) s.
-    position : (n, 3) frame origin R (world).
-    euler : (n, 4) Euler parameters of the frame (scalar first).
-    zeta : (n, m) modal coordinates.
-    tracked : (n, k, 3) world positions of ``SingleBodyScene.tracked_nodes``.
-    setup_time, integration_time : wall times (s).
-    newton_iterations : total Newton iterations (or -1 if unknown).
-    solver : text label, with the Exudyn version for Exudyn runs.
-    """
-
-    time: NDArray[np.float64]
-    position: NDArray[np.float64]
-    euler: NDArray[np.float64]
-    zeta: NDArray[np.float64]
-    tracked: NDArray[np.float64]
-    setup_time: float
-    integration_time: float
-    newton_iterations: int
-    solver: str
-    version: str = ""
-
-    @property
-    def time_per_step(self) -> float:
-        return self.integration_time / max(len(self.time) - 1, 1)
+__all__ = ["run_exudyn", "run_ffrf", "ffrf_system"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -111,8 +85,8 @@ def run_exudyn(
     modified_newton: bool = False,
     relative_tolerance: float = 1e-12,
     absolute_tolerance: float = 1e-12,
-) -> TrajectoryResult:
-    """Build the Exudyn twin of ``scene``, integrate it and return plain arrays.
+) -> TwinRun:
+    """Build the Exudyn twin of ``scene``, integrate it and return its run (module docstring).
 
     ``relative_tolerance``/``absolute_tolerance`` are Exudyn's Newton criteria (residual norm
     relative to the first residual of the step / absolute, mixed units).
@@ -161,18 +135,8 @@ def run_exudyn(
     t = rigid[:, 0]
     check_output_times(t, scene.step * np.arange(n_steps + 1), "sensor")
     q_rigid = rigid[:, 1:] + reference  # Exudyn stores displacements from the reference
-    return TrajectoryResult(
-        t,
-        q_rigid[:, :3],
-        q_rigid[:, 3:7],
-        modal[:, 1:],
-        tracked,
-        setup,
-        integration,
-        iterations,
-        f"exudyn {exu.__version__}",
-        exu.__version__,
-    )
+    metadata = run_metadata("exudyn", f"exudyn {exu.__version__}", setup, integration, iterations)
+    return twin_run(t, np.hstack([q_rigid, modal[:, 1:]]), {"tracked_nodes": tracked}, metadata)
 
 
 # --------------------------------------------------------------------------------------------
@@ -232,10 +196,10 @@ def run_ffrf(
     exact_gravity: bool = False,
     modified_newton: bool | None = None,
     exudyn_definitions: bool = False,
-) -> TrajectoryResult:
+) -> Result:
     """Integrate ``scene`` with our generalized-alpha solver (Newton ``tolerance``, see
     :func:`ffrf.solvers.generalized_alpha.generalized_alpha`); ``modified_newton=None`` keeps the
-    solver's default; ``exudyn_definitions``: see :func:`ffrf_system`."""
+    solver's default; ``exudyn_definitions``: see :func:`ffrf_system`. Its run (module docstring)."""
     from ffrf.body.flexible_body import node_positions
     from ffrf.solvers.generalized_alpha import generalized_alpha
 
@@ -247,15 +211,17 @@ def run_ffrf(
         system, q0, qd0, scene.t_end, scene.step, rho_inf=scene.rho_inf, tolerance=tolerance, **options
     )
     q = result.q
-    return TrajectoryResult(
+    solver = ("ffrf" if modified_newton is None else f"ffrf (modified_newton={modified_newton})") + (
+        " with Exudyn's force definitions" if exudyn_definitions else ""
+    )
+    metadata = run_metadata("ffrf", solver, setup, result.wall_time, int(result.newton_iterations.sum()))
+    tracked = node_positions(q, scene.body.nodes, scene.body.basis, scene.tracked_nodes)
+    return Result(
         result.time,
-        q[:, :3],
-        q[:, 3:7],
-        q[:, 7:],
-        node_positions(q, scene.body.nodes, scene.body.basis, scene.tracked_nodes),
-        setup,
-        result.wall_time,
-        int(result.newton_iterations.sum()),
-        ("ffrf" if modified_newton is None else f"ffrf (modified_newton={modified_newton})")
-        + (" with Exudyn's force definitions" if exudyn_definitions else ""),
+        {"tracked_nodes": tracked},
+        q,
+        metadata,
+        qd=result.qd,
+        multipliers=result.multipliers,
+        kind="scene",
     )

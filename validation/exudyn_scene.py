@@ -24,16 +24,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.output.result import Result
-from ffrf.scenes.builder import Scene
 from ffrf.scenes.scene_file import sensor_arrays
 
 from .modes import compare_modes
+from .twin_run import TwinRun, run_metadata, twin_run
 
 __all__ = [
     "SCENE_TARGETS",
     "SceneValidation",
     "scene_bodies",
     "run_exudyn_scene",
+    "compared_sensors",
     "validate_scene",
     "write_scene_report",
 ]
@@ -45,12 +46,11 @@ SCENE_TARGETS = {"freq": 1e-8, "mac": 1e-6, "sensor": 1e-6, "torque": 1e-4}
 
 @dataclass
 class SceneValidation:
-    """Both runs (time, sensor arrays) and the metrics."""
+    """Both runs, ours (Exudyn's gravity model) and the twin's, the mode comparisons and the metrics."""
 
     name: str
-    time: NDArray[np.float64]
-    ours: dict[str, NDArray]
-    exudyn: dict[str, NDArray]
+    ours: Result
+    exudyn: TwinRun
     modes: dict
     metrics: dict
 
@@ -79,9 +79,12 @@ def _torque_keys(scene) -> dict[str, str]:
     return {name: f"torque:{joint_key(name)}" for name in scene.driven}
 
 
-def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> tuple[dict, float, float]:
-    """Exudyn's run of ``scene`` at our output ``times``: sensor arrays named as ours
-    (positions, ``<joint>_torque`` with our sign), set-up and solution wall times."""
+def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> TwinRun:
+    """Exudyn's run of ``scene`` at our output ``times``: ``q`` in our layout and basis, the sensors of
+    :func:`compared_sensors` named as ours (positions, ``<joint>_torque`` with our sign), the set-up and solution
+    wall times."""
+    import exudyn
+
     from ffrf.scenes.assembly import quasi_static_step
     from ffrf.solvers.static_solver import refined_times
 
@@ -129,14 +132,16 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
         if mode != "dynamic":
             torque[0] = start_torques[name]  # the sweep's first row is the start state, never solved
         out[f"{name}_torque"] = torque
-    return out, setup, solve
+    metadata = run_metadata("exudyn", f"exudyn {exudyn.__version__}", setup, solve, -1)
+    return twin_run(times, data["q"][rows], out, metadata)
 
 
-def _twin_sensors(scene: Scene, run: Result) -> dict[str, NDArray]:
-    """The sensors of ``run`` both solvers measure (:func:`ffrf.scenes.scene_file.sensor_arrays`)."""
+def compared_sensors(run: Result) -> dict[str, NDArray]:
+    """The sensors of our ``run`` of a scene that both solvers measure (:func:`ffrf.scenes.scene_file.sensor_arrays`:
+    node positions, ``<joint>_torque``)."""
     if run.multipliers is None:  # every run of a scene records them; a Result read from files has none
-        raise ValueError(f"{scene.name}: the run has no multipliers to evaluate the sensors from")
-    return sensor_arrays(scene, run.q, run.multipliers)
+        raise ValueError(f"{run.scene.name}: the run has no multipliers to evaluate the sensors from")
+    return sensor_arrays(run.scene, run.q, run.multipliers)
 
 
 def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
@@ -163,15 +168,20 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
     run = load(equivalent).run()
     times = run.time
     solve_ours = time.perf_counter() - started
-    ours = _twin_sensors(equivalent, run)
+    ours = compared_sensors(run)
     # Exudyn's marker rotation Jacobian copied into ours (validation.exudyn_conventions): what remains is the
     # solvers' own difference; the production difference above adds Exudyn's approximation.
     convention = replace(equivalent, system=exudyn_convention_system(equivalent.system))
     run_convention = load(convention).run()
-    convention_arrays = _twin_sensors(convention, run_convention)
+    convention_arrays = compared_sensors(run_convention)
     run_exact = load(exact).run()
-    exact_arrays = _twin_sensors(exact, run_exact)
-    theirs, setup_exudyn, solve_exudyn = run_exudyn_scene(scene, bases, times)
+    exact_arrays = compared_sensors(run_exact)
+    twin = run_exudyn_scene(scene, bases, times)
+    theirs, setup_exudyn, solve_exudyn = (
+        twin.sensors,
+        twin.metadata["timings_s"]["setup"],
+        twin.metadata["timings_s"]["solve"],
+    )
 
     metrics: dict = {
         "scene": scene.name,
@@ -227,7 +237,7 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
         checks.append((f"{name}: driving torque, max difference / max", v["max_rel_diff"], SCENE_TARGETS["torque"]))
     metrics["checks"] = [{"name": n, "value": float(v), "target": t, "passed": bool(v <= t)} for n, v, t in checks]
     metrics["passed"] = all(c["passed"] for c in metrics["checks"])
-    return SceneValidation(scene.name, times, ours, theirs, modes, metrics)
+    return SceneValidation(scene.name, run, twin, modes, metrics)
 
 
 def write_scene_report(v: SceneValidation, directory: str | Path) -> Path:
@@ -239,9 +249,10 @@ def write_scene_report(v: SceneValidation, directory: str | Path) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     m = v.metrics
     (out / "metrics.json").write_text(json.dumps(m, indent=2, default=float))
+    ours = compared_sensors(v.ours)
     figures.series_difference_figure(
-        v.time,
-        {n: (v.ours[n], v.exudyn[n]) for n in m["sensors"]},
+        v.ours.time,
+        {n: (ours[n], v.exudyn.sensors[n]) for n in m["sensors"]},
         out / "difference.png",
         f"{v.name}: ours minus Exudyn",
     )

@@ -1,7 +1,8 @@
 """Figures of a Bennett cross-validation (matplotlib, Agg): each function writes one PNG.
 
-Every function takes plain arrays or :class:`validation.solver_run.SolverRun` s and a
-path, and returns the path; the data drawn are exactly the arrays given (no smoothing).
+Every function takes plain arrays or runs (ours :class:`~ffrf.output.result.Result` s, the twin's
+:class:`validation.twin_run.TwinRun` s: their sensors of :mod:`validation.bennett_trajectory`) and a path, and returns
+the path; the data drawn are exactly the arrays given (no smoothing).
 """
 
 from __future__ import annotations
@@ -10,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
+
+from .bennett_trajectory import TRACKED
 
 __all__ = [
     "coupler_deviation_figure",
@@ -49,7 +52,8 @@ def _save(fig, path: Path) -> Path:
 
 def _turn_deg(run) -> NDArray[np.float64]:
     """Drive angle turned since t = 0 (deg): the x-axis of the paper's figures."""
-    return np.degrees(run.drive_angle - run.drive_angle[0])
+    angle = run.sensors["drive_angle"]
+    return np.degrees(angle - angle[0])
 
 
 def coupler_deviation_figure(runs: dict, ideal: NDArray, path: Path, title: str = "") -> Path:
@@ -57,7 +61,7 @@ def coupler_deviation_figure(runs: dict, ideal: NDArray, path: Path, title: str 
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 3.6))
     for label, run in runs.items():
-        ax.plot(_turn_deg(run), 1e3 * np.linalg.norm(run.coupler - ideal, axis=1), **STYLE[label])
+        ax.plot(_turn_deg(run), 1e3 * np.linalg.norm(run.sensors["coupler_point"] - ideal, axis=1), **STYLE[label])
     ax.set_xlabel("drive angle turned (deg)")
     ax.set_ylabel("coupler deviation (mm)")
     ax.set_title(title or "Coupler deviation from the ideal path")
@@ -72,19 +76,14 @@ def difference_figure(a, b, path: Path, title: str = "") -> Path:
     fig, ax = plt.subplots(figsize=(7, 3.6))
     x = _turn_deg(a)
     floor = 1e-16
-    ax.semilogy(
-        x, np.maximum(np.linalg.norm(a.coupler - b.coupler, axis=1), floor), color="k", lw=2, label="coupler point"
-    )
-    for i in range(9):
-        ax.semilogy(
-            x,
-            np.maximum(np.linalg.norm(a.tracked[:, i] - b.tracked[:, i], axis=1), floor),
-            lw=0.8,
-            label=f"link{1 + i // 3}_node{i % 3}",
-        )
+    coupler = a.sensors["coupler_point"] - b.sensors["coupler_point"]
+    ax.semilogy(x, np.maximum(np.linalg.norm(coupler, axis=1), floor), color="k", lw=2, label="coupler point")
+    for name in TRACKED:
+        difference = np.linalg.norm(a.sensors[name] - b.sensors[name], axis=1)
+        ax.semilogy(x, np.maximum(difference, floor), lw=0.8, label=name)
     ax.set_xlabel("drive angle turned (deg)" if x[-1] > 1 else "drive angle turned (deg), dynamic window")
     ax.set_ylabel("|ours - Exudyn| (m)")
-    ax.set_title(title or f"{STYLE[a.label]['label']} minus {STYLE[b.label]['label']}")
+    ax.set_title(title or f"{STYLE[a.metadata['label']]['label']} minus {STYLE[b.metadata['label']]['label']}")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7, ncol=2)
     return _save(fig, path)
@@ -96,12 +95,12 @@ def torque_figure(runs: dict, path: Path, title: str = "") -> Path:
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5.2), sharex=True)
     reference = runs.get("exudyn")
     for label, run in runs.items():
-        top.plot(_turn_deg(run), 1e3 * run.torque, **STYLE[label])
+        torque = run.sensors["driving_torque"]
+        top.plot(_turn_deg(run), 1e3 * torque, **STYLE[label])
         if reference is not None and label != "exudyn":
-            scale = np.abs(reference.torque).max()
-            bottom.semilogy(
-                _turn_deg(run), np.maximum(np.abs(run.torque - reference.torque) / scale, 1e-16), **STYLE[label]
-            )
+            theirs = reference.sensors["driving_torque"]
+            difference = np.abs(torque - theirs) / np.abs(theirs).max()
+            bottom.semilogy(_turn_deg(run), np.maximum(difference, 1e-16), **STYLE[label])
     top.set_ylabel("driving torque (N mm)")
     top.set_title(title or "Driving torque")
     top.grid(alpha=0.3)
@@ -140,7 +139,7 @@ def coupler_path_figure(runs: dict, ideal: NDArray, path: Path, magnify: float =
     fig, ax = plt.subplots(figsize=(5, 5))
     ax.plot(1e3 * ideal[:, 0], 1e3 * ideal[:, 1], **STYLE["ideal"])
     for label, run in runs.items():
-        shown = ideal + magnify * (run.coupler - ideal)
+        shown = ideal + magnify * (run.sensors["coupler_point"] - ideal)
         ax.plot(1e3 * shown[:, 0], 1e3 * shown[:, 1], **STYLE[label])
     ax.set_aspect("equal")
     ax.set_xlabel("x (mm)")

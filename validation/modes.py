@@ -16,18 +16,36 @@ and area weights as :func:`ffrf.reduction.craig_bampton.craig_bampton`. We compa
 
 ``exudyn`` is imported lazily; the functions take duck-typed models (``.nodes``, ``.mass``,
 ``.stiffness``) like :mod:`ffrf.reduction.craig_bampton`.
+
+Exudyn's reduction calls SciPy's ``eigsh`` without a start vector, which SciPy then draws from the operating
+system's entropy: the twin's basis changed from run to run (mode signs, last digits of the frequencies), and with it
+every Exudyn number of a cross-validation. :func:`exudyn_hcb` runs it inside :func:`deterministic_eigsh`, which
+gives ``eigsh`` our fixed start (:func:`ffrf.numerics.eigen.lanczos_start`), so that a rerun reproduces every bit.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg
 from numpy.typing import NDArray
 from scipy.linalg import subspace_angles
 
-__all__ = ["ModeComparison", "exudyn_hcb", "mass_mac", "frequency_clusters", "compare_modes"]
+from ffrf.numerics.eigen import lanczos_start
+
+__all__ = [
+    "ModeComparison",
+    "deterministic_eigsh",
+    "exudyn_hcb",
+    "mass_mac",
+    "frequency_clusters",
+    "compare_modes",
+]
 
 
 @dataclass(frozen=True)
@@ -59,22 +77,44 @@ class ModeComparison:
         }
 
 
+@contextmanager
+def deterministic_eigsh() -> Iterator[None]:
+    """While inside, ``scipy.sparse.linalg.eigsh`` starts Lanczos from :func:`ffrf.numerics.eigen.lanczos_start` when
+    its caller gives no start vector (module docstring); SciPy's own function is back on the way out. For callers
+    that import ``eigsh`` when they run, as Exudyn's ``FEM`` module does; single-threaded use only."""
+    original = scipy.sparse.linalg.eigsh
+
+    def eigsh(*args: Any, **kwargs: Any):
+        if kwargs.get("v0") is None:
+            matrix = args[0] if args else kwargs["A"]
+            kwargs["v0"] = lanczos_start(matrix.shape[0])
+        return original(*args, **kwargs)
+
+    scipy.sparse.linalg.eigsh = eigsh
+    try:
+        yield
+    finally:
+        scipy.sparse.linalg.eigsh = original
+
+
 def exudyn_hcb(model, interfaces, weights, n_modes: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Exudyn's HCB basis (3N, m) (static modes first) and its fixed-interface frequencies (Hz)."""
+    """Exudyn's HCB basis (3N, m) (static modes first) and its fixed-interface frequencies (Hz), the same on every
+    call (:func:`deterministic_eigsh`)."""
     from exudyn.FEM import FEMinterface, HCBstaticModeSelection
 
     fem = FEMinterface()
     fem.nodes = {"Position": np.asarray(model.nodes, dtype=float)}
     fem.massMatrix = sp.csr_matrix(model.mass)
     fem.stiffnessMatrix = sp.csr_matrix(model.stiffness)
-    fem.ComputeHurtyCraigBamptonModes(
-        boundaryNodesList=[[int(i) for i in nodes] for nodes in interfaces],
-        nEigenModes=n_modes,
-        useSparseSolver=True,
-        computationMode=HCBstaticModeSelection.RBE2,
-        boundaryNodesWeights=[np.asarray(w, dtype=float) for w in weights],
-        excludeRigidBodyMotion=True,
-    )
+    with deterministic_eigsh():
+        fem.ComputeHurtyCraigBamptonModes(
+            boundaryNodesList=[[int(i) for i in nodes] for nodes in interfaces],
+            nEigenModes=n_modes,
+            useSparseSolver=True,
+            computationMode=HCBstaticModeSelection.RBE2,
+            boundaryNodesWeights=[np.asarray(w, dtype=float) for w in weights],
+            excludeRigidBodyMotion=True,
+        )
     return np.asarray(fem.modeBasis["matrix"]), np.asarray(fem.GetEigenFrequenciesHz())
 
 

@@ -16,8 +16,10 @@ from ffrf.paper.bennett_scene import paper_max_coupler_deviation
 
 from . import figures
 from .bennett_metrics import TARGETS
+from .bennett_trajectory import tracked_nodes
 from .bennett_validation import BennettValidation
 from .markdown import checks_table, format_length, format_sci, markdown_table
+from .twin_run import ComparedRun
 
 __all__ = ["write_report", "write_summary", "identified_dh"]
 
@@ -279,11 +281,12 @@ def write_report(v: BennettValidation, directory: str | Path) -> Path:
     return path
 
 
-def identified_dh(run) -> dict:
+def identified_dh(run: ComparedRun) -> dict:
     """DH parameters identified (paper's method, :mod:`identification`) from a run's tracked nodes."""
     from identification.loop import identify_dh
 
-    loop = identify_dh({k: run.tracked[:, 3 * (k - 1) : 3 * k] for k in (1, 2, 3)})
+    tracked = tracked_nodes(run)
+    loop = identify_dh({k: tracked[:, 3 * (k - 1) : 3 * k] for k in (1, 2, 3)})
     return {
         "a_mm": (1e3 * loop.dh.a).tolist(),
         "alpha_deg": np.degrees(loop.dh.alpha).tolist(),

@@ -38,7 +38,7 @@ from ffrf.studies.sampling import Variant, study_design
 from ffrf.studies.spec import Study
 from ffrf.studies.variant import output_names, row_names, run_variant
 
-__all__ = ["ROWS", "StudyRun", "finished_ids", "pending", "read_rows", "row_schema", "run_study"]
+__all__ = ["ROWS", "StudyCounts", "finished_ids", "pending", "read_rows", "row_schema", "run_study"]
 
 log = logging.getLogger(__name__)
 
@@ -47,9 +47,12 @@ ROWS = "rows"
 
 
 @dataclass(frozen=True)
-class StudyRun:
+class StudyCounts:
     """What one call of :func:`run_study` did: variants in the design, already finished before, run now (ok and
-    failed rows written) and lost (no row: the worker died too often, or the run was interrupted)."""
+    failed rows written) and lost (no row: the worker died too often, or the run was interrupted), and its wall time.
+
+    Counts, not a run: no time histories, so not a :class:`~ffrf.output.result.Result`. What the variants computed
+    is in their rows, each derived from its run's Result by :func:`ffrf.studies.variant.row_outputs`."""
 
     design: int
     skipped: int
@@ -244,7 +247,7 @@ def run_study(
     batch: int = 50,
     flush_seconds: float = 10.0,
     progress: bool = True,
-) -> StudyRun:
+) -> StudyCounts:
     """Run every unfinished variant of ``study`` into ``directory`` (module docstring): on ``client`` if given,
     else on the scheduler at ``scheduler``, else on a new local cluster of ``workers`` processes."""
     from dask.distributed import as_completed
@@ -258,7 +261,7 @@ def run_study(
     schema = row_schema(study)
     counts = {"ok": 0, "failed": 0, "lost": 0}
     if not todo:
-        return StudyRun(size, skipped, 0, 0, 0, time.perf_counter() - started)
+        return StudyCounts(size, skipped, 0, 0, 0, time.perf_counter() - started)
     own = client is None
     cluster = None
     if own:
@@ -292,4 +295,4 @@ def run_study(
             if cluster is not None:
                 cluster.close()
     lost = counts["lost"] + len(todo) - sum(counts.values())
-    return StudyRun(size, skipped, counts["ok"], counts["failed"], lost, time.perf_counter() - started)
+    return StudyCounts(size, skipped, counts["ok"], counts["failed"], lost, time.perf_counter() - started)

@@ -3,7 +3,8 @@ and the parameter values, so that any worker computes the same row).
 
 The row holds the parameters, ``status`` (``"ok"`` or ``"failed"``), ``reason`` (the error message of a failed
 variant), ``assembles`` (whether the static assembly found an equilibrium; empty when the variant failed before),
-the outputs (SI, NaN where not computed): ``max_coupler_deviation_m`` (same drive angle) and
+the outputs (SI, NaN where not computed; :func:`row_outputs` reads them from the variant's
+:class:`~ffrf.output.result.Result`): ``max_coupler_deviation_m`` (same drive angle) and
 ``max_coupler_distance_to_path_m`` (closest point of the ideal curve), ``max_abs_driving_torque_Nm``,
 ``assembly_strain_energy_J`` (all links, assembled state) and ``max_assembly_stress_link{k}_Pa`` (von Mises,
 :mod:`ffrf.output.assembly_stress`), and ``wall_time_s`` (building and running the variant) and ``worker``.
@@ -44,6 +45,7 @@ __all__ = [
     "OUTPUTS",
     "output_names",
     "row_names",
+    "row_outputs",
     "variant_options",
     "build_variant",
     "run_variant",
@@ -162,9 +164,12 @@ def build_variant(study: Study, values: dict[str, float], cache: SceneCache | No
     return build_linkage(loop, options, where=f"{study.name}, variant", cache=cache), run
 
 
-def _outputs(result: Result | None, n_links: int, path: bool, stability: bool = False) -> dict[str, float]:
-    """The output columns of a run's result (NaN where not computed: no result, or a path that stopped; the snaps
-    of a path that stopped count those before the stop)."""
+def row_outputs(result: Result | None, n_links: int, path: bool, stability: bool = False) -> dict[str, float]:
+    """The output columns of a row (:func:`output_names`), the one place they are read from the variant's run,
+    its :class:`~ffrf.output.result.Result`: the path's maxima from :meth:`~ffrf.output.result.Result.summary` (with
+    ``path``, a path run to its end), the assembly's from ``result.assembly``, the stability's from its metadata.
+    NaN where not computed: no result, or a path that stopped; the snaps of a path that stopped count those before
+    the stop. A row holds scalars only, so that a study's rows are one table."""
     out = dict.fromkeys(output_names(n_links, stability), math.nan)
     if result is None:
         return out
@@ -210,7 +215,7 @@ def run_variant(study: Study, variant: Variant, cache: SceneCache | None = None)
     except Exception as error:  # noqa: BLE001 -- one variant's failure is its row, never the study's end
         log.exception("variant %s failed", variant.id)
         row["reason"] = f"{type(error).__name__}: {error}"
-    row |= _outputs(result, study.n_links, path, study.stability)
+    row |= row_outputs(result, study.n_links, path, study.stability)
     row["wall_time_s"] = time.perf_counter() - started
     row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
     return row

@@ -86,9 +86,9 @@ def test_exudyn_applies_the_marker_offset_in_the_body_frame():
 
 def test_twin_uses_a_symbolic_drive_and_reports_every_step():
     run = exudyn_run()
-    assert run.extra["symbolic"], run.extra["notes"]
+    assert run.metadata["symbolic"], run.metadata["notes"]
     assert run.time.shape == (int(round(T_END / STEP)) + 1,)
-    assert run.setup_time > 0 and run.integration_time > 0
+    assert run.metadata["timings_s"]["setup"] > 0 and run.metadata["timings_s"]["solve"] > 0
 
 
 def test_the_window_exercises_elasticity_and_the_drive():

@@ -16,11 +16,13 @@ from functools import cache
 
 import numpy as np
 import pytest
-from validation_fixtures import bar, max_difference
+from validation_fixtures import bar, max_difference, tracked_nodes
 
-from validation.exudyn_ffrf import TrajectoryResult, run_exudyn, run_ffrf
+from ffrf.output.result import Result
+from validation.exudyn_ffrf import run_exudyn, run_ffrf
 from validation.force_specs import BushingSpring, CartesianSpring, HingeTorque, InterfaceLoad
 from validation.single_body_scenes import SingleBodyScene, free_body_scene, pendulum_scene
+from validation.twin_run import ComparedRun, TwinRun
 
 #: Round-off agreement (after aligning definitions where they differ): tracked nodes and frame origin (m), Euler
 #: parameters, modal coordinates relative to their largest magnitude. Measured at most 6.5e-12 m, 1.8e-11 and
@@ -76,24 +78,24 @@ def hanging_bar(scale: float = 1.0, damped: bool = True, tilted: bool = False) -
 
 
 @cache
-def exudyn(scene: SingleBodyScene) -> TrajectoryResult:
+def exudyn(scene: SingleBodyScene) -> TwinRun:
     return run_exudyn(scene)
 
 
 @cache
-def ours(scene: SingleBodyScene, exudyn_definitions: bool = False) -> TrajectoryResult:
+def ours(scene: SingleBodyScene, exudyn_definitions: bool = False) -> Result:
     return run_ffrf(scene, exudyn_definitions=exudyn_definitions)
 
 
-def modal_difference(a: TrajectoryResult, b: TrajectoryResult) -> float:
+def modal_difference(a: ComparedRun, b: ComparedRun) -> float:
     """Largest modal difference relative to the largest modal coordinate of ``b``."""
-    return max_difference(a.zeta, b.zeta) / float(np.abs(b.zeta).max())
+    return max_difference(a.q[:, 7:], b.q[:, 7:]) / float(np.abs(b.q[:, 7:]).max())
 
 
-def assert_round_off(a: TrajectoryResult, b: TrajectoryResult) -> None:
-    assert max_difference(a.tracked, b.tracked) < POSITION_M
-    assert max_difference(a.position, b.position) < POSITION_M
-    assert max_difference(a.euler, b.euler) < EULER
+def assert_round_off(a: ComparedRun, b: ComparedRun) -> None:
+    assert max_difference(tracked_nodes(a), tracked_nodes(b)) < POSITION_M
+    assert max_difference(a.q[:, :3], b.q[:, :3]) < POSITION_M
+    assert max_difference(a.q[:, 3:7], b.q[:, 3:7]) < EULER
     assert modal_difference(a, b) < MODAL_RELATIVE
 
 
@@ -107,7 +109,7 @@ def test_cartesian_spring_with_offset_agrees_to_round_off():
     (measured 1.4e-12 m, Euler 3.5e-12, modal 1.8e-11); the spring moves the tip by far more than that."""
     scene = pendulum(forces=(dataclasses.replace(SPRING, damping=(0.0, 0.0, 0.0)),))
     assert_round_off(ours(scene), exudyn(scene))
-    assert max_difference(exudyn(scene).tracked, exudyn(pendulum()).tracked) > 1e-3  # measured 1.8e-1 m
+    assert max_difference(tracked_nodes(exudyn(scene)), tracked_nodes(exudyn(pendulum()))) > 1e-3  # measured 1.8e-1 m
 
 
 def test_cartesian_damper_agrees_to_round_off():
@@ -117,7 +119,7 @@ def test_cartesian_damper_agrees_to_round_off():
     scene = pendulum(forces=(SPRING,))
     assert_round_off(ours(scene), exudyn(scene))
     undamped = pendulum(forces=(dataclasses.replace(SPRING, damping=(0.0, 0.0, 0.0)),))
-    assert max_difference(exudyn(scene).tracked, exudyn(undamped).tracked) > 1e-6
+    assert max_difference(tracked_nodes(exudyn(scene)), tracked_nodes(exudyn(undamped))) > 1e-6
 
 
 # ---------------------------------------------------------------------------------------------
@@ -130,7 +132,7 @@ def test_force_and_frame_interface_torque_agree_to_round_off():
     loadVectorUserFunction) on the frame interface: measured 9.2e-13 m, 2.3e-12, 7.4e-11."""
     scene = pendulum(forces=FRAME_LOADS)
     assert_round_off(ours(scene), exudyn(scene))
-    assert max_difference(exudyn(scene).tracked, exudyn(pendulum()).tracked) > 1e-3  # measured 3.3e-2 m
+    assert max_difference(tracked_nodes(exudyn(scene)), tracked_nodes(exudyn(pendulum()))) > 1e-3  # measured 3.3e-2 m
 
 
 def test_torque_on_an_elastic_interface_differs_by_exudyns_rotation_jacobian():
@@ -142,7 +144,7 @@ def test_torque_on_an_elastic_interface_differs_by_exudyns_rotation_jacobian():
     assert_round_off(ours(scene, exudyn_definitions=True), exudyn(scene))
     raw = modal_difference(ours(scene), exudyn(scene))
     assert 1e-6 < raw < 1e-4
-    assert max_difference(ours(scene).tracked, exudyn(scene).tracked) < 1e-9  # measured 1.0e-11 m
+    assert max_difference(tracked_nodes(ours(scene)), tracked_nodes(exudyn(scene))) < 1e-9  # measured 1.0e-11 m
 
 
 # ---------------------------------------------------------------------------------------------
@@ -204,7 +206,7 @@ def test_six_equation_spring_damper_matches_the_rigid_body_spring_damper_to_firs
     turned to world axes): the elements agree to first order, measured 3.5e-9 m (tilted 3.7e-9 m) against
     2.7e-4 m of motion."""
     scene = hanging_bar(tilted=tilted)
-    assert max_difference(ours(scene).tracked, exudyn(scene).tracked) < 5e-7
+    assert max_difference(tracked_nodes(ours(scene)), tracked_nodes(exudyn(scene))) < 5e-7
 
 
 def test_rigid_body_spring_damper_difference_is_second_order_in_the_rotation():
@@ -213,11 +215,12 @@ def test_rigid_body_spring_damper_difference_is_second_order_in_the_rotation():
     (1.1e-3 rad -> 5.5e-4 rad). About a single axis the two differ only at third order (ours is
     k sin(phi) cos(phi), Exudyn's k phi). Exudyn's definition in our solver stays at round-off."""
     full, half = hanging_bar(1.0, damped=False), hanging_bar(0.5, damped=False)
-    tracked = [max_difference(ours(s).tracked, exudyn(s).tracked) for s in (full, half)]
-    euler = [max_difference(ours(s).euler, exudyn(s).euler) for s in (full, half)]
+    tracked = [max_difference(tracked_nodes(ours(s)), tracked_nodes(exudyn(s))) for s in (full, half)]
+    euler = [max_difference(ours(s).q[:, 3:7], exudyn(s).q[:, 3:7]) for s in (full, half)]
     assert tracked[0] < 5e-7
     assert 3.5 < tracked[0] / tracked[1] and 3.5 < euler[0] / euler[1]
-    assert max_difference(ours(full, exudyn_definitions=True).tracked, exudyn(full).tracked) < 1e-3 * tracked[0]
+    with_exudyn_definitions = tracked_nodes(ours(full, exudyn_definitions=True))
+    assert max_difference(with_exudyn_definitions, tracked_nodes(exudyn(full))) < 1e-3 * tracked[0]
 
 
 def test_xyz_angles_are_exudyns():
@@ -246,4 +249,4 @@ def test_hinge_torque_agrees_with_the_torsional_spring_damper(torque):
     scene = pendulum(forces=(HingeTorque(torque=torque, stiffness=0.05, damping=1e-3, offset=0.2),))
     assert_round_off(ours(scene), exudyn(scene))
     other = pendulum(forces=(HingeTorque(torque=-torque, stiffness=0.05, damping=1e-3, offset=0.2),))
-    assert max_difference(exudyn(scene).tracked, exudyn(other).tracked) > 1e-3
+    assert max_difference(tracked_nodes(exudyn(scene)), tracked_nodes(exudyn(other))) > 1e-3

@@ -13,9 +13,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
-from validation.exudyn_ffrf import TrajectoryResult, run_exudyn, run_ffrf
+from ffrf.output.result import Result
+from validation.exudyn_ffrf import run_exudyn, run_ffrf
 from validation.reduced_body import ReducedBody, bar_body
 from validation.single_body_scenes import SingleBodyScene, free_body_scene, pendulum_scene
+from validation.twin_run import ComparedRun, TwinRun
 
 # Agreement of the two solvers, about 100x the largest difference measured on 2026-11-24 (AMD EPYC):
 #: tracked node and frame positions (m); measured 2.8e-12 m on the 0.2 m bar.
@@ -47,13 +49,18 @@ def free_body(tilted: bool = False, step: float = 1e-3, t_end: float = 0.2) -> S
 
 
 @cache
-def exudyn_run(scene: SingleBodyScene) -> TrajectoryResult:
+def exudyn_run(scene: SingleBodyScene) -> TwinRun:
     return run_exudyn(scene)
 
 
 @cache
-def ffrf_run(scene: SingleBodyScene) -> TrajectoryResult:
+def ffrf_run(scene: SingleBodyScene) -> Result:
     return run_ffrf(scene)
+
+
+def tracked_nodes(run: ComparedRun) -> NDArray[np.float64]:
+    """A single-body run's tracked nodes, (n, k, 3) world positions (:mod:`validation.exudyn_ffrf`)."""
+    return run.sensors["tracked_nodes"]
 
 
 def max_difference(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
@@ -96,7 +103,7 @@ def rigid_pendulum_tip(
     )
 
 
-def centre_of_mass_path(body: ReducedBody, result: TrajectoryResult) -> NDArray[np.float64]:
+def centre_of_mass_path(body: ReducedBody, result: ComparedRun) -> NDArray[np.float64]:
     """World centre of mass R + A (s0 + S1 zeta) / m along a run (S1 = first moments of the modes)."""
     from ffrf.body.euler_parameters import rotation_matrix
 
@@ -104,8 +111,8 @@ def centre_of_mass_path(body: ReducedBody, result: TrajectoryResult) -> NDArray[
     scalar = body.mass[0::3, 0::3]
     ones = np.ones(len(body.nodes))
     s1 = np.stack([ones @ (scalar @ body.basis[a::3]) for a in range(3)])  # (3, m)
-    out = np.empty_like(result.position)
+    out = np.empty_like(result.q[:, :3])
     for k in range(len(result.time)):
-        a = rotation_matrix(np.ascontiguousarray(result.euler[k]))
-        out[k] = result.position[k] + a @ (first + s1 @ result.zeta[k]) / mass
+        a = rotation_matrix(np.ascontiguousarray(result.q[k, 3:7]))
+        out[k] = result.q[k, :3] + a @ (first + s1 @ result.q[k, 7:]) / mass
     return out

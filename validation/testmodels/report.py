@@ -11,6 +11,9 @@ alone); ``trajectory`` compares the sensor rows, largest difference over the lar
 Then Exudyn's examples (:data:`validation.testmodels.EXAMPLES`, :func:`evaluate_example`): no stored
 value, so they run only with Exudyn (whose ``FEMinterface`` also imports their Netgen meshes) and are
 judged by :func:`validation.testmodels.spec.judge_example`; with ``exudyn=False`` they are listed as skipped.
+
+Exudyn's runs (and its eigenfrequencies of an example) run inside :func:`validation.modes.deterministic_eigsh`: its
+``FEM`` module's sparse eigensolver would start from a random vector, and move their results from run to run.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from ..modes import deterministic_eigsh
 from . import EXAMPLES, EXUDYN_COMMIT, TESTMODELS
 from .spec import (
     CONVERGED_TOLERANCE,
@@ -75,7 +79,8 @@ def evaluate(model: TestModel, exudyn: bool = True) -> dict[str, Any]:
     out["ours"] = _run(ours)
     default_result = tight_result = None
     if exudyn:
-        default, tight = model.exudyn(False), model.exudyn(True)
+        with deterministic_eigsh():
+            default, tight = model.exudyn(False), model.exudyn(True)
         default_result, tight_result = default.result, tight.result
         out["exudyn"], out["exudyn_tight"] = _run(default), _run(tight)
         diffs |= {
@@ -111,7 +116,8 @@ def evaluate_example(example: Example, exudyn: bool = True) -> dict[str, Any]:
     if not exudyn:
         return out | {"skipped": "no stored value: judged against Exudyn's run, which was not asked for"}
     ours = example.ours(example.tolerance)
-    default, tight = example.exudyn(False), example.exudyn(True)
+    with deterministic_eigsh():
+        default, tight = example.exudyn(False), example.exudyn(True)
     out["ours"], out["exudyn"], out["exudyn_tight"] = _run(ours), _run(default), _run(tight)
     diffs: dict[str, Any] = {
         "ours_vs_exudyn": relative(ours.result, default.result),
@@ -124,7 +130,8 @@ def evaluate_example(example: Example, exudyn: bool = True) -> dict[str, Any]:
     }
     frequency_error = None
     if example.frequencies is not None:
-        sets = example.frequencies()
+        with deterministic_eigsh():
+            sets = example.frequencies()
         out["frequencies_hz"] = {name: [float(f) for f in values] for name, values in sets.items()}
         frequency_error = float(np.max(np.abs(sets["ours"] / sets["exudyn"] - 1.0)))
         diffs["frequencies"] = {

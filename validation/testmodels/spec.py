@@ -95,7 +95,12 @@ class StoredValue:
 @dataclass
 class ModelRun:
     """One run of a TestModel: its ``result``, the sensor rows it was computed from (time first) and
-    the wall time (s) of the whole run (model building, reduction and integration)."""
+    the wall time (s) of the whole run (model building, reduction and integration).
+
+    Not a :class:`~ffrf.output.result.Result`: it holds what an Exudyn TestModel script computes, its scalar
+    ``result`` and the one sensor file that scalar is computed from (Exudyn's layout), filled the same way by
+    Exudyn's run and by ours (each model's ``ours`` and ``exudyn``), so that both are judged against Exudyn's stored
+    value in the script's own terms."""
 
     result: float
     sensor: NDArray[np.float64]
