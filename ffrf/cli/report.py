@@ -34,7 +34,8 @@ def run_and_report(
     """Run a linkage and save what ``bennett`` and ``linkage`` write (:meth:`ffrf.output.result.Result.save`).
 
     ``options``: ``mode`` (``auto``, ``quasi_static``, ``dynamic``), ``outputs``, ``step`` (s), ``vtk_every``,
-    ``stability``, ``clearance_margin`` (m, default 1 mm); ``then(result)``: more to do with a run that did not stop (``linkage --reach``)."""
+    ``stability``, ``clearance_margin`` (m, default 1 mm); ``then(result)``: more to do with a run that did not stop
+    (``linkage --reach``)."""
     scene = model.scene
     if not isinstance(scene, LinkageScene):
         raise TypeError(f"{model.name!r} is no linkage: its run is reported by python -m ffrf run")

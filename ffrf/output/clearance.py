@@ -87,12 +87,21 @@ class Clearance:
             if gap >= self.margin > bound:
                 line += f" (between the poses only {1e3 * bound:.2f} mm is proven)"
             lines.append(line)
-        failing = [f"{a}-{b}" for (a, b), ok in zip(self.pairs, self.met, strict=True) if not ok]
-        verdict = (
-            f"margin {1e3 * self.margin:g} mm met by every pair along the whole motion"
-            if not failing
-            else f"margin {1e3 * self.margin:g} mm not met by links {', '.join(failing)}"
-        )
+        missed = [f"{a}-{b}" for (a, b), gap in zip(self.pairs, self.distance, strict=True) if gap < self.margin]
+        unproven = [
+            f"{a}-{b}"
+            for (a, b), gap, ok in zip(self.pairs, self.distance, self.met, strict=True)
+            if gap >= self.margin and not ok
+        ]
+        margin = f"margin {1e3 * self.margin:g} mm"
+        if not missed and not unproven:
+            verdict = f"{margin} met by every pair along the whole motion"
+        else:
+            verdict = "; ".join(
+                ([f"{margin} not met by links {', '.join(missed)}"] if missed else [])
+                + ([f"{margin} kept at every pose but not proven between them by links {', '.join(unproven)}"]
+                   if unproven else [])
+            )  # fmt: skip
         return "; ".join(lines + [verdict])
 
 

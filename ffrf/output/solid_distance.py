@@ -135,11 +135,11 @@ class JointZone:
     ) -> JointZone:
         """The zone of the two housings centred at ``centres`` ``(2, 3)`` on the axis: radius ``outer_radius +
         axial_gap``, from the lower end of one housing to the upper end of the other (Eq. (K3))."""
-        point = np.asarray(point, dtype=float)
-        direction = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
-        along = (np.asarray(centres, dtype=float) - point) @ direction
+        origin = np.asarray(point, dtype=float)
+        unit = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
+        along = (np.asarray(centres, dtype=float) - origin) @ unit
         half = 0.5 * housing_length
-        return cls(point, direction, outer_radius + axial_gap, float(along.min() - half), float(along.max() + half))
+        return cls(origin, unit, outer_radius + axial_gap, float(along.min() - half), float(along.max() + half))
 
     def prism(self) -> manifold3d.Manifold:
         """The zone as a solid for manifold3d: a prism of :data:`ZONE_SIDES` sides circumscribing the cylinder,
@@ -151,7 +151,12 @@ class JointZone:
         first = np.cross(self.direction, helper)
         first /= np.linalg.norm(first)
         placement = np.column_stack(
-            [first, np.cross(self.direction, first), self.direction, self.point + (self.lower - ZONE_SLACK) * self.direction]
+            [
+                first,
+                np.cross(self.direction, first),
+                self.direction,
+                self.point + (self.lower - ZONE_SLACK) * self.direction,
+            ]
         )
         return prism.transform(placement)
 
@@ -277,7 +282,9 @@ def _triangles_from(mesh: manifold3d.Mesh64, original: int) -> NDArray[np.int64]
     triangles = np.asarray(mesh.tri_verts, dtype=np.int64).reshape(-1, 3)
     runs = np.asarray(mesh.run_index, dtype=np.int64) // 3
     ids = np.asarray(mesh.run_original_id)
-    return np.concatenate([triangles[runs[k] : runs[k + 1]] for k in np.flatnonzero(ids == original)] or [triangles[:0]])
+    return np.concatenate(
+        [triangles[runs[k] : runs[k + 1]] for k in np.flatnonzero(ids == original)] or [triangles[:0]]
+    )
 
 
 def _within(points: NDArray[np.float64], box: tuple[NDArray, NDArray]) -> bool:
@@ -335,8 +342,10 @@ def _max_min_linear(values: NDArray[np.float64]) -> NDArray[np.float64]:
             at = (1.0 - s)[:, None] * values[:, :, i0] + s[:, None] * values[:, :, i1]
             best = np.where(crosses, np.maximum(best, at.min(axis=1)), best)
     scale = np.maximum(1.0, np.abs(values).max(axis=(1, 2))) ** 2
-    for j, k, l in itertools.combinations(range(functions), 3):
-        system = np.stack([values[:, j] - values[:, k], values[:, j] - values[:, l], np.ones_like(values[:, j])], axis=1)
+    for j, k, m in itertools.combinations(range(functions), 3):
+        system = np.stack(
+            [values[:, j] - values[:, k], values[:, j] - values[:, m], np.ones_like(values[:, j])], axis=1
+        )
         solvable = np.abs(np.linalg.det(system)) > 1e-12 * scale
         if not solvable.any():
             continue
