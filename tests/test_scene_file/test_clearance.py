@@ -47,7 +47,7 @@ def test_an_obstacle_passed_between_two_samples_is_caught_by_the_bound():
     blind = signed_clearance([plate, cube], _Sweep([0.0, 1.0], 0.1), margin=1e-3, max_bisections=0)
     assert blind.distance[0] == pytest.approx(0.05 - 0.0005 - 0.005)  # both samples clear: 44.5 mm
     assert blind.bound[0] == pytest.approx(0.5 * (2 * 0.0445 - 1.5 * 0.1)) and not blind.margin_met
-    assert "only -30.75 mm is proven" in blind.summary() and "not proven between them by links 0-1" in blind.summary()
+    assert "only -30.50 mm is proven" in blind.summary() and "not proven between them by links 0-1" in blind.summary()
     caught = signed_clearance([plate, cube], _Sweep([0.0, 1.0], 0.1), margin=1e-3)
     assert caught.distance[0] == pytest.approx(-0.0045) and caught.drive_angle[0] == pytest.approx(0.5)
     assert "links 0-1: overlap by" in caught.summary()
