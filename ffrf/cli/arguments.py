@@ -130,7 +130,7 @@ def configure_linkage_run(parser: argparse.ArgumentParser) -> None:
         default=1.0,
         metavar="MM",
         help="clearance the links must keep from each other along the rigid motion, in mm (default 1; "
-        "docs/formulation.md Eqs. (K1)-(K4))",
+        "docs/formulation.md Eqs. (CL1)-(CL4))",
     )
     parser.add_argument(
         "--max-steps",

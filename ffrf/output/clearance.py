@@ -1,11 +1,11 @@
 r"""Signed clearance between the links of a linkage along its rigid motion, with a bound between the poses.
 
 At each pose the clearance of two links is the signed distance of their solids (:mod:`ffrf.output.solid_distance`,
-``docs/formulation.md`` Eqs. (K1)-(K3)): the smallest distance between them, or minus their penetration depth; for
+``docs/formulation.md`` Eqs. (CL1)-(CL3)): the smallest distance between them, or minus their penetration depth; for
 links that share a joint, the surface within the joint's zone is left out. Along the motion every link moves rigidly
 by its displacement from home (Eq. (L1)).
 
-Between two sampled poses (Eq. (K4)): the clearance is 1-Lipschitz in the relative displacement of the two solids
+Between two sampled poses (Eq. (CL4)): the clearance is 1-Lipschitz in the relative displacement of the two solids
 (a distance to a set moves no more than the set), so over a drive-angle interval of length ``h`` it drops below its
 end values ``c0``, ``c1`` by no more than the largest relative point speed ``S`` (m per rad of drive) allows:
 
@@ -35,7 +35,7 @@ from ffrf.output.solid_distance import DEPTH_TOLERANCE, JointZone, LinkSolid, So
 
 __all__ = ["Clearance", "RigidMotion", "signed_clearance", "SPEED_SAFETY"]
 
-#: Safety factor on the largest relative point speed of an interval (Eq. (K4)).
+#: Safety factor on the largest relative point speed of an interval (Eq. (CL4)).
 SPEED_SAFETY = 1.5
 
 
@@ -57,7 +57,7 @@ class Clearance:
 
     ``pairs`` ``(k, 2)`` link indices; ``distance`` ``(k,)`` the smallest clearance at the poses evaluated (negative:
     the links overlap by that much); ``drive_angle`` ``(k,)`` where (rad); ``bound`` ``(k,)`` the clearance the
-    pair keeps everywhere between the poses (Eq. (K4)); ``margin`` the clearance asked for (m); ``poses`` how many
+    pair keeps everywhere between the poses (Eq. (CL4)); ``margin`` the clearance asked for (m); ``poses`` how many
     poses were evaluated per pair (the samples and the bisections).
     """
 
@@ -115,7 +115,7 @@ def signed_clearance(
     tolerance: float = DEPTH_TOLERANCE,
 ) -> Clearance:
     """The signed clearance of every pair of ``solids`` (link ``k`` is ``solids[k]`` at home) along ``motion``
-    (module docstring, Eqs. (K1)-(K4)).
+    (module docstring, Eqs. (CL1)-(CL4)).
 
     ``joint_zones[(a, b)]``, ``a < b``: the zone of the joint links ``a`` and ``b`` share (left out of that pair's
     check); ``margin``: the clearance asked for (m); ``max_bisections``: how often an interval may be halved;
@@ -159,7 +159,7 @@ def _sphere(solid: LinkSolid) -> tuple[NDArray[np.float64], float]:
 
 
 class _PairTrack:
-    """The clearance of one pair at its evaluated poses, kept sorted by drive angle, and the bisection of Eq. (K4)."""
+    """The clearance of one pair at its evaluated poses, kept sorted by drive angle, and the bisection of Eq. (CL4)."""
 
     def __init__(
         self, pair: SolidPair, links: tuple[int, int], spheres: tuple[tuple[NDArray, float], ...], sense: float
@@ -197,7 +197,7 @@ class _PairTrack:
         return float(self.angles[int(np.argmin(self.values))])
 
     def lower_bounds(self) -> NDArray[np.float64]:
-        """Eq. (K4) on every interval between neighbouring evaluated poses."""
+        """Eq. (CL4) on every interval between neighbouring evaluated poses."""
         h = np.abs(np.diff(self.angles))
         ends = np.maximum(self.speeds[:-1], self.speeds[1:])  # (intervals, 2): a's points, b's points
         chords = self._chords()

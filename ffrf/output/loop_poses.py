@@ -1,5 +1,5 @@
 r"""A single loop's rigid motion as the links' poses and twists at any drive angle, for the clearance's bound
-between poses (:class:`ffrf.output.clearance.RigidMotion`, ``docs/formulation.md`` Eq. (K4)).
+between poses (:class:`ffrf.output.clearance.RigidMotion`, ``docs/formulation.md`` Eq. (CL4)).
 
 The motion is traced once (Eq. (L4)); at any other drive angle the loop is closed from the nearest sample
 (:func:`kinematics.close_near`). Link ``k``'s twist per rad of drive is the sum of its joints' twists along the

@@ -93,7 +93,7 @@ class Result:
 
     def add_clearance(self, margin: float = 1e-3) -> dict:
         """The signed clearance of a linkage's links along its rigid nominal motion against ``margin`` (m)
-        (:meth:`ffrf.scenes.linkage_scene.LinkageScene.clearance`, ``docs/formulation.md`` Eqs. (K1)-(K4)) in the
+        (:meth:`ffrf.scenes.linkage_scene.LinkageScene.clearance`, ``docs/formulation.md`` Eqs. (CL1)-(CL4)) in the
         metadata, ``clearance``: its summary, per pair the smallest signed clearance (m, negative: overlap), the drive
         angle there and the clearance proven between the poses, the margin and whether every pair keeps it. Computed
         once; returns that entry."""

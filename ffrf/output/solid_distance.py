@@ -1,7 +1,7 @@
 r"""Signed distance between two closed triangulated solids at one relative pose: the clearance of two links.
 
 For solids :math:`A`, :math:`B` with surfaces :math:`\partial A`, :math:`\partial B` (``docs/formulation.md``,
-"Clearance between links", Eqs. (K1)-(K3)):
+"Clearance between links", Eqs. (CL1)-(CL3)):
 
 .. math:: c(A, B) = \operatorname{dist}(\partial A, \partial B) \quad \text{when they do not overlap,} \qquad
           c(A, B) = -\max\Big(\max_{p \in \partial A \cap B} d_{\partial B}(p),\;
@@ -21,7 +21,7 @@ below the linear interpolation of its corner values. Pieces
 whose bound exceeds the deepest value found by more than ``tolerance`` are split in four until none is left: the
 depth of the faceted solids is found to within ``tolerance`` (default 0.05 mm); the positive distance is exact.
 
-Joint zone (Eq. (K3)): two links that share a joint have coaxial housings one axial gap apart by construction
+Joint zone (Eq. (CL3)): two links that share a joint have coaxial housings one axial gap apart by construction
 (:mod:`ffrf.geometry.link_geometry`), whatever the joint's angle. For such a pair the surface of each link within the
 joint's zone, a cylinder about the joint axis (:class:`JointZone`), is left out: manifold3d cuts the zone out of both
 solids, and the rest of each surface is measured against the other link's whole surface, so an arm passing a
@@ -134,7 +134,7 @@ class JointZone:
         axial_gap: float,
     ) -> JointZone:
         """The zone of the two housings centred at ``centres`` ``(2, 3)`` on the axis: radius ``outer_radius +
-        axial_gap``, from the lower end of one housing to the upper end of the other (Eq. (K3))."""
+        axial_gap``, from the lower end of one housing to the upper end of the other (Eq. (CL3))."""
         origin = np.asarray(point, dtype=float)
         unit = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
         along = (np.asarray(centres, dtype=float) - origin) @ unit
@@ -213,7 +213,7 @@ class SolidPair:
 
     def clearance(self, relative: ArrayLike) -> float:
         r"""The signed clearance (m) with ``b`` moved by ``relative`` ``(4, 4)`` into ``a``'s frame (both at home
-        for the identity): Eqs. (K1)-(K3)."""
+        for the identity): Eqs. (CL1)-(CL3)."""
         relative = np.asarray(relative, dtype=float)
         a, b = self.sides
         a.place(np.eye(4))
@@ -240,7 +240,7 @@ class SolidPair:
         return _within(inner_b, box_a) or _within(a.rest_vertices, box_b)
 
     def _depth(self, relative: NDArray[np.float64]) -> float | None:
-        """The penetration depth (Eq. (K2)) over the measured surfaces, ``None`` when no measured part of either
+        """The penetration depth (Eq. (CL2)) over the measured surfaces, ``None`` when no measured part of either
         surface lies inside the other solid. The regions are the triangles of the (zone-cut) solids' intersection
         that come from each surface; their distances are to the other's whole surface."""
         a, b = self.sides
@@ -265,7 +265,7 @@ def signed_distance(
     tolerance: float = DEPTH_TOLERANCE,
 ) -> float:
     """The signed clearance of ``a`` and ``b`` (m; negative: penetration depth), ``b`` moved by ``relative``
-    (default: as given), Eqs. (K1)-(K3); for many poses of one pair build a :class:`SolidPair` once."""
+    (default: as given), Eqs. (CL1)-(CL3); for many poses of one pair build a :class:`SolidPair` once."""
     return SolidPair(a, b, zone, tolerance).clearance(np.eye(4) if relative is None else relative)
 
 

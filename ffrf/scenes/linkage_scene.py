@@ -119,7 +119,7 @@ class LinkageScene(Scene):
     def clearance(self, n_poses: int = 72, margin: float = 1e-3) -> Clearance:
         """Signed clearance of every pair of links along one revolution of the rigid nominal motion from the start,
         sampled at ``n_poses`` poses and bounded between them, against ``margin`` (m)
-        (:func:`ffrf.output.clearance.signed_clearance`, ``docs/formulation.md`` Eqs. (K1)-(K4))."""
+        (:func:`ffrf.output.clearance.signed_clearance`, ``docs/formulation.md`` Eqs. (CL1)-(CL4))."""
         sign = drive_sign(self.driver, self.loop.n)  # turn the way the drive turns
         motion = LoopPoses.revolution(self.loop, self.driver, n_poses, self.start_phi, sign)
         solids = [
@@ -129,7 +129,7 @@ class LinkageScene(Scene):
         return signed_clearance(solids, motion, self.joint_zones(), margin)
 
     def joint_zones(self) -> dict[tuple[int, int], JointZone]:
-        """The zone of each joint (Eq. (K3)), keyed by the two links that share it: about the nominal axis, around
+        """The zone of each joint (Eq. (CL3)), keyed by the two links that share it: about the nominal axis, around
         both links' housings there (a link from a mesh file: housings of the default design stacked about the
         joint point, the offset rule of :mod:`ffrf.geometry.link_geometry`)."""
         n = self.loop.n

@@ -1,4 +1,4 @@
-"""Signed distance of two solids (ffrf.output.solid_distance, docs/formulation.md Eqs. (K1)-(K3)) on shapes with a
+"""Signed distance of two solids (ffrf.output.solid_distance, docs/formulation.md Eqs. (CL1)-(CL3)) on shapes with a
 closed form: cylinders (parallel and crossing: distance d - r1 - r2 apart, depth r1 + r2 - d overlapping), a cylinder
 and a box, a box face pushed into a box (depth t), a box inside a box; and the joint zone of two links that share a
 joint.

@@ -1,4 +1,4 @@
-"""Signed clearance along a motion (ffrf.output.clearance, docs/formulation.md Eqs. (K1)-(K4)): the bound between
+"""Signed clearance along a motion (ffrf.output.clearance, docs/formulation.md Eqs. (CL1)-(CL4)): the bound between
 poses catches an obstacle passed between two samples, the loop's twists are the derivatives of its poses, and the
 paper's parametric Bennett links overlap in the folded home pose by as much as their arm boxes do."""
 
@@ -40,7 +40,7 @@ def _box(extents) -> LinkSolid:
 
 def test_an_obstacle_passed_between_two_samples_is_caught_by_the_bound():
     """A 1 mm plate at x = 0 and a 10 mm cube sweeping 100 mm along x: at the two sampled ends 40 mm apart, at the
-    middle (drive angle 0.5 rad) through the plate. Eq. (K4) with speed 0.1 m/rad and safety 1.5 bounds the interval
+    middle (drive angle 0.5 rad) through the plate. Eq. (CL4) with speed 0.1 m/rad and safety 1.5 bounds the interval
     at (0.0445 + 0.0445 - 0.15)/2 < 0, so it is bisected: the middle pose shows the overlap, the plate's faces
     (0.5 mm from the cube's centre) 4.5 mm inside the cube."""
     plate, cube = _box((0.001, 0.1, 0.1)), _box((0.01, 0.01, 0.01))
