@@ -16,10 +16,10 @@ The libraries do the geometry: python-fcl's BVH gives the exact triangle-triangl
 cross, and the exact point-triangle distance; manifold3d's boolean intersection :math:`A \cap B` gives the region
 :math:`\partial A \cap B` (its triangles that come from :math:`\partial A`) also when one solid lies wholly inside
 the other. The depth over that region is found by branch and bound (:func:`_deepest`): the distance to the other
-surface is at most that to the surface's point nearest any corner of a piece of the region, which is convex, so
-below the linear interpolation of its corner values. Pieces
-whose bound exceeds the deepest value found by more than ``tolerance`` are split in four until none is left: the
-depth of the faceted solids is found to within ``tolerance`` (default 0.05 mm); the positive distance is exact.
+surface is at most that to the surface's point (or triangle) nearest any corner of a piece of the region, which is
+convex, so below the linear interpolation of its corner values. Pieces whose bound exceeds the deepest value found
+by more than ``tolerance`` are split in four until none is left: the depth of the faceted solids is found to within
+``tolerance`` (default 0.05 mm); the positive distance is exact.
 
 Joint zone (Eq. (CL3)): two links that share a joint have coaxial housings one axial gap apart by construction
 (:mod:`ffrf.geometry.link_geometry`), whatever the joint's angle. For such a pair the surface of each link within the
