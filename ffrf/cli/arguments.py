@@ -125,6 +125,14 @@ def configure_linkage_run(parser: argparse.ArgumentParser) -> None:
         help="also write deformed meshes for ParaView (DIR/bennett.pvd) every N outputs (0: none)",
     )
     parser.add_argument(
+        "--clearance-margin",
+        type=number_in(0.0, math.inf, unit=" mm"),
+        default=1.0,
+        metavar="MM",
+        help="clearance the links must keep from each other along the rigid motion, in mm (default 1; "
+        "docs/formulation.md Eqs. (CL1)-(CL4))",
+    )
+    parser.add_argument(
         "--max-steps",
         type=count_at_least(1),
         default=MAX_TIME_STEPS,
@@ -156,4 +164,5 @@ def run_options(args: argparse.Namespace) -> dict:
         "step": args.dt,
         "vtk_every": args.vtk_every,
         "stability": args.stability,
+        "clearance_margin": 1e-3 * args.clearance_margin,
     }

@@ -34,7 +34,8 @@ def run_and_report(
     """Run a linkage and save what ``bennett`` and ``linkage`` write (:meth:`ffrf.output.result.Result.save`).
 
     ``options``: ``mode`` (``auto``, ``quasi_static``, ``dynamic``), ``outputs``, ``step`` (s), ``vtk_every``,
-    ``stability``; ``then(result)``: more to do with a run that did not stop (``linkage --reach``)."""
+    ``stability``, ``clearance_margin`` (m, default 1 mm); ``then(result)``: more to do with a run that did not stop
+    (``linkage --reach``)."""
     scene = model.scene
     if not isinstance(scene, LinkageScene):
         raise TypeError(f"{model.name!r} is no linkage: its run is reported by python -m ffrf run")
@@ -64,7 +65,7 @@ def run_and_report(
         if error.partial is None:
             raise
         result, stopped = error.partial, error
-    clearance = result.add_clearance()
+    clearance = result.add_clearance(options.get("clearance_margin", 1e-3))
     with STOP.deferred():
         result.save(out, views=False)
     if isinstance(stopped, Interrupted):  # the user asked to stop: the results so far, no figures

@@ -82,9 +82,12 @@ class InterfaceNodes:
         return self.weights @ np.asarray(nodes)[self.nodes]
 
 
-def boundary_triangles(mesh: TetMesh) -> NDArray[np.int64]:
-    """All boundary faces (faces used by exactly one tetrahedron), shape (m, 3)."""
-    local = np.array([[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]])
+def boundary_triangles(mesh: TetMesh, outward: bool = False) -> NDArray[np.int64]:
+    """All boundary faces (faces used by exactly one tetrahedron), shape (m, 3); with ``outward`` each ordered so
+    that its normal (right-hand rule) points out of the mesh (the tetrahedra's positive order makes that so)."""
+    local = np.array(
+        [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]] if outward else [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]]
+    )
     faces = mesh.tets[:, local].reshape(-1, 3)
     _, first, counts = np.unique(np.sort(faces, axis=1), axis=0, return_index=True, return_counts=True)
     return faces[np.sort(first[counts == 1])]

@@ -91,19 +91,35 @@ class Result:
             self.write_views(directory, vtk_every=vtk_every, label=label, colors=colors)
         return directory
 
-    def add_clearance(self) -> dict:
-        """The clearance of a linkage's links along its rigid nominal motion
-        (:meth:`ffrf.scenes.linkage_scene.LinkageScene.clearance`) in the metadata, ``clearance``: its summary,
-        the collisions and the contact distance (m). Returns that entry."""
+    def add_clearance(self, margin: float = 1e-3) -> dict:
+        """The signed clearance of a linkage's links along its rigid nominal motion against ``margin`` (m)
+        (:meth:`ffrf.scenes.linkage_scene.LinkageScene.clearance`, ``docs/formulation.md`` Eqs. (CL1)-(CL4)) in the
+        metadata, ``clearance``: its summary, per pair the smallest signed clearance (m, negative: overlap), the drive
+        angle there and the clearance proven between the poses, the margin and whether every pair keeps it. Computed
+        once; returns that entry."""
         if "clearance" not in self.metadata:
-            clearance = self.scene.clearance()
+            clearance = self.scene.clearance(margin=margin)
             self.metadata["clearance"] = {
                 "summary": clearance.summary(),
-                "collisions": [
-                    {"links": [a, b], "clearance_m": d, "drive_angle_rad": angle}
-                    for a, b, d, angle in clearance.collisions
+                "pairs": [
+                    {
+                        "links": [int(a), int(b)],
+                        "clearance_m": float(gap),
+                        "drive_angle_rad": float(angle),
+                        "between_poses_m": float(bound),
+                        "margin_met": bool(met),
+                    }
+                    for (a, b), gap, angle, bound, met in zip(
+                        clearance.pairs,
+                        clearance.distance,
+                        clearance.drive_angle,
+                        clearance.bound,
+                        clearance.met,
+                        strict=True,
+                    )
                 ],
-                "contact_m": clearance.contact,
+                "margin_m": clearance.margin,
+                "margin_met": clearance.margin_met,
             }
         return self.metadata["clearance"]
 

@@ -22,8 +22,10 @@ from numpy.typing import ArrayLike, NDArray
 from ffrf.errors import SceneError
 from ffrf.fe.interfaces import boundary_triangles
 from ffrf.geometry.link_geometry import LinkDesign
-from ffrf.output.clearance import Clearance, link_clearance
+from ffrf.output.clearance import Clearance, signed_clearance
+from ffrf.output.loop_poses import LoopPoses
 from ffrf.output.path_distance import ExactCurve
+from ffrf.output.solid_distance import JointZone, LinkSolid
 from ffrf.scenes.builder import Scene, SceneBody, build_scene
 from ffrf.scenes.linkage_description import (
     BoreError,
@@ -114,22 +116,44 @@ class LinkageScene(Scene):
         key = content_key(what, _loop_content(self.loop), self.driver, self.start_phi, self.tool_link, argument)
         return np.array(self.cache.rigid_motions.get_or_compute(key, compute))
 
-    def clearance(self, n_poses: int = 72, contact: float = 1e-3) -> Clearance:
-        """Clearance of every pair of links along one revolution of the rigid nominal motion from the start,
-        at ``n_poses`` poses (:func:`ffrf.output.clearance.link_clearance`; collisions below ``contact`` m)."""
+    def clearance(self, n_poses: int = 72, margin: float = 1e-3) -> Clearance:
+        """Signed clearance of every pair of links along one revolution of the rigid nominal motion from the start,
+        sampled at ``n_poses`` poses and bounded between them, against ``margin`` (m)
+        (:func:`ffrf.output.clearance.signed_clearance`, ``docs/formulation.md`` Eqs. (CL1)-(CL4))."""
         sign = drive_sign(self.driver, self.loop.n)  # turn the way the drive turns
-        motion = trace_motion(
-            self.loop, self.driver, n_poses=n_poses, revolution=sign * 2 * np.pi, start=self.start_phi
-        )
-        meshes = [body.mesh_model.mesh for body in self.bodies]
-        surfaces = [mesh.points[np.unique(boundary_triangles(mesh))] for mesh in meshes]
-        points = joint_points(self.loop)
+        motion = LoopPoses.revolution(self.loop, self.driver, n_poses, self.start_phi, sign)
+        solids = [
+            LinkSolid(body.mesh_model.mesh.points, boundary_triangles(body.mesh_model.mesh, outward=True), body.name)
+            for body in self.bodies
+        ]
+        return signed_clearance(solids, motion, self.joint_zones(), margin)
+
+    def joint_zones(self) -> dict[tuple[int, int], JointZone]:
+        """The zone of each joint (Eq. (CL3)), keyed by the two links that share it: about the nominal axis, around
+        both links' housings there (a link from a mesh file: housings of the default design stacked about the
+        joint point, the offset rule of :mod:`ffrf.geometry.link_geometry`)."""
         n = self.loop.n
-        shared = {(min(k, (k + 1) % n), max(k, (k + 1) % n)): points[k] for k in range(n)}
-        design = LinkDesign()
-        radius = design.housing_length + design.axial_gap + design.housing_outer_radius
-        angles = sign * motion.driver_angles
-        return link_clearance(surfaces, motion.link_transforms(), angles, shared, radius, contact)
+        points = joint_points(self.loop)
+        zones = {}
+        for joint, axis in enumerate(self.loop.axes):
+            links = (joint, (joint + 1) % n)
+            centres, design = [], LinkDesign()
+            for link, side in zip(links, (1, -1), strict=True):  # h_joint: the near link's second axis, far's first
+                geometry = self.bodies[link].geometry
+                if geometry is None:
+                    centres.append(points[joint] - side * design.housing_offset * axis.direction)
+                else:
+                    design = geometry.design
+                    centres.append(geometry.housing_centers[geometry.interface_names.index(f"joint{joint}")])
+            zones[min(links), max(links)] = JointZone.around_housings(
+                points[joint],
+                axis.direction,
+                centres,
+                design.housing_length,
+                design.housing_outer_radius,
+                design.axial_gap,
+            )
+        return zones
 
     def ideal_coupler_curve(self, n: int = 720) -> NDArray[np.float64]:
         """``n`` points of the ideal coupler curve over one revolution of the driver from the start."""
