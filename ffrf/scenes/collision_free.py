@@ -38,6 +38,7 @@ from kinematics import Line, SingleLoop, motion_tangents, trace_motion
 
 __all__ = [
     "LinkBuildInput",
+    "order_candidates",
     "ProxyClearance",
     "SampledMotion",
     "Stacking",
@@ -60,15 +61,22 @@ _TRIM_REACH = 2.0
 @dataclass(frozen=True)
 class Stacking:
     """Per joint ``j``: ``offsets[j]`` (m) the axial position along :math:`h_j` of the middle of the two housings
-    from the joint point, ``spacers[j]`` (m, >= 0) the room added to the axial gap between them (module docstring)."""
+    from the joint point, ``spacers[j]`` (m, >= 0) the room added to the axial gap between them, ``orders[j]``
+    ``+1`` where link ``j``'s housing lies below link ``j + 1``'s along :math:`h_j` (as without a design), ``-1``
+    where above (module docstring)."""
 
     offsets: tuple[float, ...]
     spacers: tuple[float, ...]
+    orders: tuple[int, ...] | None = None
 
     @classmethod
     def nominal(cls, n: int) -> Stacking:
         """Both housings stacked about the joint point, one axial gap apart: the links as before any design."""
         return cls((0.0,) * n, (0.0,) * n)
+
+    def order(self, joint: int) -> int:
+        """``orders[joint]``, ``+1`` without orders."""
+        return 1 if self.orders is None else int(self.orders[joint])
 
     def attach_points(self, loop: SingleLoop, design: LinkDesign | None = None) -> NDArray[np.float64]:
         """Housing centres ``(n, 2, 3)``: row ``j`` holds link ``j``'s and link ``j + 1``'s on :math:`h_j`
@@ -79,7 +87,7 @@ class Stacking:
         points = joint_points(loop)
         attach = np.empty((loop.n, 2, 3))
         for j, axis in enumerate(loop.axes):
-            half = design.housing_offset + 0.5 * self.spacers[j]
+            half = self.order(j) * (design.housing_offset + 0.5 * self.spacers[j])
             attach[j, 0] = points[j] + (self.offsets[j] - half) * axis.direction
             attach[j, 1] = points[j] + (self.offsets[j] + half) * axis.direction
         return attach
@@ -338,50 +346,55 @@ def _closest_poses(f: NDArray, certified: NDArray, limit: float) -> tuple[NDArra
     return np.array(poses, dtype=np.int64), np.array(pairs, dtype=np.int64)
 
 
-def design_stacking(
-    loop: SingleLoop,
-    driver: int = 0,
-    start: ArrayLike | None = None,
-    design: LinkDesign | None = None,
-    margin: float = 1e-3,
-    max_offset: float | None = None,
-    max_spacer: float | None = None,
-    n_poses: int = DEFAULT_POSES,
-) -> StackingDesign:
-    r"""The :class:`Stacking` with the least spacers and shifts whose links keep ``margin`` (m) along one revolution
-    of ``driver`` from the closing pose near ``start`` (module docstring; ``docs/formulation.md``).
+#: Poses of the first, coarse design of each order (2 deg apart), refined on all the poses: the coarse problem has
+#: fewer local minima for SLSQP to stall at.
+_COARSE_POSES = 181
+#: How far above the margin the optimiser aims (m), so that the check on every interval, whose bound takes the larger
+#: speed of the interval's two ends, keeps the margin.
+_CUSHION = 1e-4
 
-    In rounds, the poses where each compared capsule pair comes closest (local minima of its clearance
-    :math:`f`) are taken, with the allowance :math:`L\,\Delta/2` of the speed bound there, and SLSQP first raises the
-    smallest :math:`f - L\Delta/2` to the margin (maximises :math:`z` subject to :math:`f - L\Delta/2 \ge z`), then
-    minimises :math:`\sum_j g_j + \epsilon \sum_j t_j^2` (mm, :math:`\epsilon` = 0.01/mm: a 10 mm shift weighs as
-    a 1 mm spacer) keeping :math:`f - L\Delta/2 \ge` ``margin``; every round starts from the last (the first from
-    the nominal stacking), so the design is deterministic. The result is judged on every interval of the motion
-    (:func:`proxy_clearance`). Bounds: :math:`|t_j|` <= ``max_offset`` (default a quarter of the loop's size),
-    :math:`0 \le g_j` <= ``max_spacer`` (default and at most the reach of ``build_link``'s trimming beyond the
-    housing, within which a housing and the other link's arm stay apart by construction). Raises
-    :class:`GeometryError` naming the closest pair of links, the drive angle and the clearance reached where no
-    stacking found within the bounds keeps the margin.
-    """
-    clock = time.perf_counter()
-    design = LinkDesign() if design is None else design
-    if not 0.0 <= margin <= design.axial_gap:
-        raise ValueError(
-            f"margin {1e3 * margin:.3g} mm must lie in [0, axial gap {1e3 * design.axial_gap:.3g} mm]: at a shared "
-            "joint the housings are one axial gap apart by construction; raise LinkDesign.axial_gap"
-        )
+
+def order_candidates(n: int, limit: int) -> list[tuple[int, ...]]:
+    """Stacking orders to try, at most ``limit``: for an even loop first the alternating one (links 1, 3, ... outside
+    at both their joints, links 0, 2, ... inside, as Bennett linkages are built), then the nominal one, then the rest
+    by their number of joints that differ from the first (ties in lexicographic order)."""
+    every = list(itertools.product((1, -1), repeat=n))
+    first = tuple(1 if j % 2 == 0 else -1 for j in range(n)) if n % 2 == 0 else (1,) * n
+
+    def rank(order: tuple[int, ...]) -> tuple:
+        differing = sum(a != b for a, b in zip(order, first, strict=True))
+        return (order != first, order != (1,) * n, differing, order)
+
+    every.sort(key=rank)
+    return every[:limit]
+
+
+class _Bounds(NamedTuple):
+    """The optimiser's bounds (mm): offsets within ``[-offset, offset]``, spacers within ``[0, spacer]``."""
+
+    offset: float
+    spacer: float
+
+
+def _design_order(
+    loop: SingleLoop,
+    motion: SampledMotion,
+    pairs: _Pairs,
+    design: LinkDesign,
+    margin: float,
+    limits: _Bounds,
+    orders: tuple[int, ...],
+    x: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """The offsets and spacers (mm) of :func:`design_stacking` for one stacking order from ``x`` (its docstring:
+    rounds, two phases)."""
     n = loop.n
-    reach = _TRIM_REACH * (design.arm_width + design.arm_thickness + design.mount_height)
-    spacer_limit = reach - design.housing_length - design.axial_gap
-    max_offset = 0.25 * loop.scale if max_offset is None else max_offset
-    max_spacer = spacer_limit if max_spacer is None else min(max_spacer, spacer_limit)
-    motion = sampled_motion(loop, driver, start, n_poses)
-    pairs = _capsule_pairs(_all_capsules(loop, Stacking.nominal(n), design))
-    bounds = [(-1e3 * max_offset, 1e3 * max_offset)] * n + [(0.0, 1e3 * max_spacer)] * n
+    bounds = [(-limits.offset, limits.offset)] * n + [(0.0, limits.spacer)] * n
     low, high = np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds])
+    target = margin + _CUSHION
 
     def stacking_of(x: NDArray) -> Stacking:
-        return Stacking(tuple(float(v) for v in 1e-3 * x[:n]), tuple(float(v) for v in 1e-3 * x[n:]))
+        return Stacking(tuple(float(v) for v in 1e-3 * x[:n]), tuple(float(v) for v in 1e-3 * x[n:]), orders)
 
     def cost(x: NDArray) -> float:
         return float(np.sum(x[n:]) + 0.01 * np.sum(x[:n] ** 2))
@@ -389,14 +402,13 @@ def design_stacking(
     def cost_gradient(x: NDArray) -> NDArray:
         return np.concatenate([0.02 * x[:n], np.ones(n)])
 
-    x = np.zeros(2 * n)
     kept: set[tuple[int, int]] = set()  # (pose, pair) entries of every round so far: no cycling between pose sets
     for _ in range(_ROUNDS):
         capsules = _all_capsules(loop, stacking_of(x), design)
         f, certified = _clearances(motion, capsules, pairs)
         if certified.min() >= margin:
             break
-        kept.update(zip(*(v.tolist() for v in _closest_poses(f, certified, margin + 0.02)), strict=True))
+        kept.update(zip(*(v.tolist() for v in _closest_poses(f, certified, target + 0.02)), strict=True))
         poses, chosen = (np.array(v, dtype=np.int64) for v in zip(*sorted(kept), strict=True))
         sub = SampledMotion(
             motion.angles[poses], 0.0, motion.transforms[poses], motion.omega[poses], motion.velocity[poses]
@@ -405,7 +417,7 @@ def design_stacking(
 
         def gaps(x: NDArray, sub=sub, chosen=chosen, allowance=allowance) -> NDArray:
             clear = _pair_clearances(sub, _all_capsules(loop, stacking_of(x), design), pairs, chosen)
-            return 1e3 * (clear - allowance - margin)
+            return 1e3 * (clear - allowance - target)
 
         if gaps(x).min() < 0.0:  # phase 1: raise the smallest clearance to the margin
             raised = minimize(
@@ -418,7 +430,7 @@ def design_stacking(
                 options={"maxiter": 100, "ftol": 1e-6},
             )
             x = np.clip(raised.x[:-1], low, high)
-            logger.info("stacking, phase 1: %s, smallest %.3g mm", raised.message, gaps(x).min())
+            logger.info("stacking %s, phase 1: %s, smallest %.3g mm", orders, raised.message, gaps(x).min())
         if gaps(x).min() >= -1e-6:  # phase 2: the least spacers and shifts that keep the margin
             least = minimize(
                 cost,
@@ -432,16 +444,74 @@ def design_stacking(
             candidate = np.clip(least.x, low, high)
             if gaps(candidate).min() >= -1e-6:
                 x = candidate
-            logger.info("stacking, phase 2: %s, cost %.4g", least.message, cost(x))
-    stacking = stacking_of(x)
-    clearance = proxy_clearance(loop, motion, stacking, design)
+            logger.info("stacking %s, phase 2: %s, cost %.4g", orders, least.message, cost(x))
+    return x
+
+
+def design_stacking(
+    loop: SingleLoop,
+    driver: int = 0,
+    start: ArrayLike | None = None,
+    design: LinkDesign | None = None,
+    margin: float = 1e-3,
+    max_offset: float | None = None,
+    max_spacer: float | None = None,
+    n_poses: int = DEFAULT_POSES,
+    max_orders: int = 16,
+) -> StackingDesign:
+    r"""The :class:`Stacking` with the least spacers and shifts whose links keep ``margin`` (m) along one revolution
+    of ``driver`` from the closing pose near ``start`` (module docstring; ``docs/formulation.md``, (C5)).
+
+    For each stacking order of :func:`order_candidates` (at most ``max_orders``), until one keeps the margin, on 181
+    poses and then from that result on all ``n_poses``: in rounds, the poses where each compared capsule pair comes
+    closest (local minima of its clearance :math:`f`) are taken, with the allowance :math:`L\,\Delta/2` of the
+    speed bound there, and SLSQP first raises the smallest
+    :math:`f - L\Delta/2` to the margin (maximises :math:`z` subject to :math:`f - L\Delta/2 \ge z`), then minimises
+    :math:`\sum_j g_j + \epsilon \sum_j t_j^2` (mm, :math:`\epsilon` = 0.01/mm: a 10 mm shift weighs as a 1 mm
+    spacer) keeping :math:`f - L\Delta/2 \ge` ``margin`` + 0.1 mm; every round starts from the last (the first
+    from the nominal offsets), so the design is deterministic. The result is judged on every interval of the
+    motion (:func:`proxy_clearance`). Bounds: :math:`|t_j|` <= ``max_offset`` (default a quarter of the loop's
+    size), :math:`0 \le g_j` <= ``max_spacer`` (default and at most the reach of ``build_link``'s trimming beyond
+    the housing, within which a housing and the other link's arm stay apart by construction). Raises
+    :class:`GeometryError` naming the closest pair of links, the drive angle and the clearance reached (of the
+    order that came closest) where no stacking found within the bounds keeps the margin.
+    """
+    clock = time.perf_counter()
+    design = LinkDesign() if design is None else design
+    if not 0.0 <= margin <= design.axial_gap:
+        raise ValueError(
+            f"margin {1e3 * margin:.3g} mm must lie in [0, axial gap {1e3 * design.axial_gap:.3g} mm]: at a shared "
+            "joint the housings are one axial gap apart by construction; raise LinkDesign.axial_gap"
+        )
+    n = loop.n
+    reach = _TRIM_REACH * (design.arm_width + design.arm_thickness + design.mount_height)
+    spacer_limit = reach - design.housing_length - design.axial_gap
+    max_offset = 0.25 * loop.scale if max_offset is None else max_offset
+    max_spacer = spacer_limit if max_spacer is None else min(max_spacer, spacer_limit)
+    limits = _Bounds(1e3 * max_offset, 1e3 * max_spacer)
+    motion = sampled_motion(loop, driver, start, n_poses)
+    coarse = motion if n_poses <= _COARSE_POSES else sampled_motion(loop, driver, start, _COARSE_POSES)
+    pairs = _capsule_pairs(_all_capsules(loop, Stacking.nominal(n), design))
+    closest: tuple[Stacking, ProxyClearance] | None = None
+    for orders in order_candidates(n, max_orders):
+        x = _design_order(loop, coarse, pairs, design, margin, limits, orders, np.zeros(2 * n))
+        x = _design_order(loop, motion, pairs, design, margin, limits, orders, x)
+        stacking = Stacking(tuple(float(v) for v in 1e-3 * x[:n]), tuple(float(v) for v in 1e-3 * x[n:]), orders)
+        clearance = proxy_clearance(loop, motion, stacking, design)
+        if closest is None or clearance.smallest[0] > closest[1].smallest[0]:
+            closest = (stacking, clearance)
+        if clearance.smallest[0] >= margin:
+            break
+    assert closest is not None  # max_orders >= 1
+    stacking, clearance = closest
     value, (a, b), angle = clearance.smallest
     seconds = time.perf_counter() - clock
-    if value < margin - 1e-9:
+    if value < margin:
         raise GeometryError(
             f"no collision-free stacking within the bounds (offsets <= {1e3 * max_offset:.3g} mm, spacers <= "
-            f"{1e3 * max_spacer:.3g} mm): links {a} and {b} come within {1e3 * value:.2f} mm at drive angle "
-            f"{np.degrees(angle):.1f} deg (margin {1e3 * margin:.3g} mm); widen the bounds or slim the links"
+            f"{1e3 * max_spacer:.3g} mm, {max_orders} stacking orders): links {a} and {b} come within "
+            f"{1e3 * value:.2f} mm at drive angle {np.degrees(angle):.1f} deg (margin {1e3 * margin:.3g} mm); "
+            "widen the bounds or slim the links"
         )
     logger.info("collision-free stacking: %s", clearance.summary())
     return StackingDesign(stacking, clearance, margin, seconds)
