@@ -34,7 +34,16 @@ from ffrf.errors import GeometryError
 from ffrf.geometry.joint_axes import Axis, common_normal_feet
 from ffrf.mesh.tet_mesh import MAX_LINK_EXTENT_M, TetMesh
 
-__all__ = ["LINK_DESIGN_FIELDS", "LinkDesign", "LinkGeometry", "arm_frame", "arm_waypoints", "build_link", "mesh_link"]
+__all__ = [
+    "LINK_DESIGN_FIELDS",
+    "LinkDesign",
+    "LinkGeometry",
+    "arm_frame",
+    "arm_waypoints",
+    "build_link",
+    "mesh_link",
+    "trim_reach",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -210,6 +219,11 @@ def _classify_surfaces(gmsh, geometry_axes, centers, design: LinkDesign, mount) 
     return found
 
 
+def trim_reach(design: LinkDesign) -> float:
+    """How far beyond a housing's end faces :func:`build_link` trims the arm near the axis (m)."""
+    return 2.0 * (design.arm_width + design.arm_thickness + design.mount_height)
+
+
 def _trim_to_housing_slabs(occ, parts: list[int], axes, centers, design: LinkDesign) -> list[tuple[int, int]]:
     """Cut away arm material that sticks out of a housing's end faces near the axis.
 
@@ -219,7 +233,7 @@ def _trim_to_housing_slabs(occ, parts: list[int], axes, centers, design: LinkDes
     everything within (housing radius + axial gap) of the axis beyond the end
     planes keeps the neighbour's housing at least one gap away in both directions.
     """
-    cap = 2.0 * (design.arm_width + design.arm_thickness + design.mount_height)
+    cap = trim_reach(design)
     clearance_radius = design.housing_outer_radius + design.axial_gap
     tools = []
     for axis, center in zip(axes, centers, strict=True):

@@ -32,19 +32,19 @@ from scipy.optimize import minimize
 
 from ffrf.errors import GeometryError
 from ffrf.geometry.link_capsules import ARM, MOUNT, LinkCapsules, link_capsules, segment_distances
-from ffrf.geometry.link_geometry import LinkDesign
+from ffrf.geometry.link_geometry import LinkDesign, trim_reach
 from ffrf.scenes.linkage_description import drive_sign, joint_points
 from kinematics import Line, SingleLoop, motion_tangents, trace_motion
 
 __all__ = [
     "LinkBuildInput",
-    "order_candidates",
     "ProxyClearance",
     "SampledMotion",
     "Stacking",
     "StackingDesign",
     "design_stacking",
     "link_build_inputs",
+    "order_candidates",
     "proxy_clearance",
     "sampled_motion",
 ]
@@ -53,9 +53,6 @@ logger = logging.getLogger(__name__)
 
 #: Poses sampled over one revolution of the driver by default (0.25 deg apart).
 DEFAULT_POSES = 1441
-#: The trimming of build_link reaches this far beyond a housing's end faces (m per m of section), which bounds
-#: the spacer for which a housing and the neighbour's arm stay apart by construction.
-_TRIM_REACH = 2.0
 
 
 @dataclass(frozen=True)
@@ -194,7 +191,7 @@ def _shared_joint(a: int, b: int, n: int) -> int | None:
     return None
 
 
-def _side(link: int, joint: int, n: int) -> int:
+def _side(link: int, joint: int) -> int:
     """Which of ``link``'s housings sits on ``joint``: 1 on its second axis (joint ``link``), 0 on its first."""
     return 1 if joint == link else 0
 
@@ -212,7 +209,7 @@ def _capsule_pairs(capsules: list[LinkCapsules]) -> _Pairs:
         kept = False
         for i, j in itertools.product(np.flatnonzero(owner == a), np.flatnonzero(owner == b)):
             if joint is not None:
-                side_a, side_b = _side(a, joint, n), _side(b, joint, n)
+                side_a, side_b = _side(a, joint), _side(b, joint)
                 if (parts[i] == side_a and parts[j] in (side_b, ARM, MOUNT)) or (
                     parts[j] == side_b and parts[i] in (ARM, MOUNT)
                 ):
@@ -484,8 +481,8 @@ def design_stacking(
             "joint the housings are one axial gap apart by construction; raise LinkDesign.axial_gap"
         )
     n = loop.n
-    reach = _TRIM_REACH * (design.arm_width + design.arm_thickness + design.mount_height)
-    spacer_limit = reach - design.housing_length - design.axial_gap
+    # Within the trimming's reach, a housing and the other link's arm at a shared joint stay apart by construction.
+    spacer_limit = trim_reach(design) - design.housing_length - design.axial_gap
     max_offset = 0.25 * loop.scale if max_offset is None else max_offset
     max_spacer = spacer_limit if max_spacer is None else min(max_spacer, spacer_limit)
     limits = _Bounds(1e3 * max_offset, 1e3 * max_spacer)
