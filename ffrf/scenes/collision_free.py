@@ -382,9 +382,10 @@ def _design_order(
     limits: _Bounds,
     orders: tuple[int, ...],
     x: NDArray[np.float64],
+    step: float,
 ) -> NDArray[np.float64]:
     """The offsets and spacers (mm) of :func:`design_stacking` for one stacking order from ``x`` (its docstring:
-    rounds, two phases)."""
+    rounds, two phases), the allowance at a local minimum that of poses ``step`` apart (the final sampling's)."""
     n = loop.n
     bounds = [(-limits.offset, limits.offset)] * n + [(0.0, limits.spacer)] * n
     low, high = np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds])
@@ -410,7 +411,7 @@ def _design_order(
         sub = SampledMotion(
             motion.angles[poses], 0.0, motion.transforms[poses], motion.omega[poses], motion.velocity[poses]
         )
-        allowance = _allowance(sub, capsules, pairs, chosen, motion.step)
+        allowance = _allowance(sub, capsules, pairs, chosen, step)
 
         def gaps(x: NDArray, sub=sub, chosen=chosen, allowance=allowance) -> NDArray:
             clear = _pair_clearances(sub, _all_capsules(loop, stacking_of(x), design), pairs, chosen)
@@ -460,9 +461,10 @@ def design_stacking(
     of ``driver`` from the closing pose near ``start`` (module docstring; ``docs/formulation.md``, (C5)).
 
     For each stacking order of :func:`order_candidates` (at most ``max_orders``), until one keeps the margin, on 181
-    poses and then from that result on all ``n_poses``: in rounds, the poses where each compared capsule pair comes
-    closest (local minima of its clearance :math:`f`) are taken, with the allowance :math:`L\,\Delta/2` of the
-    speed bound there, and SLSQP first raises the smallest
+    of the poses (with their own allowance, which asks for more room, and where that fails with the allowance of all
+    the poses) and then from that result on all ``n_poses``: in rounds, the poses
+    where each compared capsule pair comes closest (local minima of its clearance :math:`f`) are taken, with the
+    allowance :math:`L\,\Delta/2` of the speed bound there, and SLSQP first raises the smallest
     :math:`f - L\Delta/2` to the margin (maximises :math:`z` subject to :math:`f - L\Delta/2 \ge z`), then minimises
     :math:`\sum_j g_j + \epsilon \sum_j t_j^2` (mm, :math:`\epsilon` = 0.01/mm: a 10 mm shift weighs as a 1 mm
     spacer) keeping :math:`f - L\Delta/2 \ge` ``margin`` + 0.1 mm; every round starts from the last (the first
@@ -491,13 +493,16 @@ def design_stacking(
     pairs = _capsule_pairs(_all_capsules(loop, Stacking.nominal(n), design))
     closest: tuple[Stacking, ProxyClearance] | None = None
     for orders in order_candidates(n, max_orders):
-        x = _design_order(loop, coarse, pairs, design, margin, limits, orders, np.zeros(2 * n))
-        x = _design_order(loop, motion, pairs, design, margin, limits, orders, x)
-        stacking = Stacking(tuple(float(v) for v in 1e-3 * x[:n]), tuple(float(v) for v in 1e-3 * x[n:]), orders)
-        clearance = proxy_clearance(loop, motion, stacking, design)
-        if closest is None or clearance.smallest[0] > closest[1].smallest[0]:
-            closest = (stacking, clearance)
-        if clearance.smallest[0] >= margin:
+        for allowance_step in (coarse.step, motion.step):  # the coarse poses' own allowance, then all the poses'
+            x = _design_order(loop, coarse, pairs, design, margin, limits, orders, np.zeros(2 * n), allowance_step)
+            x = _design_order(loop, motion, pairs, design, margin, limits, orders, x, motion.step)
+            stacking = Stacking(tuple(float(v) for v in 1e-3 * x[:n]), tuple(float(v) for v in 1e-3 * x[n:]), orders)
+            clearance = proxy_clearance(loop, motion, stacking, design)
+            if closest is None or clearance.smallest[0] > closest[1].smallest[0]:
+                closest = (stacking, clearance)
+            if clearance.smallest[0] >= margin or coarse is motion:
+                break
+        if closest is not None and closest[1].smallest[0] >= margin:
             break
     assert closest is not None  # max_orders >= 1
     stacking, clearance = closest

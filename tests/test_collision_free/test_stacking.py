@@ -142,3 +142,15 @@ def test_the_collision_free_bennett_links_clear_each_other_on_their_meshes():
     scene = build_bennett("pla", h=8e-3, order=1, n_modes=2, collision_free=True)
     clearance = scene.clearance(n_poses=144)
     assert not clearance.collisions, clearance.summary()
+
+
+@pytest.mark.slow
+def test_the_paper_bennett_is_designed_collision_free():
+    """design_stacking finds a stacking of the paper's Bennett that keeps 1 mm (the one stored, to 0.1 mm)."""
+    from ffrf.paper.bennett_scene import COLLISION_FREE_STACKING
+
+    designed = design_stacking(BENNETT, 3, _start())
+    assert designed.clearance.smallest[0] >= 1e-3
+    assert designed.stacking.orders == COLLISION_FREE_STACKING.orders
+    np.testing.assert_allclose(designed.stacking.offsets, COLLISION_FREE_STACKING.offsets, atol=0.05e-3)
+    np.testing.assert_allclose(designed.stacking.spacers, COLLISION_FREE_STACKING.spacers, atol=0.05e-3)
