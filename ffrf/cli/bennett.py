@@ -24,6 +24,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
         default="pla",
         help="paper's variant: rigid, PLA, PLA with alpha_3 = 91 or 92 deg",
     )
+    parser.add_argument(
+        "--collision-free",
+        action="store_true",
+        help="links whose housings sit along the axes so that every two links keep 1 mm along the revolution",
+    )
     configure_linkage_run(parser)
 
 
@@ -37,7 +42,12 @@ def run(args: argparse.Namespace) -> int:
         file=sys.stderr,
     )
     scene = build_bennett(
-        args.variant, h=args.h, order=args.order, n_modes=args.modes, joint_offsets=args.joint_offsets
+        args.variant,
+        h=args.h,
+        order=args.order,
+        n_modes=args.modes,
+        joint_offsets=args.joint_offsets,
+        collision_free=args.collision_free,
     )
     return run_and_report(
         load(scene), args.out, args.variant, started, run_options(args), paper_max_coupler_deviation(args.variant)

@@ -34,7 +34,16 @@ from ffrf.errors import GeometryError
 from ffrf.geometry.joint_axes import Axis, common_normal_feet
 from ffrf.mesh.tet_mesh import MAX_LINK_EXTENT_M, TetMesh
 
-__all__ = ["LINK_DESIGN_FIELDS", "LinkDesign", "LinkGeometry", "build_link", "mesh_link"]
+__all__ = [
+    "LINK_DESIGN_FIELDS",
+    "LinkDesign",
+    "LinkGeometry",
+    "arm_frame",
+    "arm_waypoints",
+    "build_link",
+    "mesh_link",
+    "trim_reach",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -113,7 +122,7 @@ def _points_on_axes(points: ArrayLike, axes: tuple[Axis, Axis], names: tuple[str
     return points
 
 
-def _frame_along(start: NDArray, end: NDArray, hint: NDArray) -> NDArray[np.float64]:
+def arm_frame(start: NDArray, end: NDArray, hint: NDArray) -> NDArray[np.float64]:
     """Right-handed frame (columns e1, e2, e3): e1 along start->end, e2 = hint made orthogonal."""
     e1 = (end - start) / np.linalg.norm(end - start)
     e2 = hint - (hint @ e1) * e1
@@ -210,6 +219,11 @@ def _classify_surfaces(gmsh, geometry_axes, centers, design: LinkDesign, mount) 
     return found
 
 
+def trim_reach(design: LinkDesign) -> float:
+    """How far beyond a housing's end faces :func:`build_link` trims the arm near the axis (m)."""
+    return 2.0 * (design.arm_width + design.arm_thickness + design.mount_height)
+
+
 def _trim_to_housing_slabs(occ, parts: list[int], axes, centers, design: LinkDesign) -> list[tuple[int, int]]:
     """Cut away arm material that sticks out of a housing's end faces near the axis.
 
@@ -219,7 +233,7 @@ def _trim_to_housing_slabs(occ, parts: list[int], axes, centers, design: LinkDes
     everything within (housing radius + axial gap) of the axis beyond the end
     planes keeps the neighbour's housing at least one gap away in both directions.
     """
-    cap = 2.0 * (design.arm_width + design.arm_thickness + design.mount_height)
+    cap = trim_reach(design)
     clearance_radius = design.housing_outer_radius + design.axial_gap
     tools = []
     for axis, center in zip(axes, centers, strict=True):
@@ -281,7 +295,7 @@ def build_link(
     for start, end in itertools.pairwise(path):
         # Segments after a stub overlap their neighbours by half an arm width, so the corners are filled.
         extra = 0.0 if len(path) == 2 else half_w
-        frame_k = _frame_along(start, end, axes[0].direction)
+        frame_k = arm_frame(start, end, axes[0].direction)
         length = float(np.linalg.norm(end - start))
         parts.append(
             _placed_box(
@@ -294,7 +308,7 @@ def build_link(
         )
     middle = len(path) // 2 - 1 if len(path) == 4 else 0  # the segment between the stubs (or the whole arm)
     origin = path[middle]
-    frame = _frame_along(origin, path[middle + 1], axes[0].direction)
+    frame = arm_frame(origin, path[middle + 1], axes[0].direction)
     middle_length = float(np.linalg.norm(path[middle + 1] - origin))
     mount_plane = None
     if mount:

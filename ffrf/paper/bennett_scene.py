@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from ffrf.fe.materials import PLA, RIGID, Material
 from ffrf.output.path_distance import ExactCurve
 from ffrf.scenes.assembly import assemble
+from ffrf.scenes.collision_free import Stacking
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, linkage_description
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_cache import SceneCache
@@ -59,6 +60,7 @@ __all__ = [
     "build_bennett",
     "build_bennett_from_options",
     "STUDY_BASES",
+    "COLLISION_FREE_STACKING",
     "assemble",
 ]
 
@@ -72,6 +74,15 @@ VARIANTS: dict[str, tuple[Material, float]] = {
 #: The paper's maximum coupler deviations from the ideal path per variant (mm; Sect. "Results",
 #: simulated, its STL links at 2 mm with 32 modes). The rigid one is a bound: "< 0.001".
 PAPER_MAX_COUPLER_DEVIATION_MM: dict[str, float] = {"rigid": 0.001, "pla": 0.211, "pla1": 1.215, "pla2": 2.305}
+
+
+#: Where the links' housings sit along the paper's axes so that every two links keep 1 mm (capsule proxy, along a
+#: revolution from the start): :func:`ffrf.scenes.collision_free.design_stacking` of the nominal loop, driver 3,
+#: 1441 poses, rounded to 0.1 mm (``tests/test_collision_free/test_stacking.py`` checks the margin). Links 1 and 3 lie
+#: outside at both their joints (orders +1, -1, +1, -1).
+COLLISION_FREE_STACKING = Stacking(
+    offsets=(-27.7e-3, -32.4e-3, -38.3e-3, -26.8e-3), spacers=(3.9e-3, 10.1e-3, 6.9e-3, 4.1e-3), orders=(1, -1, 1, -1)
+)
 
 
 def paper_max_coupler_deviation(variant: str) -> str:
@@ -150,6 +161,7 @@ def bennett_options(
     gravity=(0.0, 0.0, -9.81),
     exact_gravity: bool = True,
     joint_offsets: str = "body",
+    collision_free: bool = False,
 ) -> LinkageOptions:
     """The paper's scene ``variant`` (``rigid``, ``pla``, ``pla1``, ``pla2``) as linkage options: joint 3
     driven (side 0 the base, side 1 link 3), the coupler link 2, the base's h3 misaligned by alpha_3 - 90 deg.
@@ -160,7 +172,9 @@ def bennett_options(
     (the rule and its measurements: ``docs/speed_vs_error.md``); ``start_angle``: link 3's
     rotation about h3 from the folded home pose at t = 0 (the folded pose itself has overlapping
     arms); ``revolutions`` after the ramp; ``joint_offsets``: ``"body"`` (paper, Exudyn) or
-    ``"marker"`` (module docstring).
+    ``"marker"`` (module docstring); ``collision_free``: the links' housings placed along the axes by
+    :data:`COLLISION_FREE_STACKING` (every two links 1 mm apart along the revolution) instead of stacked about the
+    joint points.
     """
     if variant not in VARIANTS:
         raise ValueError(f"unknown variant {variant!r}; choose one of {sorted(VARIANTS)}")
@@ -183,6 +197,7 @@ def bennett_options(
         tool_link=2,
         exact_gravity=exact_gravity,
         joint_offsets=joint_offsets,
+        attach_points=COLLISION_FREE_STACKING.attach_points(_paper_loop()) if collision_free else None,
     )
 
 

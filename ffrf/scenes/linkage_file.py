@@ -22,6 +22,10 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
     drive = {rpm = 1.0, ramp_time = 1.0}
     revolutions = 1.0
     link_design = {arm_width = 16, arm_thickness = 12}   # the links' dimensions (in unit; LinkDesign)
+    collision_free = true              # place the housings along the axes so that every two links keep
+    clearance_margin = 1.0             #   clearance_margin (in unit, default 1 mm) over a revolution of the driver
+                                       #   (ffrf.scenes.collision_free.design_stacking), or give a designed set:
+    # stacking = {offsets = [...], spacers = [...], orders = [1, -1, ...]}   # per joint, offsets and spacers in unit
     bore_errors = [{joint = 5, link = 0, twist_deg = 1.0, offset = 0.2, axial = 0.1}]   # as built (offset
                                        # along the normal, axial along the bore, in unit), or the measured
                                        # bore: {joint, link, point = [...], direction = [...], axial = ...}
@@ -53,8 +57,9 @@ import numpy as np
 from ffrf.errors import GeometryError, SceneError
 from ffrf.fe.materials import PLA, Material
 from ffrf.geometry.link_geometry import LinkDesign
+from ffrf.scenes.collision_free import Stacking, design_stacking
 from ffrf.scenes.limits import length_unit_problem, linkage_run_steps, steps_problem
-from ffrf.scenes.linkage_description import BoreError, LinkageOptions
+from ffrf.scenes.linkage_description import BoreError, LinkageOptions, start_pose
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_schema import LINK_DESIGN, MATERIAL, PARAMETRIC_H_RANGE, SETTINGS, Key, check_table
 from ffrf.scenes.schema_keys import between, nonzero_vector
@@ -139,6 +144,11 @@ BORE_ERROR = {
     "point": Key("vector3"),
     "direction": Key("vector3", False, nonzero_vector),
 }
+STACKING = {
+    "offsets": Key("numbers", True),
+    "spacers": Key("numbers"),
+    "orders": Key("numbers"),
+}
 DRIVE = {
     "rpm": Key("number", False, _nonzero),
     "omega": Key("number", False, _nonzero),
@@ -163,6 +173,9 @@ LINKAGE = {
     "revolutions": Key("number", False, _positive),
     "bore_errors": Key("tables", keys=BORE_ERROR),
     "link_design": Key("table", keys=LINK_DESIGN),
+    "collision_free": Key("boolean"),
+    "clearance_margin": Key("number", False, _non_negative),
+    "stacking": Key("table", keys=STACKING),
 }
 #: A linkage file: ``[linkage]`` and optional ``[scene]`` settings (no bodies, joints or sensors of its own).
 LINKAGE_SCHEMA = {"linkage": Key("table", True, keys=LINKAGE), "scene": Key("table", keys=SETTINGS)}
@@ -261,6 +274,48 @@ def _warn_units(loop: SingleLoop, spec: dict, where: str) -> None:
         warnings.warn(f"{where}: {problem}", UserWarning, stacklevel=3)
 
 
+def _attach_points(
+    spec: dict,
+    loop: SingleLoop,
+    driver: int,
+    start: float,
+    origin: np.ndarray | None,
+    mechanism: Any,
+    design: LinkDesign,
+    length: float,
+    where: str,
+) -> np.ndarray | None:
+    """Where the links attach on the axes: the model's design points, a given or designed stacking, or None."""
+    chosen = [key for key in ("design_points", "collision_free", "stacking") if spec.get(key, False)]
+    if len(chosen) > 1:
+        raise SceneError(f"{where}: give one of design_points, collision_free and stacking, got {chosen}")
+    if "clearance_margin" in spec and not spec.get("collision_free", False):
+        raise SceneError(f"{where}: 'clearance_margin' is the margin of collision_free = true")
+    if spec.get("design_points", False):
+        return attach_points(mechanism, spec.get("scale", 0.1))
+    if "stacking" in spec:
+        table = spec["stacking"]
+        n = loop.n
+        offsets = [length * v for v in table["offsets"]]
+        spacers = [length * v for v in table.get("spacers", [0.0] * n)]
+        orders = table.get("orders")
+        if len(offsets) != n or len(spacers) != n or (orders is not None and len(orders) != n):
+            raise SceneError(f"{where}, stacking: give one offset, spacer and order per joint ({n})")
+        if min(spacers) < 0.0 or (orders is not None and any(o not in (1, -1) for o in orders)):
+            raise SceneError(f"{where}, stacking: spacers must be >= 0 and orders 1 or -1")
+        stacking = Stacking(tuple(offsets), tuple(spacers), None if orders is None else tuple(int(o) for o in orders))
+        return stacking.attach_points(loop, design)
+    if spec.get("collision_free", False):
+        margin = length * spec.get("clearance_margin", 1.0e-3 / length)
+        phi = start_pose(loop, driver, start, origin)
+        try:
+            designed = design_stacking(loop, driver, phi, design, margin)
+        except (GeometryError, ValueError) as error:
+            raise SceneError(f"{where}, collision_free: {error}") from error
+        return designed.stacking.attach_points(loop, design)
+    return None
+
+
 def load_linkage(document: dict, base: Path | None = None, where: str = "linkage") -> LinkageScene:
     """Check a linkage file (already parsed) and build its linkage (module docstring)."""
     del base  # a linkage file refers to no other file
@@ -336,6 +391,7 @@ def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop,
         design = LinkDesign(**{key: length * value for key, value in spec.get("link_design", {}).items()})
     except GeometryError as error:
         raise SceneError(f"{label}, link_design: {error}") from error
+    attach = _attach_points(spec, loop, driver, start, origin, mechanism, design, length, label)
     options = LinkageOptions(
         material=material,
         name=spec.get("name", settings.get("name", "linkage")),
@@ -355,7 +411,7 @@ def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop,
         tool_link=tool,
         exact_gravity=settings.get("exact_gravity", True),
         joint_offsets=settings.get("joint_offsets", "body"),
-        attach_points=(attach_points(mechanism, spec.get("scale", 0.1)) if spec.get("design_points", False) else None),
+        attach_points=attach,
     )
     run = {key: settings[key] for key in ("mode", "outputs", "step", "rho_inf", "stability") if key in settings}
     return loop, options, run

@@ -1,0 +1,120 @@
+r"""A conservative proxy of the parametric link: capsules that enclose every part of its solid.
+
+A capsule is a segment :math:`[a, b]` and a radius :math:`r`, the points within :math:`r` of the segment.
+The distance between two capsules is the distance between their segments minus both radii, in closed form
+(:func:`segment_distances`), so the clearance of two links along a motion costs a few array operations per pose.
+Because the capsules enclose the solid (:func:`link_capsules`), two links whose capsules keep a distance
+:math:`c` keep at least :math:`c` between their solids (``docs/formulation.md``, "Collision-free links").
+
+The parts of :func:`ffrf.geometry.link_geometry.build_link` and their capsules (half-diagonal
+:math:`\rho_a = \tfrac12\sqrt{w^2 + t^2}` of the arm's section :math:`w \times t`, housing radius :math:`R`):
+
+* housing: its axis segment (the housing's length), radius :math:`R`;
+* arm: each box along the arm's waypoints, radius :math:`\rho_a`, lengthened by the half width where the
+  boxes overlap at a stub. Where a box leaves a housing the capsule starts :math:`x_0 = \sqrt{R^2 - \rho_a^2}`
+  from the housing centre: nearer, every point of the box lies within :math:`R` of the centre, so it is inside
+  the housing or in the region beyond the housing's end faces that ``build_link`` trims away;
+* mount block: a segment through its middle along the arm, radius the half-diagonal of its section.
+
+Trimming and bores only remove material, so the proxy of the untrimmed parts encloses the built link too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ffrf.geometry.joint_axes import Axis
+from ffrf.geometry.link_geometry import LinkDesign, arm_frame, arm_waypoints
+
+__all__ = ["ARM", "MOUNT", "LinkCapsules", "link_capsules", "segment_distances"]
+
+#: ``LinkCapsules.parts`` of the arm's and the mount block's capsules (a housing's part is its side, 0 or 1).
+ARM, MOUNT = -1, -2
+
+
+@dataclass(frozen=True)
+class LinkCapsules:
+    """Capsules of one link in the home pose: segment ``starts``/``ends`` ``(k, 3)`` (m), ``radii`` ``(k,)``
+    (m) and the part of each (``0``/``1`` the housing on the link's first/second axis, :data:`ARM`, :data:`MOUNT`)."""
+
+    starts: NDArray[np.float64]
+    ends: NDArray[np.float64]
+    radii: NDArray[np.float64]
+    parts: tuple[int, ...]
+
+
+def link_capsules(
+    axis_a, axis_b, joint_points: ArrayLike, design: LinkDesign | None = None, mount: bool = False
+) -> LinkCapsules:
+    """Capsules enclosing the link :func:`~ffrf.geometry.link_geometry.build_link` builds from the same
+    ``axis_a``, ``axis_b``, ``joint_points`` ``(2, 3)``, ``design`` and ``mount`` (module docstring)."""
+    design = LinkDesign() if design is None else design
+    axes = (Axis.of(axis_a), Axis.of(axis_b))
+    points = np.asarray(joint_points, dtype=float).reshape(2, 3)
+    s, half_length = design.housing_offset, 0.5 * design.housing_length
+    centers = np.stack([points[0] + s * axes[0].direction, points[1] - s * axes[1].direction])
+    starts = [c - half_length * a.direction for c, a in zip(centers, axes, strict=True)]
+    ends = [c + half_length * a.direction for c, a in zip(centers, axes, strict=True)]
+    radii = [design.housing_outer_radius] * 2
+    parts = [0, 1]
+    arm_radius = 0.5 * float(np.hypot(design.arm_width, design.arm_thickness))
+    inside = float(np.sqrt(max(design.housing_outer_radius**2 - arm_radius**2, 0.0)))
+    path = arm_waypoints(points, axes, design)
+    path[0], path[-1] = centers
+    stubs = len(path) > 2
+    extra = 0.5 * design.arm_width if stubs else 0.0  # boxes after a stub overlap their neighbours (build_link)
+    last = len(path) - 2
+    for k in range(last + 1):
+        start, end = path[k], path[k + 1]
+        unit = (end - start) / np.linalg.norm(end - start)
+        begin = start + (inside if k == 0 else -extra) * unit
+        finish = end - (inside if k == last else -extra) * unit
+        starts.append(begin)
+        ends.append(finish)
+        radii.append(arm_radius)
+        parts.append(ARM)
+    if mount:
+        middle = len(path) // 2 - 1 if len(path) == 4 else 0
+        origin = path[middle]
+        frame = arm_frame(origin, path[middle + 1], axes[0].direction)
+        span = float(np.linalg.norm(path[middle + 1] - origin))
+        depth = design.mount_height + 0.5 * design.arm_thickness  # the block reaches from the arm's middle plane
+        x0 = 0.5 * (span - design.mount_length)
+        for x in (x0, x0 + design.mount_length):
+            (starts if x == x0 else ends).append(origin + frame @ np.array([x, 0.0, -0.5 * depth]))
+        radii.append(0.5 * float(np.hypot(design.mount_width, depth)))
+        parts.append(MOUNT)
+    return LinkCapsules(np.array(starts), np.array(ends), np.array(radii), tuple(parts))
+
+
+def segment_distances(p0: ArrayLike, p1: ArrayLike, q0: ArrayLike, q1: ArrayLike) -> NDArray[np.float64]:
+    r"""Distances between segments :math:`[p_0, p_1]` and :math:`[q_0, q_1]`, arrays ``(..., 3)`` broadcast.
+
+    The closest points :math:`p_0 + s\,u` and :math:`q_0 + t\,v` (:math:`u = p_1 - p_0`, :math:`v = q_1 - q_0`,
+    :math:`w = p_0 - q_0`) minimise :math:`|w + s u - t v|^2` over :math:`s, t \in [0, 1]`: the unconstrained
+    :math:`s = (b f - c e)/(a e - b^2)` (:math:`a = u\cdot u, b = u\cdot v, c = u\cdot w, e = v\cdot v,
+    f = v\cdot w`) clamped, :math:`t = (b s + f)/e`, and where :math:`t` leaves :math:`[0, 1]` it is clamped
+    and :math:`s` recomputed (Ericson, *Real-Time Collision Detection*, 2005, Sect. 5.1.9). Degenerate
+    segments (points) and parallel ones are handled (for parallel segments ``s = 0`` to start)."""
+    p0, p1, q0, q1 = (np.asarray(x, dtype=float) for x in (p0, p1, q0, q1))
+    u, v, w = p1 - p0, q1 - q0, p0 - q0
+    a, b, c = (u * u).sum(-1), (u * v).sum(-1), (u * w).sum(-1)
+    e, f = (v * v).sum(-1), (v * w).sum(-1)
+    tiny = 1e-30
+    denominator = a * e - b * b
+    safe_a, safe_e = np.where(a > tiny, a, 1.0), np.where(e > tiny, e, 1.0)
+    general = denominator > 1e-12 * np.maximum(a * e, tiny)
+    s = np.where(general, np.clip((b * f - c * e) / np.where(general, denominator, 1.0), 0.0, 1.0), 0.0)
+    s = np.where(e > tiny, s, np.clip(-c / safe_a, 0.0, 1.0))  # q is a point: the nearest point of p's segment
+    s = np.where(a > tiny, s, 0.0)
+    t = np.where(e > tiny, (b * s + f) / safe_e, 0.0)
+    below, above = t < 0.0, t > 1.0
+    t = np.clip(t, 0.0, 1.0)
+    s = np.where(below, np.clip(-c / safe_a, 0.0, 1.0), s)
+    s = np.where(above, np.clip((b - c) / safe_a, 0.0, 1.0), s)
+    s = np.where(a > tiny, s, 0.0)
+    gap = w + s[..., None] * u - t[..., None] * v
+    return np.sqrt((gap * gap).sum(-1))
