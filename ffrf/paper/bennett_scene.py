@@ -114,13 +114,16 @@ class BennettScene(LinkageScene):
         return self.with_misfit(fraction)
 
     def ideal_coupler_points(self, drive_angles: ArrayLike) -> NDArray[np.float64]:
-        """Coupler point of the ideal linkage at the given drive angles, from the motion polynomial."""
+        """Coupler point of the ideal linkage at the given drive angles, from the motion polynomial acting on the
+        scene's coupler point at home (the common normal's midpoint of the coupler's axes, unless the links attach
+        elsewhere on them)."""
         angles = np.asarray(drive_angles, dtype=float)
+        home = self.home_coupler_point()
 
         def points() -> NDArray[np.float64]:
             linkage = self.linkage
             t = linkage.parameter_from_joint(linkage.home_theta[3] - angles, joint=3)
-            return linkage.coupler_pose(t).act(linkage.coupler_point())
+            return linkage.coupler_pose(t).act(home)
 
         return self._kept(("motion polynomial", self.linkage.a, self.linkage.alpha), angles, points)
 
@@ -132,7 +135,7 @@ class BennettScene(LinkageScene):
         """The ideal coupler curve over one revolution from the start, ``n`` samples and the motion polynomial at
         any drive angle between them (for :func:`ffrf.output.path_distance.distance_to_curve`)."""
         linkage = self.linkage
-        point = linkage.coupler_point()
+        point = self.home_coupler_point()
 
         def exact(angles: NDArray[np.float64], arcs: NDArray[np.int64]) -> NDArray[np.float64]:
             t = linkage.parameter_from_joint(linkage.home_theta[3] - angles, joint=3)

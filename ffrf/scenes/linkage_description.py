@@ -47,6 +47,7 @@ __all__ = [
     "drive_sign",
     "joint_points",
     "linkage_description",
+    "seated_joint_points",
     "start_pose",
     "checked_tool_link",
 ]
@@ -92,6 +93,13 @@ def joint_points(loop: SingleLoop) -> NDArray[np.float64]:
         following = common_normal(axis, loop.axes[(i + 1) % n]).foot0
         points[i] = 0.5 * (previous + following)
     return points
+
+
+def seated_joint_points(loop: SingleLoop, attach_points: ArrayLike | None = None) -> NDArray[np.float64]:
+    """Where each joint of the built linkage sits, ``(n, 3)``: :func:`joint_points`, or, with ``attach_points``
+    ``(n, 2, 3)``, midway between the two links' attach points on its axis (the joints and the coupler point's
+    sensor are placed there)."""
+    return joint_points(loop) if attach_points is None else np.asarray(attach_points, dtype=float).mean(axis=1)
 
 
 class _Side(NamedTuple):
@@ -266,7 +274,7 @@ def linkage_description(
     n = loop.n
     tool = checked_tool_link(loop, o)
     attach = None if o.attach_points is None else np.asarray(o.attach_points, dtype=float)
-    points = joint_points(loop) if attach is None else attach.mean(axis=1)
+    points = seated_joint_points(loop, attach)
     if o.bore_error_model not in BORE_ERROR_MODELS:
         raise ValueError(f"bore_error_model must be one of {BORE_ERROR_MODELS}, got {o.bore_error_model!r}")
     seats = _seats(loop, attach, o.design)

@@ -34,6 +34,7 @@ from ffrf.scenes.linkage_description import (
     drive_sign,
     joint_points,
     linkage_description,
+    seated_joint_points,
     start_pose,
 )
 from ffrf.scenes.scene_cache import PROCESS_CACHE, SceneCache, content_key
@@ -55,9 +56,11 @@ __all__ = ["LinkageScene", "build_linkage"]
 class LinkageScene(Scene):
     """A built linkage (as built: every bore error in place) with its nominal ``loop``, the ``driver``
     joint, its ``drive`` (ramp from ``start_angle``, rad, the driven joint's prescribed angle), the
-    rigid loop's joint rotations ``start_phi`` at the start, the run's end ``t_end`` and the ``tool_link``
-    whose joint points' mean is the coupler point; ``cache``: where its ideal (rigid) coupler path is kept by
-    content (:class:`~ffrf.scenes.scene_cache.SceneCache`, the one it was built with)."""
+    rigid loop's joint rotations ``start_phi`` at the start, the run's end ``t_end``, the ``tool_link`` and
+    ``coupler_home``, the coupler point at home: the mean of where the tool link's two joints sit
+    (:func:`~ffrf.scenes.linkage_description.seated_joint_points`, as the run's ``coupler_point`` sensor);
+    ``cache``: where its ideal (rigid) coupler path is kept by content
+    (:class:`~ffrf.scenes.scene_cache.SceneCache`, the one it was built with)."""
 
     loop: SingleLoop
     driver: int
@@ -66,6 +69,7 @@ class LinkageScene(Scene):
     start_phi: NDArray[np.float64]
     t_end: float
     tool_link: int
+    coupler_home: NDArray[np.float64]
     cache: SceneCache
 
     @property
@@ -96,9 +100,8 @@ class LinkageScene(Scene):
         return self.start_angle + float(self.drive(t))
 
     def home_coupler_point(self) -> NDArray[np.float64]:
-        """The coupler point at home: the mean of the tool link's two nominal joint points."""
-        points = joint_points(self.loop)
-        return 0.5 * (points[self.tool_link - 1] + points[self.tool_link])
+        """The coupler point at home (``coupler_home``, a copy): where the run's ``coupler_point`` sensor starts."""
+        return np.array(self.coupler_home)
 
     def ideal_coupler_points(self, drive_angles: ArrayLike) -> NDArray[np.float64]:
         """The coupler point of the rigid nominal loop with the driven joint at ``drive_angles`` (in order)."""
@@ -112,8 +115,10 @@ class LinkageScene(Scene):
 
     def _kept(self, what: Any, argument: Any, compute: Callable[[], NDArray[np.float64]]) -> NDArray[np.float64]:
         """``compute()`` (a copy), computed once per ``what``, ``argument`` and this linkage's nominal loop, driver,
-        start and tool link: every variant of a study has the same ideal path."""
-        key = content_key(what, _loop_content(self.loop), self.driver, self.start_phi, self.tool_link, argument)
+        start, tool link and coupler point: every variant of a study has the same ideal path."""
+        key = content_key(
+            what, _loop_content(self.loop), self.driver, self.start_phi, self.tool_link, self.coupler_home, argument
+        )
         return np.array(self.cache.rigid_motions.get_or_compute(key, compute))
 
     def clearance(self, n_poses: int = 72, margin: float = 1e-3) -> Clearance:
@@ -294,5 +299,6 @@ def build_linkage(
         start_phi=start_phi,
         t_end=t_end,
         tool_link=tool,
+        coupler_home=seated_joint_points(loop, options.attach_points)[[tool - 1, tool]].mean(axis=0),
         cache=cache,
     )
