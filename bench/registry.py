@@ -110,6 +110,12 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         "the four variants of the paper's Bennett linkage at a discretisation (README's headline table)",
         records=(
             Recording("bennett_variants_default", rows_by="variant", rows_name="variants"),
+            Recording(
+                "bennett_variants_joint_points",
+                ("--links-at-joint-points", *JSON),
+                rows_by="variant",
+                rows_name="variants",
+            ),
             Recording("bennett_variants_p2_4mm", ("--h", "0.004", *JSON), rows_by="variant", rows_name="variants"),
             Recording(
                 "bennett_variants_paper",

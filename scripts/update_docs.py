@@ -17,8 +17,10 @@ of mantissa decimals in scientific notation (``4.5e-10``).
 Tables that are whole outputs of one measurement are generated between ``<!-- table NAME -->`` and
 ``<!-- /table -->`` by the function ``table_NAME`` of ``scripts/doc_tables.py``; the check compares those blocks too.
 
-``tests/test_docs/test_doc_figures.py`` runs the check. Whether the result files still agree with today's code is the
-other check: ``python -m bench stale`` (``bench/staleness.py``).
+``--check`` also lists the result files older than the code they measure (``python -m bench stale``,
+``bench/staleness.py``): recorded from a dirty tree, or a path their benchmark measures changed since their commit.
+``tests/test_docs/test_doc_figures.py`` runs the figures' check only: a change to the engine makes every result file
+stale until it is recorded again (``python -m bench record``), which takes hours, not a test's minutes.
 """
 
 from __future__ import annotations
@@ -232,11 +234,25 @@ def check_or_update_tables(docs=DOCS, update: bool = False) -> list[str]:
     return problems
 
 
+def stale_result_files() -> list[str]:
+    """The result files older than the code they measure, each with the reason (``bench/staleness.py``)."""
+    sys.path.insert(0, str(ROOT))
+    from bench.staleness import stale_results
+
+    return [f"stale: {stale}" for stale in stale_results()]
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--check", action="store_true", help="only list disagreements; exit status 1 if any")
+    parser.add_argument(
+        "--check",
+        action="store_true",
+        help="only list disagreements and stale result files; exit status 1 if any",
+    )
     args = parser.parse_args(argv)
     problems = check_or_update_tables(update=not args.check) + check_or_update(update=not args.check)
+    if args.check:
+        problems += stale_result_files()
     for problem in problems:
         print(problem)
     if args.check:

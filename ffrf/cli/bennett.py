@@ -25,9 +25,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
         help="paper's variant: rigid, PLA, PLA with alpha_3 = 91 or 92 deg",
     )
     parser.add_argument(
-        "--collision-free",
-        action="store_true",
-        help="links whose housings sit along the axes so that every two links keep 1 mm along the revolution",
+        "--links-at-joint-points",
+        dest="collision_free",
+        action="store_false",
+        help="housings centred on the joint points (links that pass through each other) instead of the default "
+        "collision-free stacking, where every two links keep 1 mm along the revolution",
     )
     configure_linkage_run(parser)
 

@@ -164,7 +164,7 @@ def bennett_options(
     gravity=(0.0, 0.0, -9.81),
     exact_gravity: bool = True,
     joint_offsets: str = "body",
-    collision_free: bool = False,
+    collision_free: bool = True,
 ) -> LinkageOptions:
     """The paper's scene ``variant`` (``rigid``, ``pla``, ``pla1``, ``pla2``) as linkage options: joint 3
     driven (side 0 the base, side 1 link 3), the coupler link 2, the base's h3 misaligned by alpha_3 - 90 deg.
@@ -176,8 +176,8 @@ def bennett_options(
     rotation about h3 from the folded home pose at t = 0 (the folded pose itself has overlapping
     arms); ``revolutions`` after the ramp; ``joint_offsets``: ``"body"`` (paper, Exudyn) or
     ``"marker"`` (module docstring); ``collision_free``: the links' housings placed along the axes by
-    :data:`COLLISION_FREE_STACKING` (every two links 1 mm apart along the revolution) instead of stacked about the
-    joint points.
+    :data:`COLLISION_FREE_STACKING` (every two links 1 mm apart along the revolution; the default), or, when False,
+    centred on the joint points (links that pass through each other, as every release before the clearance check).
     """
     if variant not in VARIANTS:
         raise ValueError(f"unknown variant {variant!r}; choose one of {sorted(VARIANTS)}")

@@ -101,7 +101,9 @@ def test_a_sharp_turn_of_the_path_without_a_fold_is_followed_onto_the_branch_the
     from ffrf.solvers.static_solver import static_equilibrium
 
     errors = tuple(BoreError(j, k, np.radians(twist), 1e-3 * offset) for j, k, twist, offset in SHARP_PRINT)
-    scene = build_bennett_from_options(replace(bennett_options("pla"), bore_errors=errors, bore_error_model="misfit"))
+    scene = build_bennett_from_options(
+        replace(bennett_options("pla", collision_free=False), bore_errors=errors, bore_error_model="misfit")
+    )
     followed = load(scene).run("quasi_static", outputs=121)
     assert followed.time[-1] == pytest.approx(scene.t_end)
     monkeypatch.setattr(static_solver, "MAX_HALVINGS", 0)

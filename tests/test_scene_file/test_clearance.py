@@ -58,7 +58,8 @@ def test_an_obstacle_passed_between_two_samples_is_caught_by_the_bound():
 
 @pytest.fixture(scope="module")
 def bennett():
-    return build_bennett("pla", h=12e-3, order=1, n_modes=2)
+    """The paper's loop with the housings centred on the joint points (not the default collision-free links)."""
+    return build_bennett("pla", h=12e-3, order=1, n_modes=2, collision_free=False)
 
 
 def test_the_loops_twists_are_the_derivatives_of_its_poses(bennett):

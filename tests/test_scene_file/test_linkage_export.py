@@ -2,9 +2,10 @@
 print sheet against the solver's own links, and the round trip through the solver's STL path (``printed.toml``).
 
 Round-trip tolerance: the solver's STL path meshes the printed parts more finely than the parametric links at the
-same ``h`` (it puts nodes on the STL's facets: link 1 has 8529 tetrahedra from 0.6 mm facets, 1473 parametric).
-Measured on link 1: its parametric fixed-interface frequencies at h = 6 mm are 0.2 to 0.9 % above those at 3 mm
-(7095 tetrahedra), the printed part's 0.8 to 1.2 % below the 6 mm ones; the round trip is held to 2 %."""
+same ``h`` (it puts nodes on the STL's facets), so a printed link is compared with its parametric link meshed about
+as finely, at h = 3 mm. Measured on link 1 of the collision-free Bennett: its parametric fixed-interface frequencies
+at h = 6 mm are 0.7 to 2.0 % above those at 3 mm, the printed part's (0.6 mm facets, h = 6 mm) 0.1 to 0.3 % below the
+3 mm ones; the round trip is held to 1 %."""
 
 import json
 import tomllib
@@ -85,12 +86,15 @@ def test_a_printed_link_vibrates_and_weighs_as_the_parametric_one(exported):
     """Link 1 through the solver's STL path (``mesh = "link.stl"``, ``unit = "mm"``, interfaces on the printed bores and
     mount face): fixed-interface frequencies within the mesh tolerance (module docstring), the same mass."""
     printed = build_scene(_one_body(tomllib.loads((exported / "printed.toml").read_text()), "link1"), exported)
-    parametric = build_scene(_one_body(bennett_description("pla"), "link1"))
+    fine = _one_body(bennett_description("pla"), "link1")
+    fine["bodies"][0]["parametric"]["h"] = 3e-3
+    parametric = build_scene(fine)
     (a,), (b,) = parametric.bodies, printed.bodies
     assert set(b.interfaces) == set(a.interfaces)
-    assert b.fe.total_mass == pytest.approx(a.fe.total_mass, rel=3e-3)
+    # 0.6 mm chords inside the exact solid against the finer parametric mesh's: measured 0.35 %
+    assert b.fe.total_mass == pytest.approx(a.fe.total_mass, rel=5e-3)
     fa, fb = a.reduction.fixed_interface_frequencies_hz, b.reduction.fixed_interface_frequencies_hz
-    assert np.allclose(fb, fa, rtol=0.02)
+    assert np.allclose(fb, fa, rtol=0.01)
     for interface in a.interfaces:  # the same bore: its area and its centre
         assert b.interfaces[interface].area == pytest.approx(a.interfaces[interface].area, rel=0.02)
 

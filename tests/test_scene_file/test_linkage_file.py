@@ -31,6 +31,13 @@ bore_errors = [{joint = 3, link = 0, twist_deg = 1.0}]
 )
 
 
+#: The default collision-free stacking of the paper's Bennett (``COLLISION_FREE_STACKING``), in mm, as a file says it.
+STACKING = (
+    "[linkage.stacking]\n"
+    "offsets = [-27.7, -32.4, -38.3, -26.8]\nspacers = [3.9, 10.1, 6.9, 4.1]\norders = [1, -1, 1, -1]\n"
+)
+
+
 def _axes_file() -> str:
     lines = []
     for axis in BennettLinkage.paper().axes:
@@ -50,10 +57,11 @@ def paper_pla1():
 
 @pytest.mark.parametrize("source", ["dh", "axes"])
 def test_the_papers_misaligned_bennett_from_a_linkage_file_runs_as_the_built_in_scene(tmp_path, paper_pla1, source):
-    """The paper's DH table (or its axes h0..h3), in mm, with the base's 1 deg bore error: the same coupler path
-    and driving torque as build_bennett('pla1') (measured 0 m: the same description)."""
+    """The paper's DH table (or its axes h0..h3), in mm, with the base's 1 deg bore error and the collision-free
+    stacking of :data:`~ffrf.paper.bennett_scene.COLLISION_FREE_STACKING`: the same coupler path and driving torque as
+    build_bennett('pla1') (measured 0 m: the same description)."""
     path = tmp_path / "bennett.toml"
-    path.write_text(DH_FILE if source == "dh" else _axes_file())
+    path.write_text((DH_FILE if source == "dh" else _axes_file()) + STACKING)
     ours = load(load_scene(path)).run(mode="quasi_static", outputs=9)
     assert np.max(np.abs(ours.sensors["coupler_point"] - paper_pla1.sensors["coupler_point"])) < 1e-10
     assert np.max(np.abs(ours.sensors["driving_torque"] - paper_pla1.sensors["driving_torque"])) < 1e-10
