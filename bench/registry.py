@@ -345,15 +345,14 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         "validation",
         "the comparisons with Exudyn of `python -m validation`",
         module="validation",
-        measures=WITH_VALIDATION,
+        measures=(*WITH_VALIDATION, "examples/collisions_free_6r.toml"),
         records=(
             Recording("validation_summary", ("summary", "--out", "{out}"), ("summary.json",)),
             Recording("testmodels", ("testmodels", *JSON)),
             Recording(
                 "validation_collisions_free_6r",
-                ("report", "--scene", "out/rec/6r_validation.toml", "--out", "{out}"),
+                ("report", "--scene", "examples/collisions_free_6r.toml", "--out", "{out}"),
                 ("metrics.json",),
-                recipe_missing="the scene file it validated (out/rec/6r_validation.toml) is not in the repository",
             ),
         ),
     ),
