@@ -52,13 +52,19 @@ def load_average() -> list[float] | None:
         return None
 
 
+#: Tracked paths whose changes leave a tree clean for :func:`git_commit`: the measured results themselves, so that the
+#: result files of one commit can be recorded one after another (``python -m bench record``).
+RESULTS_PATHSPEC = ":(exclude)docs/results"
+
+
 def git_commit(root: Path | None = None) -> dict[str, object] | None:
-    """``{"commit": HEAD, "dirty": tracked files differ from HEAD}`` of the repository at ``root``."""
+    """``{"commit": HEAD, "dirty": tracked files differ from HEAD}`` of the repository at ``root``; changed result
+    files (``docs/results/``) do not count: they are what a measurement writes, not code it runs."""
     root = root or Path(__file__).resolve().parents[2]
     try:
         head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True)
         diff = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"],
+            ["git", "status", "--porcelain", "--untracked-files=no", "--", ".", RESULTS_PATHSPEC],
             cwd=root,
             capture_output=True,
             text=True,

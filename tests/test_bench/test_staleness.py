@@ -94,6 +94,18 @@ def test_recording_refuses_a_dirty_tree_before_running_anything(repo: Path, tmp_
     assert not (tmp_path / "results").exists()
 
 
+def test_recorded_result_files_leave_the_tree_clean_for_the_next_recording(repo: Path) -> None:
+    """The result files of one commit are recorded one after another: a changed ``docs/results/`` file is what a
+    recording wrote, not code it ran; a changed file anywhere else still makes the tree dirty."""
+    recorded = _commit(repo, {"solver/core.py": "x = 1\n", "docs/results/speed.json": "{}\n"})
+    (repo / "docs" / "results" / "speed.json").write_text('{"meta": {}}\n')
+    assert require_clean_tree(repo) == {"commit": recorded, "dirty": False}
+    (repo / "docs" / "results.md").write_text("a page beside the results\n")
+    _git(repo, "add", "docs/results.md")
+    with pytest.raises(DirtyTree):
+        require_clean_tree(repo)
+
+
 def test_rows_are_keyed_by_a_field_for_json_pointers() -> None:
     report = {"scene": "s", "rows": [{"variant": "rigid", "x": 1}, {"variant": "pla", "x": 2}]}
     assert keyed_rows(report, "variant", "variants") == {
