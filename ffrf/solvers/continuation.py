@@ -32,6 +32,10 @@ from ffrf.system.packed_system import newton_model
 
 __all__ = ["EquilibriumPath", "continue_path", "equilibrium_path", "path_points", "parabola_vertex", "path_speed"]
 
+#: Largest Newton correction from the predicted point of a continuation step, as a share of the step (Eq. (S5)), as
+#: Eq. (S4) bounds a quasi-static step's: a step whose equilibrium lies farther has crossed to another branch.
+MAX_CORRECTION = 0.5
+
 log = logging.getLogger(__name__)
 
 
@@ -148,6 +152,10 @@ def path_points(
             ):
                 converged = iteration
                 break
+        if converged is not None and _correction(y_q - guess_q, y_t - guess_t, weight) > MAX_CORRECTION * size:
+            # Newton converged far from the predicted point: onto another branch across a sharp turn of this one
+            # (Eq. (S5)); a shorter step stays on it
+            converged = None
         if converged is None:
             if size <= min_step:
                 raise StaticDivergence(
@@ -169,6 +177,11 @@ def path_points(
         count += 1
         yield t, q.copy(), lam.copy(), arclength / scale
         size = min(max_step, 1.5 * size) if converged <= 4 else size
+
+
+def _correction(dq: NDArray, dt: float, weight: float) -> float:
+    """Length of Newton's correction from the predicted point in the arclength's norm (Eq. (S5))."""
+    return float(np.sqrt(dq @ dq + weight * dt * dt))
 
 
 def _speed(rate_of_change: NDArray, n: int) -> float:
