@@ -61,6 +61,7 @@ DISCRETISATIONS = (
     ("bennett_variants_default", "**default: P2, 6 mm, 4 modes**"),
     ("bennett_variants_p2_4mm", "**P2, 4 mm, 4 modes**"),
     ("bennett_variants_paper", "**paper's: P1, 2 mm, 32 modes**"),
+    ("bennett_variants_joint_points", "**default, links centred on the joint points** (they pass through each other)"),
 )
 
 
