@@ -27,10 +27,10 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path)
     args = parser.parse_args(argv)
-    # the same geometry, theory and mode classifier as the tests; their folder is not a package (its modules import
-    # each other by plain name), so it goes on the path, which mypy does not see
-    sys.path.insert(0, str(ROOT / "tests" / "test_fe_models"))
-    import test_ffrf_beam_theory as beam  # type: ignore[import-not-found]
+    # the same geometry, theory and mode classifier as the tests; ``tests/`` is not a package (its test folders are
+    # imported from it by name, as pytest's rootdir does), so it goes on the path, which mypy does not see
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_fe_models import test_ffrf_beam_theory as beam  # type: ignore[import-not-found]
 
     rows = []
     print(f"{'P':>2} {'h mm':>5} {'bc':>13} {'bend_z %':>9} {'bend_y %':>9} {'torsion %':>10} {'s':>6}")
