@@ -68,10 +68,21 @@ def command_line(entry: Benchmark, recording: Recording, out: Path) -> list[str]
     return [sys.executable, "-m", entry.runnable, *(arg.replace("{out}", str(out)) for arg in recording.args)]
 
 
+#: Run before every recording, untimed: numba's kernels compiled (or loaded) into the cache the command then uses, so
+#: that no figure counts their first compilation (a cold cache put 24 s of it into a 6 s revolution). Benchmarks
+#: that time compilation give their runs a fresh cache of their own.
+WARM_UP = ("-m", "ffrf", "warmup")
+
+
 def record(
-    entry: Benchmark, recording: Recording, results_dir: Path = ROOT / "docs" / "results", root: Path = ROOT
+    entry: Benchmark,
+    recording: Recording,
+    results_dir: Path = ROOT / "docs" / "results",
+    root: Path = ROOT,
+    warm_up: tuple[str, ...] = WARM_UP,
 ) -> Path:
     """Run ``recording`` of ``entry`` from the clean working tree ``root`` and write its result file; its path.
+    ``warm_up``: the arguments of ``python`` run first, with the same environment (:data:`WARM_UP`; empty: none).
 
     Raises :class:`DirtyTree` before running anything if the tree has uncommitted changes, ValueError if the
     recording has no recipe or its command wrote none of its outputs.
@@ -79,14 +90,16 @@ def record(
     if recording.recipe_missing:
         raise ValueError(f"{recording.result} cannot be recorded by the runner: {recording.recipe_missing}")
     require_clean_tree(root)
-    load = load_average()
-    started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="bench-") as folder, tempfile.TemporaryDirectory(prefix="ffrf-") as cache:
         out = Path(folder)
         command = command_line(entry, recording, out)
         shown = " ".join([*recording.env, "python", *command[1:]]).replace(str(out), "OUT")
         own = {name: value for name, _, value in (item.partition("=") for item in recording.env)}
         env = {**os.environ, "FFRF_CACHE_DIR": cache, **own}
+        if warm_up:
+            subprocess.run([sys.executable, *warm_up], cwd=root, env=env, stdout=subprocess.DEVNULL, check=True)
+        load = load_average()
+        started = time.perf_counter()
         status = subprocess.run(command, cwd=root, env=env).returncode
         wall = time.perf_counter() - started
         missing = [name for name in recording.outputs if not (out / name).is_file()]

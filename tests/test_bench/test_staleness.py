@@ -106,6 +106,21 @@ def test_recorded_result_files_leave_the_tree_clean_for_the_next_recording(repo:
         require_clean_tree(repo)
 
 
+def test_a_recording_warms_up_first_and_keeps_what_the_command_wrote(repo: Path, tmp_path: Path) -> None:
+    """The warm-up (``python -m ffrf warmup`` by default) runs before the timed command, in its environment."""
+    probe = "import json, os, sys; json.dump({'warmed': os.path.exists('warmed')}, open(sys.argv[1], 'w'))\n"
+    _commit(repo, {"probe_bench.py": probe, ".gitignore": "warmed\n"})
+    entry = Benchmark(
+        "probe_bench", "writes whether the warm-up ran", measures=("probe_bench.py",), module="probe_bench"
+    )
+    recording = Recording("probe", ("{out}/report.json",))
+    warm_up = ("-c", "open('warmed', 'w').close()")
+    path = record(entry, recording, tmp_path / "results", root=repo, warm_up=warm_up)
+    written = json.loads(path.read_text())
+    assert written["results"] == {"warmed": True}
+    assert written["meta"]["exit_status"] == 0 and "probe_bench OUT/report.json" in written["meta"]["command"]
+
+
 def test_rows_are_keyed_by_a_field_for_json_pointers() -> None:
     report = {"scene": "s", "rows": [{"variant": "rigid", "x": 1}, {"variant": "pla", "x": 2}]}
     assert keyed_rows(report, "variant", "variants") == {
