@@ -136,6 +136,11 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         records=(Recording("compile_times"),),
     ),
     Benchmark(
+        "collision_free_designs",
+        "collision-free links of Rational Linkages' mechanisms: our stacking design against its own",
+        records=(Recording("collision_free_designs", ("--rl-check", "--rl-search", "bennett_ark24", *JSON)),),
+    ),
+    Benchmark(
         "conservation",
         "momentum and energy of the free flexible bar over 10^4 steps",
         measures=WITH_VALIDATION,
