@@ -17,16 +17,17 @@ Per set: the signed clearance of the meshed link solids along one revolution of 
 poses (``LinkageScene.clearance``, Eqs. (CL1)-(CL4) of ``docs/formulation.md``): per pair the smallest (negative: the
 depth by which they overlap), and whether every pair keeps the margin; the links' mass (PLA) and the length of
 their centre lines (housing centre to housing centre, summed over the links: the length Rational Linkages' smallest
-polyline minimises); the design's time (ours tries at most ``--max-orders`` stacking orders). With ``--rl-check``
-also the time of Rational Linkages' own check of its shipped design; with ``--rl-search MODEL...`` its own design
-from scratch (``CollisionFreeOptimization.optimize("combinatorial_search")`` from the smallest polyline, default step,
-10 shift sizes, each joint segment as long as our two housings at a joint, centre to centre): its time, the
-candidates it checked, and our links on the points it found.
+polyline minimises); the design's time. Ours tries at most ``--max-orders`` stacking orders, and with ``--design
+MODEL...`` runs on those models only (a design that is refused tries every order, which takes long on a 6R). With
+``--rl-check`` also the time of Rational Linkages' own check of its shipped design; with ``--rl-search MODEL...``
+its own design from scratch (``CollisionFreeOptimization.optimize("combinatorial_search")`` from the smallest
+polyline, default step, 10 shift sizes, each joint segment as long as our two housings at a joint, centre to
+centre): its time, the candidates it checked, and our links on the points it found.
 
 Usage::
 
     .venv/bin/python -m bench collision_free_designs --json out/collision_free.json [--cases collisions_free_6r:0.25]
-        [--rl-check] [--rl-search bennett_ark24] [--max-orders 4]
+        [--rl-check] [--rl-search bennett_ark24] [--design bennett_ark24] [--max-orders 4]
 
 Timings are wall-clock on a shared 2-core machine: compare them only within a run.
 """
@@ -132,7 +133,7 @@ def _rl_search(model: str, scale: float, h: float, poses: int, design: LinkDesig
 
 
 def compare_case(
-    model: str, scale: float, h: float, poses: int, rl_check: bool, rl_search: bool, max_orders: int
+    model: str, scale: float, h: float, poses: int, rl_check: bool, rl_search: bool, max_orders: int | None
 ) -> dict:
     """The three sets of links of one case (module docstring)."""
     row: dict = {"model": model, "scale": scale}
@@ -157,6 +158,8 @@ def compare_case(
         }
     if rl_search:
         row["rational_linkages_search"] = _rl_search(model, scale, h, poses, design)
+    if max_orders is None:
+        return row
     phi = start_pose(loop, options.driver, options.start_angle, options.origin)
     started = time.perf_counter()
     try:
@@ -190,6 +193,9 @@ def main() -> int:
     parser.add_argument(
         "--rl-search", nargs="*", default=[], metavar="MODEL", help="also run Rational Linkages' design on these models"
     )
+    parser.add_argument(
+        "--design", nargs="*", metavar="MODEL", help="run our design on these models only (default: every case)"
+    )
     parser.add_argument("--max-orders", type=int, default=4, help="stacking orders our design tries (default 4)")
     parser.add_argument("--json", type=Path, required=True)
     args = parser.parse_args()
@@ -199,7 +205,8 @@ def main() -> int:
         model, scale = case.split(":")
         print(f"== {model} at scale {scale}", flush=True)
         search = model in args.rl_search
-        rows.append(compare_case(model, float(scale), args.h, args.poses, args.rl_check, search, args.max_orders))
+        orders = args.max_orders if args.design is None or model in args.design else None
+        rows.append(compare_case(model, float(scale), args.h, args.poses, args.rl_check, search, orders))
     report = {
         "margin_m": MARGIN,
         "h_m": args.h,

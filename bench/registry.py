@@ -138,7 +138,12 @@ BENCHMARKS: tuple[Benchmark, ...] = (
     Benchmark(
         "collision_free_designs",
         "collision-free links of Rational Linkages' mechanisms: our stacking design against its own",
-        records=(Recording("collision_free_designs", ("--rl-check", "--rl-search", "bennett_ark24", *JSON)),),
+        records=(
+            Recording(
+                "collision_free_designs",
+                ("--rl-check", "--rl-search", "bennett_ark24", "--design", "bennett_ark24", *JSON),
+            ),
+        ),
     ),
     Benchmark(
         "conservation",
