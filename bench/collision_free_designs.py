@@ -17,8 +17,7 @@ Per set: the signed clearance of the meshed link solids along one revolution of 
 poses (``LinkageScene.clearance``, Eqs. (CL1)-(CL4) of ``docs/formulation.md``): per pair the smallest (negative: the
 depth by which they overlap), and whether every pair keeps the margin; the links' mass (PLA) and the length of
 their centre lines (housing centre to housing centre, summed over the links: the length Rational Linkages' smallest
-polyline minimises); the design's time. Ours tries at most ``--max-orders`` stacking orders, and with ``--design
-MODEL...`` runs on those models only (a design that is refused tries every order, which takes long on a 6R). With
+polyline minimises); the design's time. With ``--design MODEL...`` ours runs on those models only. With
 ``--rl-check`` also the time of Rational Linkages' own check of its shipped design; with ``--rl-search MODEL...``
 its own design from scratch (``CollisionFreeOptimization.optimize("combinatorial_search")`` from the smallest
 polyline, default step, 10 shift sizes, each joint segment as long as our two housings at a joint, centre to
@@ -27,7 +26,7 @@ centre): its time, the candidates it checked, and our links on the points it fou
 Usage::
 
     .venv/bin/python -m bench collision_free_designs --json out/collision_free.json [--cases collisions_free_6r:0.25]
-        [--rl-check] [--rl-search bennett_ark24] [--design bennett_ark24] [--max-orders 4]
+        [--rl-check] [--rl-search bennett_ark24] [--design bennett_ark24]
 
 Timings are wall-clock on a shared 2-core machine: compare them only within a run.
 """
@@ -132,9 +131,7 @@ def _rl_search(model: str, scale: float, h: float, poses: int, design: LinkDesig
     return dict(row, found=True, **_clearance_row(built, poses), centre_lines_m=_centre_line_length(points))
 
 
-def compare_case(
-    model: str, scale: float, h: float, poses: int, rl_check: bool, rl_search: bool, max_orders: int | None
-) -> dict:
+def compare_case(model: str, scale: float, h: float, poses: int, rl_check: bool, rl_search: bool, ours: bool) -> dict:
     """The three sets of links of one case (module docstring)."""
     row: dict = {"model": model, "scale": scale}
     base = {"linkage": {"model": model, "scale": scale}}
@@ -158,12 +155,12 @@ def compare_case(
         }
     if rl_search:
         row["rational_linkages_search"] = _rl_search(model, scale, h, poses, design)
-    if max_orders is None:
+    if not ours:
         return row
     phi = start_pose(loop, options.driver, options.start_angle, options.origin)
     started = time.perf_counter()
     try:
-        designed = design_stacking(loop, options.driver, phi, design, MARGIN, max_orders=max_orders)
+        designed = design_stacking(loop, options.driver, phi, design, MARGIN)
     except GeometryError as error:
         row["ours"] = {"refused": str(error), "design_s": time.perf_counter() - started}
         return row
@@ -196,7 +193,6 @@ def main() -> int:
     parser.add_argument(
         "--design", nargs="*", metavar="MODEL", help="run our design on these models only (default: every case)"
     )
-    parser.add_argument("--max-orders", type=int, default=4, help="stacking orders our design tries (default 4)")
     parser.add_argument("--json", type=Path, required=True)
     args = parser.parse_args()
     warnings.simplefilter("ignore")
@@ -205,14 +201,13 @@ def main() -> int:
         model, scale = case.split(":")
         print(f"== {model} at scale {scale}", flush=True)
         search = model in args.rl_search
-        orders = args.max_orders if args.design is None or model in args.design else None
-        rows.append(compare_case(model, float(scale), args.h, args.poses, args.rl_check, search, orders))
+        ours = args.design is None or model in args.design
+        rows.append(compare_case(model, float(scale), args.h, args.poses, args.rl_check, search, ours))
     report = {
         "margin_m": MARGIN,
         "h_m": args.h,
         "order": 2,
         "poses": args.poses,
-        "max_orders": args.max_orders,
         "cases": rows,
     }
     write_report(report, args.json)

@@ -63,10 +63,17 @@ def configure(parser: argparse.ArgumentParser) -> None:
         help="length scale of the model (its unit -> metres)",
     )
     parser.add_argument("--driver", type=count_at_least(0), default=0, help="driven joint")
-    parser.add_argument(
+    placement = parser.add_mutually_exclusive_group()
+    placement.add_argument(
         "--design-points",
         action="store_true",
         help="attach the links where the model's design attaches them (its collision-free connection points)",
+    )
+    placement.add_argument(
+        "--collision-free",
+        action="store_true",
+        help="place the housings along the axes so that every two links keep --clearance-margin along a revolution "
+        "of the driver (docs/formulation.md, (CF5); a minute or more on a 6R)",
     )
     parser.add_argument(
         "--bore-error",
@@ -114,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
             "modes": args.modes,
             "bore_errors": args.bore_error,
             "design_points": args.design_points,
-        },
+        }
+        | ({"collision_free": True, "clearance_margin": 1e-3 * args.clearance_margin} if args.collision_free else {}),
         "scene": {"joint_offsets": args.joint_offsets},
     }
     linkage_options(document, where="python -m ffrf linkage")  # the file's checks (bore errors ...) before --out

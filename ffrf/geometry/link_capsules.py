@@ -10,8 +10,9 @@ The parts of :func:`ffrf.geometry.link_geometry.build_link` and their capsules (
 :math:`\rho_a = \tfrac12\sqrt{w^2 + t^2}` of the arm's section :math:`w \times t`, housing radius :math:`R`):
 
 * housing: its axis segment (the housing's length), radius :math:`R`;
-* arm: each box along the arm's waypoints, radius :math:`\rho_a`, lengthened by the half width where the
-  boxes overlap at a stub. Where a box leaves a housing the capsule starts :math:`x_0 = \sqrt{R^2 - \rho_a^2}`
+* arm: each box along the arm's waypoints, as one capsule per cell of its section (:data:`ARM_CELLS`), each
+  about the cell's middle line with the cell's half-diagonal as radius, lengthened by the half width where the
+  boxes overlap at a stub. Where a box leaves a housing the capsules start :math:`x_0 = \sqrt{R^2 - \rho_a^2}`
   from the housing centre: nearer, every point of the box lies within :math:`R` of the centre, so it is inside
   the housing or in the region beyond the housing's end faces that ``build_link`` trims away;
 * mount block: a segment through its middle along the arm, radius the half-diagonal of its section.
@@ -29,10 +30,16 @@ from numpy.typing import ArrayLike, NDArray
 from ffrf.geometry.joint_axes import Axis
 from ffrf.geometry.link_geometry import LinkDesign, arm_frame, arm_waypoints
 
-__all__ = ["ARM", "MOUNT", "LinkCapsules", "link_capsules", "segment_distances"]
+__all__ = ["ARM", "ARM_CELLS", "MOUNT", "LinkCapsules", "closest_points", "link_capsules", "segment_distances"]
 
 #: ``LinkCapsules.parts`` of the arm's and the mount block's capsules (a housing's part is its side, 0 or 1).
 ARM, MOUNT = -1, -2
+#: An arm box's section :math:`w \times t` is split into ``ARM_CELLS`` x ``ARM_CELLS`` cells, each enclosed by a capsule
+#: about its middle line with the cell's half-diagonal as radius: with two, the proxy stands at most
+#: :math:`\tfrac14\sqrt{w^2 + t^2} - \tfrac{w}{4}` and :math:`... - \tfrac{t}{4}` off the box's faces (1 and 2 mm
+#: for the default 16 x 12 mm arm, against 2 and 4 mm for one capsule about the whole section), and each cell's
+#: capsule lies within that one capsule (centre :math:`\rho_a/2` off its axis, radius :math:`\rho_a/2`).
+ARM_CELLS = 2
 
 
 @dataclass(frozen=True)
@@ -61,6 +68,13 @@ def link_capsules(
     radii = [design.housing_outer_radius] * 2
     parts = [0, 1]
     arm_radius = 0.5 * float(np.hypot(design.arm_width, design.arm_thickness))
+    cell = (design.arm_width / ARM_CELLS, design.arm_thickness / ARM_CELLS)
+    cell_radius = 0.5 * float(np.hypot(*cell))
+    cell_centres = [
+        (-0.5 * design.arm_width + (i + 0.5) * cell[0], -0.5 * design.arm_thickness + (k + 0.5) * cell[1])
+        for i in range(ARM_CELLS)
+        for k in range(ARM_CELLS)
+    ]
     inside = float(np.sqrt(max(design.housing_outer_radius**2 - arm_radius**2, 0.0)))
     path = arm_waypoints(points, axes, design)
     path[0], path[-1] = centers
@@ -69,13 +83,15 @@ def link_capsules(
     last = len(path) - 2
     for k in range(last + 1):
         start, end = path[k], path[k + 1]
-        unit = (end - start) / np.linalg.norm(end - start)
-        begin = start + (inside if k == 0 else -extra) * unit
-        finish = end - (inside if k == last else -extra) * unit
-        starts.append(begin)
-        ends.append(finish)
-        radii.append(arm_radius)
-        parts.append(ARM)
+        frame = arm_frame(start, end, axes[0].direction)  # build_link's box: width along e2, thickness along e3
+        begin = start + (inside if k == 0 else -extra) * frame[:, 0]
+        finish = end - (inside if k == last else -extra) * frame[:, 0]
+        for width, thickness in cell_centres:
+            across = width * frame[:, 1] + thickness * frame[:, 2]
+            starts.append(begin + across)
+            ends.append(finish + across)
+            radii.append(cell_radius)
+            parts.append(ARM)
     if mount:
         middle = len(path) // 2 - 1 if len(path) == 4 else 0
         origin = path[middle]
@@ -91,10 +107,21 @@ def link_capsules(
 
 
 def segment_distances(p0: ArrayLike, p1: ArrayLike, q0: ArrayLike, q1: ArrayLike) -> NDArray[np.float64]:
-    r"""Distances between segments :math:`[p_0, p_1]` and :math:`[q_0, q_1]`, arrays ``(..., 3)`` broadcast.
+    """Distances between segments :math:`[p_0, p_1]` and :math:`[q_0, q_1]`, arrays ``(..., 3)`` broadcast
+    (:func:`closest_points`)."""
+    _, _, gap = closest_points(p0, p1, q0, q1)
+    return np.sqrt((gap * gap).sum(-1))
 
-    The closest points :math:`p_0 + s\,u` and :math:`q_0 + t\,v` (:math:`u = p_1 - p_0`, :math:`v = q_1 - q_0`,
-    :math:`w = p_0 - q_0`) minimise :math:`|w + s u - t v|^2` over :math:`s, t \in [0, 1]`: the unconstrained
+
+def closest_points(
+    p0: ArrayLike, p1: ArrayLike, q0: ArrayLike, q1: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    r"""Closest points of segments :math:`[p_0, p_1]` and :math:`[q_0, q_1]` (arrays ``(..., 3)`` broadcast):
+    ``(s, t, gap)`` with :math:`p_0 + s\,u` and :math:`q_0 + t\,v` the closest points and ``gap`` the vector
+    from the second to the first.
+
+    They minimise :math:`|w + s u - t v|^2` over :math:`s, t \in [0, 1]` (:math:`u = p_1 - p_0`,
+    :math:`v = q_1 - q_0`, :math:`w = p_0 - q_0`): the unconstrained
     :math:`s = (b f - c e)/(a e - b^2)` (:math:`a = u\cdot u, b = u\cdot v, c = u\cdot w, e = v\cdot v,
     f = v\cdot w`) clamped, :math:`t = (b s + f)/e`, and where :math:`t` leaves :math:`[0, 1]` it is clamped
     and :math:`s` recomputed (Ericson, *Real-Time Collision Detection*, 2005, Sect. 5.1.9). Degenerate
@@ -116,5 +143,4 @@ def segment_distances(p0: ArrayLike, p1: ArrayLike, q0: ArrayLike, q1: ArrayLike
     s = np.where(below, np.clip(-c / safe_a, 0.0, 1.0), s)
     s = np.where(above, np.clip((b - c) / safe_a, 0.0, 1.0), s)
     s = np.where(a > tiny, s, 0.0)
-    gap = w + s[..., None] * u - t[..., None] * v
-    return np.sqrt((gap * gap).sum(-1))
+    return s, t, w + s[..., None] * u - t[..., None] * v

@@ -20,6 +20,7 @@ not compared; the margin may therefore not exceed the axial gap.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import logging
 import time
@@ -28,13 +29,21 @@ from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import minimize
+from scipy.optimize import differential_evolution, minimize
 
 from ffrf.errors import GeometryError
-from ffrf.geometry.link_capsules import ARM, MOUNT, LinkCapsules, link_capsules, segment_distances
+from ffrf.geometry.capsule_kernels import capsule_clearances
+from ffrf.geometry.link_capsules import (
+    ARM,
+    MOUNT,
+    LinkCapsules,
+    closest_points,
+    link_capsules,
+    segment_distances,
+)
 from ffrf.geometry.link_geometry import LinkDesign, trim_reach
 from ffrf.scenes.linkage_description import drive_sign, joint_points
-from kinematics import Line, SingleLoop, motion_tangents, trace_motion
+from kinematics import Line, SingleLoop, follow_driver, motion_tangents
 
 __all__ = [
     "LinkBuildInput",
@@ -44,7 +53,6 @@ __all__ = [
     "StackingDesign",
     "design_stacking",
     "link_build_inputs",
-    "order_candidates",
     "proxy_clearance",
     "sampled_motion",
 ]
@@ -75,13 +83,16 @@ class Stacking:
         """``orders[joint]``, ``+1`` without orders."""
         return 1 if self.orders is None else int(self.orders[joint])
 
-    def attach_points(self, loop: SingleLoop, design: LinkDesign | None = None) -> NDArray[np.float64]:
+    def attach_points(
+        self, loop: SingleLoop, design: LinkDesign | None = None, points: NDArray[np.float64] | None = None
+    ) -> NDArray[np.float64]:
         """Housing centres ``(n, 2, 3)``: row ``j`` holds link ``j``'s and link ``j + 1``'s on :math:`h_j`
-        (:class:`~ffrf.scenes.linkage_description.LinkageOptions`' ``attach_points``)."""
+        (:class:`~ffrf.scenes.linkage_description.LinkageOptions`' ``attach_points``); ``points`` the loop's
+        :func:`~ffrf.scenes.linkage_description.joint_points` where the caller has them already."""
         design = LinkDesign() if design is None else design
         if len(self.offsets) != loop.n or len(self.spacers) != loop.n:
             raise ValueError(f"a stacking of {loop.n} joints needs {loop.n} offsets and spacers")
-        points = joint_points(loop)
+        points = joint_points(loop) if points is None else points
         attach = np.empty((loop.n, 2, 3))
         for j, axis in enumerate(loop.axes):
             half = self.order(j) * (design.housing_offset + 0.5 * self.spacers[j])
@@ -99,11 +110,14 @@ class LinkBuildInput(NamedTuple):
     mount: bool
 
 
-def link_build_inputs(loop: SingleLoop, stacking: Stacking, design: LinkDesign | None = None) -> list[LinkBuildInput]:
+def link_build_inputs(
+    loop: SingleLoop, stacking: Stacking, design: LinkDesign | None = None, points: NDArray[np.float64] | None = None
+) -> list[LinkBuildInput]:
     """Every link's :class:`LinkBuildInput` for ``stacking`` (link ``k`` carries :math:`h_{k-1}` and :math:`h_k`;
-    link 0 the mount): the hook for checking a design on the link solids themselves."""
+    link 0 the mount): the hook for checking a design on the link solids themselves (``points`` as
+    :meth:`Stacking.attach_points`)."""
     design = LinkDesign() if design is None else design
-    attach = stacking.attach_points(loop, design)
+    attach = stacking.attach_points(loop, design, points)
     s = design.housing_offset
     inputs = []
     for k in range(loop.n):
@@ -115,25 +129,70 @@ def link_build_inputs(loop: SingleLoop, stacking: Stacking, design: LinkDesign |
 
 @dataclass(frozen=True)
 class SampledMotion:
-    r"""The rigid loop's motion at poses ``angles`` (rad, the drive's angle, in the order of travel, ``step`` apart):
-    each link's displacement ``transforms`` ``(m, n, 4, 4)`` (Eq. (L1)) and its twist per radian of drive,
-    ``omega`` and ``velocity`` ``(m, n, 3)``: a point :math:`p` of link ``k`` moves at
-    :math:`\omega_k \times p + v_k` per radian (Eq. (L3) with the motion's tangent)."""
+    r"""The rigid loop's motion at poses ``angles`` (rad, the drive's angle, in the order of travel; ``steps``
+    ``(m - 1,)`` the drive's turn between consecutive poses): each link's displacement ``transforms``
+    ``(m, n, 4, 4)`` (Eq. (L1)) and its twist per radian of drive, ``omega`` and ``velocity`` ``(m, n, 3)``: a point
+    :math:`p` of link ``k`` moves at :math:`\omega_k \times p + v_k` per radian (Eq. (L3) with the motion's
+    tangent)."""
 
     angles: NDArray[np.float64]
-    step: float
+    steps: NDArray[np.float64]
     transforms: NDArray[np.float64]
     omega: NDArray[np.float64]
     velocity: NDArray[np.float64]
 
+    def at(self, poses: NDArray[np.int64]) -> SampledMotion:
+        """The motion at ``poses`` only (``steps`` of what remains between them)."""
+        return SampledMotion(
+            self.angles[poses],
+            np.abs(np.diff(self.angles[poses])),
+            self.transforms[poses],
+            self.omega[poses],
+            self.velocity[poses],
+        )
+
+    def spacing(self) -> NDArray[np.float64]:
+        """Per pose the larger of the steps either side (``(m,)``)."""
+        padded = np.concatenate([self.steps[:1], self.steps, self.steps[-1:]])
+        return np.maximum(padded[:-1], padded[1:])
+
 
 def sampled_motion(
-    loop: SingleLoop, driver: int = 0, start: ArrayLike | None = None, n_poses: int = DEFAULT_POSES
+    loop: SingleLoop,
+    driver: int = 0,
+    start: ArrayLike | None = None,
+    n_poses: int = DEFAULT_POSES,
+    travel: float | None = None,
 ) -> SampledMotion:
     """One revolution of joint ``driver`` from the closing pose near ``start`` (default home), ``n_poses`` poses
-    from the start to the end of the turn (the way the drive turns, :func:`drive_sign`)."""
+    from the start to the end of the turn (the way the drive turns, :func:`drive_sign`), equally spaced in the
+    drive's angle; with ``travel`` (m) every interval where a joint point moves farther (its speed at the
+    interval's ends times the step) is split into equal parts that each move it at most about ``travel``, so that
+    the poses crowd where the loop moves fast for its drive (near a dead point of another joint). The joint points
+    only guide the spacing: the clearance's bound between poses (:func:`proxy_clearance`) takes every capsule's own
+    speed and each interval's own step."""
     sign = drive_sign(driver, loop.n)
-    motion = trace_motion(loop, driver, n_poses=n_poses, revolution=sign * 2 * np.pi, start=start, endpoint=True)
+    turns = np.linspace(0.0, sign * 2 * np.pi, n_poses)
+    motion = _motion_at(loop, driver, start, turns)
+    if travel is None:
+        return motion
+    points = joint_points(loop)
+    placed = np.einsum("mkij,kj->mki", motion.transforms[:, :, :3, :3], points) + motion.transforms[:, :, :3, 3]
+    # joint point k lies on axis k, which moves with link k (and is the same point of link k + 1)
+    speed = np.linalg.norm(np.cross(motion.omega, placed) + motion.velocity, axis=-1).max(axis=1)
+    parts = np.ceil(np.maximum(speed[:-1], speed[1:]) * motion.steps / travel).astype(int).clip(1, None)
+    if parts.max() == 1:
+        return motion
+    refined = [np.linspace(turns[k], turns[k + 1], parts[k], endpoint=False) for k in range(len(parts))]
+    return _motion_at(loop, driver, start, np.concatenate([*refined, turns[-1:]]))
+
+
+def _motion_at(loop: SingleLoop, driver: int, start: ArrayLike | None, turns: NDArray) -> SampledMotion:
+    """The motion with the driver turned by ``turns`` (rad, increasing in magnitude) from the closing pose near
+    ``start``."""
+    phi = np.zeros(loop.n) if start is None else np.asarray(start, dtype=float)
+    first = 0.0 if start is None else float(phi[driver])
+    motion = follow_driver(loop, driver, first + turns, start)
     transforms = motion.link_transforms()
     rates = motion_tangents(loop, driver, motion.phi)
     points = np.array([axis.point for axis in loop.axes])
@@ -148,8 +207,8 @@ def sampled_motion(
     for k in range(1, n):  # link k turns with joints 0..k-1 (Eq. (L1)); the base stands still
         omega[:, k] = omega[:, k - 1] + rates[:, k - 1, None] * lines[:, k - 1]
         velocity[:, k] = velocity[:, k - 1] + rates[:, k - 1, None] * moments[:, k - 1]
-    angles = sign * motion.driver_angles
-    return SampledMotion(angles, 2 * np.pi / (n_poses - 1), transforms, omega, velocity)
+    angles = drive_sign(driver, n) * motion.driver_angles
+    return SampledMotion(angles, np.abs(np.diff(angles)), transforms, omega, velocity)
 
 
 @dataclass(frozen=True)
@@ -174,12 +233,18 @@ class ProxyClearance:
 
 
 class _Pairs(NamedTuple):
-    """The capsule pairs compared: index of each capsule (into all links' capsules) and its link pair."""
+    """The capsule pairs compared: index of each capsule (into all links' capsules) and its link pair (grouped:
+    ``group_starts`` the first capsule pair of each link pair)."""
 
     first: NDArray[np.int64]
     second: NDArray[np.int64]
     link_pair: NDArray[np.int64]
     link_pairs: tuple[tuple[int, int], ...]
+    group_starts: NDArray[np.int64]
+
+    def per_link_pair(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The smallest of ``values`` ``(..., P)`` over each link pair's capsule pairs: ``(..., L)``."""
+        return np.minimum.reduceat(values, self.group_starts, axis=-1)
 
 
 def _shared_joint(a: int, b: int, n: int) -> int | None:
@@ -198,10 +263,17 @@ def _side(link: int, joint: int) -> int:
 
 def _capsule_pairs(capsules: list[LinkCapsules]) -> _Pairs:
     """Every pair of capsules of two different links, without those apart by construction at a shared joint: the
-    two housings there, and each of them against the other link's arm and mount block."""
-    n = len(capsules)
-    owner = np.concatenate([[k] * len(c.radii) for k, c in enumerate(capsules)])
-    parts = np.concatenate([c.parts for c in capsules])
+    two housings there, and each of them against the other link's arm and mount block (by the links' parts: an
+    arm's capsules change in number where its stubs appear)."""
+    return _pairs_of_parts(tuple(c.parts for c in capsules))
+
+
+@functools.lru_cache(maxsize=64)
+def _pairs_of_parts(link_parts: tuple[tuple[int, ...], ...]) -> _Pairs:
+    """:func:`_capsule_pairs` of links whose capsules are of ``link_parts``."""
+    n = len(link_parts)
+    owner = np.concatenate([[k] * len(parts) for k, parts in enumerate(link_parts)])
+    parts = np.concatenate(link_parts)
     first, second, pair_index = [], [], []
     link_pairs: list[tuple[int, int]] = []
     for a, b in itertools.combinations(range(n), 2):
@@ -220,26 +292,31 @@ def _capsule_pairs(capsules: list[LinkCapsules]) -> _Pairs:
             kept = True
         if kept:
             link_pairs.append((a, b))
-    return _Pairs(np.array(first), np.array(second), np.array(pair_index), tuple(link_pairs))
+    link_pair = np.array(pair_index)
+    starts = np.flatnonzero(np.diff(link_pair, prepend=-1))
+    return _Pairs(np.array(first), np.array(second), link_pair, tuple(link_pairs), starts)
 
 
-def _all_capsules(loop: SingleLoop, stacking: Stacking, design: LinkDesign) -> list[LinkCapsules]:
+def _all_capsules(
+    loop: SingleLoop, stacking: Stacking, design: LinkDesign, points: NDArray[np.float64] | None = None
+) -> list[LinkCapsules]:
     return [
         link_capsules(*link.axes, link.joint_points, design, link.mount)
-        for link in link_build_inputs(loop, stacking, design)
+        for link in link_build_inputs(loop, stacking, design, points)
     ]
+
+
+def _owners(capsules: list[LinkCapsules]) -> NDArray[np.int64]:
+    """The link of every capsule, in the order of the concatenated capsules."""
+    return np.concatenate([[k] * len(c.radii) for k, c in enumerate(capsules)]).astype(np.int64)
 
 
 def _placed(motion: SampledMotion, capsules: list[LinkCapsules]) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     r"""Every capsule's segment ends ``(m, K, 3)`` at every pose, its radius ``(K,)`` and its speed bound ``(m, K)``
     per radian of drive: :math:`|\omega \times p + v|` is convex in :math:`p`, so its largest value on a segment is
     at an end, and a ball of radius :math:`r` about it adds :math:`|\omega| r`."""
-    owner = np.concatenate([[k] * len(c.radii) for k, c in enumerate(capsules)])
-    placed = motion.transforms[:, owner]
-    rotation, shift = placed[..., :3, :3], placed[..., :3, 3]
-    a = np.einsum("mkij,kj->mki", rotation, np.concatenate([c.starts for c in capsules])) + shift
-    b = np.einsum("mkij,kj->mki", rotation, np.concatenate([c.ends for c in capsules])) + shift
-    radii = np.concatenate([c.radii for c in capsules])
+    owner = _owners(capsules)
+    a, b, radii = _placed_ends(motion.transforms, capsules)
     omega, velocity = motion.omega[:, owner], motion.velocity[:, owner]
     speed = (
         np.maximum(
@@ -251,18 +328,28 @@ def _placed(motion: SampledMotion, capsules: list[LinkCapsules]) -> tuple[NDArra
     return a, b, radii, speed
 
 
+def _placed_ends(transforms: NDArray, capsules: list[LinkCapsules]) -> tuple[NDArray, NDArray, NDArray]:
+    """Every capsule's segment ends ``(m, K, 3)`` at the poses of the links' ``transforms`` ``(m, n, 4, 4)``
+    and its radius ``(K,)``."""
+    placed = transforms[:, _owners(capsules)]
+    rotation, shift = placed[..., :3, :3], placed[..., :3, 3]
+    a = np.einsum("mkij,kj->mki", rotation, np.concatenate([c.starts for c in capsules])) + shift
+    b = np.einsum("mkij,kj->mki", rotation, np.concatenate([c.ends for c in capsules])) + shift
+    return a, b, np.concatenate([c.radii for c in capsules])
+
+
 def _clearances(
     motion: SampledMotion, capsules: list[LinkCapsules], pairs: _Pairs
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Capsule clearances at every pose ``(m, P)`` and their certified minimum per interval ``(m - 1, P)``:
-    ``min(f_k, f_{k+1}, (f_k + f_{k+1} - L_k step) / 2)``, ``L_k`` the two capsules' larger speed bound at the
+    ``min(f_k, f_{k+1}, (f_k + f_{k+1} - L_k step_k) / 2)``, ``L_k`` the two capsules' larger speed bound at the
     interval's ends (a distance between two moving sets changes at most at the sum of their speeds)."""
     a, b, radii, speed = _placed(motion, capsules)
     i, j = pairs.first, pairs.second
-    f = segment_distances(a[:, i], b[:, i], a[:, j], b[:, j]) - radii[i] - radii[j]
+    f = capsule_clearances(a, b, radii, i, j)
     lipschitz = speed[:, i] + speed[:, j]
     bound = np.maximum(lipschitz[:-1], lipschitz[1:])
-    certified = np.minimum(np.minimum(f[:-1], f[1:]), 0.5 * (f[:-1] + f[1:] - bound * motion.step))
+    certified = np.minimum(np.minimum(f[:-1], f[1:]), 0.5 * (f[:-1] + f[1:] - bound * motion.steps[:, None]))
     return f, certified
 
 
@@ -270,20 +357,115 @@ def _pair_clearances(
     sub: SampledMotion, capsules: list[LinkCapsules], pairs: _Pairs, chosen: NDArray[np.int64]
 ) -> NDArray[np.float64]:
     """Clearance of capsule pair ``chosen[r]`` at pose ``r`` of ``sub``, for each ``r``."""
-    a, b, radii, _ = _placed(sub, capsules)
+    a, b, radii = _placed_ends(sub.transforms, capsules)
     rows = np.arange(len(chosen))
     i, j = pairs.first[chosen], pairs.second[chosen]
     return segment_distances(a[rows, i], b[rows, i], a[rows, j], b[rows, j]) - radii[i] - radii[j]
 
 
-def _allowance(
-    sub: SampledMotion, capsules: list[LinkCapsules], pairs: _Pairs, chosen: NDArray[np.int64], step: float
+def _link_pair_clearances(
+    sub: SampledMotion, capsules: list[LinkCapsules], pairs: _Pairs, chosen: NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Clearance of link pair ``chosen[r]`` at pose ``r`` of ``sub`` (the smallest of its capsule pairs), and which
+    capsule pair it is, for each ``r``."""
+    a, b, radii = _placed_ends(sub.transforms, capsules)
+    f = capsule_clearances(a, b, radii, pairs.first, pairs.second)
+    f = np.where(pairs.link_pair[None, :] == chosen[:, None], f, np.inf)
+    closest = np.argmin(f, axis=1)
+    return f[np.arange(len(chosen)), closest], closest
+
+
+class _EndRates(NamedTuple):
+    """Derivatives of every capsule's segment ends (home pose) by the design variables: ``(K, 3, N)`` each."""
+
+    starts: NDArray[np.float64]
+    ends: NDArray[np.float64]
+
+
+def _end_rates(inputs: list[LinkBuildInput], design: LinkDesign, orders: tuple[int, ...], step: float) -> _EndRates:
+    r""":class:`_EndRates` by the offsets and spacers in mm (``x`` of :func:`_design_order`): link ``k``'s capsules
+    depend on the variables only through its two seats, each moving along its axis (:meth:`Stacking.attach_points`:
+    by :math:`t_j` and by :math:`\pm o_j g_j / 2`, :math:`+` on link :math:`j + 1`), so per link two central
+    differences of ``step`` (m) along the axes (one-sided where a difference changes the number of the link's
+    capsules, as an arm's stubs appear), chained to the variables."""
+    n = len(inputs)
+    columns = []
+    for link in inputs:
+        base = link_capsules(*link.axes, link.joint_points, design, link.mount)
+        per_seat = []
+        for side in (0, 1):
+            shift = np.zeros((2, 3))
+            shift[side] = step * link.axes[side].direction
+            moved: list[LinkCapsules] = []
+            for sign in (1.0, -1.0):
+                shifted = link_capsules(*link.axes, link.joint_points + sign * shift, design, link.mount)
+                moved.append(shifted if len(shifted.radii) == len(base.radii) else base)
+            width = 2.0 * step - step * sum(m is base for m in moved)
+            if width == 0.0:  # a change of shape on both sides: no derivative there
+                per_seat.append((np.zeros_like(base.starts), np.zeros_like(base.ends)))
+                continue
+            high, low = moved
+            per_seat.append(((high.starts - low.starts) / width, (high.ends - low.ends) / width))
+        columns.append(per_seat)
+    sizes = [len(seat[0][0]) for seat in columns]
+    first = np.cumsum([0, *sizes])
+    starts = np.zeros((first[-1], 3, 2 * n))
+    ends = np.zeros_like(starts)
+    for k, ((start_0, end_0), (start_1, end_1)) in enumerate(columns):
+        rows = slice(first[k], first[k + 1])
+        before, after = (k - 1) % n, k  # the joints on link k's first and second axes
+        for variable, scale, start_rate, end_rate in (
+            (before, 1.0, start_0, end_0),
+            (n + before, 0.5 * orders[before], start_0, end_0),
+            (after, 1.0, start_1, end_1),
+            (n + after, -0.5 * orders[after], start_1, end_1),
+        ):
+            starts[rows, :, variable] += 1e-3 * scale * start_rate  # variables in mm
+            ends[rows, :, variable] += 1e-3 * scale * end_rate
+    return _EndRates(starts, ends)
+
+
+def _pair_clearance_gradients(
+    sub: SampledMotion, capsules: list[LinkCapsules], rates: _EndRates, pairs: _Pairs, chosen: NDArray[np.int64]
 ) -> NDArray[np.float64]:
-    """Half a step's travel at the pair's speed bound at pose ``r``: how far below a sampled local minimum the
-    clearance may dip between the samples."""
-    _, _, _, speed = _placed(sub, capsules)
+    """Gradient ``(R, N)`` of :func:`_pair_clearances` by the design variables: the motion of the two closest points
+    along their separation (the closest parameters :math:`s, t` stay put to first order, as a minimum's value
+    moves only with its function); where the segments cross, along the normal of both."""
+    a, b, _ = _placed_ends(sub.transforms, capsules)
     rows = np.arange(len(chosen))
-    return 0.5 * step * (speed[rows, pairs.first[chosen]] + speed[rows, pairs.second[chosen]])
+    i, j = pairs.first[chosen], pairs.second[chosen]
+    s, t, gap = closest_points(a[rows, i], b[rows, i], a[rows, j], b[rows, j])
+    length = np.linalg.norm(gap, axis=-1)
+    across = np.cross(b[rows, i] - a[rows, i], b[rows, j] - a[rows, j])
+    across_length = np.linalg.norm(across, axis=-1)
+    crossing = length <= 1e-12
+    normal = np.where(
+        crossing[:, None],
+        across / np.where(across_length > 0.0, across_length, 1.0)[:, None],
+        gap / np.where(crossing, 1.0, length)[:, None],
+    )
+    owner = _owners(capsules)
+    rotation_i = sub.transforms[rows, owner[i], :3, :3]
+    rotation_j = sub.transforms[rows, owner[j], :3, :3]
+    moved_i = (1.0 - s)[:, None, None] * rates.starts[i] + s[:, None, None] * rates.ends[i]
+    moved_j = (1.0 - t)[:, None, None] * rates.starts[j] + t[:, None, None] * rates.ends[j]
+    moved = np.einsum("rab,rbn->ran", rotation_i, moved_i) - np.einsum("rab,rbn->ran", rotation_j, moved_j)
+    return np.einsum("ra,ran->rn", normal, moved)
+
+
+def _allowance(
+    sub: SampledMotion,
+    capsules: list[LinkCapsules],
+    pairs: _Pairs,
+    closest: NDArray[np.int64],
+    spacing: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Half a step's travel at the speed bound of capsule pair ``closest[r]`` at pose ``r`` (``spacing[r]`` the
+    larger step either side of it in the whole sampling): how far below a sampled local minimum the clearance may
+    dip between the samples."""
+    _, _, _, speed = _placed(sub, capsules)
+    rows = np.arange(len(closest))
+    return 0.5 * spacing * (speed[rows, pairs.first[closest]] + speed[rows, pairs.second[closest]])
 
 
 def proxy_clearance(
@@ -294,13 +476,10 @@ def proxy_clearance(
     capsules = _all_capsules(loop, stacking, design)
     pairs = _capsule_pairs(capsules)
     _, certified = _clearances(motion, capsules, pairs)
-    values, angles = [], []
-    for p in range(len(pairs.link_pairs)):
-        block = certified[:, pairs.link_pair == p]
-        k = int(np.argmin(block.min(axis=1)))
-        values.append(float(block[k].min()))
-        angles.append(0.5 * float(motion.angles[k] + motion.angles[k + 1]))
-    return ProxyClearance(pairs.link_pairs, np.array(values), np.array(angles))
+    per_pair = pairs.per_link_pair(certified)
+    k = np.argmin(per_pair, axis=0)
+    angles = 0.5 * (motion.angles[k] + motion.angles[k + 1])
+    return ProxyClearance(pairs.link_pairs, per_pair[k, np.arange(len(k))], angles)
 
 
 @dataclass(frozen=True)
@@ -343,51 +522,54 @@ def _closest_poses(f: NDArray, certified: NDArray, limit: float) -> tuple[NDArra
     return np.array(poses, dtype=np.int64), np.array(pairs, dtype=np.int64)
 
 
-#: Poses of the first, coarse design of each order (2 deg apart), refined on all the poses: the coarse problem has
-#: fewer local minima for SLSQP to stall at.
+#: Poses of the local design's first pass (2 deg apart, more where the loop moves fast).
 _COARSE_POSES = 181
-#: How far above the margin the optimiser aims (m), so that the check on every interval, whose bound takes the larger
-#: speed of the interval's two ends, keeps the margin.
-_CUSHION = 1e-4
+#: Largest travel (m) of a joint point between the poses a design is judged at (:func:`sampled_motion`): 0.25 deg
+#: apart by default, more where the loop moves fast for its drive.
+_TRAVEL = 2e-3
+#: How far above the margin the optimiser aims (m): room for the check on every interval, whose bound takes the larger
+#: speed of the interval's two ends, and for the check on the meshed solids, which bounds the clearance between its
+#: own, fewer poses (Eq. (CL3); with 0.1 mm a design of bennett_ark24 kept 1.00 mm at every pose, proven 0.67 mm).
+_CUSHION = 5e-4
+#: Step (m) of the central differences of the capsules' ends by a seat's position along its axis (they are affine in
+#: it but for an arm's direction, so the difference's error is far below the clearances' tolerance).
+_DIFFERENCE_STEP = 1e-6
 
 
-def order_candidates(n: int, limit: int) -> list[tuple[int, ...]]:
-    """Stacking orders to try, at most ``limit``: for an even loop first the alternating one (links 1, 3, ... outside
-    at both their joints, links 0, 2, ... inside, as Bennett linkages are built), then the nominal one, then the rest
-    by their number of joints that differ from the first (ties in lexicographic order)."""
-    every = list(itertools.product((1, -1), repeat=n))
-    first = tuple(1 if j % 2 == 0 else -1 for j in range(n)) if n % 2 == 0 else (1,) * n
+def _cost(x: NDArray[np.float64], n: int) -> float:
+    """What the design minimises (mm): the spacers, and the offsets' squares at 0.01/mm (a 10 mm shift weighs as a
+    1 mm spacer)."""
+    return float(np.sum(x[n:]) + 0.01 * np.sum(x[:n] ** 2))
 
-    def rank(order: tuple[int, ...]) -> tuple:
-        differing = sum(a != b for a, b in zip(order, first, strict=True))
-        return (order != first, order != (1,) * n, differing, order)
 
-    every.sort(key=rank)
-    return every[:limit]
+def _with_column(matrix: NDArray[np.float64], value: float) -> NDArray[np.float64]:
+    """``matrix`` with a last column of ``value``."""
+    return np.hstack([matrix, np.full((len(matrix), 1), value)])
 
 
 class _Bounds(NamedTuple):
-    """The optimiser's bounds (mm): offsets within ``[-offset, offset]``, spacers within ``[0, spacer]``."""
+    """The optimiser's bounds (mm): offsets within ``[-offset, offset]``, spacers within ``[least_spacer, spacer]``."""
 
     offset: float
     spacer: float
+    least_spacer: float
 
 
 def _design_order(
     loop: SingleLoop,
     motion: SampledMotion,
-    pairs: _Pairs,
     design: LinkDesign,
     margin: float,
     limits: _Bounds,
     orders: tuple[int, ...],
     x: NDArray[np.float64],
-    step: float,
+    spacing: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """The offsets and spacers (mm) of :func:`design_stacking` for one stacking order from ``x`` (its docstring:
-    rounds, two phases), the allowance at a local minimum that of poses ``step`` apart (the final sampling's)."""
+    rounds, two phases); the allowance at a pose from ``spacing`` (default the motion's own,
+    :meth:`SampledMotion.spacing`)."""
     n = loop.n
-    bounds = [(-limits.offset, limits.offset)] * n + [(0.0, limits.spacer)] * n
+    bounds = [(-limits.offset, limits.offset)] * n + [(limits.least_spacer, limits.spacer)] * n
     low, high = np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds])
     target = margin + _CUSHION
 
@@ -395,27 +577,55 @@ def _design_order(
         return Stacking(tuple(float(v) for v in 1e-3 * x[:n]), tuple(float(v) for v in 1e-3 * x[n:]), orders)
 
     def cost(x: NDArray) -> float:
-        return float(np.sum(x[n:]) + 0.01 * np.sum(x[:n] ** 2))
+        return _cost(x, n)
 
     def cost_gradient(x: NDArray) -> NDArray:
         return np.concatenate([0.02 * x[:n], np.ones(n)])
 
-    kept: set[tuple[int, int]] = set()  # (pose, pair) entries of every round so far: no cycling between pose sets
+    points = joint_points(loop)
+
+    def capsules_at(x: NDArray) -> list[LinkCapsules]:
+        return _all_capsules(loop, stacking_of(x), design, points)
+
+    kept: set[tuple[int, int]] = set()  # (pose, capsule pair) entries of the rounds so far: no cycling between sets
+    structure = None  # the capsule pairs the kept entries index (an arm's stubs change them)
+    minimised = False  # a start that keeps the margin still has its cost minimised once
+    kept_margin: list[NDArray] = []  # every round's start that keeps the margin: the cheapest is the fallback
     for _ in range(_ROUNDS):
-        capsules = _all_capsules(loop, stacking_of(x), design)
+        capsules = capsules_at(x)
+        pairs = _capsule_pairs(capsules)
         f, certified = _clearances(motion, capsules, pairs)
         if certified.min() >= margin:
-            break
-        kept.update(zip(*(v.tolist() for v in _closest_poses(f, certified, target + 0.02)), strict=True))
+            kept_margin.append(x)
+            if minimised:
+                break
+        if pairs is not structure:
+            kept, structure = set(), pairs
+        limit = max(target, float(f.min())) + 0.02
+        kept.update(zip(*(v.tolist() for v in _closest_poses(f, certified, limit)), strict=True))
         poses, chosen = (np.array(v, dtype=np.int64) for v in zip(*sorted(kept), strict=True))
-        sub = SampledMotion(
-            motion.angles[poses], 0.0, motion.transforms[poses], motion.omega[poses], motion.velocity[poses]
-        )
-        allowance = _allowance(sub, capsules, pairs, chosen, step)
+        sub = motion.at(poses)
+        allowance = _allowance(sub, capsules, pairs, chosen, (motion.spacing() if spacing is None else spacing)[poses])
 
-        def gaps(x: NDArray, sub=sub, chosen=chosen, allowance=allowance) -> NDArray:
-            clear = _pair_clearances(sub, _all_capsules(loop, stacking_of(x), design), pairs, chosen)
-            return 1e3 * (clear - allowance - target)
+        def closest_at(x: NDArray, sub=sub, chosen=chosen, pairs=pairs) -> tuple[list, _Pairs, NDArray, NDArray]:
+            """Capsules at ``x``, their pairs, each constraint's clearance and capsule pair: the round's capsule
+            pairs, or, where an arm's stubs change them at ``x``, the closest capsule pair of the same links."""
+            capsules = capsules_at(x)
+            now = _capsule_pairs(capsules)
+            if now is pairs:
+                return capsules, now, _pair_clearances(sub, capsules, now, chosen), chosen
+            clear, closest = _link_pair_clearances(sub, capsules, now, pairs.link_pair[chosen])
+            return capsules, now, clear, closest
+
+        def gaps(x: NDArray, allowance=allowance, closest_at=closest_at) -> NDArray:
+            return 1e3 * (closest_at(x)[2] - allowance - target)
+
+        def gaps_jacobian(x: NDArray, sub=sub, closest_at=closest_at) -> NDArray:
+            capsules, now, _, closest = closest_at(x)
+            rates = _end_rates(
+                link_build_inputs(loop, stacking_of(x), design, points), design, orders, _DIFFERENCE_STEP
+            )
+            return 1e3 * _pair_clearance_gradients(sub, capsules, rates, now, closest)
 
         if gaps(x).min() < 0.0:  # phase 1: raise the smallest clearance to the margin
             raised = minimize(
@@ -424,7 +634,13 @@ def _design_order(
                 jac=lambda y: np.append(1e-3 * cost_gradient(y[:-1]), -1.0),
                 method="SLSQP",
                 bounds=[*bounds, (None, 0.5)],
-                constraints=[{"type": "ineq", "fun": lambda y, gaps=gaps: gaps(y[:-1]) - y[-1]}],
+                constraints=[
+                    {
+                        "type": "ineq",
+                        "fun": lambda y, gaps=gaps: gaps(y[:-1]) - y[-1],
+                        "jac": lambda y, gaps_jacobian=gaps_jacobian: _with_column(gaps_jacobian(y[:-1]), -1.0),
+                    }
+                ],
                 options={"maxiter": 100, "ftol": 1e-6},
             )
             x = np.clip(raised.x[:-1], low, high)
@@ -436,14 +652,86 @@ def _design_order(
                 jac=cost_gradient,
                 method="SLSQP",
                 bounds=bounds,
-                constraints=[{"type": "ineq", "fun": gaps}],
+                constraints=[{"type": "ineq", "fun": gaps, "jac": gaps_jacobian}],
                 options={"maxiter": 100, "ftol": 1e-6},
             )
             candidate = np.clip(least.x, low, high)
+            minimised = True
             if gaps(candidate).min() >= -1e-6:
                 x = candidate
             logger.info("stacking %s, phase 2: %s, cost %.4g", orders, least.message, cost(x))
-    return x
+    capsules = capsules_at(x)
+    if _clearances(motion, capsules, _capsule_pairs(capsules))[1].min() >= margin or not kept_margin:
+        return x
+    return min(kept_margin, key=cost)
+
+
+#: Poses of the global search: 4 deg apart, and a joint point's travel between them at most about 20 mm.
+_SEARCH_POSES, _SEARCH_TRAVEL = 91, 20e-3
+#: The global search stops once its best stacking keeps this much (m) beyond the margin at its poses: room for the
+#: minima between them, which the local design then certifies.
+_SEARCH_HEADROOM = 1e-3
+#: Population per variable and generations of the global search.
+_SEARCH_POPULATION, _SEARCH_GENERATIONS = 12, 300
+
+
+def _search_stacking(
+    loop: SingleLoop,
+    motion: SampledMotion,
+    design: LinkDesign,
+    margin: float,
+    limits: _Bounds,
+) -> tuple[NDArray[np.float64], tuple[int, ...]]:
+    """The global stage of :func:`design_stacking`: offsets and spacers (mm) and orders that maximise the smallest
+    capsule clearance at ``motion``'s poses, by differential evolution (seeded, so deterministic) over the offsets,
+    spacers and orders (integers), stopped once the margin and :data:`_SEARCH_HEADROOM` are kept."""
+    n = loop.n
+    points = joint_points(loop)
+    target = 1e3 * (margin + _SEARCH_HEADROOM)
+
+    bounds = np.array(
+        [(-limits.offset, limits.offset)] * n + [(limits.least_spacer, limits.spacer)] * n + [(0.0, 1.0)] * n
+    )
+    free = bounds[:, 1] > bounds[:, 0]  # the search runs over the variables with room; the rest stay at their bound
+
+    def split(free_values: NDArray) -> tuple[NDArray, tuple[int, ...]]:
+        y = bounds[:, 0].copy()
+        y[free] = free_values
+        return y[: 2 * n], tuple(1 if v > 0.5 else -1 for v in y[2 * n :])
+
+    def smallest_per_link_pair(free_values: NDArray) -> NDArray:
+        x, orders = split(free_values)
+        capsules = _all_capsules(loop, Stacking(tuple(1e-3 * x[:n]), tuple(1e-3 * x[n:]), orders), design, points)
+        pairs = _capsule_pairs(capsules)
+        a, b, radii = _placed_ends(motion.transforms, capsules)
+        return 1e3 * pairs.per_link_pair(capsule_clearances(a, b, radii, pairs.first, pairs.second).min(axis=0))
+
+    def objective(free_values: NDArray) -> float:
+        x, _ = split(free_values)
+        shortfall = np.maximum(target - smallest_per_link_pair(free_values), 0.0).sum()
+        return float(shortfall) + 1e-3 * float(np.sum(x[n:]) + 0.01 * np.sum(x[:n] ** 2))
+
+    def kept(intermediate_result) -> bool:
+        return smallest_per_link_pair(intermediate_result.x).min() >= target
+
+    found = differential_evolution(
+        objective,
+        bounds[free],
+        integrality=np.arange(3 * n)[free] >= 2 * n,
+        popsize=_SEARCH_POPULATION,
+        maxiter=_SEARCH_GENERATIONS,
+        seed=0,
+        updating="deferred",
+        polish=False,
+        callback=kept,
+    )
+    logger.info(
+        "stacking search: %s after %d generations, smallest %.3g mm",
+        found.message,
+        found.nit,
+        smallest_per_link_pair(found.x).min(),
+    )
+    return split(np.asarray(found.x, dtype=float))
 
 
 def design_stacking(
@@ -455,25 +743,27 @@ def design_stacking(
     max_offset: float | None = None,
     max_spacer: float | None = None,
     n_poses: int = DEFAULT_POSES,
-    max_orders: int = 16,
 ) -> StackingDesign:
     r"""The :class:`Stacking` with the least spacers and shifts whose links keep ``margin`` (m) along one revolution
     of ``driver`` from the closing pose near ``start`` (module docstring; ``docs/formulation.md``, (CF5)).
 
-    For each stacking order of :func:`order_candidates` (at most ``max_orders``), until one keeps the margin, on 181
-    of the poses (with their own allowance, which asks for more room, and where that fails with the allowance of all
-    the poses) and then from that result on all ``n_poses``: in rounds, the poses
-    where each compared capsule pair comes closest (local minima of its clearance :math:`f`) are taken, with the
-    allowance :math:`L\,\Delta/2` of the speed bound there, and SLSQP first raises the smallest
-    :math:`f - L\Delta/2` to the margin (maximises :math:`z` subject to :math:`f - L\Delta/2 \ge z`), then minimises
-    :math:`\sum_j g_j + \epsilon \sum_j t_j^2` (mm, :math:`\epsilon` = 0.01/mm: a 10 mm shift weighs as a 1 mm
-    spacer) keeping :math:`f - L\Delta/2 \ge` ``margin`` + 0.1 mm; every round starts from the last (the first
-    from the nominal offsets), so the design is deterministic. The result is judged on every interval of the
-    motion (:func:`proxy_clearance`). Bounds: :math:`|t_j|` <= ``max_offset`` (default a quarter of the loop's
-    size), :math:`0 \le g_j` <= ``max_spacer`` (default and at most the reach of ``build_link``'s trimming beyond
-    the housing, within which a housing and the other link's arm stay apart by construction). Raises
-    :class:`GeometryError` naming the closest pair of links, the drive angle and the clearance reached (of the
-    order that came closest) where no stacking found within the bounds keeps the margin.
+    From the nominal offsets with the order Bennett linkages are built in, and where that misses the margin also
+    from a global search (:func:`_search_stacking`: differential evolution over offsets, spacers and the orders at
+    91 poses, more where the loop moves fast), a local design (the cheaper that keeps the margin is taken): on 181
+    poses first, then on all ``n_poses`` (more where a joint point would move over 2 mm between them,
+    :func:`sampled_motion`): in rounds, the poses where each compared capsule pair comes closest (local minima of
+    its clearance :math:`f`) are taken, with the allowance :math:`L\,\Delta/2` of the speed bound there, and SLSQP
+    (exact gradients) first raises the smallest :math:`f - L\Delta/2` to the margin (maximises :math:`z` subject to
+    :math:`f - L\Delta/2 \ge z`), then minimises :math:`\sum_j g_j + \epsilon \sum_j t_j^2` (mm,
+    :math:`\epsilon` = 0.01/mm: a 10 mm shift weighs as a 1 mm spacer) keeping :math:`f - L\Delta/2 \ge`
+    ``margin`` + 0.5 mm. Deterministic (a seeded search; every round starts from the last). The result is judged on
+    every interval of the motion (:func:`proxy_clearance`). Bounds: :math:`|t_j|` <= ``max_offset`` (default half
+    the loop's size), :math:`g_j` from ``margin`` + 0.5 mm less the axial gap (what stays apart by construction
+    then keeps that much beyond the margin, for the check on the solids) to ``max_spacer`` (default and at most the
+    reach of ``build_link``'s trimming beyond the housing, within which a housing and the other link's arm stay
+    apart by construction).
+    Raises :class:`GeometryError` naming the closest pair of links, the drive angle and the clearance reached where
+    the design does not keep the margin.
     """
     clock = time.perf_counter()
     design = LinkDesign() if design is None else design
@@ -485,35 +775,51 @@ def design_stacking(
     n = loop.n
     # Within the trimming's reach, a housing and the other link's arm at a shared joint stay apart by construction.
     spacer_limit = trim_reach(design) - design.housing_length - design.axial_gap
-    max_offset = 0.25 * loop.scale if max_offset is None else max_offset
+    max_offset = 0.5 * loop.scale if max_offset is None else max_offset
     max_spacer = spacer_limit if max_spacer is None else min(max_spacer, spacer_limit)
-    limits = _Bounds(1e3 * max_offset, 1e3 * max_spacer)
-    motion = sampled_motion(loop, driver, start, n_poses)
-    coarse = motion if n_poses <= _COARSE_POSES else sampled_motion(loop, driver, start, _COARSE_POSES)
-    pairs = _capsule_pairs(_all_capsules(loop, Stacking.nominal(n), design))
-    closest: tuple[Stacking, ProxyClearance] | None = None
-    for orders in order_candidates(n, max_orders):
-        for allowance_step in (coarse.step, motion.step):  # the coarse poses' own allowance, then all the poses'
-            x = _design_order(loop, coarse, pairs, design, margin, limits, orders, np.zeros(2 * n), allowance_step)
-            x = _design_order(loop, motion, pairs, design, margin, limits, orders, x, motion.step)
-            stacking = Stacking(tuple(float(v) for v in 1e-3 * x[:n]), tuple(float(v) for v in 1e-3 * x[n:]), orders)
-            clearance = proxy_clearance(loop, motion, stacking, design)
-            if closest is None or clearance.smallest[0] > closest[1].smallest[0]:
-                closest = (stacking, clearance)
-            if clearance.smallest[0] >= margin or coarse is motion:
+    # What stays one axial gap and the spacer apart by construction (the two housings at a joint, each against the
+    # other link's arm there) is not compared, so the spacer keeps it margin + cushion apart: a check on the solids
+    # could not prove a clearance that equals the margin between its poses.
+    least_spacer = min(max(0.0, margin + _CUSHION - design.axial_gap), max_spacer)
+    limits = _Bounds(1e3 * max_offset, 1e3 * max_spacer, 1e3 * least_spacer)
+    motion = sampled_motion(loop, driver, start, n_poses, _TRAVEL)
+    search = sampled_motion(loop, driver, start, _SEARCH_POSES, _SEARCH_TRAVEL)
+    coarse = sampled_motion(loop, driver, start, _COARSE_POSES, _SEARCH_TRAVEL)
+    finest = np.full(len(coarse.angles), 2 * np.pi / (n_poses - 1))
+
+    def local(x: NDArray, orders: tuple[int, ...]) -> tuple[Stacking, ProxyClearance, float]:
+        """The local design from ``x``: first on the coarse poses (fewer local minima for SLSQP to stall at) with
+        their own allowance, which asks for more room, and where that fails with that of the final spacing; each
+        then refined on all the poses."""
+        best: tuple[Stacking, ProxyClearance, float] | None = None
+        for spacing in (None, finest):
+            y = _design_order(loop, coarse, design, margin, limits, orders, x, spacing)
+            y = _design_order(loop, motion, design, margin, limits, orders, y)
+            stacking = Stacking(tuple(float(v) for v in 1e-3 * y[:n]), tuple(float(v) for v in 1e-3 * y[n:]), orders)
+            found = (stacking, proxy_clearance(loop, motion, stacking, design), _cost(y, n))
+            if best is None or found[1].smallest[0] > best[1].smallest[0]:
+                best = found
+            if found[1].smallest[0] >= margin:
                 break
-        if closest is not None and closest[1].smallest[0] >= margin:
-            break
-    assert closest is not None  # max_orders >= 1
-    stacking, clearance = closest
+        assert best is not None
+        return best
+
+    nominal = np.concatenate([np.zeros(n), np.full(n, limits.least_spacer)])
+    # the order Bennett linkages are built in (links 1, 3, ... outside at both their joints; all +1 for an odd loop)
+    designs = [local(nominal, tuple(1 if j % 2 == 0 or n % 2 else -1 for j in range(n)))]
+    if designs[0][1].smallest[0] < margin:  # then from the global search's result, with its orders
+        designs.append(local(*_search_stacking(loop, search, design, margin, limits)))
+    keeping = [d for d in designs if d[1].smallest[0] >= margin]
+    stacking, clearance, _ = (
+        min(keeping, key=lambda d: d[2]) if keeping else max(designs, key=lambda d: d[1].smallest[0])
+    )
     value, (a, b), angle = clearance.smallest
     seconds = time.perf_counter() - clock
     if value < margin:
         raise GeometryError(
             f"no collision-free stacking within the bounds (offsets <= {1e3 * max_offset:.3g} mm, spacers <= "
-            f"{1e3 * max_spacer:.3g} mm, {max_orders} stacking orders): links {a} and {b} come within "
-            f"{1e3 * value:.2f} mm at drive angle {np.degrees(angle):.1f} deg (margin {1e3 * margin:.3g} mm); "
-            "widen the bounds or slim the links"
+            f"{1e3 * max_spacer:.3g} mm): links {a} and {b} come within {1e3 * value:.2f} mm at drive angle "
+            f"{np.degrees(angle):.1f} deg (margin {1e3 * margin:.3g} mm); widen the bounds or slim the links"
         )
     logger.info("collision-free stacking: %s", clearance.summary())
     return StackingDesign(stacking, clearance, margin, seconds)

@@ -71,6 +71,10 @@ FLAG_CASES = {
         "argument --driver: must be a whole number >= 0",
     ),
     "no steps allowed": (["bennett", "--max-steps", "0"], "argument --max-steps: must be a whole number >= 1"),
+    "two placements of the links": (
+        ["linkage", "--model", "bennett_ark24", "--design-points", "--collision-free"],
+        "argument --collision-free: not allowed with argument --design-points",
+    ),
 }
 
 

@@ -1,11 +1,13 @@
 """The capsule proxy of a parametric link (:mod:`ffrf.geometry.link_capsules`): segment distances against closed
 forms and a dense search, and the capsules enclosing every node of the meshed link."""
 
+import itertools
+
 import numpy as np
 import pytest
 
 from ffrf.geometry.joint_axes import Axis
-from ffrf.geometry.link_capsules import ARM, MOUNT, link_capsules, segment_distances
+from ffrf.geometry.link_capsules import ARM, ARM_CELLS, MOUNT, link_capsules, segment_distances
 from ffrf.geometry.link_geometry import LinkDesign, mesh_link
 
 
@@ -68,5 +70,54 @@ def test_capsules_enclose_every_node_of_the_meshed_link(first, second, mount):
     capsules = link_capsules(*axes, geometry.joint_points, design, mount)
     assert (ARM in capsules.parts) and ((MOUNT in capsules.parts) == mount)
     if not mount:
-        assert capsules.parts.count(ARM) == 3  # the stubs' case
+        assert capsules.parts.count(ARM) == 3 * ARM_CELLS**2  # the stubs' case
     assert _outside(mesh.points, capsules).max() <= 1e-9
+
+
+def test_arm_capsules_stand_off_the_arm_faces_by_the_cells_half_diagonal():
+    """Beside the middle of a straight arm (skew axes 110 mm apart), off the arm's faces above a cell's middle line:
+    a point 2.05 mm off the thickness face and one 1.05 mm off the width face lie outside every capsule (cells of
+    8 x 6 mm, radius 5 mm: 2 and 1 mm), points 1.95 and 0.95 mm off inside one; the single capsule about the whole
+    section (radius 10 mm) would hold all four."""
+    design = LinkDesign()
+    axes = (Axis.of(((0, 0, 0), (0, 0, 1))), Axis.of(((0.11, 0, 0), (0, 1, 0))))
+    capsules = link_capsules(*axes, np.array([[0, 0, 0], [0.11, 0, 0]]), design)
+    arm = np.array([p == ARM for p in capsules.parts])
+    start, end = capsules.starts[arm].mean(axis=0), capsules.ends[arm].mean(axis=0)
+    middle = 0.5 * (start + end)
+    along = (end - start) / np.linalg.norm(end - start)
+    width = axes[0].direction - (axes[0].direction @ along) * along  # build_link's e2: the first axis, projected
+    width /= np.linalg.norm(width)
+    thickness = np.cross(along, width)
+    half_w, half_t = 0.5 * design.arm_width, 0.5 * design.arm_thickness
+    for face, beside, half, outside, inside in (
+        (thickness, width, half_t, 2.05e-3, 1.95e-3),
+        (width, thickness, half_w, 1.05e-3, 0.95e-3),
+    ):
+        above_a_cell = middle + 0.5 * (half_w if beside is width else half_t) * beside  # over a cell's middle line
+        assert _outside((above_a_cell + (half + outside) * face)[None], capsules)[0] > 0.0
+        assert _outside((above_a_cell + (half + inside) * face)[None], capsules)[0] <= 0.0
+
+
+def test_the_capsule_kernel_agrees_with_the_numpy_closest_points():
+    """``capsule_clearances`` (numba) against ``segment_distances`` (numpy) on random segments, with degenerate ones
+    (points), parallel ones and crossing ones among them."""
+    from ffrf.geometry.capsule_kernels import capsule_clearances
+
+    rng = np.random.default_rng(3)
+    m, k = 5, 12
+    starts = rng.normal(size=(m, k, 3))
+    ends = starts + rng.normal(size=(m, k, 3))
+    ends[:, 0] = starts[:, 0]  # a point
+    ends[:, 1] = starts[:, 1] + 0.5 * (ends[:, 2] - starts[:, 2])  # parallel to capsule 2
+    starts[:, 3], ends[:, 3] = (-1.0, 0.0, 0.0), (1.0, 0.0, 0.0)  # crossing capsule 4's segment at the origin
+    starts[:, 4], ends[:, 4] = (0.0, -1.0, 0.0), (0.0, 1.0, 0.0)
+    radii = rng.uniform(0.0, 0.2, k)
+    first, second = (np.array(v, dtype=np.int64) for v in zip(*itertools.combinations(range(k), 2), strict=True))
+    kernel = capsule_clearances(starts, ends, radii, first, second)
+    numpy = (
+        segment_distances(starts[:, first], ends[:, first], starts[:, second], ends[:, second])
+        - radii[first]
+        - radii[second]
+    )
+    np.testing.assert_allclose(kernel, numpy, rtol=0.0, atol=1e-13)

@@ -84,6 +84,24 @@ def test_a_stiff_rational_linkages_4r_from_the_command_line_follows_its_ideal_mo
     assert "max coupler deviation" in capsys.readouterr().out
 
 
+def test_collision_free_links_of_a_rational_linkages_4r_from_the_command_line(tmp_path):
+    """``--collision-free``: the stacking is designed for the model at the scale asked (half of bennett_ark24's unit
+    size, links 121 and 209 mm), and the run's own check on the meshed solids finds every pair of links keeping the
+    margin along the motion (its links at the joint points overlap by 10.8 mm, docs/usage.md). The margin is below the
+    axial gap (1 mm): an arm that leaves its housing tilted is trimmed one gap from the neighbour's housing (Eq.
+    (CL3)), which the check between poses cannot prove to equal a margin of the gap itself."""
+    code = main(
+        ["linkage", "--model", "bennett_ark24", "--scale", "0.5", "--variant", "rigid", "--collision-free",
+         "--clearance-margin", "0.5", "--h", "0.012", "--order", "1", "--modes", "2", "--outputs", "5",
+         "--quasi-static", "--out", str(tmp_path)]
+    )  # fmt: skip
+    assert code == 0
+    written = json.loads((tmp_path / "linkage.json").read_text())
+    assert written["linkage"]["collision_free"] is True and written["linkage"]["clearance_margin"] == 0.5e-3
+    metadata = json.loads((tmp_path / "metadata.json").read_text())
+    assert metadata["clearance"]["margin_met"], metadata["clearance"]
+
+
 def test_a_measured_bore_axis_is_the_same_as_built_as_its_twist(tmp_path):
     """The base's joint-3 bore given as the line it is on (the paper's alpha_3 = 91 deg axis h3, in mm) builds the
     same description as the 1 deg twist error: bores, joints and start poses agree to round-off (measured 1.1e-16)."""
