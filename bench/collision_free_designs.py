@@ -131,7 +131,9 @@ def _rl_search(model: str, scale: float, h: float, poses: int, design: LinkDesig
     return dict(row, found=True, **_clearance_row(built, poses), centre_lines_m=_centre_line_length(points))
 
 
-def compare_case(model: str, scale: float, h: float, poses: int, rl_check: bool, rl_search: bool, ours: bool) -> dict:
+def compare_case(
+    model: str, scale: float, h: float, poses: int, rl_check: bool, rl_search: bool, run_ours: bool
+) -> dict:
     """The three sets of links of one case (module docstring)."""
     row: dict = {"model": model, "scale": scale}
     base = {"linkage": {"model": model, "scale": scale}}
@@ -155,7 +157,7 @@ def compare_case(model: str, scale: float, h: float, poses: int, rl_check: bool,
         }
     if rl_search:
         row["rational_linkages_search"] = _rl_search(model, scale, h, poses, design)
-    if not ours:
+    if not run_ours:
         return row
     phi = start_pose(loop, options.driver, options.start_angle, options.origin)
     started = time.perf_counter()
@@ -201,8 +203,8 @@ def main() -> int:
         model, scale = case.split(":")
         print(f"== {model} at scale {scale}", flush=True)
         search = model in args.rl_search
-        ours = args.design is None or model in args.design
-        rows.append(compare_case(model, float(scale), args.h, args.poses, args.rl_check, search, ours))
+        run_ours = args.design is None or model in args.design
+        rows.append(compare_case(model, float(scale), args.h, args.poses, args.rl_check, search, run_ours))
     report = {
         "margin_m": MARGIN,
         "h_m": args.h,
