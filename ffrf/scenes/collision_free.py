@@ -682,9 +682,10 @@ def _search_stacking(
     margin: float,
     limits: _Bounds,
 ) -> tuple[NDArray[np.float64], tuple[int, ...]]:
-    """The global stage of :func:`design_stacking`: offsets and spacers (mm) and orders that maximise the smallest
-    capsule clearance at ``motion``'s poses, by differential evolution (seeded, so deterministic) over the offsets,
-    spacers and orders (integers), stopped once the margin and :data:`_SEARCH_HEADROOM` are kept."""
+    """The global stage of :func:`design_stacking`: offsets and spacers (mm) and orders (integers) by differential
+    evolution (seeded, so deterministic) minimising the summed shortfall of each link pair's smallest capsule
+    clearance at ``motion``'s poses below the margin and :data:`_SEARCH_HEADROOM` (plus a thousandth of the cost),
+    stopped once no pair falls short."""
     n = loop.n
     points = joint_points(loop)
     target = 1e3 * (margin + _SEARCH_HEADROOM)
