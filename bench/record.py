@@ -111,7 +111,7 @@ def record(
         results = {key: results[key] for key in recording.select if key in results}
     if recording.rows_by:
         results = keyed_rows(results, recording.rows_by, recording.rows_name)
-    meta = provenance(shown, load_at_start=load, wall_time_s=wall)
+    meta = provenance(shown, load_at_start=load, wall_time_s=wall, root=root)
     meta["exit_status"] = status
     path = results_dir / f"{recording.result}.json"
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -159,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.coverage:
             summary["coverage"] = coverage_summary(json.loads((out / "coverage.json").read_text()))
     shown = " ".join(["python", *sys.argv] if argv is None else ["python", __file__, *argv])
-    meta = provenance(shown.replace(str(ROOT) + "/", ""), load_at_start=load, wall_time_s=wall)
+    meta = provenance(shown.replace(str(ROOT) + "/", ""), load_at_start=load, wall_time_s=wall, root=ROOT)
     meta["exit_status"] = summary["exit_status"]
     if args.coverage:
         meta["environment"] = {"NUMBA_DISABLE_JIT": "1"}

@@ -76,7 +76,10 @@ def git_commit(root: Path | None = None) -> dict[str, object] | None:
 
 
 def provenance(
-    command: list[str] | str | None = None, load_at_start: list[float] | None = None, wall_time_s: float | None = None
+    command: list[str] | str | None = None,
+    load_at_start: list[float] | None = None,
+    wall_time_s: float | None = None,
+    root: Path | None = None,
 ) -> dict[str, object]:
     """The ``meta`` block of a result file.
 
@@ -85,6 +88,8 @@ def provenance(
     command : the command that measured the results (default: this process's ``sys.argv``).
     load_at_start : load averages when the measurement started (the load at the end is read now).
     wall_time_s : wall time of the whole measurement (s).
+    root : the working tree whose code ran (default: the one this module is imported from, which differs where a
+        clone shares another tree's environment and its editable install).
     """
     if command is None:
         command = [Path(sys.executable).name, *sys.argv]
@@ -98,7 +103,7 @@ def provenance(
             "load_average_end": load_average(),
         },
         "versions": versions(),
-        "git": git_commit(),
+        "git": git_commit(root),
     }
     if wall_time_s is not None:
         meta["wall_time_s"] = round(wall_time_s, 1)

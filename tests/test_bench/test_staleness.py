@@ -107,9 +107,11 @@ def test_recorded_result_files_leave_the_tree_clean_for_the_next_recording(repo:
 
 
 def test_a_recording_warms_up_first_and_keeps_what_the_command_wrote(repo: Path, tmp_path: Path) -> None:
-    """The warm-up (``python -m ffrf warmup`` by default) runs before the timed command, in its environment."""
+    """The warm-up (``python -m ffrf warmup`` by default) runs before the timed command, in its environment; the
+    meta names the commit of the tree that ran, not of the one this process imports ``ffrf`` from (a clone sharing
+    another tree's environment once recorded that tree's commit)."""
     probe = "import json, os, sys; json.dump({'warmed': os.path.exists('warmed')}, open(sys.argv[1], 'w'))\n"
-    _commit(repo, {"probe_bench.py": probe, ".gitignore": "warmed\n"})
+    head = _commit(repo, {"probe_bench.py": probe, ".gitignore": "warmed\n"})
     entry = Benchmark(
         "probe_bench", "writes whether the warm-up ran", measures=("probe_bench.py",), module="probe_bench"
     )
@@ -119,6 +121,7 @@ def test_a_recording_warms_up_first_and_keeps_what_the_command_wrote(repo: Path,
     written = json.loads(path.read_text())
     assert written["results"] == {"warmed": True}
     assert written["meta"]["exit_status"] == 0 and "probe_bench OUT/report.json" in written["meta"]["command"]
+    assert written["meta"]["git"] == {"commit": head, "dirty": False}
 
 
 def test_rows_are_keyed_by_a_field_for_json_pointers() -> None:
