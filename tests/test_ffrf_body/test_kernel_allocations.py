@@ -4,6 +4,7 @@ with its iterations and nothing else, and none left behind, so that a long run d
 
 from collections.abc import Callable
 
+import numba
 import numpy as np
 import pytest
 
@@ -37,6 +38,9 @@ def first_step():
     return head + (to_accel, h * h * par.beta, h * par.gamma, beta_p, gamma_p), qdd, lam
 
 
+@pytest.mark.skipif(
+    numba.config.DISABLE_JIT, reason="numba's runtime counts the allocations of compiled code; the JIT is off"
+)
 def test_newton_iterations_allocate_alike_and_free_all(first_step):
     """With tolerance 0 (Newton never converges) and ``done`` far below the refactoring rule's fifth iteration, a call
     runs exactly ``max_iterations`` iterations: its allocations must be a fixed number plus the same number per
