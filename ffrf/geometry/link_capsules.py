@@ -34,11 +34,11 @@ __all__ = ["ARM", "ARM_CELLS", "MOUNT", "LinkCapsules", "closest_points", "link_
 
 #: ``LinkCapsules.parts`` of the arm's and the mount block's capsules (a housing's part is its side, 0 or 1).
 ARM, MOUNT = -1, -2
-#: An arm box's section :math:`w \times t` is split into ``ARM_CELLS`` x ``ARM_CELLS`` cells, each enclosed by a capsule
-#: about its middle line with the cell's half-diagonal as radius: with two, the proxy stands at most
-#: :math:`\tfrac14\sqrt{w^2 + t^2} - \tfrac{w}{4}` and :math:`... - \tfrac{t}{4}` off the box's faces (1 and 2 mm
-#: for the default 16 x 12 mm arm, against 2 and 4 mm for one capsule about the whole section), and each cell's
-#: capsule lies within that one capsule (centre :math:`\rho_a/2` off its axis, radius :math:`\rho_a/2`).
+#: An arm box's section :math:`w \times t` is split into ``ARM_CELLS`` by ``ARM_CELLS`` cells, each enclosed by a
+#: capsule about its middle line with the cell's half-diagonal as radius: with two, the proxy stands at most 1 and
+#: 2 mm off the faces of the default 16 x 12 mm arm (one capsule about the whole section: 2 and 4 mm), and each
+#: cell's capsule lies within that one capsule (its centre half the section's half-diagonal off the axis, and its
+#: radius the other half).
 ARM_CELLS = 2
 
 
