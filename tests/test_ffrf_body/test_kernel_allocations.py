@@ -2,9 +2,9 @@
 numba's runtime (``bench/memory_probe.py``): the same number in every iteration, so that a step's allocations grow
 with its iterations and nothing else, and none left behind, so that a long run does not leak."""
 
+import os
 from collections.abc import Callable
 
-import numba
 import numpy as np
 import pytest
 
@@ -39,7 +39,8 @@ def first_step():
 
 
 @pytest.mark.skipif(
-    numba.config.DISABLE_JIT, reason="numba's runtime counts the allocations of compiled code; the JIT is off"
+    os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0"),
+    reason="numba's runtime counts the allocations of compiled code; the JIT is off",
 )
 def test_newton_iterations_allocate_alike_and_free_all(first_step):
     """With tolerance 0 (Newton never converges) and ``done`` far below the refactoring rule's fifth iteration, a call
