@@ -192,6 +192,7 @@ def write_link_cad(
     names: tuple[str, str] = ("joint_a", "joint_b"),
     mount: bool = False,
     joint_points: ArrayLike | None = None,
+    trim: tuple[float | None, float | None] | None = None,
     *,
     h: float = 6e-3,
     tolerance: float = 0.05e-3,
@@ -204,7 +205,7 @@ def write_link_cad(
     folder.mkdir(parents=True, exist_ok=True)
     step, stl = folder / f"{name}.step", folder / f"{name}.stl"
     with gmsh_session(name) as gmsh, tempfile.TemporaryDirectory() as scratch:
-        geometry = build_link(gmsh, axis_a, axis_b, design or LinkDesign(), names, mount, joint_points)
+        geometry = build_link(gmsh, axis_a, axis_b, design or LinkDesign(), names, mount, joint_points, trim)
         brep = Path(scratch) / f"{name}.brep"
         gmsh.write(str(brep))
         solid = _import_in_mm(gmsh, brep)

@@ -42,6 +42,7 @@ __all__ = [
     "arm_waypoints",
     "build_link",
     "mesh_link",
+    "trim_covering",
     "trim_reach",
 ]
 
@@ -220,23 +221,31 @@ def _classify_surfaces(gmsh, geometry_axes, centers, design: LinkDesign, mount) 
 
 
 def trim_reach(design: LinkDesign) -> float:
-    """How far beyond a housing's end faces :func:`build_link` trims the arm near the axis (m)."""
+    """How far beyond a housing's end faces :func:`build_link` trims the arm near the axis by default (m)."""
     return 2.0 * (design.arm_width + design.arm_thickness + design.mount_height)
 
 
-def _trim_to_housing_slabs(occ, parts: list[int], axes, centers, design: LinkDesign) -> list[tuple[int, int]]:
+def trim_covering(distance: float, design: LinkDesign) -> float:
+    """The trimming's reach (m) that keeps a housing's arm one axial gap from a coaxial housing ``distance`` (m)
+    away, centre to centre, beyond that housing's far end face: at least :func:`trim_reach`."""
+    return max(trim_reach(design), distance + design.axial_gap)
+
+
+def _trim_to_housing_slabs(
+    occ, parts: list[int], axes, centers, design: LinkDesign, reaches: tuple[float, float]
+) -> list[tuple[int, int]]:
     """Cut away arm material that sticks out of a housing's end faces near the axis.
 
     A straight box cannot follow two skew axes, so its corners could protrude
     axially past a housing end (up to half the cross-section diagonal) and
     clash with the neighbouring link's housing across the axial gap. Removing
     everything within (housing radius + axial gap) of the axis beyond the end
-    planes keeps the neighbour's housing at least one gap away in both directions.
+    planes, as far as ``reaches`` (per housing), keeps the neighbour's housing at
+    least one gap away in both directions.
     """
-    cap = trim_reach(design)
     clearance_radius = design.housing_outer_radius + design.axial_gap
     tools = []
-    for axis, center in zip(axes, centers, strict=True):
+    for axis, center, cap in zip(axes, centers, reaches, strict=True):
         for sign in (-1.0, 1.0):
             base = center + sign * 0.5 * design.housing_length * axis.direction
             tools.append((3, occ.addCylinder(*base, *(sign * cap * axis.direction), clearance_radius)))
@@ -252,6 +261,7 @@ def build_link(
     names: tuple[str, str] = ("joint_a", "joint_b"),
     mount: bool = False,
     joint_points: ArrayLike | None = None,
+    trim: tuple[float | None, float | None] | None = None,
 ) -> LinkGeometry:
     """Build the link solid in the open gmsh session (OCC kernel) with physical groups.
 
@@ -268,6 +278,9 @@ def build_link(
         Where a loop has DH offsets d_i != 0, the two links meeting at a joint have different
         feet on its axis; giving both the same joint point keeps their housings stacked by the
         offset rule, and the arm, which joins the housing centres, is cranked accordingly.
+    trim : per housing, how far beyond its end faces the arm is trimmed near the axis (m; ``None``
+        or a ``None`` entry: :func:`trim_reach`); farther where the neighbour's housing on that
+        axis sits farther away (:func:`trim_covering`).
     """
     axes = (Axis.of(axis_a), Axis.of(axis_b))
     feet = common_normal_feet(*axes) if joint_points is None else _points_on_axes(joint_points, axes, names)
@@ -324,7 +337,12 @@ def build_link(
         )
         mount_center = origin + frame @ np.array([0.5 * middle_length, 0.0, -half_t - design.mount_height])
         mount_plane = (mount_center, -frame[:, 2])
-    trimmed = _trim_to_housing_slabs(occ, parts, axes, centers, design)
+    default_reach = trim_reach(design)
+    first, second = (None, None) if trim is None else trim
+    reaches = (default_reach if first is None else first, default_reach if second is None else second)
+    if not all(np.isfinite(r) and r > 0.0 for r in reaches):
+        raise GeometryError(f"link {names}: trim reaches {reaches} m must be positive")
+    trimmed = _trim_to_housing_slabs(occ, parts, axes, centers, design, reaches)
     solid, _ = occ.fuse([(3, housings[0])], [(3, housings[1])] + trimmed)
     bores = []
     for axis, center in zip(axes, centers, strict=True):
@@ -382,6 +400,7 @@ def mesh_link(
     msh_path: str | Path | None = None,
     name: str = "link",
     joint_points: ArrayLike | None = None,
+    trim: tuple[float | None, float | None] | None = None,
 ) -> tuple[TetMesh, LinkGeometry]:
     """Build and mesh a link with linear tetrahedra of maximum edge ``h`` (metres).
 
@@ -391,7 +410,7 @@ def mesh_link(
     from ffrf.geometry.meshing import configure_meshing, gmsh_session, mesh_current_model
 
     with gmsh_session(name) as gmsh:
-        geometry = build_link(gmsh, axis_a, axis_b, design, names, mount, joint_points)
+        geometry = build_link(gmsh, axis_a, axis_b, design, names, mount, joint_points, trim)
         configure_meshing(h)
         mesh = mesh_current_model(name)
         if msh_path is not None:

@@ -268,7 +268,8 @@ def _mesh(entry: dict, base: Path, where: str) -> tuple[TetMesh, LinkGeometry | 
 
 def parametric_link(spec: dict, where: str = "scene") -> dict:
     """The arguments of :func:`~ffrf.geometry.link_geometry.build_link` (``axis_a``, ``axis_b``, ``design``,
-    ``names``, ``mount``, ``joint_points``) that a body's ``parametric`` table gives."""
+    ``names``, ``mount``, ``joint_points``, ``trim``) that a body's ``parametric`` table gives (an axis' ``trim``:
+    the trimming's reach beyond that housing, m)."""
     design = _link_design(spec, where)
     a, b = spec["axes"]
     joint_points = None
@@ -284,6 +285,7 @@ def parametric_link(spec: dict, where: str = "scene") -> dict:
         "names": (a["name"], b["name"]),
         "mount": spec.get("mount", False),
         "joint_points": joint_points,
+        "trim": (a.get("trim"), b.get("trim")) if "trim" in a or "trim" in b else None,
     }
 
 

@@ -14,8 +14,8 @@ keeps at least ``margin`` between their capsule proxies (:mod:`ffrf.geometry.lin
 sampled poses by the links' speeds; among such stackings it takes the one with the least spacer and shift
 (``docs/formulation.md``, "Collision-free links"). At a joint the two links share, the housings (coaxial, one axial
 gap or more apart) and each housing against the other link's arm and mount block (which ``build_link`` trims within
-one gap of the housing's radius beyond its end faces) are apart by at least the axial gap by construction and are
-not compared; the margin may therefore not exceed the axial gap.
+one gap of the housing's radius beyond its end faces, as far as the other housing reaches) are apart by at least the
+axial gap by construction and are not compared; the margin may therefore not exceed the axial gap.
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ from ffrf.geometry.link_capsules import (
     link_capsules,
     segment_distances,
 )
-from ffrf.geometry.link_geometry import LinkDesign, trim_reach
+from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.scenes.linkage_description import drive_sign, joint_points
 from kinematics import Line, SingleLoop, follow_driver, motion_tangents
 
@@ -78,6 +78,24 @@ class Stacking:
     def nominal(cls, n: int) -> Stacking:
         """Both housings stacked about the joint point, one axial gap apart: the links as before any design."""
         return cls((0.0,) * n, (0.0,) * n)
+
+    @classmethod
+    def from_attach_points(cls, loop: SingleLoop, attach: ArrayLike, design: LinkDesign | None = None) -> Stacking:
+        """The stacking whose housings sit on ``attach`` ``(n, 2, 3)`` (points on the axes, as :meth:`attach_points`
+        gives them, or a Rational Linkages design's, :func:`kinematics.rational_mechanism.attach_points`); points
+        closer than two housings' offsets are pushed apart about their middle (spacer 0)."""
+        design = LinkDesign() if design is None else design
+        attach = np.asarray(attach, dtype=float)
+        if attach.shape != (loop.n, 2, 3):
+            raise ValueError(f"attach points must be (n, 2, 3) = ({loop.n}, 2, 3), got {attach.shape}")
+        points = joint_points(loop)
+        offsets, spacers, orders = [], [], []
+        for j, axis in enumerate(loop.axes):
+            along = float((attach[j, 1] - attach[j, 0]) @ axis.direction)
+            offsets.append(float((0.5 * (attach[j, 0] + attach[j, 1]) - points[j]) @ axis.direction))
+            spacers.append(max(0.0, abs(along) - 2.0 * design.housing_offset))
+            orders.append(1 if along >= 0.0 else -1)
+        return cls(tuple(offsets), tuple(spacers), tuple(orders))
 
     def order(self, joint: int) -> int:
         """``orders[joint]``, ``+1`` without orders."""
@@ -744,11 +762,13 @@ def design_stacking(
     max_offset: float | None = None,
     max_spacer: float | None = None,
     n_poses: int = DEFAULT_POSES,
+    starts: tuple[Stacking, ...] = (),
 ) -> StackingDesign:
     r"""The :class:`Stacking` with the least spacers and shifts whose links keep ``margin`` (m) along one revolution
     of ``driver`` from the closing pose near ``start`` (module docstring; ``docs/formulation.md``, (CF5)).
 
-    From the nominal offsets with the order Bennett linkages are built in, and where that misses the margin also
+    From the nominal offsets with the order Bennett linkages are built in and from each of ``starts`` (such as the
+    mechanism's own design, :meth:`Stacking.from_attach_points`), and where none of these keeps the margin also
     from a global search (:func:`_search_stacking`: differential evolution over offsets, spacers and the orders at
     91 poses, more where the loop moves fast), a local design (the cheaper that keeps the margin is taken): on 181
     poses first, then on all ``n_poses`` (more where a joint point would move over 2 mm between them,
@@ -759,10 +779,11 @@ def design_stacking(
     :math:`\epsilon` = 0.01/mm: a 10 mm shift weighs as a 1 mm spacer) keeping :math:`f - L\Delta/2 \ge`
     ``margin`` + 0.5 mm. Deterministic (a seeded search; every round starts from the last). The result is judged on
     every interval of the motion (:func:`proxy_clearance`). Bounds: :math:`|t_j|` <= ``max_offset`` (default half
-    the loop's size), :math:`g_j` from ``margin`` + 0.5 mm less the axial gap (what stays apart by construction
-    then keeps that much beyond the margin, for the check on the solids) to ``max_spacer`` (default and at most the
-    reach of ``build_link``'s trimming beyond the housing, within which a housing and the other link's arm stay
-    apart by construction).
+    the loop's size, or the starts' largest offset), :math:`g_j` from ``margin`` + 0.5 mm less the axial gap (what
+    stays apart by construction then keeps that much beyond the margin, for the check on the solids) to
+    ``max_spacer`` (default the loop's size: the longest DH offset, where each link's housing sits at its own foot;
+    the links' trimming reaches the other housing whatever the spacer,
+    :func:`~ffrf.geometry.link_geometry.trim_covering`).
     Raises :class:`GeometryError` naming the closest pair of links, the drive angle and the clearance reached where
     the design does not keep the margin.
     """
@@ -774,10 +795,9 @@ def design_stacking(
             "joint the housings are one axial gap apart by construction; raise LinkDesign.axial_gap"
         )
     n = loop.n
-    # Within the trimming's reach, a housing and the other link's arm at a shared joint stay apart by construction.
-    spacer_limit = trim_reach(design) - design.housing_length - design.axial_gap
-    max_offset = 0.5 * loop.scale if max_offset is None else max_offset
-    max_spacer = spacer_limit if max_spacer is None else min(max_spacer, spacer_limit)
+    if max_offset is None:
+        max_offset = max([0.5 * loop.scale] + [abs(t) for start in starts for t in start.offsets])
+    max_spacer = loop.scale if max_spacer is None else max_spacer
     # What stays one axial gap and the spacer apart by construction (the two housings at a joint, each against the
     # other link's arm there) is not compared, so the spacer keeps it margin + cushion apart: a check on the solids
     # could not prove a clearance that equals the margin between its poses.
@@ -808,7 +828,12 @@ def design_stacking(
     nominal = np.concatenate([np.zeros(n), np.full(n, limits.least_spacer)])
     # the order Bennett linkages are built in (links 1, 3, ... outside at both their joints; all +1 for an odd loop)
     designs = [local(nominal, tuple(1 if j % 2 == 0 or n % 2 else -1 for j in range(n)))]
-    if designs[0][1].smallest[0] < margin:  # then from the global search's result, with its orders
+    for given in starts:  # each within the bounds
+        x = 1e3 * np.concatenate([given.offsets, given.spacers])
+        x[:n] = np.clip(x[:n], -limits.offset, limits.offset)
+        x[n:] = np.clip(x[n:], limits.least_spacer, limits.spacer)
+        designs.append(local(x, tuple(given.order(j) for j in range(n))))
+    if all(d[1].smallest[0] < margin for d in designs):  # then from the global search's result, with its orders
         designs.append(local(*_search_stacking(loop, search, design, margin, limits)))
     keeping = [d for d in designs if d[1].smallest[0] >= margin]
     stacking, clearance, _ = (

@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ffrf.fe.materials import PLA, RIGID, Material
-from ffrf.geometry.link_geometry import LinkDesign, arm_waypoints
+from ffrf.geometry.link_geometry import LinkDesign, arm_waypoints, trim_covering, trim_reach
 from ffrf.system.drives import CosineRamp, rpm
 from kinematics import Line, SingleLoop, common_normal, trace_motion
 from kinematics.quaternion import matrix_to_quaternion
@@ -147,6 +147,17 @@ def _seats(loop: SingleLoop, attach: NDArray | None, design: LinkDesign) -> NDAr
         seats[i, 0] = attach[i, 0] + offset * axis.direction
         seats[i, 1] = attach[i, 1] - offset * axis.direction
     return seats
+
+
+def _trims(attach: NDArray | None, design: LinkDesign) -> NDArray[np.float64] | None:
+    """Per joint the trimming's reach beyond both housings there ``(n,)``, m: enough to cover the other link's
+    housing (:func:`~ffrf.geometry.link_geometry.trim_covering`); a scene names it only where it exceeds the
+    default."""
+    return (
+        None
+        if attach is None
+        else np.array([trim_covering(float(np.linalg.norm(a[1] - a[0])), design) for a in attach])
+    )
 
 
 def _link_axes(
@@ -278,6 +289,7 @@ def linkage_description(
     if o.bore_error_model not in BORE_ERROR_MODELS:
         raise ValueError(f"bore_error_model must be one of {BORE_ERROR_MODELS}, got {o.bore_error_model!r}")
     seats = _seats(loop, attach, o.design)
+    trims = _trims(attach, o.design)
     links = _link_axes(loop, points, tuple(o.bore_errors), seats)
     # The bodies are meshed on the built bores, or, for the misfit model, on the nominal ones; joints take `links`.
     meshed = links if o.bore_error_model == "remesh" else _link_axes(loop, points, (), seats)
@@ -294,6 +306,7 @@ def linkage_description(
                 "direction": _vector(line.direction),
                 "joint_point": _vector(seat),
             }
+            | ({} if trims is None or trims[j] <= trim_reach(o.design) else {"trim": float(trims[j])})
             for j, (line, _, seat) in zip((first, second), sides, strict=True)
         ]
         interfaces = (["mount"] if k == 0 else []) + [f"joint{first}", f"joint{second}"]

@@ -308,8 +308,15 @@ def _attach_points(
     if spec.get("collision_free", False):
         margin = length * spec.get("clearance_margin", 1.0e-3 / length)
         phi = start_pose(loop, driver, start, origin)
+        shipped = None if mechanism is None else attach_points(mechanism, spec.get("scale", 0.1))
+        # a model's own collision-free design (its two points at a joint apart) is one more start
+        starts = (
+            (Stacking.from_attach_points(loop, shipped, design),)
+            if shipped is not None and np.any(np.linalg.norm(shipped[:, 1] - shipped[:, 0], axis=1) > 0.0)
+            else ()
+        )
         try:
-            designed = design_stacking(loop, driver, phi, design, margin)
+            designed = design_stacking(loop, driver, phi, design, margin, starts=starts)
         except (GeometryError, ValueError) as error:
             raise SceneError(f"{where}, collision_free: {error}") from error
         return designed.stacking.attach_points(loop, design)

@@ -36,7 +36,9 @@ builds the descriptions code generates (:func:`ffrf.scenes.linkage_description.l
                                       # on any two skew axes (housings at the joint points,
                                       # default the feet of their common normal; cranked arm otherwise):
                                       # parametric = {axes = [{name = "a", point = [...], direction = [...],
-                                      #   joint_point = [...]}, {name = "b", ...}], h = 0.006, mount = false,
+                                      #   joint_point = [...], trim = 0.1}, {name = "b", ...}], h = 0.006,
+                                      #   mount = false,  (trim: how far beyond the housing's end faces the
+                                      #   arm is cut away near the axis, default 2 x (arm section + mount))
                                       #   design = {arm_width = 0.016, arm_thickness = 0.012}}  (m, LinkDesign)
     unit = "mm"                       # optional, scales the mesh to metres
     material = {E = 1.2e9, nu = 0.33, rho = 450.0}   # optional strength = 53e6 (Pa): the assembly is checked

@@ -69,6 +69,7 @@ LINK_AXIS = {
     "point": Key("vector3", True),
     "direction": Key("vector3", True, nonzero_vector),
     "joint_point": Key("vector3"),
+    "trim": Key("number", False, positive),  # the trimming's reach beyond this housing's end faces (m)
 }
 #: The parametric link's dimensions (m), :class:`ffrf.geometry.link_geometry.LinkDesign`; the rest keep defaults.
 LINK_DESIGN = {name: Key("number", False, positive) for name in LINK_DESIGN_FIELDS}

@@ -176,6 +176,33 @@ def test_a_linkage_file_stacking_becomes_the_attach_points():
     np.testing.assert_allclose(options.attach_points, expected, atol=1e-15)
 
 
+def test_a_models_shipped_design_is_one_more_start_of_a_linkage_files_design(monkeypatch):
+    """``collision_free = true`` on a Rational Linkages model that ships a design (its two points at a joint apart)
+    hands that design, read as a stacking, to the design as a start; a loop without one (a DH table) hands none."""
+    import ffrf.scenes.linkage_file as linkage_file
+    from kinematics.rational_mechanism import attach_points, load_model, loop_from_mechanism
+
+    seen = []
+
+    def recorded(loop, driver, start, design, margin, starts=()):
+        seen.append(starts)
+        raise GeometryError("recorded")
+
+    monkeypatch.setattr(linkage_file, "design_stacking", recorded)
+    for document in (
+        {"linkage": {"model": "collisions_free_6r", "scale": 0.25, "collision_free": True}},
+        _linkage_file(collision_free=True),
+    ):
+        with pytest.raises(Exception, match="recorded"):
+            linkage_file.linkage_options(document)
+    mechanism = load_model("collisions_free_6r")
+    loop = loop_from_mechanism(mechanism, 0.25)
+    (given,) = seen[0]
+    points = attach_points(mechanism, 0.25)
+    np.testing.assert_allclose(given.attach_points(loop), points, atol=1e-12)
+    assert seen[1] == ()
+
+
 @pytest.mark.parametrize(
     "keys, message",
     [
@@ -233,3 +260,37 @@ def test_stiff_collision_free_bennett_links_follow_their_ideal_path():
     assert np.linalg.norm(scene.home_coupler_point() - nominal.home_coupler_point()) > 1e-2  # not a vacuous test
     summary = load(scene).run(mode="quasi_static", outputs=13).summary()
     assert summary["max_coupler_deviation_m"] < 1e-9
+
+
+def test_a_spacer_beyond_the_default_trimming_has_its_links_trimmed_past_the_other_housing():
+    """Where a spacer puts the other housing beyond the default trimming's reach (80 mm past the end face), the
+    scene asks both links at that joint to trim as far as that housing's far end face plus one gap, L + 2 gap +
+    spacer; elsewhere, and for the paper's stored stacking, the scene is as before (no ``trim``)."""
+    from ffrf.paper.bennett_scene import COLLISION_FREE_STACKING
+    from ffrf.scenes.linkage_description import LinkageOptions, linkage_description
+
+    design = LinkDesign()
+    stacking = Stacking((0.0, 0.0, 0.0, 0.0), (0.0, 0.1, 0.0, 0.0))
+    bodies = linkage_description(BENNETT, LinkageOptions(attach_points=stacking.attach_points(BENNETT)))["bodies"]
+    trims = {(k, a["name"]): a.get("trim") for k, body in enumerate(bodies) for a in body["parametric"]["axes"]}
+    wanted = design.housing_length + 2 * design.axial_gap + 0.1
+    assert trims.pop((1, "joint1")) == pytest.approx(wanted, abs=1e-12)
+    assert trims.pop((2, "joint1")) == pytest.approx(wanted, abs=1e-12)
+    assert set(trims.values()) == {None}
+    paper = LinkageOptions(attach_points=COLLISION_FREE_STACKING.attach_points(BENNETT))
+    assert all("trim" not in a for b in linkage_description(BENNETT, paper)["bodies"] for a in b["parametric"]["axes"])
+
+
+def test_attach_points_read_back_as_their_stacking():
+    """A stacking's housing centres give back its offsets, spacers and orders; points closer than two housings'
+    offsets give spacer 0 about their middle."""
+    stacking = Stacking((0.01, -0.02, 0.0, 0.005), (0.0, 0.003, 0.0, 0.01), (1, -1, 1, -1))
+    back = Stacking.from_attach_points(BENNETT, stacking.attach_points(BENNETT))
+    np.testing.assert_allclose(back.offsets, stacking.offsets, atol=1e-15)
+    np.testing.assert_allclose(back.spacers, stacking.spacers, atol=1e-15)
+    assert back.orders == stacking.orders
+    points = joint_points(BENNETT)
+    touching = np.stack([points + 1e-3 * np.array([a.direction for a in BENNETT.axes]) * side for side in (1, -1)], 1)
+    close = Stacking.from_attach_points(BENNETT, touching)
+    assert close.spacers == (0.0,) * 4 and close.orders == (-1,) * 4
+    np.testing.assert_allclose(close.offsets, 0.0, atol=1e-15)

@@ -142,3 +142,32 @@ def test_geometry_errors():
         mesh_link(Axis(a.point * 1e3, a.direction), Axis(b.point * 1e3, b.direction), h=H)
     with pytest.raises(GeometryError, match="0, 1, 2 or 3"):
         paper_link_axes(4)
+
+
+def test_the_arm_is_trimmed_near_the_axis_as_far_as_asked():
+    """An arm that runs along its first axis (the other housing 25 mm off it, 150 mm up) keeps material within one
+    gap of the housing radius of that axis beyond the default reach, 80 mm past the end face; asked to trim 200 mm,
+    none is left there (but the other housing's own)."""
+    first, second = ((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)), ((0.025, 0.0, 0.15), (0.0, 1.0, 0.0))
+    seats = [(0.0, 0.0, -DESIGN.housing_offset), (0.025, 0.0, 0.15)]
+    left = {}
+    for trim in (None, (0.2, None)):
+        mesh, geometry = mesh_link(first, second, h=0.004, joint_points=seats, trim=trim)
+        beyond = mesh.points[:, 2] - (geometry.housing_centers[0][2] + 0.5 * DESIGN.housing_length)
+        # (the cut's own surface lies at R + gap: nodes on it are left)
+        near_axis = (
+            np.hypot(mesh.points[:, 0], mesh.points[:, 1]) < DESIGN.housing_outer_radius + DESIGN.axial_gap - 1e-6
+        )
+        rel = mesh.points - geometry.housing_centers[1]
+        other_housing = (np.hypot(rel[:, 0], rel[:, 2]) <= DESIGN.housing_outer_radius + 1e-9) & (
+            np.abs(rel[:, 1]) <= 0.5 * DESIGN.housing_length + 1e-9
+        )
+        left[trim is None] = beyond[near_axis & (beyond > 1e-9) & ~other_housing]
+    assert left[True].size > 0 and left[True].min() == pytest.approx(0.080, abs=1e-6)
+    assert left[False].size == 0
+
+
+def test_a_trim_reach_must_be_positive():
+    a, b, names = paper_link_axes(1)
+    with pytest.raises(GeometryError, match="trim reaches"):
+        mesh_link(a, b, h=H, names=names, trim=(0.0, None))
