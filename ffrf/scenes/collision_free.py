@@ -609,6 +609,30 @@ def _design_order(
     structure = None  # the capsule pairs the kept entries index (an arm's stubs change them)
     minimised = False  # a start that keeps the margin still has its cost minimised once
     kept_margin: list[NDArray] = []  # every round's start that keeps the margin: the cheapest is the fallback
+    reach = np.inf  # how far (mm) a step may move x: halved where a refused step changed the capsule pairs
+
+    def judged(x: NDArray) -> tuple[float, _Pairs, NDArray, NDArray]:
+        """The smallest clearance certified on every interval at ``x``, its capsule pairs, ``f`` and ``certified``."""
+        capsules = capsules_at(x)
+        pairs = _capsule_pairs(capsules)
+        f, certified = _clearances(motion, capsules, pairs)
+        return float(certified.min()), pairs, f, certified
+
+    def refused_step(
+        candidate: NDArray, x: NDArray, pairs: _Pairs, kept: set, limit: float, reach: float
+    ) -> float | None:
+        """``None`` where a step from ``x`` to ``candidate`` keeps the margin on every interval or, where ``x`` misses
+        it, comes no closer. The round's constraints are the poses where x's capsules come closest, and a long step
+        can bring others close: a step that does is refused, its closest poses join the constraints ``kept`` (or,
+        where its capsule pairs differ, the reach of the next steps is halved), and the reach is returned."""
+        smallest, now, f_now, certified_now = judged(candidate)
+        if smallest >= min(margin, judged(x)[0]):
+            return None
+        if now is pairs:
+            kept.update(zip(*(v.tolist() for v in _closest_poses(f_now, certified_now, limit)), strict=True))
+            return reach
+        return 0.5 * float(np.max(np.abs(candidate - x)))
+
     for _ in range(_ROUNDS):
         capsules = capsules_at(x)
         pairs = _capsule_pairs(capsules)
@@ -645,13 +669,16 @@ def _design_order(
             )
             return 1e3 * _pair_clearance_gradients(sub, capsules, rates, now, closest)
 
+        near = list(zip(np.maximum(low, x - reach), np.minimum(high, x + reach), strict=True))
+
         if gaps(x).min() < 0.0:  # phase 1: raise the smallest clearance to the margin
+            weight = 1e-3 / max(1.0, cost(x))  # the cost only breaks ties, wherever the start
             raised = minimize(
-                lambda y: -y[-1] + 1e-3 * cost(y[:-1]),
+                lambda y, weight=weight: -y[-1] + weight * cost(y[:-1]),
                 np.append(x, gaps(x).min()),
-                jac=lambda y: np.append(1e-3 * cost_gradient(y[:-1]), -1.0),
+                jac=lambda y, weight=weight: np.append(weight * cost_gradient(y[:-1]), -1.0),
                 method="SLSQP",
-                bounds=[*bounds, (None, 0.5)],
+                bounds=[*near, (None, 0.5)],
                 constraints=[
                     {
                         "type": "ineq",
@@ -661,7 +688,13 @@ def _design_order(
                 ],
                 options={"maxiter": 100, "ftol": 1e-6},
             )
-            x = np.clip(raised.x[:-1], low, high)
+            candidate = np.clip(raised.x[:-1], low, high)
+            shorter = refused_step(candidate, x, pairs, kept, limit, reach)
+            if shorter is not None:
+                reach = shorter
+                logger.info("stacking %s, phase 1: a step came closer elsewhere", orders)
+                continue
+            x = candidate
             logger.info("stacking %s, phase 1: %s, smallest %.3g mm", orders, raised.message, gaps(x).min())
         if gaps(x).min() >= -1e-6:  # phase 2: the least spacers and shifts that keep the margin
             least = minimize(
@@ -669,15 +702,20 @@ def _design_order(
                 x,
                 jac=cost_gradient,
                 method="SLSQP",
-                bounds=bounds,
+                bounds=near,
                 constraints=[{"type": "ineq", "fun": gaps, "jac": gaps_jacobian}],
                 options={"maxiter": 100, "ftol": 1e-6},
             )
             candidate = np.clip(least.x, low, high)
-            minimised = True
-            if gaps(candidate).min() >= -1e-6:
-                x = candidate
-            logger.info("stacking %s, phase 2: %s, cost %.4g", orders, least.message, cost(x))
+            shorter = refused_step(candidate, x, pairs, kept, limit, reach)
+            if shorter is not None:
+                reach = shorter
+                logger.info("stacking %s, phase 2: a step to cost %.4g left the margin", orders, cost(candidate))
+            else:
+                minimised = True
+                if gaps(candidate).min() >= -1e-6:
+                    x = candidate
+                logger.info("stacking %s, phase 2: %s, cost %.4g", orders, least.message, cost(x))
     capsules = capsules_at(x)
     if _clearances(motion, capsules, _capsule_pairs(capsules))[1].min() >= margin or not kept_margin:
         return x
