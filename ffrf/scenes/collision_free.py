@@ -815,7 +815,9 @@ def design_stacking(
     (exact gradients) first raises the smallest :math:`f - L\Delta/2` to the margin (maximises :math:`z` subject to
     :math:`f - L\Delta/2 \ge z`), then minimises :math:`\sum_j g_j + \epsilon \sum_j t_j^2` (mm,
     :math:`\epsilon` = 0.01/mm: a 10 mm shift weighs as a 1 mm spacer) keeping :math:`f - L\Delta/2 \ge`
-    ``margin`` + 0.5 mm. Deterministic (a seeded search; every round starts from the last). The result is judged on
+    ``margin`` + 0.5 mm; a step is taken only where it keeps the margin on every interval (from a start that misses
+    it: comes no closer), else the poses it brought close join the constraints. Deterministic (a seeded search;
+    every round starts from the last). The result is judged on
     every interval of the motion (:func:`proxy_clearance`). Bounds: :math:`|t_j|` <= ``max_offset`` (default half
     the loop's size, or the starts' largest offset), :math:`g_j` from ``margin`` + 0.5 mm less the axial gap (what
     stays apart by construction then keeps that much beyond the margin, for the check on the solids) to

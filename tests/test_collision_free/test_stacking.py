@@ -294,3 +294,25 @@ def test_attach_points_read_back_as_their_stacking():
     close = Stacking.from_attach_points(BENNETT, touching)
     assert close.spacers == (0.0,) * 4 and close.orders == (-1,) * 4
     np.testing.assert_allclose(close.offsets, 0.0, atol=1e-15)
+
+
+@pytest.mark.slow
+def test_from_a_design_that_keeps_the_margin_the_local_design_keeps_it_for_less():
+    """Rational Linkages' own design of ``collisions_free_6r`` at scale 1 keeps 1 mm between our links' capsules; the
+    local design from it (all 1441+ poses) keeps the margin on every interval and costs less (its first long step
+    toward the nominal offsets leaves the margin at poses that were not constraints, and is refused)."""
+    from ffrf.scenes import collision_free as cf
+    from kinematics.rational_mechanism import attach_points, load_model, loop_from_mechanism
+
+    mechanism = load_model("collisions_free_6r")
+    loop = loop_from_mechanism(mechanism, 1.0)
+    start = Stacking.from_attach_points(loop, attach_points(mechanism, 1.0))
+    motion = sampled_motion(loop, 0, None, cf.DEFAULT_POSES, cf._TRAVEL)
+    assert proxy_clearance(loop, motion, start).smallest[0] >= 1e-3
+    n = loop.n
+    x = 1e3 * np.concatenate([start.offsets, np.maximum(start.spacers, 0.5e-3)])
+    limits = cf._Bounds(1e3 * max(abs(t) for t in start.offsets), 1e3 * loop.scale, 0.5)
+    y = cf._design_order(loop, motion, LinkDesign(), 1e-3, limits, start.orders, x)
+    designed = Stacking(tuple(1e-3 * y[:n]), tuple(1e-3 * y[n:]), start.orders)
+    assert proxy_clearance(loop, motion, designed).smallest[0] >= 1e-3
+    assert cf._cost(y, n) < 0.9 * cf._cost(x, n)
