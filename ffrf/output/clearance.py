@@ -17,8 +17,8 @@ from their relative twist :math:`(\omega, v)` per unit drive angle (the loop's j
 point :math:`c` (its box centre) and radius :math:`r` about it (the smaller of the two links' values), :math:`\Delta`
 the largest displacement between the interval's ends (the chord) and :math:`\kappa` = :data:`SPEED_SAFETY` = 1.5,
 the assumption that the speed inside an interval stays below 1.5 times its largest end (or chord) value. Where
-``L`` does not prove the margin, the interval is bisected (adaptive, at most ``max_bisections`` times) until it
-does or the pair misses the margin at an evaluated pose; the report keeps the bound reached (:attr:`Clearance.bound`:
+``L`` does not prove the margin, the interval is bisected (adaptive, at most ``max_bisections`` times, not where
+no bisection left could prove it) until it does or the pair misses the margin at an evaluated pose; the report keeps the bound reached (:attr:`Clearance.bound`:
 a pair whose bound is below the margin although its poses keep it is reported as not proven).
 """
 
@@ -111,7 +111,7 @@ def signed_clearance(
     joint_zones: Mapping[tuple[int, int], JointZone] | None = None,
     margin: float = 1e-3,
     *,
-    max_bisections: int = 6,
+    max_bisections: int = 10,
     tolerance: float = DEPTH_TOLERANCE,
 ) -> Clearance:
     """The signed clearance of every pair of ``solids`` (link ``k`` is ``solids[k]`` at home) along ``motion``
@@ -196,14 +196,17 @@ class _PairTrack:
     def smallest_at(self) -> float:
         return float(self.angles[int(np.argmin(self.values))])
 
-    def lower_bounds(self) -> NDArray[np.float64]:
-        """Eq. (CL4) on every interval between neighbouring evaluated poses."""
+    def _travel(self) -> NDArray[np.float64]:
+        """``S h`` of Eq. (CL4) on every interval between neighbouring evaluated poses (m)."""
         h = np.abs(np.diff(self.angles))
         ends = np.maximum(self.speeds[:-1], self.speeds[1:])  # (intervals, 2): a's points, b's points
         chords = self._chords()
-        speed = SPEED_SAFETY * np.min(np.maximum(ends, chords / h[:, None]), axis=1)
+        return SPEED_SAFETY * np.min(np.maximum(ends, chords / h[:, None]), axis=1) * h
+
+    def lower_bounds(self) -> NDArray[np.float64]:
+        """Eq. (CL4) on every interval between neighbouring evaluated poses."""
         c0, c1 = self.values[:-1], self.values[1:]
-        return np.minimum(np.minimum(c0, c1), 0.5 * (c0 + c1 - speed * h))
+        return np.minimum(np.minimum(c0, c1), 0.5 * (c0 + c1 - self._travel()))
 
     def _chords(self) -> NDArray[np.float64]:
         """Largest displacement of each link's points relative to the other between neighbouring poses."""
@@ -220,11 +223,14 @@ class _PairTrack:
 
     def refine(self, motion: RigidMotion, margin: float, max_bisections: int) -> None:
         """Bisect the intervals whose bound does not prove the margin, round by round, at most ``max_bisections``
-        times; not once the margin is missed at an evaluated pose (the verdict stands, the bound says how deep)."""
-        for _ in range(max_bisections):
+        times; not once the margin is missed at an evaluated pose (the verdict stands, the bound says how deep), nor
+        an interval that the bisections left could not prove: one whose ends' clearance exceeds the margin by less
+        than half its travel ``S h`` halved that often (a constant clearance equal to the margin never would)."""
+        for done in range(max_bisections):
             if self.smallest < margin:
                 return
-            open_ = self.lower_bounds() < margin
+            slack = np.minimum(self.values[:-1], self.values[1:]) - margin
+            open_ = (self.lower_bounds() < margin) & (2.0 * slack > self._travel() / 2.0 ** (max_bisections - done))
             if not open_.any():
                 return
             middle = 0.5 * (self.angles[:-1] + self.angles[1:])[open_]

@@ -56,6 +56,36 @@ def test_an_obstacle_passed_between_two_samples_is_caught_by_the_bound():
     assert clear.margin_met and clear.poses[0] == 5 and "closest 39.50 mm" in clear.summary()
 
 
+class _Glide(_Sweep):
+    """Link 1 gliding along y at ``speed`` m per rad of drive, its centre ``gap`` in x from link 0's origin: a
+    constant distance."""
+
+    def __init__(self, drive_angles, speed: float, gap: float) -> None:
+        super().__init__(drive_angles, speed)
+        self.gap = gap
+
+    def poses(self, angles):
+        transforms, twists = super().poses(angles)
+        transforms[:, 1, 1, 3], transforms[:, 1, 0, 3] = transforms[:, 1, 0, 3], self.gap
+        twists[:, 1, 4], twists[:, 1, 3] = twists[:, 1, 3], 0.0
+        return transforms, twists
+
+
+def test_a_constant_clearance_is_proven_above_the_margin_and_never_bisected_at_it():
+    """A 10 mm cube gliding 10 mm along a 1 mm plate at a constant distance (its face 1.5 mm or 1 mm from the
+    plate's), 5 poses: 0.5 mm above a 1 mm margin, bisecting proves it (S h = 1.5 x 10 mm/rad x 0.25 rad = 3.75 mm,
+    proven once halved twice); at the margin itself no bisection could, and none is made."""
+    plate, cube = _box((0.001, 0.1, 0.1)), _box((0.01, 0.01, 0.01))
+    angles = np.linspace(0.0, 1.0, 5)
+    above = signed_clearance([plate, cube], _Glide(angles, 0.01, 0.0055 + 0.0015), margin=1e-3)
+    assert above.distance[0] == pytest.approx(1.5e-3) and above.margin_met and above.poses[0] > 5
+    glide = _Glide(angles, 0.01, 0.0055 + 0.001)
+    constant = signed_clearance([plate, cube], glide, margin=0.0).distance[0]
+    assert constant == pytest.approx(1e-3, abs=1e-12)
+    at = signed_clearance([plate, cube], glide, margin=constant)
+    assert not at.margin_met and at.poses[0] == 5 and "not proven between them by links 0-1" in at.summary()
+
+
 @pytest.fixture(scope="module")
 def bennett():
     """The paper's loop with the housings centred on the joint points (not the default collision-free links)."""
