@@ -26,7 +26,7 @@ def _document(**keys) -> dict:
 
 def test_the_designed_links_keep_the_margin_on_their_solids():
     """The stored stacking, checked as every run checks its links (Eqs. (CL1)-(CL4)): every pair keeps 1 mm along
-    the whole revolution (the links at the joint points overlap by up to 11 mm: issue #34)."""
+    the whole revolution."""
     loop, options, _ = linkage_options(_document(stacking=DESIGNED, modes=1))
     clearance = build_linkage(loop, options).clearance(72, 1e-3)
     assert clearance.margin_met, clearance.summary()
