@@ -92,7 +92,7 @@ def test_collision_free_links_of_a_rational_linkages_4r_from_the_command_line(tm
     (CL3)), which the check between poses cannot prove to equal a margin of the gap itself."""
     code = main(
         ["linkage", "--model", "bennett_ark24", "--scale", "0.5", "--variant", "rigid", "--collision-free",
-         "--clearance-margin", "0.5", "--h", "0.012", "--order", "1", "--modes", "2", "--outputs", "5",
+         "--clearance-margin", "0.5", "--h", "0.012", "--order", "1", "--modes", "2", "--outputs", "31",
          "--quasi-static", "--out", str(tmp_path)]
     )  # fmt: skip
     assert code == 0
