@@ -2,8 +2,9 @@
 
     python -m bench --list                 every benchmark, the result files it records and the code it measures
     python -m bench NAME [ARGS...]         run bench/NAME.py with its own arguments (NAME --help lists them)
-    python -m bench record RESULT...       record docs/results/RESULT.json (or every file of a benchmark NAME)
-                                           from a clean tree: provenance and the commit in its meta
+    python -m bench record NAME...         record every file of a benchmark NAME, or docs/results/RESULT.json
+                                           alone (RESULT or RESULT.json), from a clean tree: provenance and the
+                                           commit in its meta
     python -m bench stale                  list the result files older than the code they measure, and why;
                                            exit status 1 if any
 
@@ -32,17 +33,22 @@ def _list() -> int:
 
 
 def _recordings(names: list[str]) -> list[tuple[Benchmark, Recording]]:
-    """The recordings named: result stems, or benchmark names (all their recordings)."""
+    """The recordings named: benchmark names (all their recordings; a benchmark's first file may have its name),
+    or result stems (``RESULT`` or ``RESULT.json``, that file alone)."""
     chosen = []
     for name in names:
-        try:
-            chosen.append(recording(name))
-        except KeyError:
+        stem = name.removesuffix(".json")
+        if name == stem:
             try:
                 entry = benchmark(name)
+                chosen += [(entry, rec) for rec in entry.records]
+                continue
             except KeyError:
-                raise KeyError(f"no result file or benchmark {name!r} (python -m bench --list)") from None
-            chosen += [(entry, rec) for rec in entry.records]
+                pass
+        try:
+            chosen.append(recording(stem))
+        except KeyError:
+            raise KeyError(f"no result file or benchmark {name!r} (python -m bench --list)") from None
     return chosen
 
 

@@ -46,3 +46,16 @@ def test_the_runner_lists_every_result_file(capsys) -> None:
     listed = capsys.readouterr().out
     for stem in recordings():
         assert f"docs/results/{stem}.json" in listed
+
+
+def test_a_benchmark_name_records_all_its_files_and_a_result_file_itself() -> None:
+    """``full_revolution`` names a benchmark and its first file: the name records both of its files;
+    ``full_revolution.json`` that file alone, as does a result stem that is no benchmark."""
+    from bench.__main__ import _recordings
+
+    def stems(names):
+        return [rec.result for _, rec in _recordings(names)]
+
+    assert stems(["full_revolution"]) == ["full_revolution", "full_revolution_paper"]
+    assert stems(["full_revolution.json"]) == ["full_revolution"]
+    assert stems(["full_revolution_paper"]) == ["full_revolution_paper"]
