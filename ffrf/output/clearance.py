@@ -18,8 +18,9 @@ point :math:`c` (its box centre) and radius :math:`r` about it (the smaller of t
 the largest displacement between the interval's ends (the chord) and :math:`\kappa` = :data:`SPEED_SAFETY` = 1.5,
 the assumption that the speed inside an interval stays below 1.5 times its largest end (or chord) value. Where
 ``L`` does not prove the margin, the interval is bisected (adaptive, at most ``max_bisections`` times, not where
-no bisection left could prove it) until it does or the pair misses the margin at an evaluated pose; the report keeps the bound reached (:attr:`Clearance.bound`:
-a pair whose bound is below the margin although its poses keep it is reported as not proven).
+no bisection left could prove it) until it does or the pair misses the margin at an evaluated pose; the report
+keeps the bound reached (:attr:`Clearance.bound`: a pair whose bound is below the margin although its poses keep it
+is reported as not proven).
 """
 
 from __future__ import annotations
