@@ -127,10 +127,10 @@ def configure_linkage_run(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--clearance-margin",
         type=number_in(0.0, math.inf, unit=" mm"),
-        default=1.0,
+        default=None,
         metavar="MM",
         help="clearance the links must keep from each other along the rigid motion, in mm (default 1; "
-        "docs/formulation.md Eqs. (CL1)-(CL4))",
+        "docs/formulation.md Eqs. (CL1)-(CL4)); a run whose links do not keep it exits with 3",
     )
     parser.add_argument(
         "--max-steps",
@@ -164,5 +164,5 @@ def run_options(args: argparse.Namespace) -> dict:
         "step": args.dt,
         "vtk_every": args.vtk_every,
         "stability": args.stability,
-        "clearance_margin": 1e-3 * args.clearance_margin,
+        "clearance_margin": None if args.clearance_margin is None else 1e-3 * args.clearance_margin,
     }

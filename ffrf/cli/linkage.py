@@ -122,7 +122,8 @@ def run(args: argparse.Namespace) -> int:
             "bore_errors": args.bore_error,
             "design_points": args.design_points,
         }
-        | ({"collision_free": True, "clearance_margin": 1e-3 * args.clearance_margin} if args.collision_free else {}),
+        | ({"collision_free": True} if args.collision_free else {})
+        | ({} if args.clearance_margin is None else {"clearance_margin": 1e-3 * args.clearance_margin}),
         "scene": {"joint_offsets": args.joint_offsets},
     }
     linkage_options(document, where="python -m ffrf linkage")  # the file's checks (bore errors ...) before --out

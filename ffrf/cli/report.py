@@ -34,8 +34,8 @@ def run_and_report(
     """Run a linkage and save what ``bennett`` and ``linkage`` write (:meth:`ffrf.output.result.Result.save`).
 
     ``options``: ``mode`` (``auto``, ``quasi_static``, ``dynamic``), ``outputs``, ``step`` (s), ``vtk_every``,
-    ``stability``, ``clearance_margin`` (m, default 1 mm); ``then(result)``: more to do with a run that did not stop
-    (``linkage --reach``)."""
+    ``stability``, ``clearance_margin`` (m; default the scene's, else 1 mm); ``then(result)``: more to do with a run
+    that did not stop (``linkage --reach``)."""
     scene = model.scene
     if not isinstance(scene, LinkageScene):
         raise TypeError(f"{model.name!r} is no linkage: its run is reported by python -m ffrf run")
@@ -65,7 +65,7 @@ def run_and_report(
         if error.partial is None:
             raise
         result, stopped = error.partial, error
-    clearance = result.add_clearance(options.get("clearance_margin", 1e-3))
+    clearance = result.add_clearance(options.get("clearance_margin"))
     with STOP.deferred():
         result.save(out, views=False)
     if isinstance(stopped, Interrupted):  # the user asked to stop: the results so far, no figures
@@ -113,7 +113,8 @@ def run_and_report(
             f"({1e3 * pose['max_coupler_deviation_elsewhere_m']:.3g} mm elsewhere): the rigid motion is "
             "ill-conditioned there (docs/hard_cases.md)"
         )
-    print(f"clearance of the links along the rigid motion: {clearance['summary']}")
+    if clearance is not None:
+        print(f"clearance of the links along the rigid motion: {clearance['summary']}")
     misfit = scene.misfit_degrees > 0.0
     print("assembled state (gravity" + (", misfit" if misfit else "") + f"; {out / 'assembly.vtu'}):")
     assert result.assembly is not None  # a linkage's run always records the assembled state

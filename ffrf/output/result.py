@@ -25,13 +25,16 @@ from ffrf.output.assembly_stress import AssemblyStress, scene_assembly_stress, w
 from ffrf.output.energy_balance import energy_scale, relative_balance
 from ffrf.output.paraview import write_time_series
 from ffrf.output.tables import write_results
-from ffrf.output.verification import Verification
+from ffrf.output.verification import Verification, clearance_check
 from ffrf.solvers.stability import CriticalPose
 
 __all__ = ["Result", "RESULT_KINDS"]
 
 #: What ran: a single-loop linkage (coupler and drive sensors, figures over the drive angle) or any scene.
 RESULT_KINDS = ("linkage", "scene")
+
+#: The note of a linkage whose file says ``check_clearance = false``.
+CLEARANCE_NOT_CHECKED = "clearance not checked: the linkage file says check_clearance = false"
 
 
 @dataclass
@@ -91,13 +94,21 @@ class Result:
             self.write_views(directory, vtk_every=vtk_every, label=label, colors=colors)
         return directory
 
-    def add_clearance(self, margin: float = 1e-3) -> dict:
-        """The signed clearance of a linkage's links along its rigid nominal motion against ``margin`` (m)
-        (:meth:`ffrf.scenes.linkage_scene.LinkageScene.clearance`, ``docs/formulation.md`` Eqs. (CL1)-(CL4)) in the
-        metadata, ``clearance``: its summary, per pair the smallest signed clearance (m, negative: overlap), the drive
-        angle there and the clearance proven between the poses, the margin and whether every pair keeps it. Computed
-        once; returns that entry."""
+    def add_clearance(self, margin: float | None = None) -> dict | None:
+        """The signed clearance of a linkage's links along its rigid nominal motion against ``margin`` (m; default
+        the scene's ``clearance_margin``, else 1 mm) (:meth:`ffrf.scenes.linkage_scene.LinkageScene.clearance`,
+        ``docs/formulation.md`` Eqs. (CL1)-(CL4)) in the metadata, ``clearance``: its summary, per pair the smallest
+        signed clearance (m, negative: overlap), the drive angle there and the clearance proven between the poses,
+        the margin and whether every pair keeps it; and judged in the run's verification (its ``clearance`` check,
+        :func:`ffrf.output.verification.clearance_check`), unless the scene says ``check_clearance = false`` (then a
+        note says so and nothing is computed). Computed once; returns that entry (``None`` when not checked)."""
+        settings = self.scene.settings
+        if not settings.get("check_clearance", True):
+            if self.verification is not None and CLEARANCE_NOT_CHECKED not in self.verification.notes:
+                self._verified(self.verification.with_note(CLEARANCE_NOT_CHECKED))
+            return None
         if "clearance" not in self.metadata:
+            margin = settings.get("clearance_margin", 1e-3) if margin is None else margin
             clearance = self.scene.clearance(margin=margin)
             self.metadata["clearance"] = {
                 "summary": clearance.summary(),
@@ -121,7 +132,13 @@ class Result:
                 "margin_m": clearance.margin,
                 "margin_met": clearance.margin_met,
             }
+            if self.verification is not None:
+                self._verified(self.verification.with_check(clearance_check(self.metadata["clearance"])))
         return self.metadata["clearance"]
+
+    def _verified(self, verification: Verification) -> None:
+        self.verification = verification
+        self.metadata["verification"] = verification.as_dict()
 
     def write_tables(self, directory: str | Path) -> Path:
         """``results.npz`` (time, sensors, ``q``), ``results.csv``, ``metadata.json`` and ``manifest.json``; for a

@@ -19,6 +19,11 @@ them. The checks (those whose sensors the run has):
   reported, not judged.
 * ``path_distance`` (linkages): the coupler's distance to the exact ideal curve is at most its distance to the
   ideal point at the same drive angle (a point of that curve), to the distance's tolerance, 1e-12 m.
+* ``clearance`` (linkages, judged when the links' clearance is computed:
+  :meth:`ffrf.output.result.Result.add_clearance`, which saving a linkage's results and ``python -m ffrf`` do):
+  the margin every two links must keep (m; a linkage file's ``clearance_margin``, default 1 mm) against the
+  smallest clearance proven between two links along a revolution of the rigid motion (Eqs. (CL1)-(CL4); negative:
+  they overlap). A linkage file's ``check_clearance = false`` leaves it out, with a note.
 * ``stiff_follows_rigid`` (linkages whose links are stiff: the gravity sag ``2 U / (m |g|)`` of Eq. (C3), ``U``
   the assembled state's strain energy, below :data:`STIFF_SAG` of ``L``; without bore errors or misfit): the
   largest coupler deviation from the rigid motion against :data:`SAG_FACTOR` times that sag (the sag changes along
@@ -48,6 +53,7 @@ __all__ = [
     "STEP_ERROR_RTOL",
     "STIFF_SAG",
     "assembly_strength_warnings",
+    "clearance_check",
     "gravity_sag",
     "scene_length",
     "verify_run",
@@ -137,6 +143,15 @@ class Verification:
                 text += f"; smallest margin {smallest.margin:.3g}x, {smallest.name}"
             return text + ")" + (f"; {len(self.warnings)} warning(s) above" if self.warnings else "")
         return "verified: false: " + "; ".join(self.reasons)
+
+    def with_check(self, check: Check) -> Verification:
+        """These checks and ``check`` (one of the same name replaced)."""
+        kept = tuple(c for c in self.checks if c.name != check.name)
+        return Verification(kept + (check,), self.warnings, self.notes)
+
+    def with_note(self, note: str) -> Verification:
+        """These checks with one more note (a check not made)."""
+        return Verification(self.checks, self.warnings, self.notes + (note,))
 
     def as_dict(self) -> dict:
         return {
@@ -313,6 +328,23 @@ def verify_run(result: Any, scene: Any) -> Verification:
     assembly = None if result.assembly is None else result.assembly.as_dict()
     warnings, strength_notes = assembly_strength_warnings(scene, assembly)
     return Verification(tuple(checks), tuple(warnings), tuple(notes + strength_notes))
+
+
+def clearance_check(clearance: dict) -> Check:
+    """The ``clearance`` check of the module docstring from a linkage's ``clearance`` entry (metadata, written by
+    :meth:`ffrf.output.result.Result.add_clearance`): the margin against the smallest clearance proven between two
+    links along the motion (the pair and the drive angle of its closest pose named)."""
+    pair = min(clearance["pairs"], key=lambda p: p["between_poses_m"])
+    a, b = pair["links"]
+    return Check(
+        "clearance",
+        float(clearance["margin_m"]),
+        float(pair["between_poses_m"]),
+        "m",
+        "the margin every two links must keep against the smallest clearance proven along the rigid motion "
+        f"(links {a}-{b}, closest {1e3 * pair['clearance_m']:.3g} mm at drive angle "
+        f"{np.degrees(pair['drive_angle_rad']):.4g} deg; negative: they overlap)",
+    )
 
 
 def verify_scene_run(scene: Any, sensors: dict, metadata: dict) -> Verification:

@@ -22,8 +22,10 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
     drive = {rpm = 1.0, ramp_time = 1.0}
     revolutions = 1.0
     link_design = {arm_width = 16, arm_thickness = 12}   # the links' dimensions (in unit; LinkDesign)
-    collision_free = true              # place the housings along the axes so that every two links keep
-    clearance_margin = 1.0             #   clearance_margin (in unit, default 1 mm) over a revolution of the driver
+    clearance_margin = 1.0             # what every two links keep along a revolution of the driver (in unit,
+                                       #   default 1 mm): the run checks it (exit 3 if not met) unless
+    # check_clearance = false          #   (a model that is not to be printed); and
+    collision_free = true              # place the housings along the axes so that the links keep it
                                        #   (ffrf.scenes.collision_free.design_stacking), or give a designed set:
     # stacking = {offsets = [...], spacers = [...], orders = [1, -1, ...]}   # per joint, offsets and spacers in unit
     bore_errors = [{joint = 5, link = 0, twist_deg = 1.0, offset = 0.2, axial = 0.1}]   # as built (offset
@@ -175,6 +177,7 @@ LINKAGE = {
     "link_design": Key("table", keys=LINK_DESIGN),
     "collision_free": Key("boolean"),
     "clearance_margin": Key("number", False, _non_negative),
+    "check_clearance": Key("boolean"),
     "stacking": Key("table", keys=STACKING),
 }
 #: A linkage file: ``[linkage]`` and optional ``[scene]`` settings (no bodies, joints or sensors of its own).
@@ -289,8 +292,11 @@ def _attach_points(
     chosen = [key for key in ("design_points", "collision_free", "stacking") if spec.get(key, False)]
     if len(chosen) > 1:
         raise SceneError(f"{where}: give one of design_points, collision_free and stacking, got {chosen}")
-    if "clearance_margin" in spec and not spec.get("collision_free", False):
-        raise SceneError(f"{where}: 'clearance_margin' is the margin of collision_free = true")
+    if "clearance_margin" in spec and spec.get("check_clearance", True) is False and not spec.get("collision_free"):
+        raise SceneError(
+            f"{where}: 'clearance_margin' is the margin the run checks (and collision_free designs for), but "
+            "check_clearance = false; drop one of them"
+        )
     if spec.get("design_points", False):
         return attach_points(mechanism, spec.get("scale", 0.1))
     if "stacking" in spec:
@@ -336,7 +342,8 @@ def load_linkage(document: dict, base: Path | None = None, where: str = "linkage
 
 def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop, LinkageOptions, dict]:
     """Check a linkage file (already parsed) and return its nominal loop, the options it builds the linkage with
-    and its run settings (``mode``, ``outputs``, ``step``, ``rho_inf``, ``stability`` where given)."""
+    and its run settings (``mode``, ``outputs``, ``step``, ``rho_inf``, ``stability`` where given; always
+    ``clearance_margin``, m, and ``check_clearance``: what :meth:`ffrf.output.result.Result.add_clearance` judges)."""
     check_table(document, LINKAGE_SCHEMA, where)
     spec = document["linkage"]
     label = f"{where}, linkage"
@@ -421,4 +428,6 @@ def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop,
         attach_points=attach,
     )
     run = {key: settings[key] for key in ("mode", "outputs", "step", "rho_inf", "stability") if key in settings}
+    run["clearance_margin"] = length * spec.get("clearance_margin", 1.0e-3 / length)
+    run["check_clearance"] = spec.get("check_clearance", True)
     return loop, options, run

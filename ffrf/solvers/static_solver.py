@@ -229,6 +229,10 @@ def _newton(
     raise _not_converged(list(increments), gap_max, tolerance, advice)
 
 
+#: Halvings of one gravity increment of :func:`static_equilibrium` before the equilibrium is declared out of reach.
+MAX_LOAD_HALVINGS = 6
+
+
 def static_equilibrium(
     system: MultibodySystem,
     q0: NDArray,
@@ -240,6 +244,10 @@ def static_equilibrium(
     fast_path: bool = True,
 ) -> StaticSolution:
     """Equilibrium near ``q0`` at time ``t`` (for prescribed motions), gravity in ``load_steps`` increments.
+    An increment whose Newton solve fails is halved, from the last equilibrium, up to :data:`MAX_LOAD_HALVINGS`
+    times (a structure that sags far under its weight: the undeformed pose is outside Newton's reach of the loaded
+    equilibrium), and doubled again after each increment that converges, up to ``1/load_steps``; ``iterations``
+    has one entry per converged increment.
     ``fast_path``: Newton with the whole-system kernels when the system is supported
     (:func:`ffrf.system.packed_system.newton_model`); the same solution to round-off."""
     if load_steps < 1:
@@ -247,19 +255,31 @@ def static_equilibrium(
     q = np.array(q0, dtype=float)
     lam = np.zeros(system.n_constraints)
     counts = []
-    for k in range(1, load_steps + 1):
-        scaled = replace(system, gravity=system.gravity * (k / load_steps))
-        q, lam, iterations, _ = _newton(
-            newton_model(scaled, fast_path),
-            q,
-            lam,
-            t,
-            tolerance,
-            max_iterations,
-            advice=f"apply gravity in more load_steps (now {load_steps}) or start closer to the equilibrium",
-        )
+    # The load in integer units (each step's fraction exact, as k / load_steps was before any halving)
+    units = load_steps * 2**MAX_LOAD_HALVINGS
+    done, halvings = 0, 0
+    advice = f"apply gravity in more load_steps (now {load_steps}) or start closer to the equilibrium"
+    while done < units:
+        reached = min(units, done + 2 ** (MAX_LOAD_HALVINGS - halvings))
+        target, loaded = reached / units, done / units
+        scaled = replace(system, gravity=system.gravity * target)
+        try:
+            q_new, lam_new, iterations, _ = _newton(
+                newton_model(scaled, fast_path), q, lam, t, tolerance, max_iterations, advice=advice
+            )
+        except StaticDivergence as error:
+            if halvings == MAX_LOAD_HALVINGS:
+                raise StaticDivergence(
+                    f"{error} (gravity at {target:.4g} of its value, after {MAX_LOAD_HALVINGS} halvings of the load "
+                    f"step from {loaded:.4g})"
+                ) from error
+            halvings += 1
+            log.info("gravity step to %.4g of its value failed; halved (%d of %d)", target, halvings, MAX_LOAD_HALVINGS)
+            continue
+        q, lam, done = q_new, lam_new, reached
         counts.append(iterations)
-        log.debug("load step %d/%d converged in %d iterations", k, load_steps, iterations)
+        halvings = max(0, halvings - 1)
+        log.debug("gravity at %.4g of its value: converged in %d iterations", target, iterations)
     return StaticSolution(q, lam, tuple(counts))
 
 

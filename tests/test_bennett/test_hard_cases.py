@@ -209,3 +209,25 @@ def test_a_quick_turn_behind_the_path_steps_does_not_end_a_mild_misfit_run():
     assert run.time[-1] == pytest.approx(scene.t_end) and run.verification.verified, run.verification.reasons
     finer = quasi_static(scene.system, assemble(scene).q, run.time, path_step=lambda t: 0.1)
     np.testing.assert_allclose(run.q, finer.q, rtol=0, atol=1e-8)
+
+
+def test_a_loop_that_sags_far_under_its_weight_is_assembled_in_smaller_gravity_steps(monkeypatch):
+    """Rational Linkages' collisions_free_6r at five times its default size in PLA (links 125-824 mm, 16 x 12 mm
+    arms) sags about 0.1 m under its weight: Newton from the undeformed pose, gravity in two steps, ends on a
+    singular tangent. Halving the failed gravity step reaches it; the equilibrium is the one 64 equal steps reach
+    (the same branch: a conservative load's equilibrium does not depend on the path to it)."""
+    from ffrf.scenes.linkage_file import load_linkage
+    from ffrf.solvers import static_solver
+
+    scene = load_linkage({"linkage": {"model": "collisions_free_6r", "scale": 0.5}})
+    system = scene.with_misfit(0.0)
+    monkeypatch.setattr(static_solver, "MAX_LOAD_HALVINGS", 0)
+    with pytest.raises(StaticDivergence, match="singular"):
+        static_solver.static_equilibrium(system, scene.q_initial, load_steps=2)
+    monkeypatch.undo()
+    halved = static_solver.static_equilibrium(system, scene.q_initial, load_steps=2)
+    assert len(halved.iterations) > 2  # it did halve
+    even = static_solver.static_equilibrium(system, scene.q_initial, load_steps=64)
+    np.testing.assert_allclose(halved.q, even.q, rtol=0.0, atol=1e-9 * np.abs(even.q).max())
+    sag = np.abs(halved.q - scene.q_initial).max()
+    assert sag > 0.05  # far from the start, as the docstring says: not a case Newton reaches anyway

@@ -69,11 +69,14 @@ def test_the_papers_misaligned_bennett_from_a_linkage_file_runs_as_the_built_in_
 
 
 def test_a_stiff_rational_linkages_4r_from_the_command_line_follows_its_ideal_motion(tmp_path, capsys):
+    """bennett_ark24 at a quarter of its unit size, rigid: the run follows the ideal motion and writes everything, but
+    its default links pass through each other along the motion (the nominal stacking: every link's housings at
+    the joint points), so the run is not verified: it exits 3 and its verdict names the clearance."""
     code = main(
         ["linkage", "--model", "bennett_ark24", "--scale", "0.25", "--variant", "rigid", "--h", "0.012", "--order", "1",
          "--modes", "2", "--outputs", "13", "--quasi-static", "--out", str(tmp_path)]
     )  # fmt: skip
-    assert code == 0
+    assert code == 3
     metadata = json.loads((tmp_path / "metadata.json").read_text())
     assert metadata["summary"]["max_coupler_deviation_m"] < 1e-8  # E = 1e15 Pa under gravity
     assert metadata["summary"]["max_constraint_residual"] < 1e-10
@@ -81,7 +84,31 @@ def test_a_stiff_rational_linkages_4r_from_the_command_line_follows_its_ideal_mo
     assert written["linkage"]["model"] == "bennett_ark24"  # the linkage file the options stand for
     for name in ("results.npz", "results.csv", "assembly.vtu", "coupler_deviation.png", "driving_torque.png"):
         assert (tmp_path / name).is_file()
-    assert "max coupler deviation" in capsys.readouterr().out
+    verification = metadata["verification"]
+    assert not metadata["clearance"]["margin_met"] and not verification["verified"]
+    assert [reason.split()[0] for reason in verification["reasons"]] == ["clearance"]
+    clearance = next(c for c in verification["checks"] if c["name"] == "clearance")
+    smallest = min(p["between_poses_m"] for p in metadata["clearance"]["pairs"])
+    assert clearance["value"] == 1e-3 and clearance["tolerance"] == smallest < 0.0  # they overlap
+    out = capsys.readouterr().out
+    assert "max coupler deviation" in out and out.splitlines()[-1].startswith("verified: false: clearance")
+
+
+def test_a_linkage_file_that_keeps_no_clearance_is_verified_without_it(tmp_path, capsys):
+    """``check_clearance = false`` (a model not to be printed): the same linkage as above exits 0, with a note
+    instead of the check and no clearance computed."""
+    path = tmp_path / "ark.toml"
+    path.write_text(
+        '[linkage]\nmodel = "bennett_ark24"\nscale = 0.25\ncheck_clearance = false\n'
+        "material = {E = 1e15, nu = 0.3, rho = 1e3}\n" + COARSE + '[scene]\noutputs = 13\nmode = "quasi_static"\n'
+    )
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
+    metadata = json.loads((tmp_path / "out" / "metadata.json").read_text())
+    assert "clearance" not in metadata
+    verification = metadata["verification"]
+    assert verification["verified"] and "clearance" not in [c["name"] for c in verification["checks"]]
+    assert any("check_clearance = false" in note for note in verification["notes"])
+    assert "clearance of the links" not in capsys.readouterr().out
 
 
 def test_collision_free_links_of_a_rational_linkages_4r_from_the_command_line(tmp_path):
