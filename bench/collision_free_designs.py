@@ -10,7 +10,8 @@ was made so). The printed parts have thickness; ours are the parametric links of
 
 * ``joint_points``: both housings of a joint about its joint point (no design);
 * ``rational_linkages``: housings centred on the model's own connection points (``design_points = true``);
-* ``ours``: the stacking of ``ffrf.scenes.collision_free.design_stacking``, margin 1 mm (``collision_free = true``),
+* ``ours``: the stacking of ``ffrf.scenes.collision_free.design_stacking``, margin 1 mm, as ``collision_free = true``
+  designs it (links with the axial gap of ``designed_axial_gap``, 1.5 mm; the model's own design one more start),
   or its refusal (the closest pair, drive angle and clearance reached).
 
 Per set: the signed clearance of the meshed link solids along one revolution of the driver, bounded between the
@@ -46,7 +47,7 @@ import numpy as np
 from bench.report import write_report
 from ffrf.errors import GeometryError, SceneError
 from ffrf.geometry.link_geometry import LinkDesign
-from ffrf.scenes.collision_free import Stacking, design_stacking
+from ffrf.scenes.collision_free import Stacking, design_stacking, designed_axial_gap
 from ffrf.scenes.linkage_description import start_pose
 from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
@@ -54,8 +55,8 @@ from kinematics.rational_mechanism import attach_points, load_model
 
 #: (model, scale) compared by default: the models that ship a design (``plane_fold_6r`` and ``interp_4poses_6r`` put
 #: both points of a joint at one place); the Bennett at about the paper's size (links 121 and 209 mm against 110 and
-#: 220 mm), the 6R where its design's two points at a joint lie a housing apart (18 mm).
-CASES = ("bennett_ark24:0.5", "collisions_free_6r:0.25")
+#: 220 mm), the 6R where its design's two points at a joint lie a housing apart (18 mm) and at twice that size.
+CASES = ("bennett_ark24:0.5", "collisions_free_6r:0.25", "collisions_free_6r:0.5")
 MARGIN = 1e-3
 
 
@@ -160,9 +161,12 @@ def compare_case(
     if not run_ours:
         return row
     phi = start_pose(loop, options.driver, options.start_angle, options.origin)
+    # as a linkage file's collision_free = true designs: the widened gap, the model's own design one more start
+    design = LinkDesign(axial_gap=designed_axial_gap(MARGIN))
+    starts = Stacking.starts_from_design(loop, attach_points(load_model(model), scale), design)
     started = time.perf_counter()
     try:
-        designed = design_stacking(loop, options.driver, phi, design, MARGIN)
+        designed = design_stacking(loop, options.driver, phi, design, MARGIN, starts=starts)
     except GeometryError as error:
         row["ours"] = {"refused": str(error), "design_s": time.perf_counter() - started}
         return row
@@ -171,7 +175,7 @@ def compare_case(
     table = {"offsets": list(stacking.offsets), "spacers": list(stacking.spacers)}
     if stacking.orders is not None:
         table["orders"] = list(stacking.orders)
-    ours = _linkage(model, scale, h, {"stacking": table})
+    ours = _linkage(model, scale, h, {"stacking": table, "link_design": {"axial_gap": design.axial_gap}})
     row["ours"] = _clearance_row(ours, poses)
     row["ours"].update(
         design_s=design_s,

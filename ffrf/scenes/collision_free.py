@@ -52,6 +52,7 @@ __all__ = [
     "Stacking",
     "StackingDesign",
     "design_stacking",
+    "designed_axial_gap",
     "link_build_inputs",
     "proxy_clearance",
     "sampled_motion",
@@ -96,6 +97,20 @@ class Stacking:
             spacers.append(max(0.0, abs(along) - 2.0 * design.housing_offset))
             orders.append(1 if along >= 0.0 else -1)
         return cls(tuple(offsets), tuple(spacers), tuple(orders))
+
+    @classmethod
+    def starts_from_design(
+        cls, loop: SingleLoop, attach: ArrayLike | None, design: LinkDesign | None = None
+    ) -> tuple[Stacking, ...]:
+        """A mechanism's own design as starts of :func:`design_stacking`: ``attach`` (its connection points, as
+        :meth:`from_attach_points` reads them) as a stacking, where it is a design (two points at some joint apart;
+        ``None`` or every joint's two points at one place: none)."""
+        if attach is None:
+            return ()
+        attach = np.asarray(attach, dtype=float)
+        if not np.any(np.linalg.norm(attach[:, 1] - attach[:, 0], axis=1) > 0.0):
+            return ()
+        return (cls.from_attach_points(loop, attach, design),)
 
     def order(self, joint: int) -> int:
         """``orders[joint]``, ``+1`` without orders."""
@@ -549,6 +564,18 @@ _TRAVEL = 2e-3
 #: speed of the interval's two ends, and for the check on the meshed solids, which bounds the clearance between its
 #: own, fewer poses (Eq. (CL3); with 0.1 mm a design of bennett_ark24 kept 1.00 mm at every pose, proven 0.67 mm).
 _CUSHION = 5e-4
+
+
+def designed_axial_gap(margin: float, given: float | None = None) -> float:
+    """The axial gap (m) of links designed to keep ``margin`` (m) when the user gives none (``given`` ``None``): the
+    default one, widened to ``margin`` + 0.5 mm. Beside a joint, an arm is trimmed one axial gap from the other link's
+    housing (:func:`~ffrf.geometry.link_geometry.build_link`), a distance that stays the same as the joint turns: at a
+    gap equal to the margin (1 mm both by default) the check on the solids could not prove it between its poses."""
+    if given is not None:
+        return given
+    return max(LinkDesign().axial_gap, margin + _CUSHION)
+
+
 #: Step (m) of the central differences of the capsules' ends by a seat's position along its axis (they are affine in
 #: it but for an arm's direction, so the difference's error is far below the clearances' tolerance).
 _DIFFERENCE_STEP = 1e-6

@@ -59,7 +59,7 @@ import numpy as np
 from ffrf.errors import GeometryError, SceneError
 from ffrf.fe.materials import PLA, Material
 from ffrf.geometry.link_geometry import LinkDesign
-from ffrf.scenes.collision_free import Stacking, design_stacking
+from ffrf.scenes.collision_free import Stacking, design_stacking, designed_axial_gap
 from ffrf.scenes.limits import length_unit_problem, linkage_run_steps, steps_problem
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, start_pose
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
@@ -315,12 +315,7 @@ def _attach_points(
         margin = length * spec.get("clearance_margin", 1.0e-3 / length)
         phi = start_pose(loop, driver, start, origin)
         shipped = None if mechanism is None else attach_points(mechanism, spec.get("scale", 0.1))
-        # a model's own collision-free design (its two points at a joint apart) is one more start
-        starts = (
-            (Stacking.from_attach_points(loop, shipped, design),)
-            if shipped is not None and np.any(np.linalg.norm(shipped[:, 1] - shipped[:, 0], axis=1) > 0.0)
-            else ()
-        )
+        starts = Stacking.starts_from_design(loop, shipped, design)  # a model's own design is one more start
         try:
             designed = design_stacking(loop, driver, phi, design, margin, starts=starts)
         except (GeometryError, ValueError) as error:
@@ -401,8 +396,12 @@ def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop,
     if problem is not None:
         raise SceneError(f"{label}: {problem}")
     material = Material(**spec["material"]) if "material" in spec else PLA
+    dimensions = {key: length * value for key, value in spec.get("link_design", {}).items()}
+    margin = length * spec.get("clearance_margin", 1.0e-3 / length)
+    if spec.get("collision_free", False):  # links designed to keep the margin: an axial gap above it
+        dimensions["axial_gap"] = designed_axial_gap(margin, dimensions.get("axial_gap"))
     try:
-        design = LinkDesign(**{key: length * value for key, value in spec.get("link_design", {}).items()})
+        design = LinkDesign(**dimensions)
     except GeometryError as error:
         raise SceneError(f"{label}, link_design: {error}") from error
     attach = _attach_points(spec, loop, driver, start, origin, mechanism, design, length, label)
@@ -428,6 +427,6 @@ def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop,
         attach_points=attach,
     )
     run = {key: settings[key] for key in ("mode", "outputs", "step", "rho_inf", "stability") if key in settings}
-    run["clearance_margin"] = length * spec.get("clearance_margin", 1.0e-3 / length)
+    run["clearance_margin"] = margin
     run["check_clearance"] = spec.get("check_clearance", True)
     return loop, options, run

@@ -185,7 +185,7 @@ def test_a_models_shipped_design_is_one_more_start_of_a_linkage_files_design(mon
     seen = []
 
     def recorded(loop, driver, start, design, margin, starts=()):
-        seen.append(starts)
+        seen.append((starts, design))
         raise GeometryError("recorded")
 
     monkeypatch.setattr(linkage_file, "design_stacking", recorded)
@@ -197,10 +197,11 @@ def test_a_models_shipped_design_is_one_more_start_of_a_linkage_files_design(mon
             linkage_file.linkage_options(document)
     mechanism = load_model("collisions_free_6r")
     loop = loop_from_mechanism(mechanism, 0.25)
-    (given,) = seen[0]
+    (given,), design = seen[0]
+    assert design.axial_gap == 1.5e-3  # designed links: the margin + 0.5 mm (designed_axial_gap)
     points = attach_points(mechanism, 0.25)
-    np.testing.assert_allclose(given.attach_points(loop), points, atol=1e-12)
-    assert seen[1] == ()
+    np.testing.assert_allclose(given.attach_points(loop, design), points, atol=1e-12)
+    assert seen[1][0] == ()
 
 
 @pytest.mark.parametrize(
@@ -210,7 +211,7 @@ def test_a_models_shipped_design_is_one_more_start_of_a_linkage_files_design(mon
         ({"stacking": {"offsets": [0, 0, 0, 0], "orders": [1, 0, 1, 1]}}, "orders 1 or -1"),
         ({"collision_free": True, "stacking": {"offsets": [0, 0, 0, 0]}}, "give one of"),
         ({"clearance_margin": 1.0, "check_clearance": False}, "check_clearance = false; drop one"),
-        ({"collision_free": True, "clearance_margin": 2.0}, "axial gap"),
+        ({"collision_free": True, "clearance_margin": 2.0, "link_design": {"axial_gap": 1.0}}, "axial gap"),
     ],
 )
 def test_bad_stacking_keys_are_refused(keys, message):
