@@ -141,7 +141,7 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         records=(
             Recording(
                 "collision_free_designs",
-                ("--rl-check", "--rl-search", "bennett_ark24", "--design", "bennett_ark24", *JSON),
+                ("--rl-check", "--rl-search", "bennett_ark24", *JSON),
             ),
         ),
     ),
