@@ -24,6 +24,7 @@ __all__ = [
     "AssemblyDivergence",
     "NewtonDivergence",
     "SingularIterationMatrix",
+    "SensitivityError",
     "Interrupted",
 ]
 
@@ -94,6 +95,10 @@ class NewtonDivergence(RuntimeError):
 
 class SingularIterationMatrix(NewtonDivergence):
     """The iteration matrix (G3) has zero singular values by the rank rule (R1): no step can be solved."""
+
+
+class SensitivityError(RuntimeError):
+    """A derivative that does not exist where it was asked for: an equilibrium at a fold (Eq. (D1))."""
 
 
 class Interrupted(BaseException):

@@ -43,6 +43,7 @@ __all__ = [
     "refined_times",
     "residual_rate",
     "static_equilibrium",
+    "tangent_at",
 ]
 
 log = logging.getLogger(__name__)
@@ -76,6 +77,12 @@ def _factor_tangent(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDAr
             "static tangent has %d free motion(s) at t = %g; using its pseudo-inverse", tangent.rank_deficiency, t
         )
     return tangent
+
+
+def tangent_at(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float) -> FactoredMatrix:
+    """The static tangent of Eq. (S1) at ``(q, lam)`` and time ``t``, factored as Newton factors it (rank rule (R1)):
+    what :mod:`ffrf.solvers.equilibrium_sensitivity` solves with."""
+    return _factor_tangent(model, q, lam, t)
 
 
 class _Secant:

@@ -1,0 +1,128 @@
+"""Exact derivatives of equilibria with respect to the links' Young's modulus and density (Eq. (D1), issue #35),
+against a closed form and against re-solved equilibria of the perturbed linkage."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from body_fixtures import bar_model
+
+from ffrf.body.flexible_body import FlexibleBody
+from ffrf.body.modal_moments import ModalMoments, modal_moments
+from ffrf.errors import SensitivityError
+from ffrf.fe.materials import PLA
+from ffrf.output.sensors import path_sensors
+from ffrf.reduction.craig_bampton import craig_bampton
+from ffrf.scenes.linkage_run import run_linkage
+from ffrf.scenes.path_sensitivity import material_sensitivity
+from ffrf.solvers.equilibrium_sensitivity import equilibrium_response, material_rates
+from ffrf.solvers.static_solver import static_equilibrium
+from ffrf.system.constraints import GroundPerpendicular, GroundPoint
+from ffrf.system.multibody import MultibodySystem
+
+GRAVITY = np.array([0.0, 0.0, -9.81])
+
+
+def _cantilever(n_modes: int = 4):
+    model = bar_model(E=1e8, rho=450.0)
+    clamp = np.flatnonzero(model.nodes[:, 0] < 1e-9)
+    basis = craig_bampton(model, [clamp], n_modes)
+    body = FlexibleBody(
+        "bar",
+        modal_moments(model.nodes, model.mass, basis.basis),
+        basis.reduced_stiffness,
+        0.0 * basis.reduced_stiffness,
+    )
+    e = np.eye(3)
+    fixed = (
+        GroundPoint((0,), "clamp"),
+        GroundPerpendicular((0,), "clamp y", vector=e[1], normals=e[[0, 2]]),
+        GroundPerpendicular((0,), "clamp x", vector=e[0], normals=e[[2]]),
+    )
+    return model, basis.basis, MultibodySystem((body,), fixed, gravity=GRAVITY)
+
+
+def test_a_clamped_bar_sags_as_rho_over_e_and_so_do_its_derivatives():
+    """A cantilever's sag under its weight is proportional to rho / E (the Ritz solution K_r zeta = Psi^T M g is
+    linear in rho and in 1 / E), so d sag / d ln E = -sag and d sag / d ln rho = +sag, to round-off."""
+    model, psi, system = _cantilever()
+    solution = static_equilibrium(system, system.initial_state(), load_steps=1)
+    dq, _ = equilibrium_response(system, solution.q, solution.multipliers, 0.0, material_rates(system, solution.q))
+    tip = int(np.argmin(np.linalg.norm(model.nodes - [0.2, 0.01, 0.005], axis=1)))
+    sag = (psi @ solution.q[7:])[3 * tip + 2]
+    d_sag = (psi @ dq[7:])[3 * tip + 2]  # (2,): ln E, ln rho
+    assert sag < -1e-4  # a real sag to scale by
+    np.testing.assert_allclose(d_sag, [-sag, sag], rtol=1e-10)
+    np.testing.assert_allclose(dq[:7], 0.0, atol=1e-14)  # the clamped frame does not move
+
+
+def _scaled(body: FlexibleBody, stiffness: float = 1.0, density: float = 1.0) -> FlexibleBody:
+    m = body.moments
+    moments = ModalMoments(
+        density * m.mass, density * m.s0, density * m.s1, density * m.x2, density * m.c, density * m.d
+    )
+    return FlexibleBody(body.name, moments, stiffness * body.stiffness, stiffness * body.damping, body.exact_gravity)
+
+
+@pytest.fixture(scope="module")
+def bennett_path():
+    from bench import hard_cases
+
+    scene = hard_cases.make_scene(PLA, h=8e-3, order=1, n_modes=2)
+    result = run_linkage(scene, mode="quasi_static", n_outputs=5, t_end=0.4 * scene.t_end, sensors="path")
+    return scene, result
+
+
+@pytest.mark.parametrize("parameter", [("E", 1), ("rho", 2), ("E", 3)])
+def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linkages(bennett_path, parameter):
+    """The PLA Bennett (coarse links) along part of its revolution: the derivatives of the coupler point and the
+    driving torque by Eq. (D1) agree with central differences of equilibria re-solved by Newton for the linkage with
+    that link's E or rho changed by +-0.1 % (to 1e-13 m), within 1e-6 of the largest derivative (the differences'
+    truncation error, about 2e-7)."""
+    scene, result = bennett_path
+    kind, link = parameter
+    exact = material_sensitivity(scene, result.time, result.q, result.multipliers, links=(link,))
+    column = 0 if kind == "E" else 1
+    eps = 1e-3
+    rows = (1, 3, 4)
+    sides = []
+    for sign in (1.0, -1.0):
+        factor = np.exp(sign * eps)
+        bodies = list(scene.system.bodies)
+        bodies[link] = _scaled(bodies[link], **({"stiffness": factor} if kind == "E" else {"density": factor}))
+        system = replace(scene.system, bodies=tuple(bodies))
+        solved = []
+        for r in rows:  # solved, then polished by Newton from a freshly factored tangent (round-off, not 1e-13)
+            first = static_equilibrium(system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
+            solved.append(static_equilibrium(system, first.q, t=float(result.time[r]), tolerance=1e-15))
+        q = np.array([s.q for s in solved])
+        lam = np.array([s.multipliers for s in solved])
+        sides.append(path_sensors(replace(scene, system=system), result.time[list(rows)], q, lam))
+    coupler = (sides[0]["coupler_point"] - sides[1]["coupler_point"]) / (2 * eps)
+    torque = (sides[0]["driving_torque"] - sides[1]["driving_torque"]) / (2 * eps)
+    ours_coupler = exact.coupler_point[list(rows), :, column]
+    ours_torque = exact.driving_torque[list(rows), column]
+    assert np.abs(ours_coupler).max() > 1e-6  # the links' compliance moves the coupler
+    np.testing.assert_allclose(ours_coupler, coupler, rtol=0, atol=1e-6 * np.abs(coupler).max())
+    np.testing.assert_allclose(ours_torque, torque, rtol=0, atol=1e-6 * np.abs(torque).max())
+
+
+def test_a_fold_is_refused_not_differentiated():
+    """A free bar (nothing holds it) under gravity: its tangent is singular and gravity loads the free motion, so
+    no equilibrium responds to its density; the error says so instead of a number."""
+    _, _, clamped = _cantilever(2)
+    free = MultibodySystem(clamped.bodies, (), gravity=GRAVITY)
+    q = free.initial_state()
+    with pytest.raises(SensitivityError, match="fold"):
+        equilibrium_response(free, q, np.zeros(free.n_constraints), 0.0, material_rates(free, q))
+
+
+def test_scaling_every_stiffness_and_density_together_moves_nothing_and_scales_the_torque(bennett_path):
+    """Every link's E and rho times one factor: the same equilibrium (K_r zeta = Q_g scale alike), forces and so the
+    driving torque times that factor. So the derivatives by E and rho of all links sum to zero for the coupler
+    point and to the torque itself for the torque (exact identities of statics, not of our formulation)."""
+    scene, result = bennett_path
+    exact = material_sensitivity(scene, result.time, result.q, result.multipliers)
+    np.testing.assert_allclose(exact.coupler_point.sum(axis=2), 0.0, atol=1e-9 * np.abs(exact.coupler_point).max())
+    torque = result.sensors["driving_torque"]
+    np.testing.assert_allclose(exact.driving_torque.sum(axis=1), torque, rtol=1e-8, atol=1e-10 * np.abs(torque).max())
