@@ -44,6 +44,7 @@ __all__ = [
     "TRACKED_FRACTIONS",
     "BoreError",
     "LinkageOptions",
+    "bore_side",
     "drive_sign",
     "joint_points",
     "linkage_description",
@@ -77,6 +78,19 @@ class BoreError:
     offset: float = 0.0
     axis: Line | None = None
     axial: float = 0.0
+
+    @classmethod
+    def single(cls, joint: int, link: int, field: str, value: float) -> BoreError:
+        """The bore error with ``value`` in one of its ``field`` (``twist``, ``offset``, ``axial``), the others 0."""
+        if field not in ("twist", "offset", "axial"):
+            raise ValueError(f"a bore error's field is twist, offset or axial, got {field!r}")
+        return cls(
+            joint,
+            link,
+            twist=value if field == "twist" else 0.0,
+            offset=value if field == "offset" else 0.0,
+            axial=value if field == "axial" else 0.0,
+        )
 
 
 def _link_joints(k: int, n: int) -> tuple[int, int]:
@@ -183,6 +197,17 @@ def _link_axes(
             sides[side] = _erroneous_side(sides[side], sides[1 - side].axis, error)
         links.append(sides)
     return links
+
+
+def bore_side(loop: SingleLoop, options: LinkageOptions, error: BoreError) -> tuple[NDArray, NDArray]:
+    """The axis direction and joint point of link ``error.link``'s side of joint ``error.joint`` as built with
+    ``options``' bore errors and ``error`` (after them): what that side of the joint takes in the linkage's
+    description (the misfit model's joint, :func:`linkage_description`)."""
+    attach = None if options.attach_points is None else np.asarray(options.attach_points, dtype=float)
+    points = seated_joint_points(loop, attach)
+    links = _link_axes(loop, points, (*options.bore_errors, error), _seats(loop, attach, options.design))
+    side = links[error.link][0 if error.joint == _link_joints(error.link, loop.n)[0] else 1]
+    return np.array(side.axis.direction), np.array(side.point)
 
 
 def _along(course: NDArray, fraction: float) -> NDArray[np.float64]:

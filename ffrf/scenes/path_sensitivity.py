@@ -1,8 +1,12 @@
-r"""Derivatives of a linkage's quasi-static path with respect to its links' materials (``docs/formulation.md``, (D1)).
+r"""Derivatives of a linkage's quasi-static path with respect to its links' materials and bore errors
+(``docs/formulation.md``, Eqs. (D1)-(D2)).
 
-At every output pose of a quasi-static run the equilibrium's response to each link's relative Young's modulus and
-density comes from the implicit function theorem with the tangent Newton factored there
-(:func:`ffrf.solvers.equilibrium_sensitivity.equilibrium_response`, exact: the mode basis does not depend on either).
+At every output pose of a quasi-static run the equilibrium's response to each parameter comes from the implicit
+function theorem with the tangent Newton factored there
+(:func:`ffrf.solvers.equilibrium_sensitivity.equilibrium_response`): each link's relative Young's modulus and
+density (exact rates: the mode basis depends on neither), and each bore's three errors of
+:class:`~ffrf.scenes.linkage_description.BoreError` in the misfit model (rates of the joint's equations and reactions
+by central differences of the joint the linkage builds, :data:`TWIST_STEP`, :data:`SHIFT_STEP`).
 The outputs are explicit, smooth functions of the equilibrium: the coupler point (the mean of the tool link's joint
 points, :func:`ffrf.output.sensors.path_sensors`) and the driving torque (a multiplier). They are differentiated along
 the response by central differences (Eq. (D2)): a step moving no coordinate by more than :data:`OUTPUT_STEP`, whose
@@ -12,19 +16,29 @@ stay near 1e-10 of the derivative, far below what a re-run's finite differences 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.output.sensors import path_sensors
+from ffrf.scenes.linkage_description import BoreError, LinkageOptions, bore_side
 from ffrf.scenes.linkage_scene import LinkageScene
+from ffrf.scenes.scene_joints import joint_constraint
 from ffrf.solvers.equilibrium_sensitivity import equilibrium_response, material_rates
+from ffrf.system.constraints import Constraint
+from ffrf.system.multibody import MultibodySystem
+from kinematics.single_loop import SingleLoop
 
-__all__ = ["OUTPUT_STEP", "PathSensitivity", "material_sensitivity"]
+__all__ = ["OUTPUT_STEP", "SHIFT_STEP", "TWIST_STEP", "PathSensitivity", "bore_sensitivity", "material_sensitivity"]
 
 #: Largest coordinate change (m, or Euler parameter, or modal coordinate) of Eq. (D2)'s central differences.
 OUTPUT_STEP = 1e-6
+#: Steps of the bore errors' central differences in the joint's equations (Eq. (D1)'s right-hand side): the twist
+#: (rad), and the offsets as a fraction of the loop's size (smooth in both: truncation about the step squared).
+TWIST_STEP = 1e-6
+SHIFT_STEP = 1e-6
 
 
 @dataclass(frozen=True)
@@ -47,13 +61,109 @@ def material_sensitivity(
     modulus and then density of each of ``links`` (default all; module docstring)."""
     system = scene.system
     links = tuple(range(len(system.bodies))) if links is None else tuple(links)
-    time, q, multipliers = np.asarray(time, float), np.asarray(q, float), np.asarray(multipliers, float)
     names = tuple(f"E {system.bodies[k].name}" for k in links) + tuple(f"rho {system.bodies[k].name}" for k in links)
+    q = np.asarray(q, dtype=float)
+    return _path_derivatives(scene, time, q, multipliers, names, lambda row, t: material_rates(system, q[row], links))
+
+
+def bore_sensitivity(
+    scene: LinkageScene,
+    loop: SingleLoop,
+    options: LinkageOptions,
+    time: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+    bores: tuple[tuple[int, int], ...] | None = None,
+) -> PathSensitivity:
+    """The derivatives of the coupler point and driving torque at a quasi-static run's equilibria (as
+    :func:`material_sensitivity`) with respect to the three errors of :class:`BoreError` (``twist``, rad;
+    ``offset`` and ``axial``, m) of each bore ``(joint, link)`` of ``bores`` (default every one), in the misfit model
+    (the linkage ``scene`` built from ``loop`` and ``options`` with ``bore_error_model = "misfit"`` or without bore
+    errors: the error only in the joint's frame and point on that link's side). The rates of the joint's equations
+    and reactions (Eq. (D1)'s right-hand side) are central differences in the error of the joint built by the
+    linkage's own rule (:func:`~ffrf.scenes.linkage_description.bore_side`), steps :data:`TWIST_STEP` and
+    :data:`SHIFT_STEP` times the loop's size."""
+    n = loop.n
+    bores = tuple((j, k) for k in range(n) for j in ((k - 1) % n, k)) if bores is None else tuple(bores)
+    system, offsets = scene.system, scene.settings.get("joint_offsets", "body")
+    pairs, names = [], []
+    for joint, link in bores:
+        index = _joint_index(scene, joint)
+        geometry = scene.joints[index]
+        side = geometry.bodies.index(link)
+        shift = SHIFT_STEP * loop.scale
+        for field, step in (("twist", TWIST_STEP), ("offset", shift), ("axial", shift)):
+            built = []
+            for sign in (1.0, -1.0):
+                axis, point = bore_side(loop, options, BoreError.single(joint, link, field, sign * step))
+                axes = (axis, geometry.axes[1]) if side == 0 else (geometry.axes[0], axis)
+                points = (point, geometry.points[1]) if side == 0 else (geometry.points[0], point)
+                moved = replace(geometry, axes=axes, points=points)
+                built.append(joint_constraint(moved, scene.bodies, offsets, 1.0))
+            pairs.append((len(system.bodies) + index, built[0], built[1], step))
+            names.append(f"{field} joint{joint} link{link}")
+    q, multipliers = np.asarray(q, dtype=float), np.asarray(multipliers, dtype=float)
+
+    def rates(row: int, t: float) -> NDArray[np.float64]:
+        out = np.zeros((system.n_coordinates + system.n_constraints, len(pairs)))
+        for column, (index, plus, minus, step) in enumerate(pairs):
+            out[:, column] = _joint_rate(system, index, plus, minus, step, q[row], multipliers[row], t)
+        return out
+
+    return _path_derivatives(scene, time, q, multipliers, tuple(names), rates)
+
+
+def _joint_index(scene: LinkageScene, joint: int) -> int:
+    """The index of joint ``joint`` of the loop among the scene's joints (named ``joint{j}``, the driven one with
+    ``(drive)`` added)."""
+    found = [i for i, g in enumerate(scene.joints) if g.name.split(" ")[0] == f"joint{joint}"]
+    if len(found) != 1:
+        raise ValueError(
+            f"the linkage has no joint named joint{joint}: its joints are {[g.name for g in scene.joints]}"
+        )
+    return found[0]
+
+
+def _joint_rate(
+    system: MultibodySystem,
+    index: int,
+    plus: Constraint,
+    minus: Constraint,
+    step: float,
+    q: NDArray,
+    lam: NDArray,
+    t: float,
+) -> NDArray[np.float64]:
+    """Eq. (D1)'s right-hand side for a parameter of constraint ``index`` (of ``all_constraints``), whose joint built
+    at the parameter's +-``step`` is ``plus``, ``minus``: the change of its equations and of their reactions
+    ``C_q^T lambda`` on the bodies it joins, by central differences."""
+    n = system.n_coordinates
+    rows = slice(int(system.rows[index]), int(system.rows[index + 1]))
+    blocks = [q[system.block(i)] for i in plus.bodies]
+    out = np.zeros(n + system.n_constraints)
+    out[n + rows.start : n + rows.stop] = (plus.value(blocks, t) - minus.value(blocks, t)) / (2.0 * step)
+    for i, upper, lower in zip(plus.bodies, plus.jacobian(blocks, t), minus.jacobian(blocks, t), strict=True):
+        out[system.block(i)] += (upper - lower).T @ lam[rows] / (2.0 * step)
+    return out
+
+
+def _path_derivatives(
+    scene: LinkageScene,
+    time: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+    names: tuple[str, ...],
+    rates: Callable[[int, float], NDArray],
+) -> PathSensitivity:
+    """Eq. (D1) at every pose with ``rates(row, t)``'s right-hand sides, then Eq. (D2) for the outputs."""
+    system = scene.system
+    time, q, multipliers = np.asarray(time, float), np.asarray(q, float), np.asarray(multipliers, float)
     poses, k = len(time), len(names)
     dq, dlam = np.empty((poses, k, q.shape[1])), np.empty((poses, k, multipliers.shape[1]))
     for row, t in enumerate(time):
-        rates = material_rates(system, q[row], links)
-        response_q, response_lam = equilibrium_response(system, q[row], multipliers[row], float(t), rates)
+        response_q, response_lam = equilibrium_response(
+            system, q[row], multipliers[row], float(t), rates(row, float(t))
+        )
         dq[row], dlam[row] = response_q.T, response_lam.T
     # Eq. (D2): each (pose, parameter) pair stepped along its response, all in one evaluation per side
     step = OUTPUT_STEP / np.maximum(np.abs(dq).max(axis=2), np.finfo(float).tiny)  # (poses, k)

@@ -77,18 +77,18 @@ def bennett_path():
 def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linkages(bennett_path, parameter):
     """The PLA Bennett (coarse links) along part of its revolution: the derivatives of the coupler point and the
     driving torque by Eq. (D1) agree with central differences of equilibria re-solved by Newton for the linkage with
-    that link's E or rho changed by +-0.1 % (to 1e-13 m), within 1e-6 of the largest derivative (the differences'
-    truncation error, about 2e-7)."""
+    that link's E or rho times exp(+-1e-3) and exp(+-2e-3), combined by Richardson's rule, within 1e-6 of the largest
+    derivative (measured: 4e-8, the re-solved equilibria's round-off over the steps; one step's differences alone are
+    off by about 2e-7, the step squared)."""
     scene, result = bennett_path
     kind, link = parameter
     exact = material_sensitivity(scene, result.time, result.q, result.multipliers, links=(link,))
     column = 0 if kind == "E" else 1
-    eps = 1e-3
-    rows = (1, 3, 4)
-    sides = []
-    for sign in (1.0, -1.0):
-        factor = np.exp(sign * eps)
+    rows = [1, 3, 4]
+
+    def outputs(change: float) -> dict:
         bodies = list(scene.system.bodies)
+        factor = np.exp(change)
         bodies[link] = _scaled(bodies[link], **({"stiffness": factor} if kind == "E" else {"density": factor}))
         system = replace(scene.system, bodies=tuple(bodies))
         solved = []
@@ -97,12 +97,16 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
             solved.append(static_equilibrium(system, first.q, t=float(result.time[r]), tolerance=1e-15))
         q = np.array([s.q for s in solved])
         lam = np.array([s.multipliers for s in solved])
-        sides.append(path_sensors(replace(scene, system=system), result.time[list(rows)], q, lam))
-    coupler = (sides[0]["coupler_point"] - sides[1]["coupler_point"]) / (2 * eps)
-    torque = (sides[0]["driving_torque"] - sides[1]["driving_torque"]) / (2 * eps)
-    ours_coupler = exact.coupler_point[list(rows), :, column]
-    ours_torque = exact.driving_torque[list(rows), column]
-    assert np.abs(ours_coupler).max() > 1e-6  # the links' compliance moves the coupler
+        return path_sensors(replace(scene, system=system), result.time[rows], q, lam)
+
+    def central(step: float, name: str) -> np.ndarray:
+        return (outputs(step)[name] - outputs(-step)[name]) / (2 * step)
+
+    coupler = (4 * central(1e-3, "coupler_point") - central(2e-3, "coupler_point")) / 3
+    torque = (4 * central(1e-3, "driving_torque") - central(2e-3, "driving_torque")) / 3
+    ours_coupler = exact.coupler_point[rows, :, column]
+    ours_torque = exact.driving_torque[rows, column]
+    assert np.abs(ours_coupler).max() > 1e-7  # the links' compliance moves the coupler
     np.testing.assert_allclose(ours_coupler, coupler, rtol=0, atol=1e-6 * np.abs(coupler).max())
     np.testing.assert_allclose(ours_torque, torque, rtol=0, atol=1e-6 * np.abs(torque).max())
 
@@ -126,3 +130,61 @@ def test_scaling_every_stiffness_and_density_together_moves_nothing_and_scales_t
     np.testing.assert_allclose(exact.coupler_point.sum(axis=2), 0.0, atol=1e-9 * np.abs(exact.coupler_point).max())
     torque = result.sensors["driving_torque"]
     np.testing.assert_allclose(exact.driving_torque.sum(axis=1), torque, rtol=1e-8, atol=1e-10 * np.abs(torque).max())
+
+
+@pytest.fixture(scope="module")
+def misfit_bennett():
+    """The paper's Bennett from its DH table, coarse PLA links, bore errors as misfits (the studies' model), along
+    part of its revolution."""
+    from ffrf.scenes.linkage_file import linkage_options
+    from ffrf.scenes.linkage_scene import build_linkage
+
+    dh = {"a": [110, 220, 110, 220], "alpha_deg": [150, 90, 150, 90]}
+    document = {"linkage": {"dh": dh, "unit": "mm", "driver": 3, "tool_link": 2, "start_angle_deg": -90.0}}
+    document["linkage"] |= {"h": 0.008, "order": 1, "modes": 2}
+    loop, options, _ = linkage_options(document)
+    options = replace(options, bore_error_model="misfit")
+    scene = build_linkage(loop, options)
+    result = run_linkage(scene, mode="quasi_static", n_outputs=5, t_end=0.4 * scene.t_end, sensors="path")
+    return loop, options, scene, result
+
+
+@pytest.mark.parametrize(
+    "field, joint, link, delta", [("twist", 3, 0, 5e-5), ("offset", 1, 1, 1e-5), ("axial", 2, 3, 1e-5)]
+)
+def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_bennett, field, joint, link, delta):
+    """Eq. (D1) for a bore error (twist, rad; offset along the link's normal and axial, m) against central
+    differences of the linkage built with that BoreError (the misfit model's own build: joints from the erroneous
+    bore) and its equilibria re-solved by Newton at the same poses, at +-delta and +-2 delta combined by Richardson's
+    rule (truncation delta^4; one step's differences are off by about 1e-5 of the derivative at delta = 2e-5 m, as
+    delta squared), within 1e-6 of the largest derivative (measured: 1e-10 to 2e-10 for the coupler, up to 2e-7 for
+    the torque)."""
+    from ffrf.scenes.linkage_description import BoreError
+    from ffrf.scenes.linkage_scene import build_linkage
+    from ffrf.scenes.path_sensitivity import bore_sensitivity
+
+    loop, options, scene, result = misfit_bennett
+    exact = bore_sensitivity(scene, loop, options, result.time, result.q, result.multipliers, bores=((joint, link),))
+    column = ("twist", "offset", "axial").index(field)
+    assert exact.parameters[column] == f"{field} joint{joint} link{link}"
+    rows = [1, 3, 4]
+
+    def outputs(error: float) -> dict:
+        built = build_linkage(loop, replace(options, bore_errors=(BoreError.single(joint, link, field, error),)))
+        solved = []
+        for r in rows:
+            first = static_equilibrium(built.system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
+            solved.append(static_equilibrium(built.system, first.q, t=float(result.time[r]), tolerance=1e-15))
+        q = np.array([s.q for s in solved])
+        lam = np.array([s.multipliers for s in solved])
+        return path_sensors(built, result.time[rows], q, lam)
+
+    def central(step: float, name: str) -> np.ndarray:
+        return (outputs(step)[name] - outputs(-step)[name]) / (2 * step)
+
+    coupler = (4 * central(delta, "coupler_point") - central(2 * delta, "coupler_point")) / 3
+    torque = (4 * central(delta, "driving_torque") - central(2 * delta, "driving_torque")) / 3
+    ours_coupler, ours_torque = exact.coupler_point[rows, :, column], exact.driving_torque[rows, column]
+    assert np.abs(ours_coupler).max() > 1e-3  # a bore error moves the coupler far more than gravity's sag
+    np.testing.assert_allclose(ours_coupler, coupler, rtol=0, atol=1e-6 * np.abs(coupler).max())
+    np.testing.assert_allclose(ours_torque, torque, rtol=0, atol=1e-6 * np.abs(torque).max())
