@@ -110,7 +110,36 @@ def bore_sensitivity(
             out[:, column] = _joint_rate(system, index, plus, minus, step, q[row], multipliers[row], t)
         return out
 
-    return _path_derivatives(scene, time, q, multipliers, tuple(names), rates)
+    # The outputs read the joints' points: a bore error of the tool link moves the coupler point itself (the mean of
+    # its joint points as built), at fixed coordinates too.
+    explicit = [
+        _explicit_rate(scene, index, plus, minus, step, time, q, multipliers) for index, plus, minus, step in pairs
+    ]
+    return _path_derivatives(scene, time, q, multipliers, tuple(names), rates, explicit)
+
+
+def _explicit_rate(
+    scene: LinkageScene,
+    index: int,
+    plus: Constraint,
+    minus: Constraint,
+    step: float,
+    time: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The outputs' change with a joint's parameter at fixed coordinates and multipliers (central differences): the
+    coupler point ``(poses, 3)`` and the driving torque ``(poses,)``."""
+    sides = []
+    for joint in (plus, minus):
+        constraints = list(scene.system.constraints)
+        constraints[index - len(scene.system.bodies)] = joint
+        moved = replace(scene, system=replace(scene.system, constraints=tuple(constraints)))
+        sides.append(path_sensors(moved, time, q, multipliers))
+    return (
+        (sides[0]["coupler_point"] - sides[1]["coupler_point"]) / (2.0 * step),
+        (sides[0]["driving_torque"] - sides[1]["driving_torque"]) / (2.0 * step),
+    )
 
 
 def _joint_index(scene: LinkageScene, joint: int) -> int:
@@ -154,8 +183,10 @@ def _path_derivatives(
     multipliers: NDArray,
     names: tuple[str, ...],
     rates: Callable[[int, float], NDArray],
+    explicit: list[tuple[NDArray, NDArray]] | None = None,
 ) -> PathSensitivity:
-    """Eq. (D1) at every pose with ``rates(row, t)``'s right-hand sides, then Eq. (D2) for the outputs."""
+    """Eq. (D1) at every pose with ``rates(row, t)``'s right-hand sides, then Eq. (D2) for the outputs, plus, per
+    parameter, the outputs' own change at fixed coordinates (``explicit``: coupler point and torque rates)."""
     system = scene.system
     time, q, multipliers = np.asarray(time, float), np.asarray(q, float), np.asarray(multipliers, float)
     poses, k = len(time), len(names)
@@ -176,5 +207,9 @@ def _path_derivatives(
     denominator = 2.0 * step
     coupler = (sides[0]["coupler_point"] - sides[1]["coupler_point"]).reshape(poses, k, 3) / denominator[..., None]
     torque = (sides[0]["driving_torque"] - sides[1]["driving_torque"]).reshape(poses, k) / denominator
+    if explicit is not None:
+        for column, (coupler_rate, torque_rate) in enumerate(explicit):
+            coupler[:, column] += coupler_rate
+            torque[:, column] += torque_rate
     angles = np.array([scene.drive_angle(float(t)) for t in time])
     return PathSensitivity(names, angles, np.transpose(coupler, (0, 2, 1)), torque)

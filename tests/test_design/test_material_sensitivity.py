@@ -150,10 +150,12 @@ def misfit_bennett():
 
 
 @pytest.mark.parametrize(
-    "field, joint, link, delta", [("twist", 3, 0, 5e-5), ("offset", 1, 1, 1e-5), ("axial", 2, 3, 1e-5)]
+    "field, joint, link, delta",
+    [("twist", 3, 0, 5e-5), ("offset", 1, 1, 1e-5), ("axial", 2, 3, 1e-5), ("twist", 1, 2, 5e-5)],
 )
 def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_bennett, field, joint, link, delta):
-    """Eq. (D1) for a bore error (twist, rad; offset along the link's normal and axial, m) against central
+    """Eq. (D1) for a bore error (twist, rad; offset along the link's normal and axial, m; on the coupler link 2 the
+    coupler point, the mean of its joint points as built, moves with its bore too) against central
     differences of the linkage built with that BoreError (the misfit model's own build: joints from the erroneous
     bore) and its equilibria re-solved by Newton at the same poses, at +-delta and +-2 delta combined by Richardson's
     rule (truncation delta^4; one step's differences are off by about 1e-5 of the derivative at delta = 2e-5 m, as

@@ -1,0 +1,172 @@
+r"""Tolerance analysis of bore errors to first order: a study's prints in a second (``docs/formulation.md``, (D3)).
+
+A study whose parameters are bore errors (twist, offset, axial of :class:`~ffrf.scenes.linkage_description.BoreError`
+in the misfit model) varies a linkage whose quasi-static path responds smoothly to them. To first order the coupler's
+deviation from the ideal path at pose :math:`i` of a print with errors :math:`e` is
+
+.. math:: d_i(e) \approx d_i(0) + S_i\,e,
+
+with :math:`d_i(0)` the base's own deviation (its gravity sag, its own bore errors) and :math:`S_i` the exact
+derivatives of Eq. (D1) at the base's equilibria (:func:`ffrf.scenes.path_sensitivity.bore_sensitivity`): one run
+and one sensitivity solve per pose, then any number of prints by a matrix product (:meth:`LinearPath.max_deviation`,
+the largest :math:`|d_i(e)|` over the poses, the study's ``max_coupler_deviation_m``). Percentiles come with their
+95 % confidence interval from the order statistics of the sample (:func:`percentiles`). The model holds while the
+errors are small against what bends the path; :func:`check_with_full_runs` compares it with full runs of some of the
+study's own prints and says where they disagree.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.stats import binom
+
+from ffrf.scenes.linkage_run import run_linkage
+from ffrf.scenes.path_sensitivity import bore_sensitivity
+from ffrf.studies.sampling import study_design, values_from_unit
+from ffrf.studies.spec import Study
+from ffrf.studies.variant import BORE_FIELDS, build_variant, run_variant, variant_options
+
+__all__ = [
+    "CHECK_TOLERANCE",
+    "LinearPath",
+    "check_with_full_runs",
+    "linear_path",
+    "percentiles",
+    "sample_values",
+]
+
+#: Largest relative difference between the linear model's and a full run's largest deviation before a check warns.
+CHECK_TOLERANCE = 0.05
+#: Prints per block of :meth:`LinearPath.max_deviation` (memory: poses x 3 x block doubles).
+_BLOCK = 20_000
+
+
+@dataclass(frozen=True)
+class LinearPath:
+    """The coupler's deviation along a study's base path to first order in its parameters (module docstring):
+    ``nominal`` ``(poses, 3)`` (m) at the base, ``slopes`` ``(poses, 3, k)`` (m per unit of each parameter, in the
+    study's units: deg, mm), at the ``drive_angle`` (rad) of the base run's outputs; ``seconds``: the base run's and
+    the sensitivities' wall time."""
+
+    parameters: tuple[str, ...]
+    drive_angle: NDArray[np.float64]
+    nominal: NDArray[np.float64]
+    slopes: NDArray[np.float64]
+    seconds: dict[str, float]
+
+    def deviations(self, values: NDArray) -> NDArray[np.float64]:
+        """``(n, poses, 3)``: the deviation at every pose of each print ``values`` ``(n, k)``."""
+        values = np.atleast_2d(np.asarray(values, dtype=float))
+        return self.nominal[None] + np.einsum("pck,nk->npc", self.slopes, values)
+
+    def max_deviation(self, values: NDArray) -> NDArray[np.float64]:
+        """``(n,)``: each print's largest deviation over the poses (m), blockwise."""
+        values = np.atleast_2d(np.asarray(values, dtype=float))
+        poses = self.nominal.shape[0]
+        flat = self.slopes.reshape(poses * 3, -1)
+        out = np.empty(len(values))
+        for start in range(0, len(values), _BLOCK):
+            block = values[start : start + _BLOCK]
+            moved = (flat @ block.T).reshape(poses, 3, -1) + self.nominal[:, :, None]
+            out[start : start + _BLOCK] = np.sqrt(np.einsum("pcn,pcn->pn", moved, moved)).max(axis=0)
+        return out
+
+
+def _bore_parameters(study: Study) -> None:
+    """Refuse a study the linear model cannot take, naming what to change."""
+    others = [f"{p.name} ({p.target})" for p in study.parameters if p.target not in BORE_FIELDS]
+    if others:
+        raise ValueError(
+            f"study {study.name!r}: the linear tolerance analysis takes bore errors ({', '.join(BORE_FIELDS)}); "
+            f"{', '.join(others)} are not: run the study in full (without --linear)"
+        )
+    if study.base.bore_error_model != "misfit":
+        raise ValueError(
+            f"study {study.name!r}: the linear tolerance analysis differentiates the misfit model's joints; set "
+            'bore_error_model = "misfit" in [base]'
+        )
+
+
+def linear_path(study: Study) -> LinearPath:
+    """The study's base (every parameter 0: the base's own bore errors kept) run quasi-statically at the study's
+    outputs, and the exact derivatives of its deviation by each parameter (module docstring)."""
+    _bore_parameters(study)
+    zeros = {p.name: 0.0 for p in study.parameters}
+    started = time.perf_counter()
+    scene, run = build_variant(study, zeros)
+    if run["mode"] == "dynamic":
+        raise ValueError(
+            f"study {study.name!r}: the linear tolerance analysis differentiates quasi-static equilibria; its runs are "
+            'dynamic: set mode = "quasi_static" in [base]'
+        )
+    _, options, _ = variant_options(study, zeros)
+    result = run_linkage(scene, mode="quasi_static", n_outputs=int(run["outputs"]), sensors="path")
+    ran = time.perf_counter()
+    bores = tuple(sorted({(int(p.joint or 0), int(p.link or 0)) for p in study.parameters}))
+    assert result.multipliers is not None  # a quasi-static run keeps its equilibria's multipliers
+    exact = bore_sensitivity(scene, scene.loop, options, result.time, result.q, result.multipliers, bores)
+    columns = []
+    for p in study.parameters:
+        field, factor = BORE_FIELDS[p.target]
+        index = exact.parameters.index(f"{field} joint{int(p.joint or 0)} link{int(p.link or 0)}")
+        columns.append(factor * exact.coupler_point[:, :, index])
+    return LinearPath(
+        tuple(p.name for p in study.parameters),
+        exact.drive_angle,
+        np.asarray(result.sensors["coupler_deviation"], dtype=float),
+        np.stack(columns, axis=2),
+        {"base_run": ran - started, "sensitivities": time.perf_counter() - ran},
+    )
+
+
+def sample_values(study: Study, n: int, seed: int) -> NDArray[np.float64]:
+    """``(n, k)`` independent random prints of the study's parameter distributions (seeded)."""
+    unit = np.random.default_rng(seed).random((n, len(study.parameters)))
+    return np.column_stack([values_from_unit(p, unit[:, i]) for i, p in enumerate(study.parameters)])
+
+
+def percentiles(sample: NDArray, levels: tuple[float, ...] = (50.0, 95.0, 99.0)) -> dict[str, dict[str, float]]:
+    """Each percentile of ``sample`` with the 95 % confidence interval of the order statistics (distribution-free:
+    the ranks between the binomial's 2.5 % and 97.5 % points)."""
+    ordered = np.sort(np.asarray(sample, dtype=float))
+    n = len(ordered)
+    out = {}
+    for level in levels:
+        q = level / 100.0
+        low = int(max(binom.ppf(0.025, n, q) - 1, 0))
+        high = int(min(binom.ppf(0.975, n, q), n - 1))
+        out[f"p{level:g}"] = {
+            "value": float(np.percentile(ordered, level)),
+            "low": float(ordered[low]),
+            "high": float(ordered[high]),
+        }
+    return out
+
+
+def check_with_full_runs(study: Study, model: LinearPath, count: int) -> list[dict]:
+    """The first ``count`` prints of the study's own design run in full (:func:`ffrf.studies.variant.run_variant`)
+    against the linear model: per print its largest deviation both ways (m) and their relative difference, and
+    ``agrees`` when that is within :data:`CHECK_TOLERANCE`."""
+    rows = []
+    for variant in study_design(study)[:count]:
+        full = run_variant(study, variant)
+        values = np.array([variant.values[name] for name in model.parameters])
+        linear = float(model.max_deviation(values[None])[0])
+        measured = float(full.get("max_coupler_deviation_m", math.nan))
+        difference = abs(linear - measured) / measured if measured > 0.0 else math.inf
+        rows.append(
+            {
+                "id": variant.id,
+                "full_m": measured,
+                "linear_m": linear,
+                "relative_difference": difference,
+                "agrees": bool(difference <= CHECK_TOLERANCE),
+                "status": full.get("status"),
+            }
+        )
+    return rows
