@@ -216,6 +216,11 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         records=(Recording("quasi_static_vs_dynamic"),),
     ),
     Benchmark(
+        "linear_tolerance",
+        "the 2000-print tolerance study to first order against its full Monte Carlo, at four tolerance levels",
+        records=(Recording("linear_tolerance", rows_by="level", rows_name="levels"),),
+    ),
+    Benchmark(
         "reach_isolated",
         "minimum-energy paths to collisions_free_6r's isolated assemblies",
         records=(Recording("reach_collisions_free_6r"),),

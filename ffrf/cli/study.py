@@ -4,12 +4,14 @@
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 from ffrf.cli.arguments import output_folder, positive_count
 from ffrf.errors import Interrupted, SceneError
 from ffrf.paper.bennett_scene import STUDY_BASES
-from ffrf.studies.spec import load_study
+from ffrf.studies.linear_tolerance import check_linear, linear_report
+from ffrf.studies.spec import Study, load_study
 
 __all__ = ["HELP", "configure", "run"]
 
@@ -24,13 +26,30 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--workers", type=positive_count, help="worker processes of the local cluster (default: cores)")
     parser.add_argument("--no-report", action="store_true", help="do not write report.md after the run")
+    parser.add_argument(
+        "--linear",
+        action="store_true",
+        help="bore-error studies: to first order instead (exact sensitivities of the base path, docs/studies.md): "
+        "--prints random prints in seconds, checked against --check prints run in full; writes linear.json",
+    )
+    parser.add_argument("--prints", type=positive_count, default=10**6, help="prints of --linear (default 10^6)")
+    parser.add_argument(
+        "--check", type=positive_count, default=8, help="prints of the study's design --linear runs in full (default 8)"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     study = load_study(args.study, STUDY_BASES)  # checked before any worker starts
     if args.scheduler is not None and args.workers is not None:
         raise SceneError("--workers sizes the local cluster; a scheduler (--scheduler) has its own workers")
+    if args.linear:
+        try:
+            check_linear(study)  # before the output folder: a refused study leaves none behind
+        except ValueError as error:
+            raise SceneError(str(error)) from None
     out = output_folder(args.out)
+    if args.linear:
+        return _linear(study, out, args.prints, args.check)
     # Dask, pyarrow and matplotlib take seconds to import: only the command that uses them does
     from ffrf.studies.report import write_report
     from ffrf.studies.runner import run_study
@@ -47,3 +66,32 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_report:
         print(f"report: {write_report(out)}")
     return 1 if result.lost else 0
+
+
+def _linear(study: Study, out: Path, prints: int, checks: int) -> int:
+    """``--linear``: the study to first order (:func:`ffrf.studies.linear_tolerance.linear_report`), ``linear.json``
+    in ``out``; exit 3 when a full run disagrees with the model (the estimate did not check itself)."""
+    report = linear_report(study, prints, checks)
+    path = out / "linear.json"
+    path.write_text(json.dumps(report, indent=2) + "\n")
+    p = report["max_coupler_deviation_m"]
+    print(
+        f"{study.name}, to first order: {prints} prints in {report['seconds']['prints']:.2f} s (base run "
+        f"{report['seconds']['base_run']:.1f} s, sensitivities {report['seconds']['sensitivities']:.1f} s); largest "
+        "coupler deviation "
+        + ", ".join(
+            f"{name} {1e3 * v['value']:.4g} mm [{1e3 * v['low']:.4g}, {1e3 * v['high']:.4g}]" for name, v in p.items()
+        )
+        + f" -> {path}"
+    )
+    worst = max(report["checks"], key=lambda row: row["relative_difference"])
+    verdict = (
+        f"verified: true ({len(report['checks'])} prints run in full within {100 * report['check_tolerance']:g} % of "
+        f"the model; largest difference {100 * worst['relative_difference']:.2g} %)"
+        if report["verified"]
+        else f"verified: false: print {worst['id']} run in full deviates {1e3 * worst['full_m']:.4g} mm, the model "
+        f"says {1e3 * worst['linear_m']:.4g} mm ({100 * worst['relative_difference']:.2g} %): the errors are too large "
+        "for the first order; run the study in full"
+    )
+    print(verdict)
+    return 0 if report["verified"] else 3

@@ -34,8 +34,10 @@ from ffrf.studies.variant import BORE_FIELDS, build_variant, run_variant, varian
 __all__ = [
     "CHECK_TOLERANCE",
     "LinearPath",
+    "check_linear",
     "check_with_full_runs",
     "linear_path",
+    "linear_report",
     "percentiles",
     "sample_values",
 ]
@@ -77,8 +79,9 @@ class LinearPath:
         return out
 
 
-def _bore_parameters(study: Study) -> None:
-    """Refuse a study the linear model cannot take, naming what to change."""
+def check_linear(study: Study) -> None:
+    """Refuse (``ValueError``) a study the linear model cannot take, naming what to change: parameters other than
+    bore errors, bore errors not in the misfit model, runs that are dynamic."""
     others = [f"{p.name} ({p.target})" for p in study.parameters if p.target not in BORE_FIELDS]
     if others:
         raise ValueError(
@@ -90,20 +93,20 @@ def _bore_parameters(study: Study) -> None:
             f"study {study.name!r}: the linear tolerance analysis differentiates the misfit model's joints; set "
             'bore_error_model = "misfit" in [base]'
         )
+    if study.base.overrides.get("mode") == "dynamic":
+        raise ValueError(
+            f"study {study.name!r}: the linear tolerance analysis differentiates quasi-static equilibria; its runs are "
+            'dynamic: set mode = "quasi_static" in [base]'
+        )
 
 
 def linear_path(study: Study) -> LinearPath:
     """The study's base (every parameter 0: the base's own bore errors kept) run quasi-statically at the study's
     outputs, and the exact derivatives of its deviation by each parameter (module docstring)."""
-    _bore_parameters(study)
+    check_linear(study)
     zeros = {p.name: 0.0 for p in study.parameters}
     started = time.perf_counter()
     scene, run = build_variant(study, zeros)
-    if run["mode"] == "dynamic":
-        raise ValueError(
-            f"study {study.name!r}: the linear tolerance analysis differentiates quasi-static equilibria; its runs are "
-            'dynamic: set mode = "quasi_static" in [base]'
-        )
     _, options, _ = variant_options(study, zeros)
     result = run_linkage(scene, mode="quasi_static", n_outputs=int(run["outputs"]), sensors="path")
     ran = time.perf_counter()
@@ -170,3 +173,33 @@ def check_with_full_runs(study: Study, model: LinearPath, count: int) -> list[di
             }
         )
     return rows
+
+
+def linear_report(study: Study, prints: int, checks: int) -> dict:
+    """The study to first order as plain data (``linear.json`` of ``python -m ffrf study --linear``): ``prints``
+    random prints of its distributions (seeded by the study's seed), the percentiles of their largest deviation (m)
+    with 95 % intervals, per parameter the largest move of the coupler along the path for one standard deviation of
+    it (m: which bores matter), the first ``checks`` prints of its design run in full against the model, ``verified``
+    when all of those agree (:data:`CHECK_TOLERANCE`), and the seconds each part took."""
+    model = linear_path(study)
+    values = sample_values(study, prints, study.seed)
+    started = time.perf_counter()
+    largest = model.max_deviation(values)
+    sampled = time.perf_counter() - started
+    spread = values.std(axis=0)
+    moves = np.linalg.norm(model.slopes, axis=1).max(axis=0) * spread
+    started = time.perf_counter()
+    rows = check_with_full_runs(study, model, checks)
+    checked = time.perf_counter() - started
+    return {
+        "study": study.name,
+        "prints": prints,
+        "nominal_max_deviation_m": float(np.linalg.norm(model.nominal, axis=1).max()),
+        "max_coupler_deviation_m": percentiles(largest),
+        "mean_m": float(largest.mean()),
+        "one_std_moves_m": dict(sorted(zip(model.parameters, map(float, moves), strict=True), key=lambda kv: -kv[1])),
+        "checks": rows,
+        "verified": bool(rows) and all(row["agrees"] for row in rows),
+        "check_tolerance": CHECK_TOLERANCE,
+        "seconds": dict(model.seconds, prints=sampled, checks=checked),
+    }

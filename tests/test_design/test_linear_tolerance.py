@@ -78,3 +78,37 @@ def test_prints_are_sampled_from_the_studys_distributions():
     study = _study(0.5, 0.1)
     values = sample_values(study, 50_000, seed=3)
     np.testing.assert_allclose(values.std(axis=0), [0.5, 0.1, 0.5, 0.1], rtol=0.02)
+
+
+def test_the_study_command_runs_a_bore_study_to_first_order(tmp_path, capsys):
+    """``python -m ffrf study FILE --linear``: linear.json with the percentiles and the checks, the verdict last,
+    exit 0 when the prints run in full agree; a study of other parameters is refused in one line (exit 2)."""
+    import json
+
+    from ffrf.cli import main
+
+    study = tmp_path / "bores.toml"
+    study.write_text(
+        '[study]\nname = "two bores"\nmethod = "lhs"\nsamples = 4\nseed = 3\n'
+        '[base]\nbennett = "pla"\nh = 0.008\norder = 1\nmodes = 2\noutputs = 13\nmode = "quasi_static"\n'
+        'bore_error_model = "misfit"\n'
+        '[[parameters]]\nname = "twist"\ntarget = "bore_twist_deg"\njoint = 3\nlink = 0\n'
+        "normal = {mean = 0.0, std = 0.1}\n"
+        '[[parameters]]\nname = "offset"\ntarget = "bore_offset_mm"\njoint = 1\nlink = 2\n'
+        "normal = {mean = 0.0, std = 0.02}\n"
+    )
+    out = tmp_path / "out"
+    code = main(["study", str(study), "--linear", "--prints", "1000", "--check", "2", "--out", str(out)])
+    assert code == 0
+    report = json.loads((out / "linear.json").read_text())
+    assert report["prints"] == 1000 and len(report["checks"]) == 2 and report["verified"]
+    assert set(report["max_coupler_deviation_m"]) == {"p50", "p95", "p99"}
+    assert capsys.readouterr().out.splitlines()[-1].startswith("verified: true")
+    other = tmp_path / "material.toml"
+    other.write_text(
+        '[study]\nname = "E"\nmethod = "lhs"\nsamples = 4\n[base]\nbennett = "pla"\nmode = "quasi_static"\n'
+        '[[parameters]]\nname = "E"\ntarget = "E"\nnormal = {mean = 1.2e9, std = 1e8}\n'
+    )
+    assert main(["study", str(other), "--linear", "--out", str(tmp_path / "o2")]) == 2
+    assert "run the study in full" in capsys.readouterr().err
+    assert not (tmp_path / "o2").exists()
