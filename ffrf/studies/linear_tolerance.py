@@ -179,7 +179,7 @@ def linear_report(study: Study, prints: int, checks: int) -> dict:
     """The study to first order as plain data (``linear.json`` of ``python -m ffrf study --linear``): ``prints``
     random prints of its distributions (seeded by the study's seed), the percentiles of their largest deviation (m)
     with 95 % intervals, per parameter the largest move of the coupler along the path for one standard deviation of
-    it (m: which bores matter), the first ``checks`` prints of its design run in full against the model, ``verified``
+    it (``one_std_moves``, m: which bores matter), the first ``checks`` prints of its design run in full against the model, ``verified``
     when all of those agree (:data:`CHECK_TOLERANCE`), and the seconds each part took."""
     model = linear_path(study)
     values = sample_values(study, prints, study.seed)
@@ -197,7 +197,10 @@ def linear_report(study: Study, prints: int, checks: int) -> dict:
         "nominal_max_deviation_m": float(np.linalg.norm(model.nominal, axis=1).max()),
         "max_coupler_deviation_m": percentiles(largest),
         "mean_m": float(largest.mean()),
-        "one_std_moves_m": dict(sorted(zip(model.parameters, map(float, moves), strict=True), key=lambda kv: -kv[1])),
+        "one_std_moves": {
+            name: {"move_m": float(move)}
+            for name, move in sorted(zip(model.parameters, moves, strict=True), key=lambda kv: -kv[1])
+        },
         "checks": rows,
         "verified": bool(rows) and all(row["agrees"] for row in rows),
         "check_tolerance": CHECK_TOLERANCE,
