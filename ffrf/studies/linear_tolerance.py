@@ -179,8 +179,8 @@ def linear_report(study: Study, prints: int, checks: int) -> dict:
     """The study to first order as plain data (``linear.json`` of ``python -m ffrf study --linear``): ``prints``
     random prints of its distributions (seeded by the study's seed), the percentiles of their largest deviation (m)
     with 95 % intervals, per parameter the largest move of the coupler along the path for one standard deviation of
-    it (``one_std_moves``, m: which bores matter), the first ``checks`` prints of its design run in full against the model, ``verified``
-    when all of those agree (:data:`CHECK_TOLERANCE`), and the seconds each part took."""
+    it (``one_std_moves``, m: which bores matter), the first ``checks`` prints of its design run in full against the
+    model, ``verified`` when all of those agree (:data:`CHECK_TOLERANCE`), and the seconds each part took."""
     model = linear_path(study)
     values = sample_values(study, prints, study.seed)
     started = time.perf_counter()
