@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
-from ffrf.cli.arguments import output_folder, positive_count
+from ffrf.cli.arguments import number_in, output_folder, positive_count
 from ffrf.errors import Interrupted, SceneError
 from ffrf.paper.bennett_scene import STUDY_BASES
 from ffrf.studies.linear_tolerance import check_linear, linear_report
@@ -36,6 +37,18 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--check", type=positive_count, default=8, help="prints of the study's design --linear runs in full (default 8)"
     )
+    parser.add_argument(
+        "--target",
+        type=number_in(0.0, math.inf, closed_low=False, unit=" mm"),
+        metavar="MM",
+        help="--linear: the tolerances that keep the --level percentile of the largest coupler deviation within MM",
+    )
+    parser.add_argument(
+        "--level",
+        type=number_in(0.0, 100.0, closed_low=False, unit=" %"),
+        default=95.0,
+        help="percentile of --target (default 95)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -49,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
             raise SceneError(str(error)) from None
     out = output_folder(args.out)
     if args.linear:
-        return _linear(study, out, args.prints, args.check)
+        return _linear(study, out, args.prints, args.check, args.target, args.level)
     # Dask, pyarrow and matplotlib take seconds to import: only the command that uses them does
     from ffrf.studies.report import write_report
     from ffrf.studies.runner import run_study
@@ -68,10 +81,10 @@ def run(args: argparse.Namespace) -> int:
     return 1 if result.lost else 0
 
 
-def _linear(study: Study, out: Path, prints: int, checks: int) -> int:
+def _linear(study: Study, out: Path, prints: int, checks: int, target: float | None, level: float) -> int:
     """``--linear``: the study to first order (:func:`ffrf.studies.linear_tolerance.linear_report`), ``linear.json``
     in ``out``; exit 3 when a full run disagrees with the model (the estimate did not check itself)."""
-    report = linear_report(study, prints, checks)
+    report = linear_report(study, prints, checks, None if target is None else 1e-3 * target, level)
     path = out / "linear.json"
     path.write_text(json.dumps(report, indent=2) + "\n")
     p = report["max_coupler_deviation_m"]
@@ -84,6 +97,14 @@ def _linear(study: Study, out: Path, prints: int, checks: int) -> int:
         )
         + f" -> {path}"
     )
+    allocation = report.get("allocation")
+    if allocation is not None:
+        print(
+            f"p{level:g} of the largest deviation within {target:g} mm: every tolerance times "
+            f"{allocation['common_factor']:.3g} at once, or with equal effect "
+            f"({1e3 * allocation['equal_move_m']:.3g} mm per standard deviation) the stds "
+            + ", ".join(f"{name} {a['equal_effect_std']:.3g}" for name, a in allocation["per_parameter"].items())
+        )
     worst = max(report["checks"], key=lambda row: row["relative_difference"])
     verdict = (
         f"verified: true ({len(report['checks'])} prints run in full within {100 * report['check_tolerance']:g} % of "

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +38,7 @@ __all__ = [
     "check_linear",
     "check_with_full_runs",
     "linear_path",
+    "allocate",
     "linear_report",
     "percentiles",
     "sample_values",
@@ -175,12 +177,61 @@ def check_with_full_runs(study: Study, model: LinearPath, count: int) -> list[di
     return rows
 
 
-def linear_report(study: Study, prints: int, checks: int) -> dict:
+def _largest_factor(level_of: Callable[[float], float], target: float, top: float = 64.0) -> float:
+    """The largest ``f`` in [0, ``top``] with ``level_of(f) <= target`` by bisection (``level_of`` grows with ``f``
+    where it matters: a spread times ``f``), to 1e-3 relative; 0 when even ``f = 0`` misses the target."""
+    if level_of(0.0) > target:
+        return 0.0
+    if level_of(top) <= target:
+        return top
+    low, high = 0.0, top
+    while high - low > 1e-3 * high:
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if level_of(middle) <= target else (low, middle)
+    return low
+
+
+def allocate(model: LinearPath, values: NDArray, target: float, level: float = 95.0) -> dict:
+    """Tolerances that keep the ``level``-th percentile of the largest deviation at most ``target`` (m), from the
+    prints ``values`` ``(n, k)`` of the study's distributions (the same prints throughout, their spreads scaled about
+    their means): ``common_factor``, the largest factor on every given spread at once; and an equal-effect
+    allocation, a print shop's table: each parameter's spread (standard deviation, study units) such that one
+    standard deviation of it moves the coupler at most the same distance along the path (``equal_move_m``, the
+    largest that keeps the target), tight where the path is sensitive, loose where it is not. A target the nominal
+    linkage already misses allows nothing (factors 0)."""
+    values = np.asarray(values, dtype=float)
+    mean = values.mean(axis=0)
+    centred = values - mean
+    spreads = centred.std(axis=0)
+    standard = centred / np.where(spreads > 0.0, spreads, 1.0)  # the distributions' shapes, unit spread
+    unit_moves = np.linalg.norm(model.slopes, axis=1).max(axis=0)  # largest move per unit of each parameter (m)
+
+    def percentile(scaled: NDArray) -> float:
+        return float(np.percentile(model.max_deviation(scaled), level))
+
+    common = _largest_factor(lambda f: percentile(mean + f * centred), target)
+    reference = float(np.median(unit_moves * spreads))  # the equal move's scale for the bisection
+    equal = reference * _largest_factor(lambda f: percentile(mean + standard * (f * reference / unit_moves)), target)
+    return {
+        "target_m": target,
+        "level": level,
+        "common_factor": common,
+        "equal_move_m": equal,
+        "per_parameter": {
+            name: {"given_std": float(spread), "equal_effect_std": float(equal / move)}
+            for name, spread, move in zip(model.parameters, spreads, unit_moves, strict=True)
+        },
+    }
+
+
+def linear_report(study: Study, prints: int, checks: int, target: float | None = None, level: float = 95.0) -> dict:
     """The study to first order as plain data (``linear.json`` of ``python -m ffrf study --linear``): ``prints``
     random prints of its distributions (seeded by the study's seed), the percentiles of their largest deviation (m)
     with 95 % intervals, per parameter the largest move of the coupler along the path for one standard deviation of
     it (``one_std_moves``, m: which bores matter), the first ``checks`` prints of its design run in full against the
-    model, ``verified`` when all of those agree (:data:`CHECK_TOLERANCE`), and the seconds each part took."""
+    model, ``verified`` when all of those agree (:data:`CHECK_TOLERANCE`), and the seconds each part took; with a
+    ``target`` (m), the tolerances that keep the ``level``-th percentile within it (:func:`allocate`, on 10^5 of the
+    prints)."""
     model = linear_path(study)
     values = sample_values(study, prints, study.seed)
     started = time.perf_counter()
@@ -205,4 +256,4 @@ def linear_report(study: Study, prints: int, checks: int) -> dict:
         "verified": bool(rows) and all(row["agrees"] for row in rows),
         "check_tolerance": CHECK_TOLERANCE,
         "seconds": dict(model.seconds, prints=sampled, checks=checked),
-    }
+    } | ({} if target is None else {"allocation": allocate(model, values[:100_000], target, level)})
