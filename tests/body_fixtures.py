@@ -90,6 +90,33 @@ def free_bar(name: str = "bar"):
     return model, basis.basis, ends, body
 
 
+def clamped_cantilever(n_modes: int, gravity=(0.0, 0.0, -9.81)):
+    """The soft bar (E = 1e8 Pa, 450 kg/m^3) clamped at its x = 0 face (frame held by a point and two perpendicular
+    constraints), ``n_modes`` Craig-Bampton modes of that face: ``(model, clamp nodes, basis, system)``."""
+    from ffrf.body.flexible_body import FlexibleBody
+    from ffrf.body.modal_moments import modal_moments
+    from ffrf.reduction.craig_bampton import craig_bampton
+    from ffrf.system.constraints import GroundPerpendicular, GroundPoint
+    from ffrf.system.multibody import MultibodySystem
+
+    model = bar_model(E=1e8, rho=450.0)
+    clamp = np.flatnonzero(model.nodes[:, 0] < 1e-9)
+    basis = craig_bampton(model, [clamp], n_modes)
+    body = FlexibleBody(
+        "bar",
+        modal_moments(model.nodes, model.mass, basis.basis),
+        basis.reduced_stiffness,
+        0.0 * basis.reduced_stiffness,
+    )
+    e = np.eye(3)
+    fixed = (
+        GroundPoint((0,), "clamp"),
+        GroundPerpendicular((0,), "clamp y", vector=e[1], normals=e[[0, 2]]),
+        GroundPerpendicular((0,), "clamp x", vector=e[0], normals=e[[2]]),
+    )
+    return model, clamp, basis.basis, MultibodySystem((body,), fixed, gravity=np.asarray(gravity, dtype=float))
+
+
 def tumbling_start(body):
     """A one-body system of ``body`` thrown at 0.1 m/s, spun at (0.5, 1, 5) rad/s (body frame),
     its modes excited at random (1e-5): ``(system, q0, qd0)``."""

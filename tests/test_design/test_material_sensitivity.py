@@ -5,41 +5,25 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from body_fixtures import bar_model
+from body_fixtures import clamped_cantilever
 
 from ffrf.body.flexible_body import FlexibleBody
-from ffrf.body.modal_moments import ModalMoments, modal_moments
+from ffrf.body.modal_moments import ModalMoments
 from ffrf.errors import SensitivityError
 from ffrf.fe.materials import PLA
 from ffrf.output.sensors import path_sensors
-from ffrf.reduction.craig_bampton import craig_bampton
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.path_sensitivity import material_sensitivity
 from ffrf.solvers.equilibrium_sensitivity import equilibrium_response, material_rates
 from ffrf.solvers.static_solver import static_equilibrium
-from ffrf.system.constraints import GroundPerpendicular, GroundPoint
 from ffrf.system.multibody import MultibodySystem
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
 
 
 def _cantilever(n_modes: int = 4):
-    model = bar_model(E=1e8, rho=450.0)
-    clamp = np.flatnonzero(model.nodes[:, 0] < 1e-9)
-    basis = craig_bampton(model, [clamp], n_modes)
-    body = FlexibleBody(
-        "bar",
-        modal_moments(model.nodes, model.mass, basis.basis),
-        basis.reduced_stiffness,
-        0.0 * basis.reduced_stiffness,
-    )
-    e = np.eye(3)
-    fixed = (
-        GroundPoint((0,), "clamp"),
-        GroundPerpendicular((0,), "clamp y", vector=e[1], normals=e[[0, 2]]),
-        GroundPerpendicular((0,), "clamp x", vector=e[0], normals=e[[2]]),
-    )
-    return model, basis.basis, MultibodySystem((body,), fixed, gravity=GRAVITY)
+    model, _, basis, system = clamped_cantilever(n_modes, GRAVITY)
+    return model, basis, system
 
 
 def test_a_clamped_bar_sags_as_rho_over_e_and_so_do_its_derivatives():

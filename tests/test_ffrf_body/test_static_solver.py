@@ -3,38 +3,19 @@
 import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
-from body_fixtures import bar_model
+from body_fixtures import clamped_cantilever
 from pendulum_fixtures import pendulum
 
 from ffrf.body.euler_parameters import rotation_matrix
-from ffrf.body.flexible_body import FlexibleBody
-from ffrf.body.modal_moments import modal_moments
 from ffrf.errors import StaticDivergence
-from ffrf.reduction.craig_bampton import craig_bampton
 from ffrf.solvers.static_solver import static_equilibrium
-from ffrf.system.constraints import GroundPerpendicular, GroundPoint
 from ffrf.system.multibody import MultibodySystem
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
 
 
 def _cantilever(n_modes):
-    model = bar_model(E=1e8, rho=450.0)
-    clamp = np.flatnonzero(model.nodes[:, 0] < 1e-9)
-    basis = craig_bampton(model, [clamp], n_modes)
-    body = FlexibleBody(
-        "bar",
-        modal_moments(model.nodes, model.mass, basis.basis),
-        basis.reduced_stiffness,
-        0.0 * basis.reduced_stiffness,
-    )
-    e = np.eye(3)
-    fixed = (
-        GroundPoint((0,), "clamp"),
-        GroundPerpendicular((0,), "clamp y", vector=e[1], normals=e[[0, 2]]),
-        GroundPerpendicular((0,), "clamp x", vector=e[0], normals=e[[2]]),
-    )
-    return model, clamp, basis.basis, MultibodySystem((body,), fixed, gravity=GRAVITY)
+    return clamped_cantilever(n_modes, GRAVITY)
 
 
 def test_cantilever_under_gravity_equals_ritz_and_approaches_full_fe():
