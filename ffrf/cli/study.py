@@ -97,6 +97,12 @@ def _linear(study: Study, out: Path, prints: int, checks: int, target: float | N
         )
         + f" -> {path}"
     )
+    torque = report["max_abs_driving_torque_Nm"]
+    print(
+        f"largest driving torque: {torque['refused']}: not given to first order"
+        if "refused" in torque
+        else "largest driving torque " + ", ".join(f"{name} {1e3 * v['value']:.4g} N mm" for name, v in torque.items())
+    )
     allocation = report.get("allocation")
     if allocation is not None:
         print(

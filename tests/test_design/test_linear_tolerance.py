@@ -53,12 +53,15 @@ def test_the_linear_model_predicts_full_runs_of_the_studys_prints(scale, within)
     the study's own design run in full: at a tenth of the 2000-print study's tolerances (0.05 deg, 0.01 mm) the
     linear model's largest deviation is within 0.5 % of the full run's, at its tolerances (0.5 deg, 0.1 mm) within
     5 % (measured: 0.04 to 0.23 %, and 0 to 2.6 %: the second order, relative to the first, grows with the
-    errors)."""
+    errors). The largest driving torque, of second order in the errors (the misfit's strain energy), is within 0.03 %
+    at the small tolerances but off by 25 % at the study's (measured)."""
     study = _study(0.5 * scale, 0.1 * scale)
     model = linear_path(study)
     rows = check_with_full_runs(study, model, 3)
     assert all(row["status"] == "ok" for row in rows), rows
     assert max(row["relative_difference"] for row in rows) < within, rows
+    torque = max(row["torque_difference"] for row in rows)  # second order in the errors: far off at the study's
+    assert torque < 1e-3 if scale < 1.0 else torque > 0.1, rows
     nominal = np.linalg.norm(model.nominal, axis=1).max()
     assert max(abs(row["full_m"] - nominal) for row in rows) > 1e-5  # the errors move the coupler
 
