@@ -174,3 +174,40 @@ def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_
     assert np.abs(ours_coupler).max() > 1e-3  # a bore error moves the coupler far more than gravity's sag
     np.testing.assert_allclose(ours_coupler, coupler, rtol=0, atol=1e-6 * np.abs(coupler).max())
     np.testing.assert_allclose(ours_torque, torque, rtol=0, atol=1e-6 * np.abs(torque).max())
+
+
+def test_the_von_mises_trusss_apex_moves_with_the_bars_stiffness_as_its_closed_form(tmp_path):
+    """The von Mises truss of two steel bars under a dead load P at the apex (tests/test_textbook): P = k h(z) with
+    k = EA / L0 and h(z) = 2 (L0 - L) z / L, L = sqrt(a^2 + z^2), so at a fixed load the apex rises by
+    dz / d ln E = -h(z) / h'(z) when both bars' E grow together; Eq. (D1) summed over the two bars gives it at every
+    equilibrium of the run before the fold, a large-rotation equilibrium (the bars turn about their feet), to 1e-6
+    of the largest (measured 4e-10; the FE bar's axial stiffness is EA / L0 to 1e-14, and at pinned ends it only
+    stretches). Approaching the fold the derivative grows as 1 / h' (127-fold from 0.1 to 0.99 P_max)."""
+    from ffrf import load
+    from ffrf.output.sensors import joint_rows
+    from ffrf.scenes.scene_file import load_scene
+    from validation.textbook_cases import HALF_SPAN, LOAD_RATE, truss_closed_form, write_truss_scene
+
+    c = truss_closed_form()
+    scene = load_scene(write_truss_scene(tmp_path))
+    run = load(scene).run()
+    system = scene.system
+    before = np.flatnonzero(run.time * LOAD_RATE < c["limit_load"])[1:]  # loaded, before the fold
+    ours, exact = [], []
+    for row in before:
+        q, lam, t = run.q[row], run.multipliers[row], float(run.time[row])
+        dq, _ = equilibrium_response(system, q, lam, t, material_rates(system, q))
+        direction = dq[:, 0] + dq[:, 1]  # both bars' E together
+        step = 1e-6 / np.abs(direction).max()
+        sides = [
+            joint_rows(system, [t], (q + s * step * direction)[None], lam[None])["apex_point1"][0, 2] for s in (1, -1)
+        ]
+        ours.append((sides[0] - sides[1]) / (2 * step))
+        z = run.sensors["apex_point1"][row, 2]
+        length = np.hypot(HALF_SPAN, z)
+        h = 2.0 * (c["length"] - length) * z / length
+        slope = 2.0 * (-(z**2) / length**2 + (c["length"] - length) * HALF_SPAN**2 / length**3)
+        exact.append(-h / slope)
+    ours, exact = np.array(ours), np.array(exact)
+    np.testing.assert_allclose(ours, exact, rtol=0, atol=1e-6 * np.abs(exact).max())
+    assert np.abs(exact[-1]) > 100.0 * np.abs(exact[0])
