@@ -216,6 +216,11 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         records=(Recording("quasi_static_vs_dynamic"),),
     ),
     Benchmark(
+        "compensation",
+        "bore corrections that compensate the PLA Bennett's deviation, checked by forward runs of the corrected print",
+        records=(Recording("compensation", rows_by="variant", rows_name="variants"),),
+    ),
+    Benchmark(
         "linear_tolerance",
         "the 2000-print tolerance study to first order against its full Monte Carlo, at four tolerance levels",
         records=(Recording("linear_tolerance", rows_by="level", rows_name="levels"),),
