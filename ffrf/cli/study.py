@@ -93,7 +93,8 @@ def _linear(study: Study, out: Path, prints: int, checks: int, target: float | N
         f"{report['seconds']['base_run']:.1f} s, sensitivities {report['seconds']['sensitivities']:.1f} s); largest "
         "coupler deviation "
         + ", ".join(
-            f"{name} {1e3 * v['value']:.4g} mm [{1e3 * v['low']:.4g}, {1e3 * v['high']:.4g}]" for name, v in p.items()
+            f"{name} {1e3 * v['value']:.4g} mm [{_mm(v['low'], '-inf')}, {_mm(v['high'], 'inf')}]"
+            for name, v in p.items()
         )
         + f" -> {path}"
     )
@@ -122,3 +123,8 @@ def _linear(study: Study, out: Path, prints: int, checks: int, target: float | N
     )
     print(verdict)
     return 0 if report["verified"] else 3
+
+
+def _mm(value: float | None, unbounded: str) -> str:
+    """A length in mm for a line, or ``unbounded`` where an interval has no end."""
+    return unbounded if value is None else f"{1e3 * value:.4g}"

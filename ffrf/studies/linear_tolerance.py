@@ -24,12 +24,12 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.stats import binom
 
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.path_sensitivity import bore_sensitivity
 from ffrf.studies.sampling import study_design, values_from_unit
 from ffrf.studies.spec import Study
+from ffrf.studies.statistics import percentile_interval
 from ffrf.studies.variant import BORE_FIELDS, build_variant, run_variant, variant_options
 
 __all__ = [
@@ -152,21 +152,14 @@ def sample_values(study: Study, n: int, seed: int) -> NDArray[np.float64]:
     return np.column_stack([values_from_unit(p, unit[:, i]) for i, p in enumerate(study.parameters)])
 
 
-def percentiles(sample: NDArray, levels: tuple[float, ...] = (50.0, 95.0, 99.0)) -> dict[str, dict[str, float]]:
-    """Each percentile of ``sample`` with the 95 % confidence interval of the order statistics (distribution-free:
-    the ranks between the binomial's 2.5 % and 97.5 % points)."""
+def percentiles(sample: NDArray, levels: tuple[float, ...] = (50.0, 95.0, 99.0)) -> dict[str, dict[str, float | None]]:
+    """Each percentile of ``sample`` with its 95 % interval (:func:`ffrf.studies.statistics.percentile_interval`;
+    ``None`` for an end the sample cannot bound)."""
     ordered = np.sort(np.asarray(sample, dtype=float))
-    n = len(ordered)
     out = {}
     for level in levels:
-        q = level / 100.0
-        low = int(max(binom.ppf(0.025, n, q) - 1, 0))
-        high = int(min(binom.ppf(0.975, n, q), n - 1))
-        out[f"p{level:g}"] = {
-            "value": float(np.percentile(ordered, level)),
-            "low": float(ordered[low]),
-            "high": float(ordered[high]),
-        }
+        low, high = (x if np.isfinite(x) else None for x in percentile_interval(ordered, level))
+        out[f"p{level:g}"] = {"value": float(np.percentile(ordered, level)), "low": low, "high": high}
     return out
 
 

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from ffrf.studies.runner import read_rows
 from ffrf.studies.sensitivity import sobol_indices, standardised_regression
+from ffrf.studies.statistics import percentile_interval
 
 __all__ = ["PERCENTILES", "percentile_table", "saltelli_outputs", "analyse", "write_report"]
 
@@ -27,14 +28,19 @@ PERCENTILES = (0, 1, 5, 25, 50, 75, 95, 99, 100)
 TOP_PARAMETERS = 3
 
 
-def percentile_table(values: NDArray) -> dict[str, float]:
-    """Count, mean, standard deviation and :data:`PERCENTILES` of the finite ``values``."""
-    v = np.asarray(values, dtype=float)
+def percentile_table(values: NDArray) -> dict:
+    """Count, mean, standard deviation and :data:`PERCENTILES` of the finite ``values``, and ``intervals``: the
+    95 % interval of each percentile between the extremes
+    (:func:`~ffrf.studies.statistics.percentile_interval`, distribution-free; ``None`` for an end the sample
+    cannot bound)."""
+    v = np.sort(np.asarray(values, dtype=float))
     v = v[np.isfinite(v)]
     if v.size == 0:
         return {"n": 0}
     table = {"n": int(v.size), "mean": float(v.mean()), "std": float(v.std(ddof=1)) if v.size > 1 else 0.0}
-    return table | {f"p{p}": float(q) for p, q in zip(PERCENTILES, np.percentile(v, PERCENTILES), strict=True)}
+    table |= {f"p{p}": float(q) for p, q in zip(PERCENTILES, np.percentile(v, PERCENTILES), strict=True)}
+    intervals = {f"p{p}": [x if np.isfinite(x) else None for x in percentile_interval(v, p)] for p in PERCENTILES[1:-1]}
+    return table | {"intervals": intervals}
 
 
 def saltelli_outputs(columns: dict[str, NDArray], output: NDArray, d: int, n: int) -> tuple[NDArray, NDArray, NDArray]:
@@ -147,6 +153,18 @@ def _influence(entry: dict, names: list[str]) -> list[str]:
     return sorted(names, key=lambda n: -np.nan_to_num(score[n], nan=-1.0))
 
 
+def _interval(table: dict, level: int) -> str:
+    """A percentile's 95 % interval as ``[low, high]`` (empty where the table has none)."""
+    interval = table.get("intervals", {}).get(f"p{level}")
+    if interval is None:
+        return ""
+    low, high = (
+        "-inf" if interval[0] is None else f"{interval[0]:.4g}",
+        "inf" if interval[1] is None else f"{interval[1]:.4g}",
+    )
+    return f"[{low}, {high}]"
+
+
 def _table(header: list[str], rows: list[list[str]]) -> list[str]:
     return ["| " + " | ".join(header) + " |", "|" + " --- |" * len(header)] + [
         "| " + " | ".join(r) + " |" for r in rows
@@ -174,10 +192,11 @@ def write_report(directory: str | Path) -> Path:
         "## Percentiles of the ok variants",
         "",
     ]
-    header = ["output", "n"] + [f"p{p}" for p in PERCENTILES]
+    header = ["output", "n"] + [f"p{p}" for p in PERCENTILES] + ["p50, 95 % interval", "p95, 95 % interval"]
     rows = [
         [o, str(e["percentiles"].get("n", 0))]
         + [f"{e['percentiles'].get(f'p{p}', float('nan')):.4g}" for p in PERCENTILES]
+        + [_interval(e["percentiles"], level) for level in (50, 95)]
         for o, e in analysis["outputs"].items()
     ]
     lines += _table(header, rows) + ["", "## Sensitivities", ""]
