@@ -29,7 +29,7 @@ from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.path_sensitivity import bore_sensitivity
 from ffrf.studies.sampling import study_design, values_from_unit
 from ffrf.studies.spec import Study
-from ffrf.studies.statistics import percentile_interval
+from ffrf.studies.statistics import exceedance, percentile_interval
 from ffrf.studies.variant import BORE_FIELDS, build_variant, run_variant, variant_options
 
 __all__ = [
@@ -277,6 +277,9 @@ def linear_report(study: Study, prints: int, checks: int, target: float | None =
             for name, move in sorted(zip(model.parameters, moves, strict=True), key=lambda kv: -kv[1])
         },
         "max_abs_driving_torque_Nm": _torque_percentiles(model, values, rows),
+        "limits": {
+            output: exceedance(largest, above) for output, above in study.limits if output == "max_coupler_deviation_m"
+        },
         "checks": rows,
         "verified": bool(rows) and all(row["agrees"] for row in rows),
         "check_tolerance": CHECK_TOLERANCE,

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from ffrf.studies.runner import read_rows
 from ffrf.studies.sensitivity import sobol_indices, standardised_regression
-from ffrf.studies.statistics import percentile_interval
+from ffrf.studies.statistics import exceedance, percentile_interval
 
 __all__ = ["PERCENTILES", "percentile_table", "saltelli_outputs", "analyse", "write_report"]
 
@@ -90,8 +90,13 @@ def analyse(directory: str | Path) -> dict:
                 "sobol_rows_used": dict(zip(names, indices.used.tolist(), strict=True)),
             }
         outputs[output] = entry
+    limits = {
+        output: exceedance(np.where(ok, columns[output].astype(float), np.nan), above)
+        for output, above in study.get("limits", [])
+    }
     return {
         "study": study,
+        "limits": limits,
         "rows": int(len(ok)),
         "ok": int(ok.sum()),
         "failed": failures,
@@ -199,7 +204,16 @@ def write_report(directory: str | Path) -> Path:
         + [_interval(e["percentiles"], level) for level in (50, 95)]
         for o, e in analysis["outputs"].items()
     ]
-    lines += _table(header, rows) + ["", "## Sensitivities", ""]
+    lines += _table(header, rows) + [""]
+    for output, limit in analysis.get("limits", {}).items():
+        if limit["n"] == 0:
+            continue
+        lines.append(
+            f"Limit {output} <= {limit['above']:.4g}: {limit['exceeding']} of {limit['n']} ok prints exceed it; yield "
+            f"{100 * limit['yield']:.4g} % (95 % interval {100 * limit['yield_low']:.4g} to "
+            f"{100 * limit['yield_high']:.4g} %); failed prints are not counted."
+        )
+    lines += ["", "## Sensitivities", ""]
     for output, entry in analysis["outputs"].items():
         lines += [f"### {output}", "", f"Linear regression: R^2 = {entry['src_r2']:.3g}.", ""]
         header = ["parameter", "SRC"] + (["S_i", "S_Ti"] if "sobol_first" in entry else [])

@@ -193,6 +193,7 @@ def _description(study: Study) -> dict:
         "seed": study.seed,
         "parameters": [asdict(p) for p in study.parameters],
         "outputs": list(output_names(study.n_links, study.stability)),
+        "limits": [list(limit) for limit in study.limits],
         "base": study.base.description(),
         "bore_error_model": study.base.bore_error_model,
         "fingerprint": study.fingerprint,

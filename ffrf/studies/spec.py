@@ -112,6 +112,8 @@ _BASE = {
     "max_steps": Key("number", False, positive),
 }
 _UNIFORM = {"low": Key("number", True), "high": Key("number", True)}
+#: A specification limit: a print whose ``output`` exceeds ``above`` (its SI unit) fails it.
+_LIMIT = {"output": Key("string", True), "above": Key("number", True)}
 _NORMAL = {"mean": Key("number", True), "std": Key("number", True, positive)}
 _PARAMETER = {
     "name": Key("string", True),
@@ -145,6 +147,7 @@ def _schema(bases: NamedBases | None) -> dict[str, Key]:
         "study": Key("table", True, keys=_STUDY),
         "base": Key("table", True, keys=named | _BASE),
         "parameters": Key("tables", True, keys=_PARAMETER),
+        "limits": Key("tables", keys=_LIMIT),
     }
 
 
@@ -194,6 +197,7 @@ class Study:
     parameters: tuple[Parameter, ...]
     fingerprint: str
     n_links: int = 4
+    limits: tuple[tuple[str, float], ...] = ()
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -324,7 +328,23 @@ def study_from_document(
         json.dumps({"base": document["base"], "document": base.document}, sort_keys=True, default=str).encode()
     ).hexdigest()[:16]
     name = head.get("name", "study")
-    return Study(name, method, samples, int(head.get("seed", 0)), base, parameters, fingerprint, n)
+    limits = _limits(document.get("limits", []), n, bool(base.overrides.get("stability", False)), where)
+    return Study(name, method, samples, int(head.get("seed", 0)), base, parameters, fingerprint, n, limits)
+
+
+def _limits(entries: list[dict], n_links: int, stability: bool, where: str) -> tuple[tuple[str, float], ...]:
+    """The ``[[limits]]`` as (output, above) pairs, each output one of the study's (:func:`output_names`)."""
+    from ffrf.studies.variant import output_names  # variant builds on this module
+
+    outputs = output_names(n_links, stability)
+    out = []
+    for k, entry in enumerate(entries):
+        if entry["output"] not in outputs:
+            raise SceneError(
+                f"{where}, limits[{k}]: output {entry['output']!r} is not one of this study's: {', '.join(outputs)}"
+            )
+        out.append((str(entry["output"]), float(entry["above"])))
+    return tuple(out)
 
 
 def design_size(method: str, samples: int, parameters: tuple[Parameter, ...]) -> int:

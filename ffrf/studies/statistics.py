@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.stats import binom
+from scipy.stats import binom, binomtest
 
-__all__ = ["CONFIDENCE", "percentile_interval"]
+__all__ = ["CONFIDENCE", "exceedance", "percentile_interval"]
 
 #: The intervals' confidence level.
 CONFIDENCE = 0.95
@@ -30,3 +30,26 @@ def percentile_interval(ordered: NDArray, level: float) -> tuple[float, float]:
     low = -np.inf if below == 0 else float(ordered[below - 1])  # P(B <= below - 1) < tail
     high = np.inf if above >= n else float(ordered[above])  # P(B >= above + 1) <= tail
     return low, high
+
+
+def exceedance(values: NDArray, above: float) -> dict[str, float | int]:
+    """How many of ``values`` (finite ones; NaN: not counted) exceed the limit ``above``: their count, the number
+    counted, the fraction and its 95 % Clopper-Pearson interval (exact, from the binomial), and the yield (the
+    fraction within the limit) with its interval."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    n, k = int(v.size), int(np.sum(v > above))
+    if n == 0:
+        return {"above": float(above), "n": 0, "exceeding": 0}
+    low, high = binomtest(k, n).proportion_ci(confidence_level=CONFIDENCE, method="exact")
+    return {
+        "above": float(above),
+        "n": n,
+        "exceeding": k,
+        "fraction": k / n,
+        "fraction_low": float(low),
+        "fraction_high": float(high),
+        "yield": 1.0 - k / n,
+        "yield_low": 1.0 - float(high),
+        "yield_high": 1.0 - float(low),
+    }

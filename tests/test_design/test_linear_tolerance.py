@@ -99,12 +99,15 @@ def test_the_study_command_runs_a_bore_study_to_first_order(tmp_path, capsys):
         "normal = {mean = 0.0, std = 0.1}\n"
         '[[parameters]]\nname = "offset"\ntarget = "bore_offset_mm"\njoint = 1\nlink = 2\n'
         "normal = {mean = 0.0, std = 0.02}\n"
+        '[[limits]]\noutput = "max_coupler_deviation_m"\nabove = 1e-4\n'
     )
     out = tmp_path / "out"
     arguments = ["--linear", "--prints", "1000", "--check", "2", "--target", "0.1", "--out", str(out)]
     code = main(["study", str(study), *arguments])
     assert code == 0
     report = json.loads((out / "linear.json").read_text())
+    limit = report["limits"]["max_coupler_deviation_m"]
+    assert limit["n"] == 1000 and limit["yield_low"] <= limit["yield"] <= limit["yield_high"]
     allocation = report["allocation"]
     assert allocation["target_m"] == 1e-4 and set(allocation["per_parameter"]) == {"twist", "offset"}
     assert report["prints"] == 1000 and len(report["checks"]) == 2 and report["verified"]

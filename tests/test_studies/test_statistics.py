@@ -27,3 +27,32 @@ def test_an_end_a_small_sample_cannot_bound_is_infinite():
     """Three values and the 99th percentile: all three lie below it with probability 0.99^3 = 0.97 > 0.025, so no
     order statistic bounds it from above with 95 % confidence; from below the second does (P(B <= 1) = 3e-4)."""
     assert percentile_interval(np.array([1.0, 2.0, 3.0]), 99.0) == (2.0, np.inf)
+
+
+def test_the_yields_interval_is_clopper_pearsons():
+    """No print of 100 beyond the limit: the fraction's exact 95 % interval is [0, 1 - 0.025^(1/100)] (the closed form
+    of Clopper and Pearson at k = 0), the yield's [0.025^(1/100), 1]; NaN rows (failed prints) are not counted."""
+    from ffrf.studies.statistics import exceedance
+
+    values = np.concatenate([np.linspace(0.1, 0.9, 100), [np.nan, np.nan]])
+    result = exceedance(values, 1.0)
+    assert result["n"] == 100 and result["exceeding"] == 0 and result["yield"] == 1.0
+    assert result["fraction_high"] == pytest.approx(1.0 - 0.025 ** (1 / 100), rel=1e-9)
+    assert result["yield_low"] == pytest.approx(0.025 ** (1 / 100), rel=1e-9)
+    half = exceedance(np.arange(100.0), 49.5)  # 50 of 100 above
+    assert half["fraction"] == 0.5 and half["fraction_low"] < 0.5 < half["fraction_high"]
+
+
+def test_a_limit_on_an_output_the_study_does_not_have_is_refused():
+    from ffrf.errors import SceneError
+    from ffrf.paper.bennett_scene import STUDY_BASES
+    from ffrf.studies.spec import study_from_document
+
+    document = {
+        "study": {"name": "limits", "method": "grid"},
+        "base": {"bennett": "pla"},
+        "parameters": [{"name": "twist", "target": "bore_twist_deg", "joint": 3, "link": 0, "values": [0.0]}],
+        "limits": [{"output": "max_coupler_deviation_mm", "above": 1.0}],
+    }
+    with pytest.raises(SceneError, match="'max_coupler_deviation_mm' is not one of this study's"):
+        study_from_document(document, bases=STUDY_BASES)

@@ -2,6 +2,7 @@
 LocalCluster of two worker processes, written to Parquet: every variant is a row, a variant with bad parameters is
 a row with its reason, a rerun skips what is finished, and the rows equal standalone runs of the same scenes."""
 
+import json
 import math
 import os
 import threading
@@ -23,7 +24,7 @@ from ffrf.studies.variant import OUTPUTS
 BASE = {"bennett": "pla", "h": 0.012, "order": 1, "modes": 2, "mode": "quasi_static", "outputs": 9}
 
 
-def _study(twists: list[float], h: list[float]):
+def _study(twists: list[float], h: list[float], limits: tuple[tuple[str, float], ...] = ()):
     """A grid over the base's joint-3 bore twist on link 0 (deg) and the element edge (m)."""
     return study_from_document(
         {
@@ -33,6 +34,7 @@ def _study(twists: list[float], h: list[float]):
                 {"name": "twist", "target": "bore_twist_deg", "joint": 3, "link": 0, "values": twists},
                 {"name": "edge", "target": "h", "values": h},
             ],
+            "limits": [{"output": output, "above": above} for output, above in limits],
         },
         bases=STUDY_BASES,
     )
@@ -76,11 +78,22 @@ def test_a_tiny_study_runs_on_two_workers_resumes_and_equals_standalone_runs(cli
     nominal = next(r for r in table if r["status"] == "ok" and r["twist"] == 0.0)
     assert twisted["assembly_strain_energy_J"] > 10 * nominal["assembly_strain_energy_J"]
 
-    again = run_study(_study([0.0, 0.5, 1.0], [0.012, 1.0]), tmp_path, client=client, progress=False)
+    limit = 1.01 * nominal["max_coupler_deviation_m"]  # a specification the twisted prints miss
+    again = run_study(
+        _study([0.0, 0.5, 1.0], [0.012, 1.0], (("max_coupler_deviation_m", limit),)), tmp_path, client=client,
+        progress=False,
+    )  # fmt: skip
     assert (again.design, again.skipped, again.ok + again.failed) == (6, 4, 2)
-    assert len(read_rows(tmp_path)) == 6
+    rows = read_rows(tmp_path).to_pylist()
+    assert len(rows) == 6
     report = write_report(tmp_path).read_text()
     assert "max_coupler_deviation_m" in report and "contour" in report
+    analysis = json.loads((tmp_path / "analysis.json").read_text())
+    beyond = sum(r["status"] == "ok" and r["max_coupler_deviation_m"] > limit for r in rows)
+    yield_ = analysis["limits"]["max_coupler_deviation_m"]
+    assert (yield_["n"], yield_["exceeding"]) == (3, beyond) and beyond >= 1  # failed prints are not counted
+    assert yield_["yield_low"] <= yield_["yield"] <= yield_["yield_high"]
+    assert f"{beyond} of 3 ok prints exceed it" in report
 
 
 @pytest.mark.slow
