@@ -58,6 +58,7 @@ from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.scenes.scene_cache import SceneCache
 from ffrf.scenes.schema_keys import Key, at_least, between, check_table, one_of, positive
 from ffrf.solvers.stability import check_judged_at_equilibria
+from ffrf.studies.outputs import output_names
 
 __all__ = [
     "METHODS",
@@ -334,8 +335,6 @@ def study_from_document(
 
 def _limits(entries: list[dict], n_links: int, stability: bool, where: str) -> tuple[tuple[str, float], ...]:
     """The ``[[limits]]`` as (output, above) pairs, each output one of the study's (:func:`output_names`)."""
-    from ffrf.studies.variant import output_names  # variant builds on this module
-
     outputs = output_names(n_links, stability)
     out = []
     for k, entry in enumerate(entries):

@@ -37,6 +37,7 @@ from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_cache import SceneCache
+from ffrf.studies.outputs import OUTPUTS, output_names
 from ffrf.studies.sampling import Variant
 from ffrf.studies.spec import NamedBases, Study
 from ffrf.system.drives import rpm
@@ -52,25 +53,6 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
-
-#: Outputs of every linkage; the assembly stresses add one column per link (:func:`output_names`).
-OUTPUTS = (
-    "max_coupler_deviation_m",
-    "max_coupler_distance_to_path_m",
-    "max_abs_driving_torque_Nm",
-    "assembly_strain_energy_J",
-)
-
-
-#: Outputs of a study with stability monitoring: the snaps of the path, the energy they release (J, summed) and the
-#: lowest vibration frequency over the equilibria (Hz; NaN where one is unstable).
-STABILITY_OUTPUTS = ("snaps", "snap_energy_released_J", "min_frequency_hz")
-
-
-def output_names(n_links: int, stability: bool = False) -> tuple[str, ...]:
-    """The output columns of a linkage of ``n_links`` links (and of its stability, if monitored)."""
-    stresses = tuple(f"max_assembly_stress_link{k}_Pa" for k in range(n_links))
-    return OUTPUTS + stresses + (STABILITY_OUTPUTS if stability else ())
 
 
 def row_names(study: Study) -> tuple[str, ...]:

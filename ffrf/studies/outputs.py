@@ -1,0 +1,24 @@
+"""The output columns of a study's rows: what every variant reports (``docs/studies.md``, "What a variant computes")."""
+
+from __future__ import annotations
+
+__all__ = ["OUTPUTS", "STABILITY_OUTPUTS", "output_names"]
+
+#: Outputs of every linkage; the assembly stresses add one column per link (:func:`output_names`).
+OUTPUTS = (
+    "max_coupler_deviation_m",
+    "max_coupler_distance_to_path_m",
+    "max_abs_driving_torque_Nm",
+    "assembly_strain_energy_J",
+)
+
+
+#: Outputs of a study with stability monitoring: the snaps of the path, the energy they release (J, summed) and the
+#: lowest vibration frequency over the equilibria (Hz; NaN where one is unstable).
+STABILITY_OUTPUTS = ("snaps", "snap_energy_released_J", "min_frequency_hz")
+
+
+def output_names(n_links: int, stability: bool = False) -> tuple[str, ...]:
+    """The output columns of a linkage of ``n_links`` links (and of its stability, if monitored)."""
+    stresses = tuple(f"max_assembly_stress_link{k}_Pa" for k in range(n_links))
+    return OUTPUTS + stresses + (STABILITY_OUTPUTS if stability else ())
