@@ -221,6 +221,11 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         records=(Recording("compensation", rows_by="variant", rows_name="variants"),),
     ),
     Benchmark(
+        "section_design",
+        "derivatives by the links' section against re-solved and remeshed linkages; the PLA Bennett's lightest arm",
+        records=(Recording("section_design"),),
+    ),
+    Benchmark(
         "linear_tolerance",
         "the 2000-print tolerance study to first order against its full Monte Carlo, at four tolerance levels",
         records=(Recording("linear_tolerance", rows_by="level", rows_name="levels"),),

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -32,6 +32,7 @@ from ffrf.reduction.mode_basis import ReducedMatrices
 __all__ = [
     "REFERENCE_CONDITIONS",
     "RigidInterface",
+    "aligned_modes",
     "CraigBamptonBasis",
     "craig_bampton",
     "rigid_interfaces",
@@ -268,6 +269,29 @@ def craig_bampton(
     )
     logger.info("%s", result.summary())
     return result
+
+
+def aligned_modes(basis: CraigBamptonBasis, reference: CraigBamptonBasis, fe_model: Any) -> CraigBamptonBasis:
+    """``basis`` with its fixed-interface modes turned by the orthogonal matrix that brings them closest to
+    ``reference``'s in the mass norm (the polar factor of their overlap ``Phi^T M Phi_ref``), and its reduced matrices
+    for ``fe_model`` (the model ``basis`` reduces). For a morph of the reference's mesh this makes the modal
+    coordinates a smooth function of the morph: eigenvectors alone flip sign and, where frequencies are close,
+    turn within their span. The span, hence the reduced model's solutions, is unchanged."""
+    _, mass, stiffness = checked_model(fe_model)
+    start = basis.n_static_modes
+    if reference.n_static_modes != start or reference.basis.shape != basis.basis.shape:
+        raise ReductionError("aligned_modes: the reference basis reduces another model (other sizes)")
+    modes = basis.basis[:, start:]
+    u, singular, vt = np.linalg.svd(modes.T @ (mass @ reference.basis[:, start:]))
+    if singular.size and singular.min() < 0.5:
+        raise ReductionError(
+            f"aligned_modes: the fixed-interface modes left the reference's span (overlap {singular.min():.3g}); "
+            "the shape change crosses a mode beyond the kept ones: keep more modes"
+        )
+    turned = basis.basis.copy()
+    turned[:, start:] = modes @ (u @ vt)
+    reduced_mass, reduced_stiffness = _reduced_matrices(turned, mass, stiffness)
+    return replace(basis, basis=turned, reduced_mass=reduced_mass, reduced_stiffness=reduced_stiffness)
 
 
 def _symmetric(a: NDArray) -> NDArray[np.float64]:

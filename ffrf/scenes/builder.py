@@ -55,7 +55,7 @@ from ffrf.geometry.joint_axes import Axis, common_normal_feet
 from ffrf.geometry.link_geometry import LinkDesign, LinkGeometry, mesh_link
 from ffrf.geometry.meshing import mesh_stl
 from ffrf.mesh.tet_mesh import TetMesh, read_mesh
-from ffrf.reduction.craig_bampton import craig_bampton
+from ffrf.reduction.craig_bampton import CraigBamptonBasis, aligned_modes, craig_bampton
 from ffrf.reduction.free_free import free_free_basis
 from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.reduction.reduced_io import reduction_fingerprint
@@ -67,7 +67,7 @@ from ffrf.scenes.scene_schema import check_scene
 from ffrf.system.markers import BodyMarker, rigid_interface_marker
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["MeshedBody", "SceneBody", "JointGeometry", "Scene", "build_scene", "parametric_link"]
+__all__ = ["MeshedBody", "SceneBody", "JointGeometry", "Scene", "build_scene", "morphed_body", "parametric_link"]
 
 log = logging.getLogger(__name__)
 
@@ -188,6 +188,13 @@ class Scene:
             tuple(b.body for b in self.bodies), constraints, gravity=self.system.gravity, forces=self.system.forces
         )
 
+    def with_body(self, body: SceneBody) -> Self:
+        """The same scene with ``body`` in place of the body of its index, and the joints built again on it (the
+        force elements are kept: they hold no body data, the linkages' have none)."""
+        bodies = tuple(body if b.index == body.index else b for b in self.bodies)
+        scene = replace(self, bodies=bodies)
+        return replace(scene, system=scene.with_misfit(1.0))
+
     def with_exact_gravity(self, exact: bool) -> Self:
         """The same scene with the exact gravity force or Exudyn's simplified one (Eq. (F10))."""
         bodies = tuple(replace(b, body=replace(b.body, exact_gravity=exact)) for b in self.bodies)
@@ -213,7 +220,10 @@ def build_scene(
     # reductions' dense factorisations differ in their last digits with the thread count.
     with threadpool_limits(limits=1, user_api="blas"):
         meshed = [_meshed(entry, base, cache) for entry in description["bodies"]]
-        bodies = tuple(_body(k, entry, meshed[k], settings, cache) for k, entry in enumerate(description["bodies"]))
+        bodies = tuple(
+            _body(k, entry, meshed[k], settings, _reduction(k, meshed[k], entry, cache.reductions))
+            for k, entry in enumerate(description["bodies"])
+        )
     index = {b.name: b.index for b in bodies}
     joints = tuple(joint_geometry(spec, index, bodies) for spec in description.get("joints", []))
     offsets = settings.get("joint_offsets", "body")
@@ -324,8 +334,11 @@ def _mesh_interface(fe: FEModel, spec: dict, base: Path) -> InterfaceNodes:
     return interface_from_nodes_file(fe, name, base / spec["nodes_file"])
 
 
-def _fe_model(entry: dict, base: Path, where: str) -> tuple[FEModel | ExternalFEModel, LinkGeometry | None]:
-    """The body's FE model: from its ``matrices``, or assembled on its mesh with its material and order."""
+def _fe_model(
+    entry: dict, base: Path, where: str, mesh: TetMesh | None = None
+) -> tuple[FEModel | ExternalFEModel, LinkGeometry | None]:
+    """The body's FE model: from its ``matrices``, or assembled on its mesh (``mesh`` if given) with its material
+    and order."""
     if "matrices" in entry:
         return matrices_model(entry["matrices"], base, entry["name"], where), None
     m = entry["material"]
@@ -337,7 +350,9 @@ def _fe_model(entry: dict, base: Path, where: str) -> tuple[FEModel | ExternalFE
         name=m.get("name", f"{entry['name']} material"),
         strength=strength,
     )
-    mesh, geometry = _mesh(entry, base, where)
+    geometry = None
+    if mesh is None:
+        mesh, geometry = _mesh(entry, base, where)
     return FEModel.from_tet_mesh(mesh, material, entry.get("order", 2)), geometry
 
 
@@ -351,29 +366,57 @@ class Reduced(NamedTuple):
 
 
 def _reduction(k: int, meshed: MeshedBody, entry: dict, reductions: LRUCache[Reduced]) -> Reduced:
+    """:func:`_reduced` kept by fingerprint in ``reductions`` (:meth:`MeshedBody.reduction_key`)."""
+    key = meshed.reduction_key(int(entry.get("modes", 4)), entry.get("reduction", "craig_bampton"))
+    return reductions.get_or_compute(key, lambda: _reduced(k, meshed, entry))
+
+
+def _reduced(k: int, meshed: MeshedBody, entry: dict, aligned_to: ModeBasis | None = None) -> Reduced:
     """Craig-Bampton on the interfaces (default), or ``reduction = "free_free"``: the lowest ``modes`` elastic
     free-free modes (eqs. (FF-1)-(FF-3)), whose interfaces are only where markers average nodes; with the basis's
-    modal moments and markers. ``reductions``: all three by fingerprint (:meth:`MeshedBody.reduction_key`)."""
+    modal moments and markers. ``aligned_to``: a Craig-Bampton basis of the same model's nominal shape, whose
+    fixed-interface modes this one's are turned to (:func:`~ffrf.reduction.craig_bampton.aligned_modes`)."""
     n_modes = int(entry.get("modes", 4))
     kind = entry.get("reduction", "craig_bampton")
     name = entry["name"]
+    fe = meshed.fe
+    if kind == "craig_bampton":
+        component_modes = craig_bampton(fe, list(meshed.interfaces.values()), n_modes)
+        if isinstance(aligned_to, CraigBamptonBasis):
+            component_modes = aligned_modes(component_modes, aligned_to, fe)
+        basis: ModeBasis = component_modes
+    else:
+        if aligned_to is not None:
+            raise SceneError(f"body {name!r}: a free-free basis has no derivative along a shape change here")
+        try:
+            basis = free_free_basis(fe, n_modes)
+        except ReductionError as error:  # a supported model (boundary conditions in K), too few DOFs, ...
+            raise SceneError(f'body {name!r}, reduction = "free_free": {error}') from error
+    markers = {
+        n: rigid_interface_marker(k, fe.nodes, basis.basis, itf.nodes, itf.weights, name=f"{name}:{n}")
+        for n, itf in meshed.interfaces.items()
+    }
+    return Reduced(basis, modal_moments(fe.nodes, fe.mass, basis.basis), markers)
 
-    def reduce() -> Reduced:
-        fe = meshed.fe
-        if kind == "craig_bampton":
-            basis: ModeBasis = craig_bampton(fe, list(meshed.interfaces.values()), n_modes)
-        else:
-            try:
-                basis = free_free_basis(fe, n_modes)
-            except ReductionError as error:  # a supported model (boundary conditions in K), too few DOFs, ...
-                raise SceneError(f'body {name!r}, reduction = "free_free": {error}') from error
-        markers = {
-            n: rigid_interface_marker(k, fe.nodes, basis.basis, itf.nodes, itf.weights, name=f"{name}:{n}")
-            for n, itf in meshed.interfaces.items()
-        }
-        return Reduced(basis, modal_moments(fe.nodes, fe.mass, basis.basis), markers)
 
-    return reductions.get_or_compute(meshed.reduction_key(n_modes, kind), reduce)
+def morphed_body(scene: Scene, k: int, points: NDArray) -> SceneBody:
+    """Body ``k`` of ``scene`` built again on its own tetrahedra with the points moved to ``points`` (a morph of its
+    mesh, :mod:`ffrf.geometry.design_velocity`), not cached: same interfaces (refused if the morph changes which
+    nodes they take), its fixed-interface modes turned towards the nominal body's so that its coordinates change
+    smoothly with the morph."""
+    entry, nominal = scene.description["bodies"][k], scene.bodies[k]
+    if not isinstance(nominal.fe, FEModel):
+        raise SceneError(f"body {nominal.name!r} is given by its matrices: it has no mesh to morph")
+    mesh = TetMesh(np.asarray(points, dtype=float), nominal.fe.mesh.tets, dict(nominal.fe.mesh.groups), entry["name"])
+    meshed = _new_meshed(entry, Path("."), mesh)
+    for name, interface in meshed.interfaces.items():
+        if not np.array_equal(interface.nodes, nominal.interfaces[name].nodes):
+            raise SceneError(
+                f"body {nominal.name!r}: the morph changes the nodes of interface {name!r}; "
+                "a design parameter that moves a bore is not a section parameter"
+            )
+    meshed = replace(meshed, geometry=nominal.geometry)
+    return _body(k, entry, meshed, scene.settings, _reduced(k, meshed, entry, nominal.reduction))
 
 
 def _file_digest(path: Path) -> str | None:
@@ -397,9 +440,9 @@ def _meshed(entry: dict, base: Path, cache: SceneCache) -> MeshedBody:
     return cache.fe_models.get_or_compute(_meshed_key(entry, base), lambda: _new_meshed(entry, base))
 
 
-def _new_meshed(entry: dict, base: Path) -> MeshedBody:
-    """The body's FE model, interfaces and geometry, built afresh."""
-    fe, geometry = _fe_model(entry, base, f"body {entry['name']!r}")
+def _new_meshed(entry: dict, base: Path, mesh: TetMesh | None = None) -> MeshedBody:
+    """The body's FE model (on ``mesh`` if given), interfaces and geometry, built afresh."""
+    fe, geometry = _fe_model(entry, base, f"body {entry['name']!r}", mesh)
     interfaces: dict[str, InterfaceNodes] = {}
     for spec in entry["interfaces"]:
         interface = _interface(fe, spec, base)
@@ -407,10 +450,10 @@ def _new_meshed(entry: dict, base: Path) -> MeshedBody:
     return MeshedBody(fe, interfaces, geometry)
 
 
-def _body(k: int, entry: dict, meshed: MeshedBody, settings: dict, cache: SceneCache) -> SceneBody:
+def _body(k: int, entry: dict, meshed: MeshedBody, settings: dict, reduced: Reduced) -> SceneBody:
     name = entry["name"]
     fe, interfaces = meshed.fe, meshed.interfaces
-    reduction, moments, kept = _reduction(k, meshed, entry, cache.reductions)
+    reduction, moments, kept = reduced
     body = FlexibleBody(
         name,
         moments,

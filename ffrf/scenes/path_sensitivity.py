@@ -1,5 +1,5 @@
-r"""Derivatives of a linkage's quasi-static path with respect to its links' materials and bore errors
-(``docs/formulation.md``, Eqs. (D1)-(D2)).
+r"""Derivatives of a linkage's quasi-static path with respect to its links' materials, bore errors and sections
+(``docs/formulation.md``, Eqs. (D1)-(D2), (D5)).
 
 At every output pose of a quasi-static run the equilibrium's response to each parameter comes from the implicit
 function theorem with the tangent Newton factored there
@@ -7,6 +7,9 @@ function theorem with the tangent Newton factored there
 density (exact rates: the mode basis depends on neither), and each bore's three errors of
 :class:`~ffrf.scenes.linkage_description.BoreError` in the misfit model (rates of the joint's equations and reactions
 by central differences of the joint the linkage builds, :data:`TWIST_STEP`, :data:`SHIFT_STEP`).
+and each link's section dimensions (:data:`~ffrf.geometry.design_velocity.SECTION_PARAMETERS`: rates of the
+residual by central differences of the link rebuilt on its mesh morphed along the dimension's design velocity,
+:func:`~ffrf.geometry.design_velocity.design_velocity`, step :data:`MORPH_STEP` of the dimension).
 The outputs are explicit, smooth functions of the equilibrium: the coupler point (the mean of the tool link's joint
 points, :func:`ffrf.output.sensors.path_sensors`) and the driving torque (a multiplier). They are differentiated along
 the response by central differences (Eq. (D2)): a step moving no coordinate by more than :data:`OUTPUT_STEP`, whose
@@ -22,7 +25,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from ffrf.errors import SceneError
+from ffrf.geometry.design_velocity import SECTION_PARAMETERS, design_velocity
 from ffrf.output.sensors import path_sensors
+from ffrf.scenes.builder import morphed_body, parametric_link
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, bore_side
 from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.scenes.scene_joints import joint_constraint
@@ -31,7 +37,17 @@ from ffrf.system.constraints import Constraint
 from ffrf.system.multibody import MultibodySystem
 from kinematics.single_loop import SingleLoop
 
-__all__ = ["OUTPUT_STEP", "SHIFT_STEP", "TWIST_STEP", "PathSensitivity", "bore_sensitivity", "material_sensitivity"]
+__all__ = [
+    "MORPH_STEP",
+    "OUTPUT_STEP",
+    "SHIFT_STEP",
+    "TWIST_STEP",
+    "PathSensitivity",
+    "bore_sensitivity",
+    "material_sensitivity",
+    "section_sensitivity",
+    "section_velocities",
+]
 
 #: Largest coordinate change (m, or Euler parameter, or modal coordinate) of Eq. (D2)'s central differences.
 OUTPUT_STEP = 1e-6
@@ -39,18 +55,22 @@ OUTPUT_STEP = 1e-6
 #: (rad), and the offsets as a fraction of the loop's size (smooth in both: truncation about the step squared).
 TWIST_STEP = 1e-6
 SHIFT_STEP = 1e-6
+#: Step of a section dimension's central differences along its morph, relative to the dimension.
+MORPH_STEP = 1e-4
 
 
 @dataclass(frozen=True)
 class PathSensitivity:
     """Per output pose (``drive_angle``, rad) the derivatives of the coupler point ``(poses, 3, k)`` (m) and of the
-    driving torque ``(poses, k)`` (N m) with respect to the ``k`` ``parameters`` (per unit relative change: ``E
-    link1`` is ``d/d ln E`` of link 1, the change per 100 % of E to first order)."""
+    driving torque ``(poses, k)`` (N m) with respect to the ``k`` ``parameters`` (a material per unit relative
+    change: ``E link1`` is ``d/d ln E`` of link 1, the change per 100 % of E to first order; a bore error or a
+    section dimension per unit of it, rad or m), and of the links' total ``mass`` ``(k,)`` (kg)."""
 
     parameters: tuple[str, ...]
     drive_angle: NDArray[np.float64]
     coupler_point: NDArray[np.float64]
     driving_torque: NDArray[np.float64]
+    mass: NDArray[np.float64] | None = None
 
 
 def material_sensitivity(
@@ -116,6 +136,91 @@ def bore_sensitivity(
         _explicit_rate(scene, index, plus, minus, step, time, q, multipliers) for index, plus, minus, step in pairs
     ]
     return _path_derivatives(scene, time, q, multipliers, tuple(names), rates, explicit)
+
+
+def section_velocities(
+    scene: LinkageScene, parameters: tuple[str, ...] = SECTION_PARAMETERS, links: tuple[int, ...] | None = None
+) -> dict[tuple[int, str], NDArray[np.float64]]:
+    """The design velocity (Eq. (D5), :func:`~ffrf.geometry.design_velocity.design_velocity`) of each of
+    ``parameters`` on the mesh of each of ``links`` (default every parametric link), by ``(link, parameter)``."""
+    bodies = scene.description["bodies"]
+    links = tuple(k for k, entry in enumerate(bodies) if "parametric" in entry) if links is None else tuple(links)
+    out = {}
+    for k in links:
+        entry = bodies[k]
+        if "parametric" not in entry:
+            raise SceneError(f"body {entry['name']!r} is not a parametric link: it has no section to change")
+        spec = entry["parametric"]
+        build = parametric_link(spec, f"body {entry['name']!r}")
+        for parameter in parameters:
+            mesh, velocity = design_velocity(build, float(spec.get("h", 6e-3)), parameter, entry["name"])
+            if not np.array_equal(mesh.points, scene.bodies[k].mesh_model.mesh.points):
+                raise SceneError(f"body {entry['name']!r}: its mesh is not the one its description builds today")
+            out[k, parameter] = velocity
+    return out
+
+
+def section_sensitivity(
+    scene: LinkageScene,
+    time: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+    parameters: tuple[str, ...] = SECTION_PARAMETERS,
+    links: tuple[int, ...] | None = None,
+    step: float = MORPH_STEP,
+    velocities: dict[tuple[int, str], NDArray] | None = None,
+) -> PathSensitivity:
+    """The derivatives of the coupler point, driving torque and mass at a quasi-static run's equilibria (as
+    :func:`material_sensitivity`) with respect to each of ``parameters`` (fields of
+    :class:`~ffrf.geometry.link_geometry.LinkDesign` that leave the bores in place, m) of each of ``links`` (default
+    every parametric link), per metre. The right-hand side of Eq. (D1) and the outputs' own change are central
+    differences of the linkage with that link rebuilt on its mesh moved by ``+-step`` of the dimension along its
+    design velocity (Eq. (D5)); the derivative is that of the model on the morphed mesh (module docstring).
+    ``velocities``: by ``(link, parameter)``, for a scene whose links are already morphed (their points moved along
+    these velocities from the meshes their description builds); default :func:`section_velocities`."""
+    bodies = scene.description["bodies"]
+    links = tuple(k for k, entry in enumerate(bodies) if "parametric" in entry) if links is None else tuple(links)
+    velocities = section_velocities(scene, parameters, links) if velocities is None else velocities
+    time, q, multipliers = np.asarray(time, float), np.asarray(q, float), np.asarray(multipliers, float)
+    shifted, names = [], []
+    for k in links:
+        points = scene.bodies[k].mesh_model.mesh.points
+        design = parametric_link(bodies[k]["parametric"])["design"]
+        for parameter in parameters:
+            delta = step * float(getattr(design, parameter))
+            velocity = velocities[k, parameter]
+            sides = tuple(
+                scene.with_body(morphed_body(scene, k, points + sign * delta * velocity)) for sign in (1.0, -1.0)
+            )
+            shifted.append((sides, delta))
+            names.append(f"{parameter} {bodies[k]['name']}")
+
+    def rates(row: int, t: float) -> NDArray[np.float64]:
+        out = np.zeros((scene.system.n_coordinates + scene.system.n_constraints, len(shifted)))
+        zeros = np.zeros(scene.system.n_coordinates)
+        for column, ((plus, minus), delta) in enumerate(shifted):
+            upper = np.concatenate(plus.system.residual(q[row], zeros, zeros, multipliers[row], t))
+            lower = np.concatenate(minus.system.residual(q[row], zeros, zeros, multipliers[row], t))
+            out[:, column] = (upper - lower) / (2.0 * delta)
+        return out
+
+    explicit = []
+    for (plus, minus), delta in shifted:
+        upper, lower = path_sensors(plus, time, q, multipliers), path_sensors(minus, time, q, multipliers)
+        explicit.append(
+            (
+                (upper["coupler_point"] - lower["coupler_point"]) / (2.0 * delta),
+                (upper["driving_torque"] - lower["driving_torque"]) / (2.0 * delta),
+            )
+        )
+    sensitivity = _path_derivatives(scene, time, q, multipliers, tuple(names), rates, explicit)
+    mass = np.array([(_mass(plus) - _mass(minus)) / (2.0 * delta) for (plus, minus), delta in shifted])
+    return replace(sensitivity, mass=mass)
+
+
+def _mass(scene: LinkageScene) -> float:
+    """The links' total mass (kg)."""
+    return float(sum(body.moments.mass for body in scene.system.bodies))
 
 
 def _explicit_rate(

@@ -1,0 +1,100 @@
+"""``python -m ffrf design DESIGN.toml --out DIR``: the lightest section of a linkage's links that keeps its coupler
+within a bound of the ideal path (:mod:`ffrf.scenes.section_design`), then the designed linkage run and verified as
+``python -m ffrf run`` does.
+
+Writes ``design.json`` (the problem, every design evaluated, the start and the optimum, SLSQP's end, the KKT
+residual), ``designed.toml`` (the linkage file of the optimum) and, in ``check/``, the designed linkage's own run;
+the exit status is that run's (0 only when it verified itself) or 1 when SLSQP did not converge.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+from ffrf.cli.arguments import output_folder
+from ffrf.cli.report import run_and_report
+from ffrf.errors import SceneError
+from ffrf.model import load
+from ffrf.scenes.scene_toml import scene_toml
+from ffrf.scenes.section_design import DesignPoint, SectionDesign, designed_document, load_design, optimise_section
+
+__all__ = ["HELP", "configure", "run"]
+
+HELP = "find the lightest link section that keeps the coupler on its path (a design file: linkage + [design])"
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("design", type=Path, help="design file (TOML): a linkage file with a [design] table")
+    parser.add_argument("--out", type=Path, required=True, help="output directory")
+
+
+def run(args: argparse.Namespace) -> int:
+    started = time.perf_counter()
+    if not args.design.is_file():
+        raise SceneError(f"design file {args.design} not found")
+    document = tomllib.loads(args.design.read_text())
+    loop, options, problem = load_design(document, str(args.design))
+    out = output_folder(args.out)
+    print(f"Designing {options.name}: {', '.join(problem.parameters)} for the least mass", file=sys.stderr)
+
+    def progress(iteration: int, point: DesignPoint) -> None:
+        values = ", ".join(f"{p} {1e3 * v:.3f} mm" for p, v in zip(problem.parameters, point.values, strict=True))
+        print(
+            f"iteration {iteration}: {values}: mass {1e3 * point.mass:.2f} g, largest deviation "
+            f"{1e3 * point.max_deviation:.4f} mm (bound {1e3 * problem.max_deviation:.4f} mm)",
+            file=sys.stderr,
+        )
+
+    design = optimise_section(loop, options, problem, progress)
+    (out / "design.json").write_text(json.dumps(_summary(design, time.perf_counter() - started), indent=2) + "\n")
+    designed = out / "designed.toml"
+    designed.write_text(scene_toml(designed_document(document, design)))
+    print(
+        f"{options.name}: mass {1e3 * design.start.mass:.2f} -> {1e3 * design.optimum.mass:.2f} g, largest "
+        f"deviation {1e3 * design.start.max_deviation:.4f} -> {1e3 * design.optimum.max_deviation:.4f} mm in "
+        f"{design.iterations} iterations ({design.message}; KKT residual {design.kkt_residual:.2g}) -> {designed}",
+        file=sys.stderr,
+    )
+    model = load(designed)
+    status = run_and_report(model, out / "check", model.name, time.perf_counter(), model.settings() | {"vtk_every": 0})
+    if not design.success:
+        print(f"error: SLSQP did not converge: {design.message}", file=sys.stderr)
+        return max(status, 1)
+    return status
+
+
+def _point(point: DesignPoint, parameters: tuple[str, ...]) -> dict:
+    return {
+        "section_mm": {p: 1e3 * float(v) for p, v in zip(parameters, point.values, strict=True)},
+        "mass_g": 1e3 * point.mass,
+        "max_deviation_mm": 1e3 * point.max_deviation,
+        "seconds": point.seconds,
+    }
+
+
+def _summary(design: SectionDesign, seconds: float) -> dict:
+    problem = design.problem
+    return {
+        "problem": {
+            "parameters": list(problem.parameters),
+            "lower_mm": [1e3 * v for v in problem.lower],
+            "upper_mm": [1e3 * v for v in problem.upper],
+            "max_deviation_mm": 1e3 * problem.max_deviation,
+            "outputs": problem.outputs,
+        },
+        "start": _point(design.start, problem.parameters),
+        "optimum": _point(design.optimum, problem.parameters),
+        "iterations": design.iterations,
+        "evaluations": len(design.history),
+        "success": design.success,
+        "message": design.message,
+        "kkt_residual": design.kkt_residual,
+        "active_multipliers": design.active,
+        "history": [_point(p, problem.parameters) for p in design.history],
+        "seconds": seconds,
+    }

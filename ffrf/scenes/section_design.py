@@ -1,0 +1,293 @@
+r"""The lightest section that keeps a linkage's coupler on its ideal path: gradient-based design on exact
+sensitivities (``docs/formulation.md``, Eq. (D6); issue #35).
+
+The links' section dimensions :math:`p` (fields of :class:`~ffrf.geometry.link_geometry.LinkDesign` that leave the
+bores in place, every link alike) solve
+
+.. math:: \min_p\ m(p) \quad\text{s.t.}\quad |d_i(p)| \le \bar d \ \text{at every pose } i,\qquad
+          p_{lo} \le p \le p_{hi},
+
+with :math:`m` the links' mass and :math:`d_i` the coupler's deviation from the ideal path at pose :math:`i` of a
+quasi-static revolution under the linkage's load (its weight, its bore errors). Each design is meshed and run
+afresh; the gradients are exact for the meshed model (Eq. (D1) with the section's morph, Eq. (D5),
+:func:`~ffrf.scenes.path_sensitivity.section_sensitivity`): :math:`\partial|d_i|/\partial p = d_i^T
+(\partial d_i/\partial p)/|d_i|`. scipy's SLSQP works in dimensions relative to the start, mass relative to the
+start's and deviations relative to the bound. At its end the first-order optimality (KKT) residual is measured
+independently of SLSQP: the objective's gradient against the non-negative combination (``scipy.optimize.nnls``) of
+the active constraints' and bounds' gradients.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import minimize, nnls
+
+from ffrf.errors import GeometryError, SceneError
+from ffrf.geometry.design_velocity import SECTION_PARAMETERS
+from ffrf.scenes.linkage_description import LinkageOptions
+from ffrf.scenes.linkage_file import LINKAGE_SCHEMA, linkage_options
+from ffrf.scenes.linkage_run import run_linkage
+from ffrf.scenes.linkage_scene import build_linkage
+from ffrf.scenes.path_sensitivity import section_sensitivity
+from ffrf.scenes.scene_schema import Key, check_table
+from ffrf.scenes.schema_keys import positive
+from kinematics.single_loop import SingleLoop
+
+__all__ = [
+    "ACTIVE",
+    "DESIGN",
+    "FEASIBLE",
+    "FTOL",
+    "KKT_TOLERANCE",
+    "DesignPoint",
+    "DesignProblem",
+    "SectionDesign",
+    "designed_document",
+    "evaluate",
+    "load_design",
+    "optimise_section",
+]
+
+#: A design file's ``[design]`` table (lengths in the linkage's ``unit``): the section dimensions every link shares,
+#: their bounds, the bound on the coupler's deviation, the poses it is checked at and SLSQP's iteration limit.
+DESIGN = {
+    "parameters": Key("strings", True),
+    "lower": Key("numbers", True),
+    "upper": Key("numbers", True),
+    "max_deviation": Key("number", True, positive),
+    "outputs": Key("integer", False, positive),
+    "max_iterations": Key("integer", False, positive),
+}
+
+#: SLSQP's tolerance on the objective (the mass relative to the start's): each design is meshed afresh, so its mass
+#: and deviations carry the meshes' own differences (about 1e-4 and 3e-3 of a change by a millimetre, measured), and
+#: on the bound SLSQP wanders within them at a tighter tolerance (measured on the PLA Bennett: 3e-4 of the mass).
+FTOL = 1e-3
+#: A design meets the bound when its largest deviation exceeds it by at most this fraction.
+FEASIBLE = 1e-3
+#: An optimum is accepted when its KKT residual (relative to the objective's gradient) is below this.
+KKT_TOLERANCE = 2e-2
+
+#: A constraint or bound within this fraction of its scale counts as active in the KKT residual.
+ACTIVE = 1e-3
+
+
+@dataclass(frozen=True)
+class DesignProblem:
+    """The section ``parameters`` with their ``lower`` and ``upper`` bounds (m), the bound on the coupler's
+    deviation ``max_deviation`` (m) at each of ``outputs`` poses of a revolution, and SLSQP's ``max_iterations``."""
+
+    parameters: tuple[str, ...]
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    max_deviation: float
+    outputs: int = 25
+    max_iterations: int = 20
+
+    def __post_init__(self) -> None:
+        unknown = [p for p in self.parameters if p not in SECTION_PARAMETERS]
+        if unknown or not self.parameters:
+            raise SceneError(f"design parameters {list(self.parameters)}: choose from {list(SECTION_PARAMETERS)}")
+        if not len(self.lower) == len(self.upper) == len(self.parameters):
+            raise SceneError("design: give one lower and one upper bound per parameter")
+        if any(not 0.0 < lo < hi for lo, hi in zip(self.lower, self.upper, strict=True)):
+            raise SceneError(f"design: every bound needs 0 < lower < upper, got {self.lower} and {self.upper}")
+        if not self.max_deviation > 0.0:
+            raise SceneError(f"design: max_deviation must be > 0, got {self.max_deviation!r}")
+        if self.outputs < 3:
+            raise SceneError(f"design: outputs must be at least 3 poses, got {self.outputs}")
+
+
+@dataclass(frozen=True)
+class DesignPoint:
+    """One design, meshed and run: its parameter ``values`` (m), the links' ``mass`` (kg) and the coupler's
+    ``deviation`` (m) at each pose, with their gradients by the parameters (``(k,)`` and ``(poses, k)``)."""
+
+    values: NDArray[np.float64]
+    mass: float
+    deviation: NDArray[np.float64]
+    mass_gradient: NDArray[np.float64]
+    deviation_gradient: NDArray[np.float64]
+    seconds: float
+
+    @property
+    def max_deviation(self) -> float:
+        return float(self.deviation.max())
+
+
+@dataclass(frozen=True)
+class SectionDesign:
+    """An optimisation's ``start`` and ``optimum`` (the lightest design evaluated that meets the bound), every design
+    evaluated (``history``), SLSQP's ``iterations`` and ``message``, ``success`` (:func:`optimise_section`), and
+    the KKT residual (relative to the objective's gradient) with the multipliers of the active constraints (poses)
+    and bounds."""
+
+    problem: DesignProblem
+    start: DesignPoint
+    optimum: DesignPoint
+    history: tuple[DesignPoint, ...]
+    iterations: int
+    success: bool
+    message: str
+    kkt_residual: float
+    active: dict[str, float] = field(default_factory=dict)
+
+
+def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, values: NDArray) -> DesignPoint:
+    """Mesh and run the linkage with the section ``values`` (m) and differentiate its mass and deviations (every link
+    alike: the derivative by a common dimension is the sum of the links')."""
+    started = time.perf_counter()
+    design = replace(options.design, **dict(zip(problem.parameters, map(float, values), strict=True)))
+    scene = build_linkage(loop, replace(options, design=design))
+    result = run_linkage(scene, mode="quasi_static", n_outputs=problem.outputs, sensors="path")
+    assert result.multipliers is not None  # a quasi-static run keeps its equilibria's multipliers
+    try:
+        exact = section_sensitivity(scene, result.time, result.q, result.multipliers, problem.parameters)
+    except GeometryError as error:
+        section = ", ".join(f"{p} {1e3 * v:.4g} mm" for p, v in zip(problem.parameters, values, strict=True))
+        raise SceneError(f"design at {section}: {error}; keep the bounds away from that section") from error
+    assert exact.mass is not None
+    k = len(problem.parameters)
+    coupler = exact.coupler_point.reshape(len(result.time), 3, -1, k).sum(axis=2)
+    deviation = np.asarray(result.sensors["coupler_deviation"], dtype=float)
+    size = np.linalg.norm(deviation, axis=1)
+    direction = deviation / np.maximum(size, np.finfo(float).tiny)[:, None]
+    return DesignPoint(
+        np.asarray(values, dtype=float),
+        float(sum(body.moments.mass for body in scene.system.bodies)),
+        size,
+        exact.mass.reshape(-1, k).sum(axis=0),
+        np.einsum("pa,pak->pk", direction, coupler),
+        time.perf_counter() - started,
+    )
+
+
+def optimise_section(
+    loop: SingleLoop,
+    options: LinkageOptions,
+    problem: DesignProblem,
+    progress: Callable[[int, DesignPoint], None] | None = None,
+) -> SectionDesign:
+    """Solve the module docstring's problem from the linkage's own section (clipped to the bounds) with SLSQP;
+    ``progress(iteration, design)`` after each iteration. The optimum is accepted (``success``) when it meets the
+    bound to :data:`FEASIBLE` and its KKT residual is below :data:`KKT_TOLERANCE`, whatever SLSQP's own message."""
+    lower, upper = np.asarray(problem.lower), np.asarray(problem.upper)
+    scale = np.clip([getattr(options.design, p) for p in problem.parameters], lower, upper)
+    evaluated: dict[bytes, DesignPoint] = {}
+    history: list[DesignPoint] = []
+
+    def at(x: NDArray) -> DesignPoint:
+        key = np.asarray(x, dtype=float).tobytes()
+        if key not in evaluated:
+            evaluated[key] = evaluate(loop, options, problem, np.asarray(x) * scale)
+            history.append(evaluated[key])
+        return evaluated[key]
+
+    mass0 = at(np.ones(len(scale))).mass
+
+    def objective(x: NDArray) -> tuple[float, NDArray]:
+        point = at(x)
+        return point.mass / mass0, point.mass_gradient * scale / mass0
+
+    def margins(x: NDArray) -> NDArray:
+        return 1.0 - at(x).deviation / problem.max_deviation
+
+    def margin_gradients(x: NDArray) -> NDArray:
+        return -at(x).deviation_gradient * scale / problem.max_deviation
+
+    iteration = 0
+
+    def callback(x: NDArray) -> None:
+        nonlocal iteration
+        iteration += 1
+        if progress is not None:
+            progress(iteration, at(x))
+
+    solution = minimize(
+        objective,
+        np.ones(len(scale)),
+        jac=True,
+        method="SLSQP",
+        bounds=list(zip(lower / scale, upper / scale, strict=True)),
+        constraints=[{"type": "ineq", "fun": margins, "jac": margin_gradients}],
+        callback=callback,
+        options={"maxiter": problem.max_iterations, "ftol": FTOL},
+    )
+    # SLSQP returns its last iterate; take the lightest design that meets the bound among those it ran
+    feasible = [p for p in history if p.max_deviation <= problem.max_deviation * (1.0 + FEASIBLE)]
+    optimum = min(feasible, key=lambda p: p.mass) if feasible else at(solution.x)
+    residual, active = _kkt(problem, optimum, optimum.values / scale, scale, mass0)
+    success = bool(feasible) and residual < KKT_TOLERANCE
+    return SectionDesign(
+        problem,
+        history[0],
+        optimum,
+        tuple(history),
+        int(solution.nit),
+        success,
+        str(solution.message),
+        residual,
+        active,
+    )
+
+
+def _kkt(
+    problem: DesignProblem, point: DesignPoint, x: NDArray, scale: NDArray, mass0: float
+) -> tuple[float, dict[str, float]]:
+    """The first-order optimality residual at ``point`` (relative to the objective's gradient, in SLSQP's scaled
+    variables ``x``) and the non-negative multipliers of the active constraints and bounds that minimise it."""
+    gradient = point.mass_gradient * scale / mass0
+    columns, names = [], []
+    margins = 1.0 - point.deviation / problem.max_deviation
+    for i in np.flatnonzero(margins < ACTIVE):
+        columns.append(-point.deviation_gradient[i] * scale / problem.max_deviation)
+        names.append(f"deviation at pose {i}")
+    for j, name in enumerate(problem.parameters):
+        unit = np.zeros(len(scale))
+        unit[j] = 1.0
+        if x[j] * scale[j] <= problem.lower[j] * (1.0 + ACTIVE):
+            columns.append(unit)
+            names.append(f"{name} at its lower bound")
+        if x[j] * scale[j] >= problem.upper[j] * (1.0 - ACTIVE):
+            columns.append(-unit)
+            names.append(f"{name} at its upper bound")
+    if not columns:
+        return float(np.linalg.norm(gradient) / np.linalg.norm(gradient)), {}
+    multipliers, residual = nnls(np.column_stack(columns), gradient)
+    return float(residual / np.linalg.norm(gradient)), dict(zip(names, map(float, multipliers), strict=True))
+
+
+def load_design(document: dict, where: str = "design") -> tuple[SingleLoop, LinkageOptions, DesignProblem]:
+    """A design file (already parsed): a linkage file (:mod:`ffrf.scenes.linkage_file`) with a ``[design]`` table
+    (:data:`DESIGN`), lengths in the linkage's ``unit``. Returns the loop, the options it builds the linkage with and
+    the problem in SI units."""
+    check_table(document, dict(LINKAGE_SCHEMA, design=Key("table", True, keys=DESIGN)), where)
+    loop, options, _ = linkage_options({k: v for k, v in document.items() if k != "design"}, where)
+    spec = document["design"]
+    length = 1e-3 if document["linkage"].get("unit") == "mm" else 1.0
+    try:
+        problem = DesignProblem(
+            tuple(spec["parameters"]),
+            tuple(length * float(v) for v in spec["lower"]),
+            tuple(length * float(v) for v in spec["upper"]),
+            length * float(spec["max_deviation"]),
+            int(spec.get("outputs", 25)),
+            int(spec.get("max_iterations", 20)),
+        )
+    except SceneError as error:
+        raise SceneError(f"{where}, {error}") from error
+    return loop, options, problem
+
+
+def designed_document(document: dict, design: SectionDesign) -> dict:
+    """The design file's linkage (without ``[design]``) with the optimum's section in its ``link_design``, in the
+    file's unit: a linkage file of the designed linkage."""
+    length = 1e-3 if document["linkage"].get("unit") == "mm" else 1.0
+    chosen = {p: float(v) / length for p, v in zip(design.problem.parameters, design.optimum.values, strict=True)}
+    linkage = dict(document["linkage"], link_design=dict(document["linkage"].get("link_design", {}), **chosen))
+    return {k: v for k, v in dict(document, linkage=linkage).items() if k != "design"}
