@@ -18,7 +18,7 @@ from collections.abc import Callable, Sequence
 
 from threadpoolctl import threadpool_limits
 
-from ffrf.cli import bennett, design, export, linkage, mesh, run, study, study_report, warmup
+from ffrf.cli import bennett, compensate, design, export, linkage, mesh, run, study, study_report, warmup
 from ffrf.cli.arguments import positive_count
 from ffrf.cli.stop import STOP
 from ffrf.errors import FEInputError, Interrupted, NewtonDivergence, StaticDivergence
@@ -40,6 +40,7 @@ SUBCOMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None], Cal
         ("study", study),
         ("study-report", study_report),
         ("design", design),
+        ("compensate", compensate),
     )
 }
 

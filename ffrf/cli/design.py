@@ -2,9 +2,11 @@
 within a bound of the ideal path (:mod:`ffrf.scenes.section_design`), then the designed linkage run and verified as
 ``python -m ffrf run`` does.
 
-Writes ``design.json`` (the problem, every design evaluated, the start and the optimum, SLSQP's end, the KKT
-residual), ``designed.toml`` (the linkage file of the optimum) and, in ``check/``, the designed linkage's own run;
-the exit status is that run's (0 only when it verified itself) or 1 when SLSQP did not converge.
+Writes ``progress.json`` after every SLSQP iteration (what is kept if the design stops), ``design.json`` (the
+problem, every design evaluated, the start and the optimum, SLSQP's end, the KKT residual), ``designed.toml`` (the
+linkage file of the optimum) and, in ``check/``, the designed linkage's own run; the exit status is that run's (0
+only when it verified itself), or 1 when the optimum is not accepted (no design met the bound, or its KKT residual
+is above :data:`~ffrf.scenes.section_design.KKT_TOLERANCE`).
 """
 
 from __future__ import annotations
@@ -42,7 +44,11 @@ def run(args: argparse.Namespace) -> int:
     out = output_folder(args.out)
     print(f"Designing {options.name}: {', '.join(problem.parameters)} for the least mass", file=sys.stderr)
 
+    iterations: list[dict] = []
+
     def progress(iteration: int, point: DesignPoint) -> None:
+        iterations.append({"iteration": iteration, **_point(point, problem.parameters)})
+        (out / "progress.json").write_text(json.dumps(iterations, indent=2) + "\n")  # kept if the design stops
         values = ", ".join(f"{p} {1e3 * v:.3f} mm" for p, v in zip(problem.parameters, point.values, strict=True))
         print(
             f"iteration {iteration}: {values}: mass {1e3 * point.mass:.2f} g, largest deviation "
@@ -60,10 +66,18 @@ def run(args: argparse.Namespace) -> int:
         f"{design.iterations} iterations ({design.message}; KKT residual {design.kkt_residual:.2g}) -> {designed}",
         file=sys.stderr,
     )
+    print(
+        f"the designed linkage against its Exudyn twin: python -m validation report --scene {designed} "
+        f"--out {out / 'exudyn'}",
+        file=sys.stderr,
+    )
     model = load(designed)
     status = run_and_report(model, out / "check", model.name, time.perf_counter(), model.settings() | {"vtk_every": 0})
     if not design.success:
-        print(f"error: SLSQP did not converge: {design.message}", file=sys.stderr)
+        print(
+            f"error: the design is not accepted (KKT residual {design.kkt_residual:.2g}; SLSQP: {design.message})",
+            file=sys.stderr,
+        )
         return max(status, 1)
     return status
 

@@ -46,6 +46,8 @@ def test_the_design_finds_a_lighter_section_on_its_bound_and_the_designed_linkag
     assert main(["design", str(path), "--out", str(tmp_path / "out")]) == 0
     summary = json.loads((tmp_path / "out" / "design.json").read_text())
     assert summary["success"]
+    progress = json.loads((tmp_path / "out" / "progress.json").read_text())
+    assert len(progress) == summary["iterations"] > 0
     assert summary["optimum"]["mass_g"] < 0.95 * summary["start"]["mass_g"]
     assert summary["start"]["max_deviation_mm"] == pytest.approx(nominal_deviation_mm, rel=1e-9)
     assert summary["optimum"]["max_deviation_mm"] == pytest.approx(bound, rel=FEASIBLE)

@@ -76,3 +76,38 @@ def test_flexible_6r_linkage_file_against_its_exudyn_twin(tmp_path):
     # Exudyn's approximate marker Jacobian copied into ours: the solvers agree to round-off (measured 4.6e-13 m).
     assert max(s["with_exudyn_jacobian_max_abs_diff_m"] for s in m["sensors"].values()) < 1e-11
     assert m["torques"]["joint0 (drive)"]["max_rel_diff"] < 1e-5  # measured 8.9e-8
+
+
+#: A linkage as ``python -m ffrf design`` writes it (``designed.toml`` of the coarse PLA Bennett design of
+#: ``tests/test_design/test_section_design.py``): the section it chose in ``link_design``.
+DESIGNED = """[linkage]
+name = "PLA Bennett, lightest arm"
+dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90]}
+unit = "mm"
+driver = 3
+tool_link = 2
+start_angle_deg = -90.0
+h = 0.008
+modes = 2
+stacking = {offsets = [-27.7, -32.4, -38.3, -26.8], spacers = [3.9, 10.1, 6.9, 4.1], orders = [1, -1, 1, -1]}
+link_design = {arm_width = 9.485930162140063, arm_thickness = 14.131892734199848}
+
+[scene]
+mode = "quasi_static"
+outputs = 13
+"""
+
+
+def test_a_designed_linkage_against_its_exudyn_twin(tmp_path):
+    """The designed linkage file and its Exudyn twin (the same meshes, Exudyn's own reduction): the same modes (5e-13),
+    node paths (1.0e-12 of the travel with Exudyn's marker Jacobian in both, 8.5e-7 with each its own) and driving
+    torque (7.8e-7), as measured."""
+    m = report(tmp_path, DESIGNED)
+    assert m["passed"]
+    for body in ("link0", "link1", "link2", "link3"):
+        assert m["modes"][body]["max_rel_freq_diff"] < 1e-10  # measured 5.4e-13 at most
+    for sensor in m["sensors"].values():
+        assert sensor["travel_m"] > 0.05
+        assert sensor["with_exudyn_jacobian_relative_to_travel"] < 1e-10
+        assert sensor["relative_to_travel"] < 1e-5  # measured 8.5e-7 at most
+    assert m["torques"]["joint3 (drive)"]["max_rel_diff"] < 1e-5
