@@ -1,12 +1,13 @@
-"""Bore corrections that compensate the paper's PLA Bennett's deviation from its ideal path (issue #35).
+"""Bore corrections that compensate the deviation from the ideal path: the PLA Bennett and a 6R (issue #35).
 
     .venv/bin/python -m bench record compensation                  # docs/results/compensation.json
     .venv/bin/python -m bench compensation --json out/comp.json     # the rows alone
 
 For the PLA Bennett and its 1 deg variant (default discretisation, 121 quasi-static poses over the ramp and a
-revolution): ``ffrf.scenes.compensation.compensate`` (corrections within 0.5 deg and 0.2 mm), and the corrected
-print run in full twice: with the corrections as joint misfits (the model the first order is of) and remeshed on
-the corrected bores (the parts as printed). Per variant the largest deviation before, predicted, and after both runs,
+revolution) and Rational Linkages' collisions_free_6r in PLA (``examples/collisions_free_6r.toml``, the same poses):
+``ffrf.scenes.compensation.compensate`` (corrections within 0.5 deg and 0.2 mm), and the corrected print run in full
+twice: with the corrections as joint misfits (the model the first order is of) and remeshed on the corrected bores
+(the parts as printed). Per variant the largest deviation before, predicted, and after both runs,
 the corrections and the times.
 """
 
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import time
+import tomllib
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,10 +24,12 @@ import numpy as np
 from bench.report import write_report
 from ffrf.paper.bennett_scene import _paper_loop, bennett_options
 from ffrf.scenes.compensation import compensate, with_corrections
+from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import build_linkage
 
 OUTPUTS = 121
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _forward(loop, options, model: str) -> dict:
@@ -40,10 +44,11 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path, required=True)
     args = parser.parse_args()
-    loop = _paper_loop()
+    document = tomllib.loads((ROOT / "examples" / "collisions_free_6r.toml").read_text())
+    six_r = linkage_options(document, "collisions_free_6r")[:2]
+    cases = [("pla", _paper_loop(), bennett_options("pla")), ("pla1", _paper_loop(), bennett_options("pla1"))]
     rows = []
-    for variant in ("pla", "pla1"):
-        options = bennett_options(variant)
+    for variant, loop, options in [*cases, ("collisions_free_6r", *six_r)]:
         compensation = compensate(loop, options, outputs=OUTPUTS)
         corrected = with_corrections(options, compensation.corrections)
         printed = _forward(loop, corrected, "remesh")

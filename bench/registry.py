@@ -217,7 +217,7 @@ BENCHMARKS: tuple[Benchmark, ...] = (
     ),
     Benchmark(
         "compensation",
-        "bore corrections that compensate the PLA Bennett's deviation, checked by forward runs of the corrected print",
+        "bore corrections that compensate the PLA Bennett's and a 6R's deviation, checked by forward runs of the print",
         records=(Recording("compensation", rows_by="variant", rows_name="variants"),),
     ),
     Benchmark(
