@@ -5,8 +5,8 @@ A measured figure in the docs is a Markdown link into a result file, the fragmen
     [0.134 mm](results/bennett_variants_default.json#/results/variants/pla/max_coupler_deviation_mm)
 
 The path is relative to the Markdown file. The unit written in the link's text decides the display
-scale (m, mm, um, nm; s, ms, us; N m, N mm; Pa, MPa; J, mJ; deg, rad; g, kg; %, x for ratios; nothing
-for plain numbers; Hz). The value in the file is in SI units unless the pointer names its unit as a suffix
+scale (m, mm, um, nm; s, ms, us; N m, N mm; Pa, MPa; J, mJ; deg, rad; %, x for ratios; nothing for
+plain numbers; Hz). The value in the file is in SI units unless the pointer names its unit as a suffix
 of a key (``..._mm``, ``..._Nmm``, ``..._MPa``, ``wall_time_s/build``, ``ms_per_step``): the last key
 with a unit decides. The number keeps the form its author wrote: as many decimals, or the same number
 of mantissa decimals in scientific notation (``4.5e-10``).
@@ -63,8 +63,6 @@ UNITS: dict[str, tuple[str, float]] = {
     "%": ("ratio", 1e-2),
     "Hz": ("frequency", 1.0),
     "rad^2/s^2": ("squared frequency", 1.0),
-    "g": ("mass", 1e-3),
-    "kg": ("mass", 1.0),
     "MiB": ("memory", 1.0),
     "GiB": ("memory", 1024.0),
 }
@@ -89,8 +87,6 @@ KEY_SUFFIXES = {
     "_deg": "deg",
     "_percent": "%",
     "_hz": "Hz",
-    "_g": "g",
-    "_kg": "kg",
     "_mb": "MiB",
 }
 LINK = re.compile(r"\[(?P<text>[^\[\]]+)\]\((?P<path>[^()\s#]*results/[^()\s#]+\.json)#(?P<pointer>/[^()\s]*)\)")

@@ -76,14 +76,17 @@ class PathSensitivity:
 def material_sensitivity(
     scene: LinkageScene, time: NDArray, q: NDArray, multipliers: NDArray, links: tuple[int, ...] | None = None
 ) -> PathSensitivity:
-    """The derivatives of the coupler point and driving torque at the equilibria ``q`` ``(poses, n)``,
+    """The derivatives of the coupler point, driving torque and mass at the equilibria ``q`` ``(poses, n)``,
     ``multipliers`` ``(poses, m)`` at ``time`` (a quasi-static run's rows) with respect to the relative Young's
-    modulus and then density of each of ``links`` (default all; module docstring)."""
+    modulus and then density of each of ``links`` (default all; module docstring). The mass is proportional to the
+    density and independent of the modulus: its derivatives are 0 and the link's mass."""
     system = scene.system
     links = tuple(range(len(system.bodies))) if links is None else tuple(links)
     names = tuple(f"E {system.bodies[k].name}" for k in links) + tuple(f"rho {system.bodies[k].name}" for k in links)
     q = np.asarray(q, dtype=float)
-    return _path_derivatives(scene, time, q, multipliers, names, lambda row, t: material_rates(system, q[row], links))
+    found = _path_derivatives(scene, time, q, multipliers, names, lambda row, t: material_rates(system, q[row], links))
+    masses = [float(system.bodies[k].moments.mass) for k in links]
+    return replace(found, mass=np.array([0.0] * len(links) + masses))
 
 
 def bore_sensitivity(

@@ -114,6 +114,9 @@ def test_scaling_every_stiffness_and_density_together_moves_nothing_and_scales_t
     np.testing.assert_allclose(exact.coupler_point.sum(axis=2), 0.0, atol=1e-9 * np.abs(exact.coupler_point).max())
     torque = result.sensors["driving_torque"]
     np.testing.assert_allclose(exact.driving_torque.sum(axis=1), torque, rtol=1e-8, atol=1e-10 * np.abs(torque).max())
+    assert exact.mass is not None  # the mass scales with the density alone: its derivatives sum to the mass
+    assert exact.mass.sum() == pytest.approx(sum(body.moments.mass for body in scene.system.bodies), rel=1e-12)
+    np.testing.assert_array_equal(exact.mass[: len(scene.system.bodies)], 0.0)
 
 
 @pytest.fixture(scope="module")
