@@ -19,6 +19,7 @@ stay near 1e-10 of the derivative, far below what a re-run's finite differences 
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
@@ -34,6 +35,7 @@ from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.scenes.scene_joints import joint_constraint
 from ffrf.solvers.equilibrium_sensitivity import equilibrium_response, material_rates
 from ffrf.system.constraints import Constraint
+from ffrf.system.joints import MarkerJoint
 from ffrf.system.multibody import MultibodySystem
 from kinematics.single_loop import SingleLoop
 
@@ -64,13 +66,15 @@ class PathSensitivity:
     """Per output pose (``drive_angle``, rad) the derivatives of the coupler point ``(poses, 3, k)`` (m) and of the
     driving torque ``(poses, k)`` (N m) with respect to the ``k`` ``parameters`` (a material per unit relative
     change: ``E link1`` is ``d/d ln E`` of link 1, the change per 100 % of E to first order; a bore error or a
-    section dimension per unit of it, rad or m), and of the links' total ``mass`` ``(k,)`` (kg)."""
+    section dimension per unit of it, rad or m), of the links' total ``mass`` ``(k,)`` (kg), and of each joint's
+    reaction force ``(poses, 3, k)`` (N, world axes; its first three multipliers), by joint name."""
 
     parameters: tuple[str, ...]
     drive_angle: NDArray[np.float64]
     coupler_point: NDArray[np.float64]
     driving_torque: NDArray[np.float64]
     mass: NDArray[np.float64] | None = None
+    reaction_forces: dict[str, NDArray[np.float64]] = dataclasses.field(default_factory=dict)
 
 
 def material_sensitivity(
@@ -320,4 +324,10 @@ def _path_derivatives(
             coupler[:, column] += coupler_rate
             torque[:, column] += torque_rate
     angles = np.array([scene.drive_angle(float(t)) for t in time])
-    return PathSensitivity(names, angles, np.transpose(coupler, (0, 2, 1)), torque)
+    # a joint's reaction force is its first three multipliers (Eq. (J2)): its derivative is the response's, exactly
+    reactions = {
+        joint.name: np.transpose(dlam[:, :, int(system.rows[c]) : int(system.rows[c]) + 3], (0, 2, 1))
+        for c, joint in enumerate(system.all_constraints)
+        if isinstance(joint, MarkerJoint)
+    }
+    return PathSensitivity(names, angles, np.transpose(coupler, (0, 2, 1)), torque, reaction_forces=reactions)

@@ -59,8 +59,9 @@ def bennett_path():
 
 @pytest.mark.parametrize("parameter", [("E", 1), ("rho", 2), ("E", 3)])
 def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linkages(bennett_path, parameter):
-    """The PLA Bennett (coarse links) along part of its revolution: the derivatives of the coupler point and the
-    driving torque by Eq. (D1) agree with central differences of equilibria re-solved by Newton for the linkage with
+    """The PLA Bennett (coarse links) along part of its revolution: the derivatives of the coupler point, the
+    driving torque and every joint's reaction force by Eq. (D1) (the clamp's by a link's density: that link's
+    weight, as statics says) agree with central differences of equilibria re-solved by Newton for the linkage with
     that link's E or rho times exp(+-1e-3) and exp(+-2e-3), combined by Richardson's rule, within 1e-6 of the largest
     derivative (measured: 4e-8, the re-solved equilibria's round-off over the steps; one step's differences alone are
     off by about 2e-7, the step squared)."""
@@ -81,7 +82,7 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
             solved.append(static_equilibrium(system, first.q, t=float(result.time[r]), tolerance=1e-15))
         q = np.array([s.q for s in solved])
         lam = np.array([s.multipliers for s in solved])
-        return path_sensors(replace(scene, system=system), result.time[rows], q, lam)
+        return path_sensors(replace(scene, system=system), result.time[rows], q, lam) | {"multipliers": lam}
 
     def central(step: float, name: str) -> np.ndarray:
         return (outputs(step)[name] - outputs(-step)[name]) / (2 * step)
@@ -93,6 +94,22 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
     assert np.abs(ours_coupler).max() > 1e-7  # the links' compliance moves the coupler
     np.testing.assert_allclose(ours_coupler, coupler, rtol=0, atol=1e-6 * np.abs(coupler).max())
     np.testing.assert_allclose(ours_torque, torque, rtol=0, atol=1e-6 * np.abs(torque).max())
+    # every joint's reaction force: its first three multipliers, the response's own rows
+    multipliers = (4 * central(1e-3, "multipliers") - central(2e-3, "multipliers")) / 3
+    system = scene.system
+    for c, joint in enumerate(system.all_constraints):
+        if joint.name in exact.reaction_forces:
+            theirs = multipliers[:, int(system.rows[c]) : int(system.rows[c]) + 3]
+            ours_force = exact.reaction_forces[joint.name][rows, :, column]
+            np.testing.assert_allclose(ours_force, theirs, rtol=0, atol=1e-6 * np.abs(theirs).max())
+    assert len(exact.reaction_forces) == 5  # the loop's four joints and the base's clamp
+    # statics: the clamp carries the whole weight, so its vertical force changes with a link's density by that
+    # link's weight and not at all with its modulus, at every pose
+    weight = float(scene.system.bodies[link].moments.mass) * 9.81
+    expected = -weight if kind == "rho" else 0.0
+    clamp = exact.reaction_forces["clamp"][:, :, column]
+    np.testing.assert_allclose(clamp[:, 2], expected, rtol=0, atol=1e-9 * weight)
+    np.testing.assert_allclose(clamp[:, :2], 0.0, atol=1e-9 * weight)
 
 
 def test_a_fold_is_refused_not_differentiated():
