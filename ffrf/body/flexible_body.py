@@ -86,6 +86,16 @@ class FlexibleBody:
     def n_modes(self) -> int:
         return self.moments.n_modes
 
+    def scaled(self, stiffness: float = 1.0, density: float = 1.0) -> FlexibleBody:
+        """The same body of a material ``stiffness`` times as stiff (``K_r`` and ``D_r``) and ``density`` times as
+        dense (every modal moment): its modes are unchanged, as scaling ``K`` or ``M`` leaves the eigenvectors of the
+        pair ``(K, M)`` and the Craig-Bampton basis alone."""
+        m = self.moments
+        moments = ModalMoments(*(density * value for value in (m.mass, m.s0, m.s1, m.x2, m.c, m.d)))
+        return FlexibleBody(
+            self.name, moments, stiffness * self.stiffness, stiffness * self.damping, self.exact_gravity
+        )
+
     @property
     def n_coordinates(self) -> int:
         """7 + m: position (3), Euler parameters (4), modal coordinates (m)."""

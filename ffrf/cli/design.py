@@ -27,7 +27,10 @@ from ffrf.scenes.section_design import DesignPoint, SectionDesign, designed_docu
 
 __all__ = ["HELP", "configure", "run"]
 
-HELP = "find the lightest link section that keeps the coupler on its path (a design file: linkage + [design])"
+HELP = (
+    "find the lightest link section that keeps the coupler on its path and, if asked, a lowest vibration frequency "
+    "(a design file: linkage + [design])"
+)
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -50,9 +53,13 @@ def run(args: argparse.Namespace) -> int:
         iterations.append({"iteration": iteration, **_point(point, problem.parameters)})
         (out / "progress.json").write_text(json.dumps(iterations, indent=2) + "\n")  # kept if the design stops
         values = ", ".join(f"{p} {1e3 * v:.3f} mm" for p, v in zip(problem.parameters, point.values, strict=True))
+        lowest = point.min_frequency_hz
+        frequency = (
+            "" if lowest is None else f", lowest frequency {lowest:.3f} Hz (bound {problem.min_frequency_hz} Hz)"
+        )
         print(
             f"iteration {iteration}: {values}: mass {1e3 * point.mass:.2f} g, largest deviation "
-            f"{1e3 * point.max_deviation:.4f} mm (bound {1e3 * problem.max_deviation:.4f} mm)",
+            f"{1e3 * point.max_deviation:.4f} mm (bound {1e3 * problem.max_deviation:.4f} mm){frequency}",
             file=sys.stderr,
         )
 
@@ -88,7 +95,7 @@ def _point(point: DesignPoint, parameters: tuple[str, ...]) -> dict:
         "mass_g": 1e3 * point.mass,
         "max_deviation_mm": 1e3 * point.max_deviation,
         "seconds": point.seconds,
-    }
+    } | ({} if point.min_frequency_hz is None else {"min_frequency_hz": point.min_frequency_hz})
 
 
 def _summary(design: SectionDesign, seconds: float) -> dict:
@@ -99,6 +106,7 @@ def _summary(design: SectionDesign, seconds: float) -> dict:
             "lower_mm": [1e3 * v for v in problem.lower],
             "upper_mm": [1e3 * v for v in problem.upper],
             "max_deviation_mm": 1e3 * problem.max_deviation,
+            "min_frequency_hz": problem.min_frequency_hz,
             "outputs": problem.outputs,
         },
         "start": _point(design.start, problem.parameters),

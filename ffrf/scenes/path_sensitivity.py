@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.errors import SceneError
+from ffrf.errors import SceneError, SensitivityError
 from ffrf.geometry.design_velocity import SECTION_PARAMETERS, design_velocity
 from ffrf.output.sensors import path_sensors
 from ffrf.scenes.builder import morphed_body, parametric_link
@@ -34,12 +34,15 @@ from ffrf.scenes.linkage_description import BoreError, LinkageOptions, bore_side
 from ffrf.scenes.linkage_scene import LinkageScene
 from ffrf.scenes.scene_joints import joint_constraint
 from ffrf.solvers.equilibrium_sensitivity import equilibrium_response, material_rates
+from ffrf.solvers.stability import LowestMode, frequency_form, lowest_mode
 from ffrf.system.constraints import Constraint
 from ffrf.system.joints import MarkerJoint
 from ffrf.system.multibody import MultibodySystem
 from kinematics.single_loop import SingleLoop
 
 __all__ = [
+    "FREQUENCY_STEP",
+    "MATERIAL_STEP",
     "MORPH_STEP",
     "OUTPUT_STEP",
     "SHIFT_STEP",
@@ -59,6 +62,13 @@ TWIST_STEP = 1e-6
 SHIFT_STEP = 1e-6
 #: Step of a section dimension's central differences along its morph, relative to the dimension.
 MORPH_STEP = 1e-4
+#: Step of the relative Young's modulus and density (ln E, ln rho) in the outputs' own change (Eq. (D2)): the
+#: matrices scale as exp(step), so central differences are off by step^2 / 6.
+MATERIAL_STEP = 1e-4
+#: Largest coordinate change of Eq. (D2) for the lowest squared frequency's form of Eq. (D7) (Richardson-combined
+#: with twice it): the links' stiffest modes make the form's round-off about 1e-10 of the frequency, which a step of
+#: OUTPUT_STEP would amplify.
+FREQUENCY_STEP = 1e-4
 
 
 @dataclass(frozen=True)
@@ -67,7 +77,9 @@ class PathSensitivity:
     driving torque ``(poses, k)`` (N m) with respect to the ``k`` ``parameters`` (a material per unit relative
     change: ``E link1`` is ``d/d ln E`` of link 1, the change per 100 % of E to first order; a bore error or a
     section dimension per unit of it, rad or m), of the links' total ``mass`` ``(k,)`` (kg), and of each joint's
-    reaction force ``(poses, 3, k)`` (N, world axes; its first three multipliers), by joint name."""
+    reaction force ``(poses, 3, k)`` (N, world axes; its first three multipliers), by joint name; with stability,
+    the lowest squared frequency of Eq. (B1) at each pose ``squared_frequency`` ``(poses,)`` (rad^2/s^2) and its
+    derivatives ``lowest_squared_frequency`` ``(poses, k)``."""
 
     parameters: tuple[str, ...]
     drive_angle: NDArray[np.float64]
@@ -75,22 +87,54 @@ class PathSensitivity:
     driving_torque: NDArray[np.float64]
     mass: NDArray[np.float64] | None = None
     reaction_forces: dict[str, NDArray[np.float64]] = dataclasses.field(default_factory=dict)
+    squared_frequency: NDArray[np.float64] | None = None
+    lowest_squared_frequency: NDArray[np.float64] | None = None
+
+    def fold_distance(self) -> NDArray[np.float64]:
+        """``(poses, k)``: the change of each parameter alone that brings the pose's lowest squared frequency of
+        Eq. (B1) to zero to first order, ``mu / |d mu / dp|`` (inf where it does not move): how far the derivatives
+        hold before the equilibrium folds (snaps). Needs the sensitivity computed with ``stability``."""
+        if self.squared_frequency is None or self.lowest_squared_frequency is None:
+            raise ValueError("these derivatives were computed without stability: pass stability=True")
+        slope = np.abs(self.lowest_squared_frequency)
+        with np.errstate(divide="ignore"):
+            return np.where(slope > 0.0, self.squared_frequency[:, None] / slope, np.inf)
 
 
 def material_sensitivity(
-    scene: LinkageScene, time: NDArray, q: NDArray, multipliers: NDArray, links: tuple[int, ...] | None = None
+    scene: LinkageScene,
+    time: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+    links: tuple[int, ...] | None = None,
+    stability: bool = False,
 ) -> PathSensitivity:
     """The derivatives of the coupler point, driving torque and mass at the equilibria ``q`` ``(poses, n)``,
     ``multipliers`` ``(poses, m)`` at ``time`` (a quasi-static run's rows) with respect to the relative Young's
     modulus and then density of each of ``links`` (default all; module docstring). The mass is proportional to the
-    density and independent of the modulus: its derivatives are 0 and the link's mass."""
+    density and independent of the modulus: its derivatives are 0 and the link's mass. ``stability``: the lowest
+    squared frequency of Eq. (B1) too (:class:`PathSensitivity`)."""
     system = scene.system
     links = tuple(range(len(system.bodies))) if links is None else tuple(links)
     names = tuple(f"E {system.bodies[k].name}" for k in links) + tuple(f"rho {system.bodies[k].name}" for k in links)
     q = np.asarray(q, dtype=float)
-    found = _path_derivatives(scene, time, q, multipliers, names, lambda row, t: material_rates(system, q[row], links))
+    sides = [
+        (*(_with_material(scene, k, {field: np.exp(sign * MATERIAL_STEP)}) for sign in (1.0, -1.0)), MATERIAL_STEP)
+        for field in ("stiffness", "density")
+        for k in links
+    ]
+    found = _path_derivatives(
+        scene, time, q, multipliers, names, lambda row, t: material_rates(system, q[row], links), sides, stability
+    )
     masses = [float(system.bodies[k].moments.mass) for k in links]
     return replace(found, mass=np.array([0.0] * len(links) + masses))
+
+
+def _with_material(scene: LinkageScene, link: int, factors: dict[str, float]) -> LinkageScene:
+    """``scene`` with link ``link`` of a material scaled by ``factors`` (:meth:`FlexibleBody.scaled`)."""
+    bodies = list(scene.system.bodies)
+    bodies[link] = bodies[link].scaled(**factors)
+    return replace(scene, system=replace(scene.system, bodies=tuple(bodies)))
 
 
 def bore_sensitivity(
@@ -101,6 +145,7 @@ def bore_sensitivity(
     q: NDArray,
     multipliers: NDArray,
     bores: tuple[tuple[int, int], ...] | None = None,
+    stability: bool = False,
 ) -> PathSensitivity:
     """The derivatives of the coupler point and driving torque at a quasi-static run's equilibria (as
     :func:`material_sensitivity`) with respect to the three errors of :class:`BoreError` (``twist``, rad;
@@ -112,23 +157,16 @@ def bore_sensitivity(
     :data:`SHIFT_STEP` times the loop's size."""
     n = loop.n
     bores = tuple((j, k) for k in range(n) for j in ((k - 1) % n, k)) if bores is None else tuple(bores)
-    system, offsets = scene.system, scene.settings.get("joint_offsets", "body")
-    pairs, names = [], []
+    system = scene.system
+    pairs, names, sides = [], [], []
     for joint, link in bores:
-        index = _joint_index(scene, joint)
-        geometry = scene.joints[index]
-        side = geometry.bodies.index(link)
-        shift = SHIFT_STEP * loop.scale
-        for field, step in (("twist", TWIST_STEP), ("offset", shift), ("axial", shift)):
-            built = []
-            for sign in (1.0, -1.0):
-                axis, point = bore_side(loop, options, BoreError.single(joint, link, field, sign * step))
-                axes = (axis, geometry.axes[1]) if side == 0 else (geometry.axes[0], axis)
-                points = (point, geometry.points[1]) if side == 0 else (geometry.points[0], point)
-                moved = replace(geometry, axes=axes, points=points)
-                built.append(joint_constraint(moved, scene.bodies, offsets, 1.0))
-            pairs.append((len(system.bodies) + index, built[0], built[1], step))
+        index = len(system.bodies) + _joint_index(scene, joint)  # among all constraints
+        for field, unit in (("twist", 1.0), ("offset", loop.scale), ("axial", loop.scale)):
+            step = (TWIST_STEP if field == "twist" else SHIFT_STEP) * unit
+            plus, minus = (_bore_joint(scene, loop, options, (joint, link), field, s) for s in (step, -step))
+            pairs.append((index, plus, minus, step))
             names.append(f"{field} joint{joint} link{link}")
+            sides.append((_with_joint(scene, index, plus), _with_joint(scene, index, minus), step))
     q, multipliers = np.asarray(q, dtype=float), np.asarray(multipliers, dtype=float)
 
     def rates(row: int, t: float) -> NDArray[np.float64]:
@@ -139,10 +177,7 @@ def bore_sensitivity(
 
     # The outputs read the joints' points: a bore error of the tool link moves the coupler point itself (the mean of
     # its joint points as built), at fixed coordinates too.
-    explicit = [
-        _explicit_rate(scene, index, plus, minus, step, time, q, multipliers) for index, plus, minus, step in pairs
-    ]
-    return _path_derivatives(scene, time, q, multipliers, tuple(names), rates, explicit)
+    return _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability)
 
 
 def section_velocities(
@@ -176,6 +211,7 @@ def section_sensitivity(
     links: tuple[int, ...] | None = None,
     step: float = MORPH_STEP,
     velocities: dict[tuple[int, str], NDArray] | None = None,
+    stability: bool = False,
 ) -> PathSensitivity:
     """The derivatives of the coupler point, driving torque and mass at a quasi-static run's equilibria (as
     :func:`material_sensitivity`) with respect to each of ``parameters`` (fields of
@@ -211,16 +247,8 @@ def section_sensitivity(
             out[:, column] = (upper - lower) / (2.0 * delta)
         return out
 
-    explicit = []
-    for (plus, minus), delta in shifted:
-        upper, lower = path_sensors(plus, time, q, multipliers), path_sensors(minus, time, q, multipliers)
-        explicit.append(
-            (
-                (upper["coupler_point"] - lower["coupler_point"]) / (2.0 * delta),
-                (upper["driving_torque"] - lower["driving_torque"]) / (2.0 * delta),
-            )
-        )
-    sensitivity = _path_derivatives(scene, time, q, multipliers, tuple(names), rates, explicit)
+    sides = [(plus, minus, delta) for (plus, minus), delta in shifted]
+    sensitivity = _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability)
     mass = np.array([(_mass(plus) - _mass(minus)) / (2.0 * delta) for (plus, minus), delta in shifted])
     return replace(sensitivity, mass=mass)
 
@@ -230,28 +258,44 @@ def _mass(scene: LinkageScene) -> float:
     return float(sum(body.moments.mass for body in scene.system.bodies))
 
 
-def _explicit_rate(
-    scene: LinkageScene,
-    index: int,
-    plus: Constraint,
-    minus: Constraint,
-    step: float,
-    time: NDArray,
-    q: NDArray,
-    multipliers: NDArray,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The outputs' change with a joint's parameter at fixed coordinates and multipliers (central differences): the
-    coupler point ``(poses, 3)`` and the driving torque ``(poses,)``."""
-    sides = []
-    for joint in (plus, minus):
-        constraints = list(scene.system.constraints)
-        constraints[index - len(scene.system.bodies)] = joint
-        moved = replace(scene, system=replace(scene.system, constraints=tuple(constraints)))
-        sides.append(path_sensors(moved, time, q, multipliers))
-    return (
-        (sides[0]["coupler_point"] - sides[1]["coupler_point"]) / (2.0 * step),
-        (sides[0]["driving_torque"] - sides[1]["driving_torque"]) / (2.0 * step),
-    )
+def _bore_joint(
+    scene: LinkageScene, loop: SingleLoop, options: LinkageOptions, bore: tuple[int, int], field: str, error: float
+) -> Constraint:
+    """Joint ``bore[0]`` of ``scene`` with bore ``(joint, link)``'s ``field`` in error by ``error``, built by the
+    linkage's own rule (:func:`~ffrf.scenes.linkage_description.bore_side`)."""
+    joint, link = bore
+    geometry = scene.joints[_joint_index(scene, joint)]
+    side = geometry.bodies.index(link)
+    axis, point = bore_side(loop, options, BoreError.single(joint, link, field, error))
+    axes = (axis, geometry.axes[1]) if side == 0 else (geometry.axes[0], axis)
+    points = (point, geometry.points[1]) if side == 0 else (geometry.points[0], point)
+    offsets = scene.settings.get("joint_offsets", "body")
+    return joint_constraint(replace(geometry, axes=axes, points=points), scene.bodies, offsets, 1.0)
+
+
+def _with_joint(scene: LinkageScene, index: int, joint: Constraint) -> LinkageScene:
+    """``scene`` with constraint ``index`` (of the system's bodies then constraints) replaced by ``joint``."""
+    constraints = list(scene.system.constraints)
+    constraints[index - len(scene.system.bodies)] = joint
+    return replace(scene, system=replace(scene.system, constraints=tuple(constraints)))
+
+
+def _outputs(
+    scene: LinkageScene, time: NDArray, q: NDArray, multipliers: NDArray, modes: list[LowestMode] | None = None
+) -> dict:
+    """The differentiated outputs at the rows ``(time, q, multipliers)``: the coupler point ``(rows, 3)``, the
+    driving torque and, with ``modes`` (one per row, of the nominal equilibria), the lowest squared frequency's form
+    of Eq. (D7) ``(rows,)``, whose change is the frequency's."""
+    sensors = path_sensors(scene, time, q, multipliers)
+    out = {"coupler_point": sensors["coupler_point"], "driving_torque": sensors["driving_torque"]}
+    if modes is not None:
+        out["lowest_squared_frequency"] = np.array(
+            [
+                frequency_form(scene.system, row, lam, float(t), mode)
+                for t, row, lam, mode in zip(time, q, multipliers, modes, strict=True)
+            ]
+        )
+    return out
 
 
 def _joint_index(scene: LinkageScene, joint: int) -> int:
@@ -295,13 +339,24 @@ def _path_derivatives(
     multipliers: NDArray,
     names: tuple[str, ...],
     rates: Callable[[int, float], NDArray],
-    explicit: list[tuple[NDArray, NDArray]] | None = None,
+    sides: list[tuple[LinkageScene, LinkageScene, float]],
+    stability: bool = False,
 ) -> PathSensitivity:
-    """Eq. (D1) at every pose with ``rates(row, t)``'s right-hand sides, then Eq. (D2) for the outputs, plus, per
-    parameter, the outputs' own change at fixed coordinates (``explicit``: coupler point and torque rates)."""
+    """Eq. (D1) at every pose with ``rates(row, t)``'s right-hand sides, then Eq. (D2) for the outputs: along the
+    response, plus, per parameter, the outputs' own change at fixed coordinates, central differences of the linkage
+    built at +-step of it (``sides``: ``(plus, minus, step)``). With ``stability`` the lowest squared frequency of
+    Eq. (B1) too, refused (:class:`SensitivityError`) at a pose where it is not positive."""
     system = scene.system
     time, q, multipliers = np.asarray(time, float), np.asarray(q, float), np.asarray(multipliers, float)
     poses, k = len(time), len(names)
+    modes = (
+        [lowest_mode(system, row, lam, float(t)) for t, row, lam in zip(time, q, multipliers, strict=True)]
+        if stability
+        else None
+    )
+    frequencies = None if modes is None else np.array([mode.mu for mode in modes])
+    if frequencies is not None and np.any(frequencies <= 0.0):
+        _refuse_unstable(scene, time, frequencies)
     dq, dlam = np.empty((poses, k, q.shape[1])), np.empty((poses, k, multipliers.shape[1]))
     for row, t in enumerate(time):
         response_q, response_lam = equilibrium_response(
@@ -309,20 +364,18 @@ def _path_derivatives(
         )
         dq[row], dlam[row] = response_q.T, response_lam.T
     # Eq. (D2): each (pose, parameter) pair stepped along its response, all in one evaluation per side
-    step = OUTPUT_STEP / np.maximum(np.abs(dq).max(axis=2), np.finfo(float).tiny)  # (poses, k)
-    times = np.repeat(time, k)
-    sides = []
-    for sign in (1.0, -1.0):
-        shifted_q = (q[:, None, :] + sign * step[..., None] * dq).reshape(poses * k, -1)
-        shifted_lam = (multipliers[:, None, :] + sign * step[..., None] * dlam).reshape(poses * k, -1)
-        sides.append(path_sensors(scene, times, shifted_q, shifted_lam))
-    denominator = 2.0 * step
-    coupler = (sides[0]["coupler_point"] - sides[1]["coupler_point"]).reshape(poses, k, 3) / denominator[..., None]
-    torque = (sides[0]["driving_torque"] - sides[1]["driving_torque"]).reshape(poses, k) / denominator
-    if explicit is not None:
-        for column, (coupler_rate, torque_rate) in enumerate(explicit):
-            coupler[:, column] += coupler_rate
-            torque[:, column] += torque_rate
+    derivatives = _along_response(scene, time, q, multipliers, dq, dlam, OUTPUT_STEP)
+    if modes is not None:  # Richardson's rule on steps h and 2h: truncation h^4
+        fine, coarse = (
+            _along_response(scene, time, q, multipliers, dq, dlam, factor * FREQUENCY_STEP, modes)
+            for factor in (1.0, 2.0)
+        )
+        name = "lowest_squared_frequency"
+        derivatives[name] = (4.0 * fine[name] - coarse[name]) / 3.0
+    for column, (plus, minus, step) in enumerate(sides):
+        upper, lower = (_outputs(side, time, q, multipliers, modes) for side in (plus, minus))
+        for name, values in derivatives.items():
+            values[:, column] += (upper[name] - lower[name]) / (2.0 * step)
     angles = np.array([scene.drive_angle(float(t)) for t in time])
     # a joint's reaction force is its first three multipliers (Eq. (J2)): its derivative is the response's, exactly
     reactions = {
@@ -330,4 +383,51 @@ def _path_derivatives(
         for c, joint in enumerate(system.all_constraints)
         if isinstance(joint, MarkerJoint)
     }
-    return PathSensitivity(names, angles, np.transpose(coupler, (0, 2, 1)), torque, reaction_forces=reactions)
+    return PathSensitivity(
+        names,
+        angles,
+        np.transpose(derivatives["coupler_point"], (0, 2, 1)),
+        derivatives["driving_torque"],
+        reaction_forces=reactions,
+        squared_frequency=frequencies,
+        lowest_squared_frequency=derivatives.get("lowest_squared_frequency"),
+    )
+
+
+def _along_response(
+    scene: LinkageScene,
+    time: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+    dq: NDArray,
+    dlam: NDArray,
+    largest: float,
+    modes: list[LowestMode] | None = None,
+) -> dict[str, NDArray[np.float64]]:
+    """Eq. (D2): the outputs' central differences along each response ``(dq, dlam)`` ``(poses, k, .)``, a step
+    moving no coordinate by more than ``largest``; each output ``(poses, k, ...)``."""
+    poses, k = dq.shape[:2]
+    step = largest / np.maximum(np.abs(dq).max(axis=2), np.finfo(float).tiny)  # (poses, k)
+    times = np.repeat(time, k)
+    sides = []
+    for sign in (1.0, -1.0):
+        shifted_q = (q[:, None, :] + sign * step[..., None] * dq).reshape(poses * k, -1)
+        shifted_lam = (multipliers[:, None, :] + sign * step[..., None] * dlam).reshape(poses * k, -1)
+        repeated = None if modes is None else [mode for mode in modes for _ in range(k)]
+        sides.append(_outputs(scene, times, shifted_q, shifted_lam, repeated))
+    out = {}
+    for name in sides[0]:
+        difference = (sides[0][name] - sides[1][name]).reshape(poses, k, *sides[0][name].shape[1:])
+        out[name] = difference / (2.0 * step).reshape(poses, k, *([1] * (difference.ndim - 2)))
+    return out
+
+
+def _refuse_unstable(scene: LinkageScene, time: NDArray, frequencies: NDArray) -> None:
+    """:class:`SensitivityError` for the first pose whose lowest squared frequency of Eq. (B1) is not positive."""
+    row = int(np.flatnonzero(frequencies <= 0.0)[0])
+    angle = np.degrees(scene.drive_angle(float(time[row])))
+    raise SensitivityError(
+        f"the equilibrium at drive angle {angle:.4g} deg (t = {time[row]:g} s) is not stable (lowest squared "
+        f"frequency of Eq. (B1) {frequencies[row]:.3g} rad^2/s^2): a print does not rest there, and its derivatives "
+        "are those of a fold or of a path it has left; take the poses on either side"
+    )

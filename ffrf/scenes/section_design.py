@@ -4,11 +4,13 @@ sensitivities (``docs/formulation.md``, Eq. (D6); issue #35).
 The links' section dimensions :math:`p` (fields of :class:`~ffrf.geometry.link_geometry.LinkDesign` that leave the
 bores in place, every link alike) solve
 
-.. math:: \min_p\ m(p) \quad\text{s.t.}\quad |d_i(p)| \le \bar d \ \text{at every pose } i,\qquad
-          p_{lo} \le p \le p_{hi},
+.. math:: \min_p\ m(p) \quad\text{s.t.}\quad |d_i(p)| \le \bar d,\ \ \mu_i(p) \ge (2\pi \underline f)^2
+          \ \text{at every pose } i,\qquad p_{lo} \le p \le p_{hi},
 
-with :math:`m` the links' mass and :math:`d_i` the coupler's deviation from the ideal path at pose :math:`i` of a
-quasi-static revolution under the linkage's load (its weight, its bore errors). Each design is meshed and run
+with :math:`m` the links' mass, :math:`d_i` the coupler's deviation from the ideal path at pose :math:`i` of a
+quasi-static revolution under the linkage's load (its weight, its bore errors) and, where a lowest frequency
+:math:`\underline f` is asked for, :math:`\mu_i` the lowest squared frequency of Eq. (B1) there (its gradient by
+Eq. (D7)). Each design is meshed and run
 afresh; the gradients are exact for the meshed model (Eq. (D1) with the section's morph, Eq. (D5),
 :func:`~ffrf.scenes.path_sensitivity.section_sensitivity`): :math:`\partial|d_i|/\partial p = d_i^T
 (\partial d_i/\partial p)/|d_i|`. scipy's SLSQP works in dimensions relative to the start, mass relative to the
@@ -60,6 +62,7 @@ DESIGN = {
     "lower": Key("numbers", True),
     "upper": Key("numbers", True),
     "max_deviation": Key("number", True, positive),
+    "min_frequency_hz": Key("number", False, positive),
     "outputs": Key("integer", False, positive),
     "max_iterations": Key("integer", False, positive),
 }
@@ -80,7 +83,8 @@ ACTIVE = 1e-3
 @dataclass(frozen=True)
 class DesignProblem:
     """The section ``parameters`` with their ``lower`` and ``upper`` bounds (m), the bound on the coupler's
-    deviation ``max_deviation`` (m) at each of ``outputs`` poses of a revolution, and SLSQP's ``max_iterations``."""
+    deviation ``max_deviation`` (m) at each of ``outputs`` poses of a revolution, SLSQP's ``max_iterations`` and,
+    optionally, the least lowest vibration frequency ``min_frequency_hz`` (Hz, Eq. (B1)) at each pose."""
 
     parameters: tuple[str, ...]
     lower: tuple[float, ...]
@@ -88,6 +92,12 @@ class DesignProblem:
     max_deviation: float
     outputs: int = 25
     max_iterations: int = 20
+    min_frequency_hz: float | None = None
+
+    @property
+    def min_squared_frequency(self) -> float | None:
+        """The frequency bound as a squared angular frequency (rad^2/s^2), Eq. (B1)'s unit."""
+        return None if self.min_frequency_hz is None else (2.0 * np.pi * self.min_frequency_hz) ** 2
 
     def __post_init__(self) -> None:
         unknown = [p for p in self.parameters if p not in SECTION_PARAMETERS]
@@ -101,12 +111,16 @@ class DesignProblem:
             raise SceneError(f"design: max_deviation must be > 0, got {self.max_deviation!r}")
         if self.outputs < 3:
             raise SceneError(f"design: outputs must be at least 3 poses, got {self.outputs}")
+        if self.min_frequency_hz is not None and not self.min_frequency_hz > 0.0:
+            raise SceneError(f"design: min_frequency_hz must be > 0, got {self.min_frequency_hz!r}")
 
 
 @dataclass(frozen=True)
 class DesignPoint:
     """One design, meshed and run: its parameter ``values`` (m), the links' ``mass`` (kg) and the coupler's
-    ``deviation`` (m) at each pose, with their gradients by the parameters (``(k,)`` and ``(poses, k)``)."""
+    ``deviation`` (m) at each pose, with their gradients by the parameters (``(k,)`` and ``(poses, k)``); for a
+    problem with a frequency bound the lowest squared frequency of Eq. (B1) at each pose (rad^2/s^2) and its
+    gradients likewise."""
 
     values: NDArray[np.float64]
     mass: float
@@ -114,10 +128,36 @@ class DesignPoint:
     mass_gradient: NDArray[np.float64]
     deviation_gradient: NDArray[np.float64]
     seconds: float
+    frequency: NDArray[np.float64] | None = None
+    frequency_gradient: NDArray[np.float64] | None = None
 
     @property
     def max_deviation(self) -> float:
         return float(self.deviation.max())
+
+    @property
+    def min_frequency_hz(self) -> float | None:
+        """The lowest vibration frequency over the poses (Hz), where computed."""
+        return None if self.frequency is None else float(np.sqrt(max(self.frequency.min(), 0.0)) / (2.0 * np.pi))
+
+    def margins(self, problem: DesignProblem) -> NDArray[np.float64]:
+        """Every constraint's margin, non-negative where met: the deviations' relative to their bound, then the
+        squared frequencies' relative to theirs."""
+        out = [1.0 - self.deviation / problem.max_deviation]
+        if problem.min_squared_frequency is not None and self.frequency is not None:
+            out.append(self.frequency / problem.min_squared_frequency - 1.0)
+        return np.concatenate(out)
+
+    def margin_gradients(self, problem: DesignProblem) -> NDArray[np.float64]:
+        """The margins' gradients by the parameters (m^-1), ``(constraints, k)``."""
+        out = [-self.deviation_gradient / problem.max_deviation]
+        if problem.min_squared_frequency is not None and self.frequency_gradient is not None:
+            out.append(self.frequency_gradient / problem.min_squared_frequency)
+        return np.vstack(out)
+
+    def feasible(self, problem: DesignProblem) -> bool:
+        """Whether every constraint is met to :data:`FEASIBLE`."""
+        return bool(self.margins(problem).min() >= -FEASIBLE)
 
 
 @dataclass(frozen=True)
@@ -147,7 +187,14 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
     result = run_linkage(scene, mode="quasi_static", n_outputs=problem.outputs, sensors="path")
     assert result.multipliers is not None  # a quasi-static run keeps its equilibria's multipliers
     try:
-        exact = section_sensitivity(scene, result.time, result.q, result.multipliers, problem.parameters)
+        exact = section_sensitivity(
+            scene,
+            result.time,
+            result.q,
+            result.multipliers,
+            problem.parameters,
+            stability=problem.min_frequency_hz is not None,
+        )
     except GeometryError as error:
         section = ", ".join(f"{p} {1e3 * v:.4g} mm" for p, v in zip(problem.parameters, values, strict=True))
         raise SceneError(f"design at {section}: {error}; keep the bounds away from that section") from error
@@ -157,6 +204,11 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
     deviation = np.asarray(result.sensors["coupler_deviation"], dtype=float)
     size = np.linalg.norm(deviation, axis=1)
     direction = deviation / np.maximum(size, np.finfo(float).tiny)[:, None]
+    frequency_gradient = (
+        None
+        if exact.lowest_squared_frequency is None
+        else exact.lowest_squared_frequency.reshape(len(result.time), -1, k).sum(axis=1)
+    )
     return DesignPoint(
         np.asarray(values, dtype=float),
         float(sum(body.moments.mass for body in scene.system.bodies)),
@@ -164,6 +216,8 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
         exact.mass.reshape(-1, k).sum(axis=0),
         np.einsum("pa,pak->pk", direction, coupler),
         time.perf_counter() - started,
+        exact.squared_frequency,
+        frequency_gradient,
     )
 
 
@@ -195,10 +249,10 @@ def optimise_section(
         return point.mass / mass0, point.mass_gradient * scale / mass0
 
     def margins(x: NDArray) -> NDArray:
-        return 1.0 - at(x).deviation / problem.max_deviation
+        return at(x).margins(problem)
 
     def margin_gradients(x: NDArray) -> NDArray:
-        return -at(x).deviation_gradient * scale / problem.max_deviation
+        return at(x).margin_gradients(problem) * scale
 
     iteration = 0
 
@@ -219,7 +273,7 @@ def optimise_section(
         options={"maxiter": problem.max_iterations, "ftol": FTOL},
     )
     # SLSQP returns its last iterate; take the lightest design that meets the bound among those it ran
-    feasible = [p for p in history if p.max_deviation <= problem.max_deviation * (1.0 + FEASIBLE)]
+    feasible = [p for p in history if p.feasible(problem)]
     optimum = min(feasible, key=lambda p: p.mass) if feasible else at(solution.x)
     residual, active = _kkt(problem, optimum, optimum.values / scale, scale, mass0)
     success = bool(feasible) and residual < KKT_TOLERANCE
@@ -243,10 +297,11 @@ def _kkt(
     variables ``x``) and the non-negative multipliers of the active constraints and bounds that minimise it."""
     gradient = point.mass_gradient * scale / mass0
     columns, names = [], []
-    margins = 1.0 - point.deviation / problem.max_deviation
+    margins, gradients = point.margins(problem), point.margin_gradients(problem)
+    poses = len(point.deviation)
     for i in np.flatnonzero(margins < ACTIVE):
-        columns.append(-point.deviation_gradient[i] * scale / problem.max_deviation)
-        names.append(f"deviation at pose {i}")
+        columns.append(gradients[i] * scale)
+        names.append(f"deviation at pose {i}" if i < poses else f"frequency at pose {i - poses}")
     for j, name in enumerate(problem.parameters):
         unit = np.zeros(len(scale))
         unit[j] = 1.0
@@ -278,6 +333,7 @@ def load_design(document: dict, where: str = "design") -> tuple[SingleLoop, Link
             length * float(spec["max_deviation"]),
             int(spec.get("outputs", 25)),
             int(spec.get("max_iterations", 20)),
+            float(spec["min_frequency_hz"]) if "min_frequency_hz" in spec else None,
         )
     except SceneError as error:
         raise SceneError(f"{where}, {error}") from error

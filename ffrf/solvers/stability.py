@@ -28,8 +28,11 @@ __all__ = [
     "check_judged_at_equilibria",
     "CriticalPose",
     "EquilibriumStability",
+    "LowestMode",
     "critical_pose",
     "equilibrium_stability",
+    "frequency_form",
+    "lowest_mode",
     "mode_shares",
     "stability_along",
     "stability_summary",
@@ -73,9 +76,7 @@ def equilibrium_stability(
 ) -> EquilibriumStability:
     """Eq. (B1) at the equilibrium ``(q, multipliers)`` at time ``t`` (drives at their prescribed angles)."""
     n = system.n_coordinates
-    zeros = np.zeros(n)
-    matrix = newton_model(system).iteration_matrix(q, zeros, zeros, multipliers, t, 0.0, 1.0, 0.0)
-    tangent, jacobian = matrix[:n, :n], matrix[n:, :n]
+    tangent, jacobian = _pencil(system, q, multipliers, t)
     symmetric = 0.5 * (tangent + tangent.T)
     asymmetry = float(np.abs(tangent - tangent.T).max() / max(np.abs(tangent).max(), 1e-300))
     free = _null_space(jacobian)
@@ -87,6 +88,49 @@ def equilibrium_stability(
     # only the k smallest (LAPACK's subset solver): Eq. (B1) at every output is the monitoring's cost
     values, vectors = eigh(0.5 * (stiffness + stiffness.T), 0.5 * (mass + mass.T), subset_by_index=[0, k - 1])
     return EquilibriumStability(values, free @ vectors, free.shape[1], asymmetry)
+
+
+@dataclass(frozen=True)
+class LowestMode:
+    """The lowest squared frequency ``mu`` of Eq. (B1) at an equilibrium, its mode ``x`` in ``q`` (``x^T M x = 1``,
+    in the null space of ``C_q``) and the mode's constraint forces ``y`` (``(K_t + H) x + C_q^T y = mu M x``)."""
+
+    mu: float
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+
+
+def lowest_mode(system: MultibodySystem, q: NDArray, multipliers: NDArray, t: float = 0.0) -> LowestMode:
+    """:class:`LowestMode` at the equilibrium ``(q, multipliers)`` at time ``t``; ``y`` by least squares (unique
+    where the constraints are independent)."""
+    found = equilibrium_stability(system, q, multipliers, t, count=1)
+    if found.squared_frequencies.size == 0:
+        raise SceneError(f"the equilibrium at t = {t:g} has no free motion: it has no squared frequency to follow")
+    tangent, jacobian = _pencil(system, q, multipliers, t)
+    mu, x = float(found.squared_frequencies[0]), found.modes[:, 0]
+    # the symmetric part, as in Eq. (B1): the tangent's asymmetry (round-off at an equilibrium) is not differentiated
+    unbalanced = mu * (system.mass_matrix(q) @ x) - 0.5 * (tangent + tangent.T) @ x
+    y = np.linalg.lstsq(jacobian.T, unbalanced, rcond=None)[0]
+    return LowestMode(mu, x, y)
+
+
+def frequency_form(system: MultibodySystem, q: NDArray, multipliers: NDArray, t: float, mode: LowestMode) -> float:
+    r""":math:`x^T (K_t + H) x + 2 y^T C_q x - \mu\, x^T M x` of ``system`` at ``(q, multipliers, t)`` with the
+    mode of another (nominal) state (``docs/formulation.md``, Eq. (D7)): zero at the mode's own state, and its
+    change with anything the matrices depend on is, to first order, that of the lowest squared frequency (the
+    derivative of a simple eigenvalue of the constrained pencil, the mode held fixed: no eigenvalue is re-solved,
+    so the eigensolver's round-off is not differenced)."""
+    tangent, jacobian = _pencil(system, q, multipliers, t)
+    x = mode.x  # x^T K x is that of K's symmetric part
+    return float(x @ tangent @ x + 2.0 * mode.y @ (jacobian @ x) - mode.mu * (x @ system.mass_matrix(q) @ x))
+
+
+def _pencil(system: MultibodySystem, q: NDArray, multipliers: NDArray, t: float) -> tuple[NDArray, NDArray]:
+    """The static tangent ``K_t + H`` and the constraint Jacobian ``C_q`` at ``(q, multipliers, t)``."""
+    n = system.n_coordinates
+    zeros = np.zeros(n)
+    matrix = newton_model(system).iteration_matrix(q, zeros, zeros, multipliers, t, 0.0, 1.0, 0.0)
+    return matrix[:n, :n], matrix[n:, :n]
 
 
 def stability_along(

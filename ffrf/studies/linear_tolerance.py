@@ -37,6 +37,7 @@ __all__ = [
     "LinearPath",
     "check_linear",
     "check_with_full_runs",
+    "first_order_stability",
     "linear_path",
     "allocate",
     "linear_report",
@@ -56,7 +57,8 @@ class LinearPath:
     ``nominal`` ``(poses, 3)`` (m) at the base, ``slopes`` ``(poses, 3, k)`` (m per unit of each parameter, in the
     study's units: deg, mm), at the ``drive_angle`` (rad) of the base run's outputs; ``seconds``: the base run's and
     the sensitivities' wall time; the driving torque likewise, ``torque`` ``(poses,)`` (N m) and ``torque_slopes``
-    ``(poses, k)``, where given."""
+    ``(poses, k)``, where given; and for a study that monitors stability the lowest squared frequency of Eq. (B1),
+    ``frequency`` ``(poses,)`` (rad^2/s^2) and ``frequency_slopes`` ``(poses, k)``."""
 
     parameters: tuple[str, ...]
     drive_angle: NDArray[np.float64]
@@ -65,6 +67,20 @@ class LinearPath:
     seconds: dict[str, float]
     torque: NDArray[np.float64] | None = None
     torque_slopes: NDArray[np.float64] | None = None
+    frequency: NDArray[np.float64] | None = None
+    frequency_slopes: NDArray[np.float64] | None = None
+
+    def min_squared_frequency(self, values: NDArray) -> NDArray[np.float64]:
+        """``(n,)``: each print's lowest squared frequency of Eq. (B1) over the poses (rad^2/s^2); zero or below
+        where the first order says the print reaches a fold (snaps), beyond which it does not hold."""
+        if self.frequency is None or self.frequency_slopes is None:
+            raise ValueError("this linear model has no stability: the study does not monitor it")
+        values = np.atleast_2d(np.asarray(values, dtype=float))
+        out = np.empty(len(values))
+        for start in range(0, len(values), _BLOCK):
+            block = values[start : start + _BLOCK]
+            out[start : start + _BLOCK] = (self.frequency[:, None] + self.frequency_slopes @ block.T).min(axis=0)
+        return out
 
     def max_torque(self, values: NDArray) -> NDArray[np.float64]:
         """``(n,)``: each print's largest driving torque magnitude over the poses (N m)."""
@@ -128,13 +144,17 @@ def linear_path(study: Study) -> LinearPath:
     ran = time.perf_counter()
     bores = tuple(sorted({(int(p.joint or 0), int(p.link or 0)) for p in study.parameters}))
     assert result.multipliers is not None  # a quasi-static run keeps its equilibria's multipliers
-    exact = bore_sensitivity(scene, scene.loop, options, result.time, result.q, result.multipliers, bores)
-    columns, torques = [], []
+    exact = bore_sensitivity(
+        scene, scene.loop, options, result.time, result.q, result.multipliers, bores, stability=study.stability
+    )
+    columns, torques, frequencies = [], [], []
     for p in study.parameters:
         field, factor = BORE_FIELDS[p.target]
         index = exact.parameters.index(f"{field} joint{int(p.joint or 0)} link{int(p.link or 0)}")
         columns.append(factor * exact.coupler_point[:, :, index])
         torques.append(factor * exact.driving_torque[:, index])
+        if exact.lowest_squared_frequency is not None:
+            frequencies.append(factor * exact.lowest_squared_frequency[:, index])
     return LinearPath(
         tuple(p.name for p in study.parameters),
         exact.drive_angle,
@@ -143,6 +163,8 @@ def linear_path(study: Study) -> LinearPath:
         {"base_run": ran - started, "sensitivities": time.perf_counter() - ran},
         np.asarray(result.sensors["driving_torque"], dtype=float),
         np.stack(torques, axis=1),
+        exact.squared_frequency,
+        np.stack(frequencies, axis=1) if frequencies else None,
     )
 
 
@@ -187,6 +209,14 @@ def check_with_full_runs(study: Study, model: LinearPath, count: int) -> list[di
             full_torque = float(full.get("max_abs_driving_torque_Nm", math.nan))
             torque_difference = abs(torque - full_torque) / full_torque if full_torque > 0.0 else math.inf
             row |= {"full_torque_Nm": full_torque, "linear_torque_Nm": torque, "torque_difference": torque_difference}
+        if model.frequency is not None and math.isfinite(full.get("min_frequency_hz", math.nan)):
+            hertz = float(_hertz(model.min_squared_frequency(values))[0])
+            full_hertz = float(full["min_frequency_hz"])
+            row |= {
+                "full_min_frequency_hz": full_hertz,
+                "linear_min_frequency_hz": hertz,
+                "frequency_difference": abs(hertz - full_hertz) / full_hertz,
+            }
         rows.append(row | {"agrees": bool(difference <= CHECK_TOLERANCE)})
     return rows
 
@@ -248,14 +278,40 @@ def _torque_percentiles(model: LinearPath, values: NDArray, rows: list[dict]) ->
     return {"refused": f"prints run in full differ from the first order by up to {100 * worst:.3g} %"}
 
 
+def _hertz(squared: NDArray) -> NDArray[np.float64]:
+    """Frequencies (Hz) of squared angular frequencies (rad^2/s^2); a fold's (zero or below) is 0."""
+    return np.sqrt(np.maximum(np.asarray(squared, dtype=float), 0.0)) / (2.0 * np.pi)
+
+
+def first_order_stability(model: LinearPath, values: NDArray) -> dict:
+    """The prints' lowest vibration frequency to first order (Hz, percentiles) and the prints that the first order
+    says reach a fold (their share with its interval, and the poses where the first of them folds): the first order
+    holds only away from folds, so where there are such prints the study must run in full."""
+    lowest = model.min_squared_frequency(values)
+    folding = exceedance(-lowest, 0.0)  # the prints whose lowest squared frequency is below zero
+    out: dict = {"min_frequency_hz": percentiles(_hertz(lowest), (0.0, 1.0, 5.0, 50.0, 95.0)), "folds": folding}
+    if folding["exceeding"]:
+        assert model.frequency is not None and model.frequency_slopes is not None
+        first = values[int(np.argmin(lowest))]
+        pose = int(np.argmin(model.frequency + model.frequency_slopes @ first))
+        out["warning"] = (
+            f"{folding['exceeding']} of {folding['n']} prints reach a fold to first order (the lowest squared "
+            "frequency of Eq. (B1) falls below zero, first near drive angle "
+            f"{np.degrees(model.drive_angle[pose]):.4g} deg): they snap, and the first order does not hold for them; "
+            "run the study in full"
+        )
+    return out
+
+
 def linear_report(study: Study, prints: int, checks: int, target: float | None = None, level: float = 95.0) -> dict:
     """The study to first order as plain data (``linear.json`` of ``python -m ffrf study --linear``): ``prints``
     random prints of its distributions (seeded by the study's seed), the percentiles of their largest deviation (m)
     with 95 % intervals, per parameter the largest move of the coupler along the path for one standard deviation of
     it (``one_std_moves``, m: which bores matter), the first ``checks`` prints of its design run in full against the
-    model, ``verified`` when all of those agree (:data:`CHECK_TOLERANCE`), and the seconds each part took; with a
-    ``target`` (m), the tolerances that keep the ``level``-th percentile within it (:func:`allocate`, on 10^5 of the
-    prints)."""
+    model, ``verified`` when all of those agree (:data:`CHECK_TOLERANCE`) and, for a study that monitors stability,
+    no print reaches a fold to first order (``stability``: :func:`first_order_stability`), and the seconds each part
+    took; with a ``target`` (m), the tolerances that keep the ``level``-th percentile within it (:func:`allocate`, on
+    10^5 of the prints)."""
     model = linear_path(study)
     values = sample_values(study, prints, study.seed)
     started = time.perf_counter()
@@ -266,6 +322,8 @@ def linear_report(study: Study, prints: int, checks: int, target: float | None =
     started = time.perf_counter()
     rows = check_with_full_runs(study, model, checks)
     checked = time.perf_counter() - started
+    stability = None if model.frequency is None else first_order_stability(model, values)
+    folds = 0 if stability is None else stability["folds"]["exceeding"]
     return {
         "study": study.name,
         "prints": prints,
@@ -281,7 +339,10 @@ def linear_report(study: Study, prints: int, checks: int, target: float | None =
             output: exceedance(largest, above) for output, above in study.limits if output == "max_coupler_deviation_m"
         },
         "checks": rows,
-        "verified": bool(rows) and all(row["agrees"] for row in rows),
+        "verified": bool(rows) and all(row["agrees"] for row in rows) and not folds,
         "check_tolerance": CHECK_TOLERANCE,
         "seconds": dict(model.seconds, prints=sampled, checks=checked),
-    } | ({} if target is None else {"allocation": allocate(model, values[:100_000], target, level)})
+    } | (
+        ({} if stability is None else {"stability": stability})
+        | ({} if target is None else {"allocation": allocate(model, values[:100_000], target, level)})
+    )

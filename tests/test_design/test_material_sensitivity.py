@@ -7,14 +7,13 @@ import numpy as np
 import pytest
 from body_fixtures import clamped_cantilever
 
-from ffrf.body.flexible_body import FlexibleBody
-from ffrf.body.modal_moments import ModalMoments
 from ffrf.errors import SensitivityError
 from ffrf.fe.materials import PLA
 from ffrf.output.sensors import path_sensors
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.path_sensitivity import material_sensitivity
 from ffrf.solvers.equilibrium_sensitivity import equilibrium_response, material_rates
+from ffrf.solvers.stability import equilibrium_stability
 from ffrf.solvers.static_solver import static_equilibrium
 from ffrf.system.multibody import MultibodySystem
 
@@ -40,14 +39,6 @@ def test_a_clamped_bar_sags_as_rho_over_e_and_so_do_its_derivatives():
     np.testing.assert_allclose(dq[:7], 0.0, atol=1e-14)  # the clamped frame does not move
 
 
-def _scaled(body: FlexibleBody, stiffness: float = 1.0, density: float = 1.0) -> FlexibleBody:
-    m = body.moments
-    moments = ModalMoments(
-        density * m.mass, density * m.s0, density * m.s1, density * m.x2, density * m.c, density * m.d
-    )
-    return FlexibleBody(body.name, moments, stiffness * body.stiffness, stiffness * body.damping, body.exact_gravity)
-
-
 @pytest.fixture(scope="module")
 def bennett_path():
     from bench import hard_cases
@@ -64,17 +55,18 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
     weight, as statics says) agree with central differences of equilibria re-solved by Newton for the linkage with
     that link's E or rho times exp(+-1e-3) and exp(+-2e-3), combined by Richardson's rule, within 1e-6 of the largest
     derivative (measured: 4e-8, the re-solved equilibria's round-off over the steps; one step's differences alone are
-    off by about 2e-7, the step squared)."""
+    off by about 2e-7, the step squared). The lowest squared frequency of Eq. (B1) likewise, within 1e-6 of the
+    largest squared frequency (measured 1e-7: both sides' eigenvalue round-off, 1e-10 of mu, over the steps)."""
     scene, result = bennett_path
     kind, link = parameter
-    exact = material_sensitivity(scene, result.time, result.q, result.multipliers, links=(link,))
+    exact = material_sensitivity(scene, result.time, result.q, result.multipliers, links=(link,), stability=True)
     column = 0 if kind == "E" else 1
     rows = [1, 3, 4]
 
     def outputs(change: float) -> dict:
         bodies = list(scene.system.bodies)
         factor = np.exp(change)
-        bodies[link] = _scaled(bodies[link], **({"stiffness": factor} if kind == "E" else {"density": factor}))
+        bodies[link] = bodies[link].scaled(**({"stiffness": factor} if kind == "E" else {"density": factor}))
         system = replace(scene.system, bodies=tuple(bodies))
         solved = []
         for r in rows:  # solved, then polished by Newton from a freshly factored tangent (round-off, not 1e-13)
@@ -82,7 +74,11 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
             solved.append(static_equilibrium(system, first.q, t=float(result.time[r]), tolerance=1e-15))
         q = np.array([s.q for s in solved])
         lam = np.array([s.multipliers for s in solved])
-        return path_sensors(replace(scene, system=system), result.time[rows], q, lam) | {"multipliers": lam}
+        mu = [_lowest(system, s, float(result.time[r])) for s, r in zip(solved, rows, strict=True)]
+        return path_sensors(replace(scene, system=system), result.time[rows], q, lam) | {
+            "multipliers": lam,
+            "mu": np.array(mu),
+        }
 
     def central(step: float, name: str) -> np.ndarray:
         return (outputs(step)[name] - outputs(-step)[name]) / (2 * step)
@@ -103,6 +99,12 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
             ours_force = exact.reaction_forces[joint.name][rows, :, column]
             np.testing.assert_allclose(ours_force, theirs, rtol=0, atol=1e-6 * np.abs(theirs).max())
     assert len(exact.reaction_forces) == 5  # the loop's four joints and the base's clamp
+    mu = (4 * central(1e-3, "mu") - central(2e-3, "mu")) / 3
+    assert exact.squared_frequency is not None and exact.lowest_squared_frequency is not None
+    np.testing.assert_allclose(exact.squared_frequency[rows], outputs(0.0)["mu"], rtol=1e-9)
+    scale = exact.squared_frequency.max()
+    np.testing.assert_allclose(exact.lowest_squared_frequency[rows, column], mu, rtol=0, atol=1e-6 * scale)
+    assert np.abs(mu).max() > 1e-3 * scale  # the material moves the frequency
     # statics: the clamp carries the whole weight, so its vertical force changes with a link's density by that
     # link's weight and not at all with its modulus, at every pose
     weight = float(scene.system.bodies[link].moments.mass) * 9.81
@@ -110,6 +112,11 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
     clamp = exact.reaction_forces["clamp"][:, :, column]
     np.testing.assert_allclose(clamp[:, 2], expected, rtol=0, atol=1e-9 * weight)
     np.testing.assert_allclose(clamp[:, :2], 0.0, atol=1e-9 * weight)
+
+
+def _lowest(system: MultibodySystem, solved, t: float) -> float:
+    """The lowest squared frequency of Eq. (B1) at a solved equilibrium."""
+    return float(equilibrium_stability(system, solved.q, solved.multipliers, t, count=1).squared_frequencies[0])
 
 
 def test_a_fold_is_refused_not_differentiated():
@@ -125,15 +132,36 @@ def test_a_fold_is_refused_not_differentiated():
 def test_scaling_every_stiffness_and_density_together_moves_nothing_and_scales_the_torque(bennett_path):
     """Every link's E and rho times one factor: the same equilibrium (K_r zeta = Q_g scale alike), forces and so the
     driving torque times that factor. So the derivatives by E and rho of all links sum to zero for the coupler
-    point and to the torque itself for the torque (exact identities of statics, not of our formulation)."""
+    point and to the torque itself for the torque (exact identities of statics, not of our formulation). The forces
+    and the masses scale alike, so the frequencies of small vibrations do not move: the lowest squared frequency's
+    derivatives sum to zero too (measured 1.5e-7 of the largest, the eigenvalue's round-off over the step)."""
     scene, result = bennett_path
-    exact = material_sensitivity(scene, result.time, result.q, result.multipliers)
+    exact = material_sensitivity(scene, result.time, result.q, result.multipliers, stability=True)
+    assert exact.lowest_squared_frequency is not None
+    slopes = exact.lowest_squared_frequency
+    np.testing.assert_allclose(slopes.sum(axis=1), 0.0, atol=1e-6 * np.abs(slopes).max())
     np.testing.assert_allclose(exact.coupler_point.sum(axis=2), 0.0, atol=1e-9 * np.abs(exact.coupler_point).max())
     torque = result.sensors["driving_torque"]
     np.testing.assert_allclose(exact.driving_torque.sum(axis=1), torque, rtol=1e-8, atol=1e-10 * np.abs(torque).max())
     assert exact.mass is not None  # the mass scales with the density alone: its derivatives sum to the mass
     assert exact.mass.sum() == pytest.approx(sum(body.moments.mass for body in scene.system.bodies), rel=1e-12)
     np.testing.assert_array_equal(exact.mass[: len(scene.system.bodies)], 0.0)
+
+
+def test_without_gravity_the_squared_frequencies_go_as_e_over_rho(bennett_path):
+    """Without gravity the held linkage rests unstrained (no load, no reaction), so its stiffness is the links'
+    elastic one alone, proportional to E, and its mass proportional to rho: every squared frequency goes as E / rho,
+    and the lowest one's derivatives by all links' ln E sum to it, by all links' ln rho to minus it (Euler's rule for
+    homogeneous functions; measured 1e-9)."""
+    scene, _ = bennett_path
+    weightless = replace(scene, system=replace(scene.system, gravity=np.zeros(3)))
+    result = run_linkage(weightless, mode="quasi_static", n_outputs=3, t_end=0.2 * scene.t_end, sensors="path")
+    exact = material_sensitivity(weightless, result.time, result.q, result.multipliers, stability=True)
+    assert exact.squared_frequency is not None and exact.lowest_squared_frequency is not None
+    mu, k = exact.squared_frequency, len(scene.system.bodies)
+    np.testing.assert_allclose(exact.lowest_squared_frequency[:, :k].sum(axis=1), mu, rtol=1e-6)
+    np.testing.assert_allclose(exact.lowest_squared_frequency[:, k:].sum(axis=1), -mu, rtol=1e-6)
+    np.testing.assert_allclose(exact.coupler_point, 0.0, atol=1e-12)  # nothing loads it: nothing moves
 
 
 @pytest.fixture(scope="module")
@@ -164,13 +192,17 @@ def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_
     bore) and its equilibria re-solved by Newton at the same poses, at +-delta and +-2 delta combined by Richardson's
     rule (truncation delta^4; one step's differences are off by about 1e-5 of the derivative at delta = 2e-5 m, as
     delta squared), within 1e-6 of the largest derivative (measured: 1e-10 to 2e-10 for the coupler, up to 2e-7 for
-    the torque)."""
+    the torque). The lowest squared frequency of Eq. (B1) at steps five times as wide, within 1e-5 (measured 1.2e-6
+    to 2.5e-6: on both sides the eigenvalue's round-off, 1e-10 of it as the links' stiffest modes are 1e6 times the
+    lowest, over the steps)."""
     from ffrf.scenes.linkage_description import BoreError
     from ffrf.scenes.linkage_scene import build_linkage
     from ffrf.scenes.path_sensitivity import bore_sensitivity
 
     loop, options, scene, result = misfit_bennett
-    exact = bore_sensitivity(scene, loop, options, result.time, result.q, result.multipliers, bores=((joint, link),))
+    exact = bore_sensitivity(
+        scene, loop, options, result.time, result.q, result.multipliers, bores=((joint, link),), stability=True
+    )
     column = ("twist", "offset", "axial").index(field)
     assert exact.parameters[column] == f"{field} joint{joint} link{link}"
     rows = [1, 3, 4]
@@ -183,7 +215,8 @@ def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_
             solved.append(static_equilibrium(built.system, first.q, t=float(result.time[r]), tolerance=1e-15))
         q = np.array([s.q for s in solved])
         lam = np.array([s.multipliers for s in solved])
-        return path_sensors(built, result.time[rows], q, lam)
+        mu = [_lowest(built.system, s, float(result.time[r])) for s, r in zip(solved, rows, strict=True)]
+        return path_sensors(built, result.time[rows], q, lam) | {"mu": np.array(mu)}
 
     def central(step: float, name: str) -> np.ndarray:
         return (outputs(step)[name] - outputs(-step)[name]) / (2 * step)
@@ -194,6 +227,11 @@ def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_
     assert np.abs(ours_coupler).max() > 1e-3  # a bore error moves the coupler far more than gravity's sag
     np.testing.assert_allclose(ours_coupler, coupler, rtol=0, atol=1e-6 * np.abs(coupler).max())
     np.testing.assert_allclose(ours_torque, torque, rtol=0, atol=1e-6 * np.abs(torque).max())
+    wide = 5 * delta  # an eigenvalue's round-off (1e-10 of it) needs a wider step
+    mu = (4 * central(wide, "mu") - central(2 * wide, "mu")) / 3
+    assert exact.lowest_squared_frequency is not None
+    ours = exact.lowest_squared_frequency[rows, column]
+    np.testing.assert_allclose(ours, mu, rtol=0, atol=1e-5 * np.abs(mu).max())
 
 
 def test_the_von_mises_trusss_apex_moves_with_the_bars_stiffness_as_its_closed_form(tmp_path):

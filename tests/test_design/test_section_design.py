@@ -62,12 +62,45 @@ def test_the_design_finds_a_lighter_section_on_its_bound_and_the_designed_linkag
     assert check == pytest.approx(summary["optimum"]["max_deviation_mm"], rel=1e-9)
 
 
+def test_a_lowest_frequency_bound_stops_the_design_where_the_linkage_would_vibrate_lower(tmp_path):
+    """The same room on the deviation, and the lowest vibration frequency (Eq. (B1)) at every design pose kept above
+    0.97 times the default section's (24.94 Hz on the coarse links): the frequency bound is what stops the design
+    (measured: its multiplier at pose 9, the deviation's inactive; 82.2 g -> 79.9 g, not the 63.8 g the deviation
+    alone allows), the optimum meets it, and the designed linkage run afresh with stability monitoring finds the
+    same lowest frequency (its own equilibria, remeshed from the file)."""
+    path = tmp_path / "design.toml"
+    path.write_text(_coarse(EXAMPLE.read_text(), 0.22).rstrip("\n") + "\nmin_frequency_hz = 24.196\n")
+    assert tomllib.loads(path.read_text())["design"]["min_frequency_hz"] == 24.196
+    assert main(["design", str(path), "--out", str(tmp_path / "out")]) == 0
+    summary = json.loads((tmp_path / "out" / "design.json").read_text())
+    assert summary["success"] and summary["problem"]["min_frequency_hz"] == 24.196
+    assert any(name.startswith("frequency at pose") for name in summary["active_multipliers"])
+    assert not any(name.startswith("deviation") for name in summary["active_multipliers"])
+    optimum = summary["optimum"]
+    assert optimum["min_frequency_hz"] ** 2 >= 24.196**2 * (1.0 - FEASIBLE)
+    assert optimum["min_frequency_hz"] < 1.01 * 24.196  # on the bound
+    assert optimum["mass_g"] < 0.99 * summary["start"]["mass_g"]
+    designed = load_design_free(tmp_path / "out" / "designed.toml")
+    run = run_linkage(designed, mode="quasi_static", n_outputs=13, sensors="path", stability=True)
+    lowest = np.sqrt(run.sensors["stability_squared_frequencies"][:, 0].min()) / (2 * np.pi)
+    assert lowest == pytest.approx(optimum["min_frequency_hz"], rel=1e-9)
+
+
+def load_design_free(path: Path):
+    """The linkage a designed linkage file builds."""
+    from ffrf.scenes.linkage_file import linkage_options
+
+    loop, options, _ = linkage_options(tomllib.loads(path.read_text()), str(path))
+    return build_linkage(loop, options)
+
+
 @pytest.mark.parametrize(
     ("change", "message"),
     [
         (('parameters = ["arm_width", "arm_thickness"]', 'parameters = ["arm_width", "bore_radius"]'), "choose from"),
         (("lower = [8, 8]", "lower = [8, 40]"), "0 < lower < upper"),
         (("max_deviation = 0.2", "max_deviation = -0.2"), "max_deviation"),
+        (("outputs = 37", "outputs = 37\nmin_frequency_hz = 0"), "min_frequency_hz"),
         (("[design]", "[designs]"), "unknown key 'designs'"),
     ],
 )

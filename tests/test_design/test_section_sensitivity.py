@@ -17,6 +17,7 @@ from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
 from ffrf.scenes.builder import morphed_body, parametric_link
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.path_sensitivity import section_sensitivity, section_velocities
+from ffrf.solvers.stability import equilibrium_stability
 from ffrf.solvers.static_solver import static_equilibrium
 
 ROWS = [1, 3, 4]
@@ -78,9 +79,10 @@ def test_the_path_derivatives_agree_with_re_solved_linkages_on_the_morphed_mesh(
     morph's rates) against central differences of equilibria re-solved by Newton for the linkage with that link
     rebuilt on its mesh morphed by +-3e-4 of the dimension (the same model, differentiated the long way), within
     1e-6 of the largest derivative (measured 1.3e-8 for the arm's thickness, the steps' truncation: 8e-8 at 1e-3,
-    8e-6 at 1e-2)."""
+    8e-6 at 1e-2). The lowest squared frequency of Eq. (B1) likewise, within 1e-5 of the largest derivative (its
+    eigenvalue's round-off, 1e-10 of it, over the steps)."""
     scene, result = bennett_path
-    exact = section_sensitivity(scene, result.time, result.q, result.multipliers, (parameter,), (link,))
+    exact = section_sensitivity(scene, result.time, result.q, result.multipliers, (parameter,), (link,), stability=True)
     spec = scene.description["bodies"][link]["parametric"]
     build = parametric_link(spec)
     mesh, velocity = design_velocity(build, float(spec["h"]), parameter)
@@ -93,16 +95,26 @@ def test_the_path_derivatives_agree_with_re_solved_linkages_on_the_morphed_mesh(
             first = static_equilibrium(moved.system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
             solved.append(static_equilibrium(moved.system, first.q, t=float(result.time[r]), tolerance=1e-15))
         q = np.array([s.q for s in solved])
-        return path_sensors(moved, result.time[ROWS], q, np.array([s.multipliers for s in solved]))
+        mu = [
+            equilibrium_stability(moved.system, s.q, s.multipliers, float(result.time[r]), 1).squared_frequencies[0]
+            for s, r in zip(solved, ROWS, strict=True)
+        ]
+        return path_sensors(moved, result.time[ROWS], q, np.array([s.multipliers for s in solved])) | {"mu": mu}
 
-    plus, minus = outputs(step), outputs(-step)
-    for name, ours in (
-        ("coupler_point", exact.coupler_point[ROWS, :, 0]),
-        ("driving_torque", exact.driving_torque[ROWS, 0]),
+    near, far = ((outputs(s * step), outputs(-s * step)) for s in (1.0, 2.0))
+    assert exact.lowest_squared_frequency is not None
+    for name, ours, tolerance in (
+        ("coupler_point", exact.coupler_point[ROWS, :, 0], 1e-6),
+        ("driving_torque", exact.driving_torque[ROWS, 0], 1e-6),
+        ("mu", exact.lowest_squared_frequency[ROWS, 0], 1e-5),
     ):
-        theirs = (plus[name] - minus[name]) / (2 * step)
+        central = [
+            (np.asarray(plus[name]) - np.asarray(minus[name])) / (2 * s * step)
+            for s, (plus, minus) in ((1, near), (2, far))
+        ]
+        theirs = (4 * central[0] - central[1]) / 3  # Richardson's rule: truncation step^4
         assert np.abs(theirs).max() > 0.0
-        np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-6 * np.abs(theirs).max())
+        np.testing.assert_allclose(ours, theirs, rtol=0, atol=tolerance * np.abs(theirs).max())
 
 
 @pytest.mark.slow
