@@ -4,7 +4,11 @@ the ideal path (:func:`ffrf.scenes.compensation.compensate`, Eq. (D4)), then the
 Writes ``compensation.json`` (the corrections in degrees and the file's unit, the largest deviation before and as
 the first order predicts it after), ``compensated.toml`` (the linkage file with the corrections added to its bore
 errors: the parts to print) and, in ``check/``, the compensated linkage run as ``python -m ffrf run`` does, its
-links remeshed on the corrected bores; the exit status is that run's.
+links remeshed on the corrected bores; the exit status is that run's. With ``--drive``, also the drive's correction
+along the motion of the compensated print (:func:`ffrf.scenes.drive_correction.correct_drive`, where the task is a
+path): ``drive.json`` (the largest deviation before and after, each corrected angle solved for the print's
+equilibrium) and ``drive_angles.csv`` (per pose the nominal and corrected drive angle, deg, and the deviation before
+and after, mm).
 """
 
 from __future__ import annotations
@@ -17,12 +21,17 @@ import time
 import tomllib
 from pathlib import Path
 
+import numpy as np
+
 from ffrf.cli.arguments import count_at_least, output_folder
 from ffrf.cli.report import run_and_report
 from ffrf.errors import SceneError
 from ffrf.model import load
 from ffrf.scenes.compensation import MAX_SHIFT, MAX_TWIST, Compensation, compensate
+from ffrf.scenes.drive_correction import correct_drive
 from ffrf.scenes.linkage_file import linkage_options
+from ffrf.scenes.linkage_run import run_linkage
+from ffrf.scenes.linkage_scene import build_linkage
 from ffrf.scenes.scene_toml import scene_toml
 
 __all__ = ["HELP", "configure", "run"]
@@ -47,6 +56,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
         type=float,
         default=1e3 * MAX_SHIFT,
         help=f"largest offset or axial correction of a bore (default {1e3 * MAX_SHIFT:g} mm)",
+    )
+    parser.add_argument(
+        "--drive",
+        action="store_true",
+        help="also correct the drive's angle along the motion of the compensated print (a path task, not a timing)",
     )
 
 
@@ -79,7 +93,39 @@ def run(args: argparse.Namespace) -> int:
         file=sys.stderr,
     )
     model = load(compensated)
-    return run_and_report(model, out / "check", model.name, time.perf_counter(), model.settings() | {"vtk_every": 0})
+    status = run_and_report(model, out / "check", model.name, time.perf_counter(), model.settings() | {"vtk_every": 0})
+    if args.drive:
+        _drive(compensated, out, args.outputs)
+    return status
+
+
+def _drive(compensated: Path, out: Path, outputs: int) -> None:
+    """The drive's correction of the compensated print (its links as printed), written to ``out``."""
+    loop, options, _ = linkage_options(tomllib.loads(compensated.read_text()), str(compensated))
+    scene = build_linkage(loop, options)
+    result = run_linkage(scene, mode="quasi_static", n_outputs=outputs, sensors="path")
+    assert result.multipliers is not None  # a quasi-static run keeps its equilibria's multipliers
+    found = correct_drive(scene, result.time, result.q, result.multipliers)
+    before, after = (1e3 * np.linalg.norm(d, axis=1) for d in (found.before, found.after))
+    summary = {
+        "outputs": outputs,
+        "before_mm": float(before.max()),
+        "after_mm": float(after.max()),
+        "max_distance_to_path_mm": float(1e3 * result.sensors["coupler_distance_to_path"].max()),
+        "max_correction_deg": float(np.degrees(np.abs(found.corrected_angle - found.drive_angle)).max()),
+        "clipped_poses": found.clipped,
+        "seconds": found.seconds,
+    }
+    (out / "drive.json").write_text(json.dumps(summary, indent=2) + "\n")
+    rows = np.column_stack([np.degrees(found.drive_angle), np.degrees(found.corrected_angle), before, after])
+    header = "drive_angle_deg,corrected_drive_angle_deg,deviation_before_mm,deviation_after_mm"
+    np.savetxt(out / "drive_angles.csv", rows, delimiter=",", header=header, comments="", fmt="%.9g")
+    print(
+        f"drive corrected along the motion: largest deviation {summary['before_mm']:.4f} -> "
+        f"{summary['after_mm']:.4f} mm (corrections up to {summary['max_correction_deg']:.3g} deg) -> "
+        f"{out / 'drive_angles.csv'}",
+        file=sys.stderr,
+    )
 
 
 def _compensated(document: dict, found: Compensation, length: float) -> dict:

@@ -4,6 +4,7 @@ print."""
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from ffrf.paper.bennett_scene import _paper_loop, bennett_options
 from ffrf.scenes.compensation import compensate, with_corrections
@@ -77,7 +78,7 @@ def test_the_command_line_writes_the_print_to_make_and_runs_it(tmp_path):
 
     source = tmp_path / "pla1.toml"
     source.write_text(PLA1_FILE)
-    assert main(["compensate", str(source), "--out", str(tmp_path / "out"), "--outputs", "25"]) == 0
+    assert main(["compensate", str(source), "--out", str(tmp_path / "out"), "--outputs", "25", "--drive"]) == 0
     summary = json.loads((tmp_path / "out" / "compensation.json").read_text())
     compensated = tomllib.loads((tmp_path / "out" / "compensated.toml").read_text())["linkage"]
     base = next(e for e in compensated["bore_errors"] if (e["joint"], e["link"]) == (3, 0))
@@ -86,6 +87,14 @@ def test_the_command_line_writes_the_print_to_make_and_runs_it(tmp_path):
     assert len(compensated["bore_errors"]) == len(summary["corrections"]) == 8
     after = json.loads((tmp_path / "out" / "check" / "metadata.json").read_text())["summary"]["max_coupler_deviation_m"]
     assert 1e3 * after < summary["before_mm"] / 4
+    # --drive: the compensated print's drive corrected along the motion, from the same print as the check run
+    drive = json.loads((tmp_path / "out" / "drive.json").read_text())
+    assert drive["before_mm"] == pytest.approx(1e3 * after, rel=1e-9)
+    assert drive["after_mm"] < drive["before_mm"]
+    # what remains is the print's distance to the ideal curve (to second order: measured 7e-6 of it)
+    assert drive["after_mm"] == pytest.approx(drive["max_distance_to_path_mm"], rel=1e-3)
+    table = np.loadtxt(tmp_path / "out" / "drive_angles.csv", delimiter=",", skiprows=1)
+    assert table.shape == (25, 4) and np.all(table[:, 3] <= table[:, 2] + 1e-9)
 
 
 def test_bad_compensation_input_is_refused_in_one_line(tmp_path, capsys):
