@@ -34,6 +34,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ffrf.errors import SceneError
+from ffrf.scenes.scene_cache import code_version
 from ffrf.studies.sampling import Variant, study_design
 from ffrf.studies.spec import Study
 from ffrf.studies.variant import output_names, row_names, run_variant
@@ -197,12 +198,14 @@ def _description(study: Study) -> dict:
         "base": study.base.description(),
         "bore_error_model": study.base.bore_error_model,
         "fingerprint": study.fingerprint,
+        "solver": code_version(),
     }
 
 
-#: What makes a folder's rows another study's: its name, its base and the parameters' columns (a rerun may change
-#: the method, samples, seed, distributions or grid values: rows are kept by their parameter values).
-SAME_STUDY = ("name", "base", "bore_error_model", "fingerprint")
+#: What makes a folder's rows another study's: its name, its base, the parameters' columns and the solver that
+#: computed them (its sources and libraries, :func:`~ffrf.scenes.scene_cache.code_version`). A rerun may change the
+#: design only so that every row already there stays one of its variants (:func:`_check_one_design`).
+SAME_STUDY = ("name", "base", "bore_error_model", "fingerprint", "solver")
 COLUMN = ("name", "target", "joint", "link")
 
 
@@ -221,10 +224,41 @@ def _check_same_study(study: Study, directory: Path) -> None:
     columns = [[p.get(k) for k in COLUMN] for p in old.get("parameters", [])]
     if columns != [[p[k] for k in COLUMN] for p in new["parameters"]]:
         differs.append("parameters")
+    if differs == ["solver"]:
+        raise SceneError(
+            f"{directory} holds rows computed by another version of the solver (its sources or libraries changed "
+            "since): they would mix with this version's; give another output folder (--out), or delete "
+            f"{directory} to start afresh"
+        )
     if differs:
         raise SceneError(
             f"{directory} holds the rows of another study ({old.get('name', '?')!r}: its {', '.join(differs)} "
             f"differ from {study.name!r}); give another output folder (--out), or delete {directory} to start afresh"
+        )
+
+
+def _check_one_design(study: Study, directory: Path) -> None:
+    """Refuse a folder holding rows that are not variants of this study's design (another seed, size or method of
+    a random design: its rows would bias every estimate of this one); a design that keeps every row there (a resumed
+    study, a grid grown by values, the first draws of a longer random sequence) is accepted."""
+    stray = finished_ids(directory) - {v.id for v in study_design(study)}
+    if stray:
+        raise SceneError(
+            f"{directory} holds {len(stray)} row(s) of another design of this study (another seed, number of "
+            "samples, method or distribution): they would mix with this design's; give another output folder "
+            f"(--out), or delete {directory} to start afresh"
+        )
+
+
+def _check_workers(client: Any) -> None:
+    """Refuse workers that run another version of the solver than this client (their rows would not be this
+    version's): each one's :func:`~ffrf.scenes.scene_cache.code_version` against ours."""
+    ours = code_version()
+    others = sorted(address for address, version in client.run(code_version).items() if version != ours)
+    if others:
+        raise SceneError(
+            f"worker(s) {', '.join(others)} run another version of the solver than this client (their sources or "
+            "libraries differ): install the same version on every worker, or start the study where they agree"
         )
 
 
@@ -256,6 +290,7 @@ def run_study(
     started = time.perf_counter()
     directory = Path(directory)
     _check_same_study(study, directory)
+    _check_one_design(study, directory)
     directory.mkdir(parents=True, exist_ok=True)
     (directory / "study.json").write_text(json.dumps(_description(study), indent=2))
     todo, size, skipped = pending(study, directory)
@@ -272,6 +307,7 @@ def run_study(
     bar = _progress(len(todo), progress)
     futures: Iterable[Any] = []
     try:
+        _check_workers(client)
         shared = client.scatter(study, broadcast=True)
         futures = [client.submit(_worker_variant, shared, v, key=f"variant-{study.fingerprint}-{v.id}") for v in todo]
         for future in as_completed(futures):

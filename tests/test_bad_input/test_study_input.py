@@ -110,3 +110,56 @@ def test_an_out_folder_of_another_study_is_refused(tmp_path, capsys):
     _check_same_study(load_study(first, bases=STUDY_BASES), out)  # its own folder
     first.write_text(GOOD.replace("samples = 8", "samples = 16"))
     _check_same_study(load_study(first, bases=STUDY_BASES), out)  # more samples of the same study
+
+
+def _folder_with_a_row(tmp_path, text: str):
+    """An output folder of the study ``text`` with the row of its design's first variant (its outputs NaN)."""
+    import json
+
+    from ffrf.paper.bennett_scene import STUDY_BASES
+    from ffrf.studies.runner import _description, _write_batch, row_schema
+    from ffrf.studies.sampling import study_design
+    from ffrf.studies.spec import load_study
+
+    path = tmp_path / "study.toml"
+    path.write_text(text)
+    study = load_study(path, bases=STUDY_BASES)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "study.json").write_text(json.dumps(_description(study)))
+    variant = study_design(study)[0]
+    row = {"id": variant.id, "status": "ok", "block": variant.block, "sample": variant.sample} | variant.values
+    _write_batch([row], row_schema(study), out)
+    return path, out
+
+
+def test_rows_of_another_design_are_refused_and_a_grown_design_is_not(tmp_path, capsys):
+    """Another seed of a random design: the folder's row is no variant of the new design, and its rows would bias
+    every estimate of it: refused in one line before anything runs (exit 2). The same study with more Sobol' samples
+    keeps the row (the first points of the longer sequence): accepted, as is the study itself."""
+    from ffrf.paper.bennett_scene import STUDY_BASES
+    from ffrf.studies.runner import _check_one_design
+    from ffrf.studies.spec import load_study
+
+    path, out = _folder_with_a_row(tmp_path, GOOD.replace("samples = 8", "samples = 8\nseed = 1"))
+    _check_one_design(load_study(path, bases=STUDY_BASES), out)
+    path.write_text(GOOD.replace("samples = 8", "samples = 16\nseed = 1"))
+    _check_one_design(load_study(path, bases=STUDY_BASES), out)  # grown: the row stays a variant
+    path.write_text(GOOD.replace("samples = 8", "samples = 8\nseed = 2"))
+    assert main(["study", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "holds 1 row(s) of another design of this study" in err and "another output folder" in err, err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_rows_of_another_solver_version_are_refused(tmp_path, capsys):
+    """A folder whose rows another version of the solver computed (its study.json's solver, the hash of the
+    sources and libraries, differs): a resume would mix two versions' rows; refused in one line (exit 2)."""
+    import json
+
+    path, out = _folder_with_a_row(tmp_path, GOOD)
+    description = json.loads((out / "study.json").read_text())
+    (out / "study.json").write_text(json.dumps(description | {"solver": "0" * 64}))
+    assert main(["study", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "rows computed by another version of the solver" in err and len(err.strip().splitlines()) == 1, err

@@ -266,3 +266,36 @@ def test_a_study_with_stability_monitoring_reports_what_a_standalone_stability_r
         assert row["status"] == "ok" and row["snaps"] == 0 and row["snap_energy_released_J"] == 0
         assert row["min_frequency_hz"] > 1.0
         assert abs(row["min_frequency_hz"] - alone.metadata["stability"]["min_frequency_hz"]) < 1e-9
+
+
+def test_workers_of_another_solver_version_are_refused(tmp_path):
+    """A worker whose solver differs from the client's (here: a copy of the sources with one comment added, first
+    on the path of a `dask worker` started as its own process) would compute rows of another version: the study
+    refuses before submitting any variant, naming the worker, and writes no row."""
+    import shutil
+    import subprocess
+    import sys
+
+    import ffrf
+    from ffrf.errors import SceneError
+    from ffrf.scenes.scene_cache import code_version
+
+    copy = tmp_path / "other"
+    shutil.copytree(os.path.dirname(ffrf.__file__), copy / "ffrf")
+    (copy / "ffrf" / "errors.py").write_text((copy / "ffrf" / "errors.py").read_text() + "\n# another version\n")
+    environment = dict(os.environ, PYTHONPATH=os.pathsep.join([str(copy), os.environ.get("PYTHONPATH", "")]))
+    with LocalCluster(n_workers=0, dashboard_address=None) as cluster, Client(cluster) as other:
+        command = [sys.executable, "-m", "distributed.cli.dask_worker", cluster.scheduler_address, "--nthreads", "1"]
+        worker = subprocess.Popen(  # not in the repository: python -m puts its folder first on the path
+            command, env=environment, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        )
+        try:
+            other.wait_for_workers(1, timeout=120)
+            (theirs,) = other.run(code_version).values()
+            assert theirs != code_version()  # the worker does run the copy
+            with pytest.raises(SceneError, match="run another version of the solver than this client"):
+                run_study(_study([0.0], [0.012]), tmp_path / "out", client=other, progress=False)
+        finally:
+            worker.terminate()
+            worker.wait(timeout=60)
+    assert read_rows(tmp_path / "out") is None
