@@ -25,6 +25,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--scheduler", help="address of a Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)"
     )
+    parser.add_argument(
+        "--scheduler-file",
+        type=Path,
+        help="the file a Dask scheduler wrote (dask scheduler --scheduler-file F, as a batch job starts one)",
+    )
     parser.add_argument("--workers", type=positive_count, help="worker processes of the local cluster (default: cores)")
     parser.add_argument("--no-report", action="store_true", help="do not write report.md after the run")
     parser.add_argument(
@@ -53,8 +58,14 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     study = load_study(args.study, STUDY_BASES)  # checked before any worker starts
-    if args.scheduler is not None and args.workers is not None:
+    if args.scheduler is not None and args.scheduler_file is not None:
+        raise SceneError("give the scheduler once: --scheduler ADDRESS or --scheduler-file FILE, not both")
+    if (args.scheduler is not None or args.scheduler_file is not None) and args.workers is not None:
         raise SceneError("--workers sizes the local cluster; a scheduler (--scheduler) has its own workers")
+    if args.scheduler_file is not None:
+        from ffrf.studies.runner import check_scheduler_file
+
+        check_scheduler_file(args.scheduler_file)  # before the output folder, as every refusal
     if args.linear:
         try:
             check_linear(study)  # before the output folder: a refused study leaves none behind
@@ -68,7 +79,8 @@ def run(args: argparse.Namespace) -> int:
     from ffrf.studies.runner import run_study
 
     try:
-        result = run_study(study, out, scheduler=args.scheduler, workers=args.workers)
+        scheduler_file = None if args.scheduler_file is None else str(args.scheduler_file)
+        result = run_study(study, out, scheduler=args.scheduler, workers=args.workers, scheduler_file=scheduler_file)
     except Interrupted as error:  # the rows of the finished variants are written (run_study's finally)
         message = f"{error}: the finished variants' rows are in {out}; the same command runs the rest"
         raise Interrupted(message) from None

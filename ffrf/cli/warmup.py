@@ -6,8 +6,7 @@ import argparse
 import sys
 import time
 
-from ffrf.model import load
-from ffrf.paper.bennett_scene import build_bennett
+from ffrf.scenes.kernel_warmup import warm_kernels
 
 __all__ = ["HELP", "configure", "run"]
 
@@ -20,20 +19,15 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Compile the numba kernels the main job uses, once after install (numba caches them on disk, next to the
-    sources): a coarse Bennett scene through a few quasi-static equilibria. Kernels do not depend on the mesh or the
-    number of modes, so the default scene's runs then load them. The dynamic solver's kernels (``--dynamic``, the
-    validation's dynamic window) are left to their first use: the main job never calls them (issue #22)."""
+    sources): a coarse Bennett through a few quasi-static equilibria (:func:`warm_kernels`). Kernels do not depend
+    on the mesh or the number of modes, so the default scene's runs then load them. The dynamic solver's kernels
+    (``--dynamic``, the validation's dynamic window) are left to their first use: the main job never calls them
+    (issue #22)."""
     print(
         "Compiling the solver's kernels (once after install; later runs load them from numba's cache)", file=sys.stderr
     )
     started = time.perf_counter()
-    model = load(build_bennett("pla", h=0.012, order=1, n_modes=2))
-    steps = (
-        (
-            "quasi-static and stability kernels",
-            lambda: model.run("quasi_static", outputs=3, t_end=0.2, stability=True),
-        ),
-    )
+    steps = (("quasi-static and stability kernels", warm_kernels),)
     for k, (name, step) in enumerate(steps, start=1):
         began = time.perf_counter()
         print(f"  [{k}/{len(steps)}] {name} ...", end="", file=sys.stderr, flush=True)

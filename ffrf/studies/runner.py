@@ -32,14 +32,27 @@ from typing import Any
 
 import pyarrow as pa
 import pyarrow.parquet as pq
+from distributed.diagnostics.plugin import WorkerPlugin
 
 from ffrf.errors import SceneError
+from ffrf.scenes.kernel_warmup import warm_kernels
 from ffrf.scenes.scene_cache import code_version
 from ffrf.studies.sampling import Variant, study_design
 from ffrf.studies.spec import Study
 from ffrf.studies.variant import output_names, row_names, run_variant
 
-__all__ = ["ROWS", "StudyCounts", "finished_ids", "pending", "read_rows", "row_schema", "run_study"]
+__all__ = [
+    "ROWS",
+    "WORKER_WAIT",
+    "KernelWarmup",
+    "StudyCounts",
+    "check_scheduler_file",
+    "finished_ids",
+    "pending",
+    "read_rows",
+    "row_schema",
+    "run_study",
+]
 
 log = logging.getLogger(__name__)
 
@@ -161,14 +174,27 @@ def _worker_variant(study: Study, variant: Variant) -> dict:
     return run_variant(study, variant)
 
 
-def _client(scheduler: str | None, workers: int | None) -> tuple[Any, Any]:
-    """A Dask client of the scheduler at ``scheduler``, or of a new local cluster (returned to close it) whose
-    workers start without Dask's ``MALLOC_TRIM_THRESHOLD_`` (:func:`_allocator_for_variants` says why)."""
+def check_scheduler_file(path: str | Path) -> None:
+    """Refuse a scheduler file that is not there yet (:class:`SceneError` naming the fix)."""
+    if not Path(path).is_file():
+        raise SceneError(
+            f"scheduler file {path} not found: start the scheduler with --scheduler-file {path} first (its batch "
+            "job), or give its address with --scheduler"
+        )
+
+
+def _client(scheduler: str | None, workers: int | None, scheduler_file: str | None = None) -> tuple[Any, Any]:
+    """A Dask client of the scheduler at ``scheduler`` or written in ``scheduler_file`` (by ``dask scheduler
+    --scheduler-file``, as a batch job starts one), or of a new local cluster (returned to close it) whose workers
+    start without Dask's ``MALLOC_TRIM_THRESHOLD_`` (:func:`_allocator_for_variants` says why)."""
     import dask
     from dask.distributed import Client, LocalCluster
 
     # Dask logs every worker's start and end at INFO; show them only when the caller asked for INFO (-v).
     logging.getLogger("distributed").setLevel(max(logging.WARNING, logging.getLogger().getEffectiveLevel()))
+    if scheduler_file is not None:
+        check_scheduler_file(scheduler_file)
+        return Client(scheduler_file=scheduler_file), None
     if scheduler is not None:
         return Client(scheduler), None
     with dask.config.set({f"distributed.nanny.pre-spawn-environ.{TRIM_VARIABLE}": None}):  # read by each nanny
@@ -250,9 +276,31 @@ def _check_one_design(study: Study, directory: Path) -> None:
         )
 
 
-def _check_workers(client: Any) -> None:
-    """Refuse workers that run another version of the solver than this client (their rows would not be this
+#: Seconds a study waits for the first worker of a scheduler it did not start before it says so.
+WORKER_WAIT = 60.0
+
+
+class KernelWarmup(WorkerPlugin):
+    """A Dask worker plugin: each worker compiles or loads the solver's kernels once, when it joins, before its first
+    variant (:func:`~ffrf.scenes.kernel_warmup.warm_kernels`), so that no variant's time counts a compilation."""
+
+    name = "ffrf-kernel-warmup"
+
+    def setup(self, worker: Any) -> None:
+        warm_kernels()
+
+
+def _check_workers(client: Any, wait: float = WORKER_WAIT) -> None:
+    """Wait up to ``wait`` seconds for a first worker (a scheduler without workers is named, not waited on forever),
+    then refuse workers that run another version of the solver than this client (their rows would not be this
     version's): each one's :func:`~ffrf.scenes.scene_cache.code_version` against ours."""
+    try:
+        client.wait_for_workers(1, timeout=wait)
+    except TimeoutError:
+        raise SceneError(
+            f"the scheduler at {client.scheduler.address} has no worker after {wait:g} s: start workers on it "
+            f"(dask worker {client.scheduler.address}, or the batch jobs that do), then run the study again"
+        ) from None
     ours = code_version()
     others = sorted(address for address, version in client.run(code_version).items() if version != ours)
     if others:
@@ -282,9 +330,13 @@ def run_study(
     batch: int = 50,
     flush_seconds: float = 10.0,
     progress: bool = True,
+    scheduler_file: str | None = None,
+    worker_wait: float = WORKER_WAIT,
 ) -> StudyCounts:
     """Run every unfinished variant of ``study`` into ``directory`` (module docstring): on ``client`` if given,
-    else on the scheduler at ``scheduler``, else on a new local cluster of ``workers`` processes."""
+    else on the scheduler at ``scheduler`` or in ``scheduler_file``, else on a new local cluster of ``workers``
+    processes. Every worker warms its kernels when it joins (:class:`KernelWarmup`); a scheduler without a worker
+    after ``worker_wait`` seconds, or a worker of another solver version, is refused (:class:`SceneError`)."""
     from dask.distributed import as_completed
 
     started = time.perf_counter()
@@ -301,13 +353,14 @@ def run_study(
     own = client is None
     cluster = None
     if own:
-        client, cluster = _client(scheduler, workers)
+        client, cluster = _client(scheduler, workers, scheduler_file)
     buffer: list[dict] = []
     last = time.monotonic()
     bar = _progress(len(todo), progress)
     futures: Iterable[Any] = []
     try:
-        _check_workers(client)
+        _check_workers(client, worker_wait)
+        client.register_plugin(KernelWarmup(), name=KernelWarmup.name)
         shared = client.scatter(study, broadcast=True)
         futures = [client.submit(_worker_variant, shared, v, key=f"variant-{study.fingerprint}-{v.id}") for v in todo]
         for future in as_completed(futures):

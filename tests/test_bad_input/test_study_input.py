@@ -81,6 +81,27 @@ def test_zero_workers_are_refused(tmp_path, capsys):
     assert "argument --workers: must be a whole number >= 1" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (["--scheduler", "tcp://127.0.0.1:1", "--workers", "2"], "--workers sizes the local cluster"),
+        (["--scheduler-file", "S.json", "--workers", "2"], "--workers sizes the local cluster"),
+        (["--scheduler", "tcp://127.0.0.1:1", "--scheduler-file", "S.json"], "give the scheduler once"),
+        (["--scheduler-file", "S.json"], "start the scheduler with --scheduler-file"),
+    ],
+)
+def test_a_cluster_given_twice_or_not_there_is_refused(tmp_path, capsys, monkeypatch, options, message):
+    """A scheduler given with --workers (which only a local cluster takes), a scheduler given twice, and a scheduler
+    file that no scheduler wrote yet: one line naming the fix, exit 2, no output folder."""
+    monkeypatch.chdir(tmp_path)
+    path = tmp_path / "study.toml"
+    path.write_text(GOOD)
+    assert main(["study", str(path), "--out", str(tmp_path / "out"), *options]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_report_of_a_folder_without_a_study_is_refused(tmp_path, capsys):
     assert main(["study-report", str(tmp_path)]) == 2
     assert "holds no study (no study.json)" in capsys.readouterr().err

@@ -269,9 +269,10 @@ def test_a_study_with_stability_monitoring_reports_what_a_standalone_stability_r
 
 
 def test_workers_of_another_solver_version_are_refused(tmp_path):
-    """A worker whose solver differs from the client's (here: a copy of the sources with one comment added, first
-    on the path of a `dask worker` started as its own process) would compute rows of another version: the study
-    refuses before submitting any variant, naming the worker, and writes no row."""
+    """A scheduler without workers is reported after the wait, not waited on forever. A worker whose solver differs
+    from the client's (here: a copy of the sources with one comment added, first on the path of a `dask worker`
+    started as its own process) would compute rows of another version: the study refuses before submitting any
+    variant, naming the worker, and writes no row."""
     import shutil
     import subprocess
     import sys
@@ -285,6 +286,9 @@ def test_workers_of_another_solver_version_are_refused(tmp_path):
     (copy / "ffrf" / "errors.py").write_text((copy / "ffrf" / "errors.py").read_text() + "\n# another version\n")
     environment = dict(os.environ, PYTHONPATH=os.pathsep.join([str(copy), os.environ.get("PYTHONPATH", "")]))
     with LocalCluster(n_workers=0, dashboard_address=None) as cluster, Client(cluster) as other:
+        # a scheduler without a worker is named, not waited on forever
+        with pytest.raises(SceneError, match="has no worker after 1 s: start workers on it"):
+            run_study(_study([0.0], [0.012]), tmp_path / "out", client=other, progress=False, worker_wait=1.0)
         command = [sys.executable, "-m", "distributed.cli.dask_worker", cluster.scheduler_address, "--nthreads", "1"]
         worker = subprocess.Popen(  # not in the repository: python -m puts its folder first on the path
             command, env=environment, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
@@ -299,3 +303,39 @@ def test_workers_of_another_solver_version_are_refused(tmp_path):
             worker.terminate()
             worker.wait(timeout=60)
     assert read_rows(tmp_path / "out") is None
+
+
+def test_a_study_runs_on_a_scheduler_started_with_a_file_and_its_workers_warm_their_kernels(tmp_path):
+    """As a batch system starts them: `dask scheduler --scheduler-file F` and `dask worker --scheduler-file F` as
+    processes of their own, and the study given only F. Its row equals the standalone run's, and the worker ran the
+    kernel warm-up plugin when the study registered it."""
+    import subprocess
+    import sys
+
+    from ffrf.studies.runner import KernelWarmup
+
+    file = tmp_path / "scheduler.json"
+    quiet = {"cwd": tmp_path, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
+    processes = [
+        subprocess.Popen(
+            [sys.executable, "-m", "distributed.cli.dask_scheduler", "--scheduler-file", str(file), "--port", "0",
+             "--dashboard-address", ":0"], **quiet
+        ),
+    ]  # fmt: skip
+    try:
+        deadline = time.monotonic() + 120
+        while not file.is_file() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        worker = [sys.executable, "-m", "distributed.cli.dask_worker", "--scheduler-file", str(file), "--nthreads", "1"]
+        processes.append(subprocess.Popen(worker, **quiet))
+        run = run_study(_study([0.5], [0.012]), tmp_path / "out", scheduler_file=str(file), progress=False)
+        assert (run.design, run.ok, run.failed, run.lost) == (1, 1, 0, 0)
+        (row,) = read_rows(tmp_path / "out").to_pylist()
+        assert row["max_coupler_deviation_m"] == pytest.approx(_standalone(0.5)["max_coupler_deviation_m"], rel=1e-12)
+        with Client(scheduler_file=str(file)) as client:
+            plugins = client.run(lambda dask_worker: sorted(dask_worker.plugins))
+        assert all(KernelWarmup.name in names for names in plugins.values()) and plugins
+    finally:
+        for process in reversed(processes):
+            process.terminate()
+            process.wait(timeout=60)
