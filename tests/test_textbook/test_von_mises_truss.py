@@ -42,7 +42,16 @@ def test_the_bars_axial_stiffness_is_ea_over_l_and_their_euler_load_is_far(tmp_p
         assert 1.0 / (axis @ compliance @ axis) == pytest.approx(c["stiffness"], rel=1e-10)
 
 
-def test_the_scene_file_run_snaps_at_the_limit_load_onto_the_inverted_branch(tmp_path):
+@pytest.fixture(scope="module")
+def truss_run(tmp_path_factory):
+    """``python -m ffrf run truss.toml`` (16 outputs, stability): its output folder."""
+    folder = tmp_path_factory.mktemp("truss")
+    scene = write_truss_scene(folder)
+    assert main(["run", str(scene), "--out", str(folder / "out")]) == 0
+    return folder / "out"
+
+
+def test_the_scene_file_run_snaps_at_the_limit_load_onto_the_inverted_branch(truss_run):
     """``python -m ffrf run truss.toml`` with ``stability = true`` loads the truss to 1.5 P_max: the run stops
     at the fold, traces the path through it (Eq. (S6)), lands on the inverted branch and goes on. The snap in
     the metadata is at P_max of the closed form (measured 8.8e-9 relative), Eq. (B1) is near zero there, the
@@ -50,21 +59,19 @@ def test_the_scene_file_run_snaps_at_the_limit_load_onto_the_inverted_branch(tmp
     and the apex at the end of the run holds the closed form's equilibrium on the inverted branch: P(z) = P_end
     for z < -z* (brentq on it; measured 1.4e-13 m)."""
     c = truss_closed_form()
-    scene = write_truss_scene(tmp_path)
-    assert main(["run", str(scene), "--out", str(tmp_path / "out")]) == 0
-    metadata = json.loads((tmp_path / "out" / "metadata.json").read_text())
+    metadata = json.loads((truss_run / "metadata.json").read_text())
     snaps = metadata["stability"]["snaps"]
     assert len(snaps) == 1 and snaps[0]["landed"]
     print("limit load error", snaps[0]["time_s"] * LOAD_RATE / c["limit_load"] - 1.0)
     assert snaps[0]["time_s"] * LOAD_RATE == pytest.approx(c["limit_load"], rel=1e-3)
-    results = np.load(tmp_path / "out" / "results.npz")
+    results = np.load(truss_run / "results.npz")
     first = results["stability_squared_frequencies"][0, 0]
     assert abs(snaps[0]["squared_frequency_at_fold"]) < 1e-3 * first
     assert np.all(results["stability_squared_frequencies"][:, 0] > 0.0)  # every output is a stable equilibrium
-    table = json.loads((tmp_path / "out" / "stability.json").read_text())
+    table = json.loads((truss_run / "stability.json").read_text())
     assert table["summary"]["critical"]["where"] == "fold"
     assert table["summary"]["critical"]["time_s"] == pytest.approx(snaps[0]["time_s"], rel=1e-12)
-    assert (tmp_path / "out" / "stability_critical.vtu").is_file()
+    assert (truss_run / "stability_critical.vtu").is_file()
     end_load = LOAD_RATE * results["time"][-1]
     rise = brentq(lambda z: truss_load(z) - end_load, -10.0 * c["critical_rise"], -c["critical_rise"])
     print("landing rise error", results["apex_point1"][-1, 2] - rise)
@@ -89,26 +96,24 @@ def test_run_with_stability_on_a_dynamic_scene_is_refused(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
-def test_the_fold_and_the_landing_do_not_depend_on_the_outputs(tmp_path):
+def test_the_fold_and_the_landing_do_not_depend_on_the_outputs(tmp_path, truss_run):
     """The truss has no drive: its path steps t_end / PATH_STEPS_WITHOUT_DRIVE (Eq. (S10)), and the trace through the
-    fold starts from where that path stops with the path's step, so 5 and 9 outputs fold at the same load (measured
-    identical to the last digit, 2.2e-9 from the closed form's P_max; before, with the path and the trace on the
-    outputs' spacing, 7 and 16 outputs folded 1.8e-6 and 8.8e-9 from it) and land on the same equilibrium."""
+    fold starts from where that path stops with the path's step, so 5 and 16 outputs fold at the same load
+    (measured identical to the last digit, 2.2e-9 from the closed form's P_max; before, with the path and the trace
+    on the outputs' spacing, 7 and 16 outputs folded 1.8e-6 and 8.8e-9 from it) and land on the same equilibrium
+    (the apex at the end)."""
     c = truss_closed_form()
-    folds, ends = [], []
-    for outputs in (5, 9):
-        (tmp_path / str(outputs)).mkdir()
-        scene = load_scene(write_truss_scene(tmp_path / str(outputs), outputs=outputs))
-        assert quasi_static_path_step(scene, 1.5)(0.3) == pytest.approx(1.5 / PATH_STEPS_WITHOUT_DRIVE, rel=1e-12)
-        run = load(scene).run()
-        snaps = run.metadata["stability"]["snaps"]
-        assert run.time.shape == (outputs,) and len(snaps) == 1
-        folds.append(snaps[0]["time_s"])
-        ends.append(run.q[-1])
-    print("fold loads", [t * LOAD_RATE / c["limit_load"] - 1.0 for t in folds])
-    assert folds[0] * LOAD_RATE == pytest.approx(c["limit_load"], rel=1e-6)
-    assert folds[1] == pytest.approx(folds[0], rel=1e-12)
-    np.testing.assert_allclose(ends[1], ends[0], rtol=0, atol=1e-9 * np.abs(ends[0]).max())
+    scene = load_scene(write_truss_scene(tmp_path, outputs=5))
+    assert quasi_static_path_step(scene, 1.5)(0.3) == pytest.approx(1.5 / PATH_STEPS_WITHOUT_DRIVE, rel=1e-12)
+    run = load(scene).run()
+    snaps = run.metadata["stability"]["snaps"]
+    assert run.time.shape == (5,) and len(snaps) == 1
+    sixteen = json.loads((truss_run / "metadata.json").read_text())["stability"]["snaps"][0]["time_s"]
+    print("fold loads", [t * LOAD_RATE / c["limit_load"] - 1.0 for t in (snaps[0]["time_s"], sixteen)])
+    assert snaps[0]["time_s"] * LOAD_RATE == pytest.approx(c["limit_load"], rel=1e-6)
+    assert sixteen == pytest.approx(snaps[0]["time_s"], rel=1e-12)
+    apex = np.load(truss_run / "results.npz")["apex_point1"][-1]
+    np.testing.assert_allclose(run.sensors["apex_point1"][-1], apex, rtol=0, atol=1e-9 * np.abs(apex).max())
 
 
 @pytest.mark.slow  # the halvings at the fold: 4 min on the loaded 2-core machine
