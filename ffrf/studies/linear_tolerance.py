@@ -75,23 +75,15 @@ class LinearPath:
         where the first order says the print reaches a fold (snaps), beyond which it does not hold."""
         if self.frequency is None or self.frequency_slopes is None:
             raise ValueError("this linear model has no stability: the study does not monitor it")
-        values = np.atleast_2d(np.asarray(values, dtype=float))
-        out = np.empty(len(values))
-        for start in range(0, len(values), _BLOCK):
-            block = values[start : start + _BLOCK]
-            out[start : start + _BLOCK] = (self.frequency[:, None] + self.frequency_slopes @ block.T).min(axis=0)
-        return out
+        nominal, slopes = self.frequency, self.frequency_slopes
+        return _blockwise(values, lambda block: (nominal[:, None] + slopes @ block.T).min(axis=0))
 
     def max_torque(self, values: NDArray) -> NDArray[np.float64]:
         """``(n,)``: each print's largest driving torque magnitude over the poses (N m)."""
         if self.torque is None or self.torque_slopes is None:
             raise ValueError("this linear model has no driving torque")
-        values = np.atleast_2d(np.asarray(values, dtype=float))
-        out = np.empty(len(values))
-        for start in range(0, len(values), _BLOCK):
-            block = values[start : start + _BLOCK]
-            out[start : start + _BLOCK] = np.abs(self.torque[:, None] + self.torque_slopes @ block.T).max(axis=0)
-        return out
+        nominal, slopes = self.torque, self.torque_slopes
+        return _blockwise(values, lambda block: np.abs(nominal[:, None] + slopes @ block.T).max(axis=0))
 
     def deviations(self, values: NDArray) -> NDArray[np.float64]:
         """``(n, poses, 3)``: the deviation at every pose of each print ``values`` ``(n, k)``."""
@@ -99,16 +91,25 @@ class LinearPath:
         return self.nominal[None] + np.einsum("pck,nk->npc", self.slopes, values)
 
     def max_deviation(self, values: NDArray) -> NDArray[np.float64]:
-        """``(n,)``: each print's largest deviation over the poses (m), blockwise."""
-        values = np.atleast_2d(np.asarray(values, dtype=float))
+        """``(n,)``: each print's largest deviation over the poses (m)."""
         poses = self.nominal.shape[0]
         flat = self.slopes.reshape(poses * 3, -1)
-        out = np.empty(len(values))
-        for start in range(0, len(values), _BLOCK):
-            block = values[start : start + _BLOCK]
+
+        def largest(block: NDArray) -> NDArray[np.float64]:
             moved = (flat @ block.T).reshape(poses, 3, -1) + self.nominal[:, :, None]
-            out[start : start + _BLOCK] = np.sqrt(np.einsum("pcn,pcn->pn", moved, moved)).max(axis=0)
-        return out
+            return np.sqrt(np.einsum("pcn,pcn->pn", moved, moved)).max(axis=0)
+
+        return _blockwise(values, largest)
+
+
+def _blockwise(values: NDArray, per_block: Callable[[NDArray], NDArray]) -> NDArray[np.float64]:
+    """``per_block`` of the prints ``values`` ``(n, k)`` in blocks of :data:`_BLOCK` (memory: poses x 3 x block
+    doubles), one value per print."""
+    values = np.atleast_2d(np.asarray(values, dtype=float))
+    out = np.empty(len(values))
+    for start in range(0, len(values), _BLOCK):
+        out[start : start + _BLOCK] = per_block(values[start : start + _BLOCK])
+    return out
 
 
 def check_linear(study: Study) -> None:
