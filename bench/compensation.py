@@ -20,6 +20,7 @@ import time
 import tomllib
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -40,7 +41,7 @@ def _forward(loop, options, model: str, drive: bool = False) -> dict:
     scene = build_linkage(loop, replace(options, bore_error_model=model))
     result = run_linkage(scene, mode="quasi_static", n_outputs=OUTPUTS, sensors="path")
     deviation = np.linalg.norm(result.sensors["coupler_deviation"], axis=1)
-    out = {"max_coupler_deviation_m": float(deviation.max()), "seconds": time.perf_counter() - started}
+    out: dict[str, Any] = {"max_coupler_deviation_m": float(deviation.max()), "seconds": time.perf_counter() - started}
     if drive:
         assert result.multipliers is not None
         corrected = correct_drive(scene, result.time, result.q, result.multipliers)

@@ -91,7 +91,9 @@ class FlexibleBody:
         dense (every modal moment): its modes are unchanged, as scaling ``K`` or ``M`` leaves the eigenvectors of the
         pair ``(K, M)`` and the Craig-Bampton basis alone."""
         m = self.moments
-        moments = ModalMoments(*(density * value for value in (m.mass, m.s0, m.s1, m.x2, m.c, m.d)))
+        moments = ModalMoments(
+            density * m.mass, density * m.s0, density * m.s1, density * m.x2, density * m.c, density * m.d
+        )
         return FlexibleBody(
             self.name, moments, stiffness * self.stiffness, stiffness * self.damping, self.exact_gravity
         )

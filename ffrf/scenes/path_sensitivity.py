@@ -118,8 +118,9 @@ def material_sensitivity(
     links = tuple(range(len(system.bodies))) if links is None else tuple(links)
     names = tuple(f"E {system.bodies[k].name}" for k in links) + tuple(f"rho {system.bodies[k].name}" for k in links)
     q = np.asarray(q, dtype=float)
+    factor = np.exp(MATERIAL_STEP)
     sides = [
-        (*(_with_material(scene, k, {field: np.exp(sign * MATERIAL_STEP)}) for sign in (1.0, -1.0)), MATERIAL_STEP)
+        (_with_material(scene, k, {field: factor}), _with_material(scene, k, {field: 1.0 / factor}), MATERIAL_STEP)
         for field in ("stiffness", "density")
         for k in links
     ]
@@ -232,10 +233,10 @@ def section_sensitivity(
         for parameter in parameters:
             delta = step * float(getattr(design, parameter))
             velocity = velocities[k, parameter]
-            sides = tuple(
+            morphed = tuple(
                 scene.with_body(morphed_body(scene, k, points + sign * delta * velocity)) for sign in (1.0, -1.0)
             )
-            shifted.append((sides, delta))
+            shifted.append((morphed, delta))
             names.append(f"{parameter} {bodies[k]['name']}")
 
     def rates(row: int, t: float) -> NDArray[np.float64]:
