@@ -18,14 +18,20 @@ from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
 from ffrf.studies.runner import read_rows
-from ffrf.studies.sensitivity import sobol_indices, standardised_regression
+from ffrf.studies.sensitivity import given_data_indices, sobol_indices, standardised_regression
 from ffrf.studies.statistics import exceedance, percentile_interval
 
 __all__ = ["PERCENTILES", "percentile_table", "saltelli_outputs", "analyse", "write_report"]
 
 PERCENTILES = (0, 1, 5, 25, 50, 75, 95, 99, 100)
-#: Scatter plots per output: the parameters with the largest total index (or ``|SRC|``).
+#: Scatter plots per output: the parameters with the largest total index (or given-data index, or ``|SRC|``).
 TOP_PARAMETERS = 3
+#: Below this R^2 a linear model does not rank the parameters: the report says so.
+LOW_R2 = 0.5
+#: A Sobol index whose 95 % interval is wider than this either way is too uncertain to rank by: the report says so.
+WIDE_INDEX = 0.2
+#: Designs of random rows, whose first-order indices come from the rows as given (RBD-FAST).
+RANDOM_DESIGNS = ("monte_carlo", "lhs", "sobol")
 
 
 def percentile_table(values: NDArray) -> dict:
@@ -74,20 +80,45 @@ def analyse(directory: str | Path) -> dict:
         failures[key] = failures.get(key, 0) + 1
     x = np.column_stack([columns[name].astype(float) for name in names])
     outputs = {}
+    warnings = []
+    variants = study.get("variants")
+    if variants is not None and len(ok) < variants:
+        warnings.append(
+            f"the study is unfinished: {len(ok)} of its {variants} variants have a row, and every number here is of "
+            "those (a Saltelli design's indices of its complete sample rows only)"
+        )
     for output in study["outputs"]:
         y = np.where(ok, columns[output].astype(float), np.nan)
         regression = standardised_regression(x, y)
         entry = {
             "percentiles": percentile_table(y),
             "src": dict(zip(names, regression.beta.tolist(), strict=True)),
+            "src_interval": {
+                n: [lo, hi] for n, lo, hi in zip(names, regression.low.tolist(), regression.high.tolist(), strict=True)
+            },
             "src_r2": regression.r2,
         }
+        if np.isfinite(regression.r2) and regression.r2 < LOW_R2:
+            warnings.append(
+                f"{output}: a linear model explains R^2 = {regression.r2:.2g} of it, so its regression coefficients "
+                "do not rank the parameters"
+            )
         if study["method"] == "saltelli":
             indices = sobol_indices(*saltelli_outputs(columns, y, len(names), study["samples"]))
             entry |= {
                 "sobol_first": dict(zip(names, indices.first.tolist(), strict=True)),
                 "sobol_total": dict(zip(names, indices.total.tolist(), strict=True)),
-                "sobol_rows_used": dict(zip(names, indices.used.tolist(), strict=True)),
+                "sobol_first_conf": dict(zip(names, indices.first_conf.tolist(), strict=True)),
+                "sobol_total_conf": dict(zip(names, indices.total_conf.tolist(), strict=True)),
+                "sobol_rows_used": indices.used,
+            }
+            warnings += _index_warnings(output, names, indices.first, indices.first_conf, "first-order")
+            warnings += _index_warnings(output, names, indices.total, indices.total_conf, "total")
+        elif study["method"] in RANDOM_DESIGNS:
+            given = given_data_indices(x, y)
+            entry |= {
+                "given_data_first": dict(zip(names, given.first.tolist(), strict=True)),
+                "given_data_first_conf": dict(zip(names, given.first_conf.tolist(), strict=True)),
             }
         outputs[output] = entry
     limits = {
@@ -96,6 +127,7 @@ def analyse(directory: str | Path) -> dict:
     }
     return {
         "study": study,
+        "warnings": warnings,
         "limits": limits,
         "rows": int(len(ok)),
         "ok": int(ok.sum()),
@@ -104,6 +136,25 @@ def analyse(directory: str | Path) -> dict:
         "wall_time_s": percentile_table(columns["wall_time_s"].astype(float)),
         "outputs": outputs,
     }
+
+
+def _index_warnings(output: str, names: list[str], index: NDArray, conf: NDArray, kind: str) -> list[str]:
+    """What a reader must know of one output's Sobol indices: an index outside [0, 1] beyond its interval (the
+    estimator's sampling error, not a property of the linkage), and intervals too wide to rank by."""
+    out = []
+    for name, value, half in zip(names, index, conf, strict=True):
+        if np.isfinite(value) and (value - half > 1.0 or value + half < 0.0):
+            out.append(
+                f"{output}: the {kind} index of {name} is {value:.3g} +- {half:.2g}, outside [0, 1] beyond its "
+                "interval: too few samples for this estimator; raise samples"
+            )
+    widest = float(np.nanmax(conf)) if np.any(np.isfinite(conf)) else 0.0
+    if widest > WIDE_INDEX:
+        out.append(
+            f"{output}: its {kind} Sobol indices are uncertain (95 % intervals up to +-{widest:.2g}): they do not rank "
+            "the parameters; raise samples"
+        )
+    return out
 
 
 def _distribution_figure(values: NDArray, name: str, path: Path) -> None:
@@ -153,8 +204,9 @@ def _contour_figure(x1: NDArray, x2: NDArray, y: NDArray, labels: tuple[str, str
 
 
 def _influence(entry: dict, names: list[str]) -> list[str]:
-    """Parameters by influence: total Sobol index where there is one, else ``|SRC|``."""
-    score = entry.get("sobol_total", {n: abs(entry["src"][n]) for n in names})
+    """Parameters by influence: total Sobol index where there is one, else the given-data first-order index, else
+    ``|SRC|``."""
+    score = entry.get("sobol_total", entry.get("given_data_first", {n: abs(entry["src"][n]) for n in names}))
     return sorted(names, key=lambda n: -np.nan_to_num(score[n], nan=-1.0))
 
 
@@ -194,9 +246,10 @@ def write_report(directory: str | Path) -> Path:
         f"{analysis['assembles']} assembled; failures by reason: {analysis['failed'] or 'none'}. "
         "Outputs in SI units (`docs/studies.md`).",
         "",
-        "## Percentiles of the ok variants",
-        "",
     ]
+    if analysis["warnings"]:
+        lines += ["## Warnings", ""] + [f"- {warning}" for warning in analysis["warnings"]] + [""]
+    lines += ["## Percentiles of the ok variants", ""]
     header = ["output", "n"] + [f"p{p}" for p in PERCENTILES] + ["p50, 95 % interval", "p95, 95 % interval"]
     rows = [
         [o, str(e["percentiles"].get("n", 0))]
@@ -215,11 +268,25 @@ def write_report(directory: str | Path) -> Path:
         )
     lines += ["", "## Sensitivities", ""]
     for output, entry in analysis["outputs"].items():
-        lines += [f"### {output}", "", f"Linear regression: R^2 = {entry['src_r2']:.3g}.", ""]
-        header = ["parameter", "SRC"] + (["S_i", "S_Ti"] if "sobol_first" in entry else [])
+        lines += [
+            f"### {output}",
+            "",
+            f"Linear regression: R^2 = {entry['src_r2']:.3g}. Each value with its 95 % interval.",
+            "",
+        ]
+        sobol, given = "sobol_first" in entry, "given_data_first" in entry
+        header = ["parameter", "SRC"] + (["S_i", "S_Ti"] if sobol else []) + (["S_i (given data)"] if given else [])
         rows = [
-            [n, f"{entry['src'][n]:.3g}"]
-            + ([f"{entry['sobol_first'][n]:.3g}", f"{entry['sobol_total'][n]:.3g}"] if "sobol_first" in entry else [])
+            [n, f"{entry['src'][n]:.3g} [{entry['src_interval'][n][0]:.3g}, {entry['src_interval'][n][1]:.3g}]"]
+            + (
+                [
+                    f"{entry['sobol_first'][n]:.3g} +- {entry['sobol_first_conf'][n]:.2g}",
+                    f"{entry['sobol_total'][n]:.3g} +- {entry['sobol_total_conf'][n]:.2g}",
+                ]
+                if sobol
+                else []
+            )
+            + ([f"{entry['given_data_first'][n]:.3g} +- {entry['given_data_first_conf'][n]:.2g}"] if given else [])
             for n in names
         ]
         lines += _table(header, rows) + [""]

@@ -225,6 +225,7 @@ def _description(study: Study) -> dict:
         "bore_error_model": study.base.bore_error_model,
         "fingerprint": study.fingerprint,
         "solver": code_version(),
+        "variants": len({v.id for v in study_design(study)}),
     }
 
 

@@ -1,0 +1,85 @@
+"""What a study's report says of its own numbers (issue #37): every sensitivity with its interval, and warnings
+where a reader would otherwise take noise for a result. The rows are written here (a Saltelli design of the
+Ishigami function, Saltelli et al., Global Sensitivity Analysis: The Primer, 2008), so nothing is built or run."""
+
+import json
+
+import numpy as np
+
+from ffrf.paper.bennett_scene import STUDY_BASES
+from ffrf.studies.report import analyse, write_report
+from ffrf.studies.runner import _description, _write_batch, row_schema
+from ffrf.studies.sampling import study_design
+from ffrf.studies.spec import study_from_document
+
+OUTPUT = "max_coupler_deviation_m"
+
+
+def _ishigami(x: np.ndarray) -> np.ndarray:
+    return np.sin(x[:, 0]) + 7.0 * np.sin(x[:, 1]) ** 2 + 0.1 * x[:, 2] ** 4 * np.sin(x[:, 0])
+
+
+def _folder(tmp_path, method: str, samples: int, share: float = 1.0):
+    """A study folder of three uniform parameters on [-pi, pi] whose rows carry the Ishigami function as their
+    largest coupler deviation, for the first ``share`` of the design's variants."""
+    parameters = [
+        {"name": name, "target": target, "uniform": {"low": -np.pi, "high": np.pi}}
+        for name, target in (("x1", "E"), ("x2", "rho"), ("x3", "rpm"))
+    ]
+    study = study_from_document(
+        {
+            "study": {"method": method, "samples": samples, "seed": 1},
+            "base": {"bennett": "pla"},
+            "parameters": parameters,
+        },
+        bases=STUDY_BASES,
+    )
+    design = study_design(study)[: int(share * len(study_design(study)))]
+    x = np.array([[v.values[n] for n in ("x1", "x2", "x3")] for v in design])
+    rows = [
+        {"id": v.id, "block": v.block, "sample": v.sample, "status": "ok", "reason": "", "assembles": True,
+         "wall_time_s": 1.0, OUTPUT: float(y)} | v.values
+        for v, y in zip(design, _ishigami(x), strict=True)
+    ]  # fmt: skip
+    (tmp_path / "study.json").write_text(json.dumps(_description(study)))
+    _write_batch(rows, row_schema(study), tmp_path)
+    return tmp_path
+
+
+def test_few_samples_give_wide_sobol_intervals_and_the_report_says_they_rank_nothing(tmp_path):
+    """N = 16 (80 variants, as the shipped Saltelli example): the indices come with intervals of several tenths, the
+    report warns that they do not rank the parameters, and that a linear model explains little of the output."""
+    analysis = analyse(_folder(tmp_path, "saltelli", 16))
+    entry = analysis["outputs"][OUTPUT]
+    assert max(entry["sobol_total_conf"].values()) > 0.2
+    assert entry["sobol_rows_used"] == 16
+    warnings = "\n".join(analysis["warnings"])
+    assert "Sobol indices are uncertain" in warnings and "raise samples" in warnings
+    assert "R^2" in warnings and entry["src_r2"] < 0.5
+    report = write_report(tmp_path).read_text()
+    assert "## Warnings" in report and "+-" in report
+
+
+def test_many_samples_give_tight_intervals_around_the_closed_form_and_no_warning_on_them(tmp_path):
+    """N = 4096: every index's interval is narrow (below 0.1) and contains the closed form (first order 0.314,
+    0.442, 0; total 0.558, 0.442, 0.244); no warning about the indices."""
+    analysis = analyse(_folder(tmp_path, "saltelli", 4096))
+    entry = analysis["outputs"][OUTPUT]
+    first = dict(zip(("x1", "x2", "x3"), (0.3139, 0.4424, 0.0), strict=True))
+    total = dict(zip(("x1", "x2", "x3"), (0.5576, 0.4424, 0.2437), strict=True))
+    for name in first:
+        assert abs(entry["sobol_first"][name] - first[name]) <= entry["sobol_first_conf"][name] < 0.1, name
+        assert abs(entry["sobol_total"][name] - total[name]) <= entry["sobol_total_conf"][name] < 0.1, name
+    assert not any("Sobol" in warning for warning in analysis["warnings"])
+
+
+def test_an_unfinished_study_says_so_and_a_random_design_gets_given_data_indices(tmp_path):
+    """Half of a Latin hypercube's 2048 rows: the report warns that the study is unfinished (its numbers are of the
+    rows there), and gives each parameter's first-order index from the rows as given, with its interval, near the
+    closed form (within the interval plus 0.05)."""
+    analysis = analyse(_folder(tmp_path, "lhs", 2048, share=0.5))
+    assert any("the study is unfinished: 1024 of its 2048 variants" in w for w in analysis["warnings"])
+    entry = analysis["outputs"][OUTPUT]
+    for name, exact in zip(("x1", "x2", "x3"), (0.3139, 0.4424, 0.0), strict=True):
+        value, half = entry["given_data_first"][name], entry["given_data_first_conf"][name]
+        assert abs(value - exact) <= half + 0.05, (name, value, half)
