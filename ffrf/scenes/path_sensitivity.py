@@ -27,7 +27,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.errors import SceneError, SensitivityError
+from ffrf.fe.fe_model import FEModel
 from ffrf.geometry.design_velocity import SECTION_PARAMETERS, design_velocity
+from ffrf.output.peak_stress import corner_stress, peak_stress, strain_modes
 from ffrf.output.sensors import path_sensors
 from ffrf.scenes.builder import morphed_body, parametric_link
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, bore_side
@@ -79,7 +81,10 @@ class PathSensitivity:
     section dimension per unit of it, rad or m), of the links' total ``mass`` ``(k,)`` (kg), and of each joint's
     reaction force ``(poses, 3, k)`` (N, world axes; its first three multipliers), by joint name; with stability,
     the lowest squared frequency of Eq. (B1) at each pose ``squared_frequency`` ``(poses,)`` (rad^2/s^2) and its
-    derivatives ``lowest_squared_frequency`` ``(poses, k)``."""
+    derivatives ``lowest_squared_frequency`` ``(poses, k)``; with stress, each link's peak von Mises stress at each
+    pose ``peak_stress`` ``(poses, links)`` (Pa; NaN for a body without elements of ours), where it lies
+    ``peak_stress_corner`` ``(poses, links, 2)`` (element, its corner; -1 without elements) and its derivatives
+    ``peak_stress_slopes`` ``(poses, links, k)`` (Eq. (D9): those of the stress at that corner)."""
 
     parameters: tuple[str, ...]
     drive_angle: NDArray[np.float64]
@@ -89,6 +94,9 @@ class PathSensitivity:
     reaction_forces: dict[str, NDArray[np.float64]] = dataclasses.field(default_factory=dict)
     squared_frequency: NDArray[np.float64] | None = None
     lowest_squared_frequency: NDArray[np.float64] | None = None
+    peak_stress: NDArray[np.float64] | None = None
+    peak_stress_slopes: NDArray[np.float64] | None = None
+    peak_stress_corner: NDArray[np.int64] | None = None
 
     def fold_distance(self) -> NDArray[np.float64]:
         """``(poses, k)``: the change of each parameter alone that brings the pose's lowest squared frequency of
@@ -108,6 +116,7 @@ def material_sensitivity(
     multipliers: NDArray,
     links: tuple[int, ...] | None = None,
     stability: bool = False,
+    stress: bool = False,
 ) -> PathSensitivity:
     """The derivatives of the coupler point, driving torque and mass at the equilibria ``q`` ``(poses, n)``,
     ``multipliers`` ``(poses, m)`` at ``time`` (a quasi-static run's rows) with respect to the relative Young's
@@ -125,8 +134,19 @@ def material_sensitivity(
         for k in links
     ]
     found = _path_derivatives(
-        scene, time, q, multipliers, names, lambda row, t: material_rates(system, q[row], links), sides, stability
+        scene,
+        time,
+        q,
+        multipliers,
+        names,
+        lambda row, t: material_rates(system, q[row], links),
+        sides,
+        stability,
+        stress,
     )
+    if found.peak_stress_slopes is not None and found.peak_stress is not None:
+        for column, k in enumerate(links):  # at fixed strain a link's stress is proportional to its E
+            found.peak_stress_slopes[:, k, column] += found.peak_stress[:, k]
     masses = [float(system.bodies[k].moments.mass) for k in links]
     return replace(found, mass=np.array([0.0] * len(links) + masses))
 
@@ -147,6 +167,7 @@ def bore_sensitivity(
     multipliers: NDArray,
     bores: tuple[tuple[int, int], ...] | None = None,
     stability: bool = False,
+    stress: bool = False,
 ) -> PathSensitivity:
     """The derivatives of the coupler point and driving torque at a quasi-static run's equilibria (as
     :func:`material_sensitivity`) with respect to the three errors of :class:`BoreError` (``twist``, rad;
@@ -178,7 +199,7 @@ def bore_sensitivity(
 
     # The outputs read the joints' points: a bore error of the tool link moves the coupler point itself (the mean of
     # its joint points as built), at fixed coordinates too.
-    return _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability)
+    return _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability, stress)
 
 
 def section_velocities(
@@ -213,6 +234,7 @@ def section_sensitivity(
     step: float = MORPH_STEP,
     velocities: dict[tuple[int, str], NDArray] | None = None,
     stability: bool = False,
+    stress: bool = False,
 ) -> PathSensitivity:
     """The derivatives of the coupler point, driving torque and mass at a quasi-static run's equilibria (as
     :func:`material_sensitivity`) with respect to each of ``parameters`` (fields of
@@ -249,7 +271,7 @@ def section_sensitivity(
         return out
 
     sides = [(plus, minus, delta) for (plus, minus), delta in shifted]
-    sensitivity = _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability)
+    sensitivity = _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability, stress)
     mass = np.array([(_mass(plus) - _mass(minus)) / (2.0 * delta) for (plus, minus), delta in shifted])
     return replace(sensitivity, mass=mass)
 
@@ -342,6 +364,7 @@ def _path_derivatives(
     rates: Callable[[int, float], NDArray],
     sides: list[tuple[LinkageScene, LinkageScene, float]],
     stability: bool = False,
+    stress: bool = False,
 ) -> PathSensitivity:
     """Eq. (D1) at every pose with ``rates(row, t)``'s right-hand sides, then Eq. (D2) for the outputs: along the
     response, plus, per parameter, the outputs' own change at fixed coordinates, central differences of the linkage
@@ -377,6 +400,7 @@ def _path_derivatives(
         upper, lower = (_outputs(side, time, q, multipliers, modes) for side in (plus, minus))
         for name, values in derivatives.items():
             values[:, column] += (upper[name] - lower[name]) / (2.0 * step)
+    peaks, peak_slopes, corners = _peak_stress_derivatives(scene, q, dq, sides) if stress else (None, None, None)
     angles = np.array([scene.drive_angle(float(t)) for t in time])
     # a joint's reaction force is its first three multipliers (Eq. (J2)): its derivative is the response's, exactly
     reactions = {
@@ -392,7 +416,46 @@ def _path_derivatives(
         reaction_forces=reactions,
         squared_frequency=frequencies,
         lowest_squared_frequency=derivatives.get("lowest_squared_frequency"),
+        peak_stress=peaks,
+        peak_stress_slopes=peak_slopes,
+        peak_stress_corner=corners,
     )
+
+
+def _peak_stress_derivatives(
+    scene: LinkageScene, q: NDArray, dq: NDArray, sides: list[tuple[LinkageScene, LinkageScene, float]]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """Each link's peak von Mises stress at every pose ``(poses, links)``, its element and corner, and its
+    derivatives ``(poses, links, k)``
+    (Eq. (D9)): along the response ``dq`` ``(poses, k, n)`` exactly, by the peak's gradient in the link's modal
+    coordinates; plus, for a parameter whose linkage at +-step has that link rebuilt (a section), the stress at the
+    peak's corner of the rebuilt link at the same coordinates, by central differences. A material's own share (the
+    stress is proportional to E at fixed strain) is the caller's (:func:`material_sensitivity`)."""
+    system = scene.system
+    poses, k = dq.shape[:2]
+    peaks = np.full((poses, len(scene.bodies)), np.nan)
+    slopes = np.full((poses, len(scene.bodies), k), np.nan)
+    corners = np.full((poses, len(scene.bodies), 2), -1, dtype=np.int64)
+    for link, body in enumerate(scene.bodies):
+        if not isinstance(body.fe, FEModel):
+            continue
+        modes = strain_modes(body.fe, body.reduction.basis)
+        block = system.block(link)
+        for row in range(poses):
+            zeta = q[row, block][7:]
+            peak = peak_stress(modes, zeta, body.fe.material.E, body.fe.material.nu)
+            peaks[row, link], corners[row, link] = peak.value, (peak.element, peak.corner)
+            slopes[row, link] = dq[row, :, block.start + 7 : block.stop] @ peak.gradient
+            for column, (plus, minus, step) in enumerate(sides):
+                rebuilt = [side.bodies[link] for side in (plus, minus)]
+                if all(other is body for other in rebuilt):
+                    continue
+                at = [
+                    corner_stress(other.mesh_model, other.reduction.basis, zeta, peak.element, peak.corner)
+                    for other in rebuilt
+                ]
+                slopes[row, link, column] += (at[0] - at[1]) / (2.0 * step)
+    return peaks, slopes, corners
 
 
 def _along_response(

@@ -9,6 +9,8 @@ from body_fixtures import clamped_cantilever
 
 from ffrf.errors import SensitivityError
 from ffrf.fe.materials import PLA
+from ffrf.output.assembly_stress import scene_assembly_stress
+from ffrf.output.peak_stress import corner_stress
 from ffrf.output.sensors import path_sensors
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.path_sensitivity import material_sensitivity
@@ -56,10 +58,15 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
     that link's E or rho times exp(+-1e-3) and exp(+-2e-3), combined by Richardson's rule, within 1e-6 of the largest
     derivative (measured: 4e-8, the re-solved equilibria's round-off over the steps; one step's differences alone are
     off by about 2e-7, the step squared). The lowest squared frequency of Eq. (B1) likewise, within 1e-6 of the
-    largest squared frequency (measured 1e-7: both sides' eigenvalue round-off, 1e-10 of mu, over the steps)."""
+    largest squared frequency (measured 1e-7: both sides' eigenvalue round-off, 1e-10 of mu, over the steps). Every
+    link's peak von Mises stress likewise (Eq. (D9)): the peak is the whole stress field's as the assembly report
+    computes it, and its derivative, that of the stress at the peak's corner, agrees with the re-solved linkages'
+    stress at that corner within 1e-6 of the largest (measured 7e-10 to 8e-9)."""
     scene, result = bennett_path
     kind, link = parameter
-    exact = material_sensitivity(scene, result.time, result.q, result.multipliers, links=(link,), stability=True)
+    exact = material_sensitivity(
+        scene, result.time, result.q, result.multipliers, links=(link,), stability=True, stress=True
+    )
     column = 0 if kind == "E" else 1
     rows = [1, 3, 4]
 
@@ -75,9 +82,15 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
         q = np.array([s.q for s in solved])
         lam = np.array([s.multipliers for s in solved])
         mu = [_lowest(system, s, float(result.time[r])) for s, r in zip(solved, rows, strict=True)]
+        peaks = np.array(
+            [_at_corners(scene, s.q, exact.peak_stress_corner[r]) for s, r in zip(solved, rows, strict=True)]
+        )
+        if kind == "E":  # the FE model's E is the nominal one: the stress at a strain is proportional to E
+            peaks[:, link] *= factor
         return path_sensors(replace(scene, system=system), result.time[rows], q, lam) | {
             "multipliers": lam,
             "mu": np.array(mu),
+            "peaks": peaks,
         }
 
     def central(step: float, name: str) -> np.ndarray:
@@ -105,6 +118,13 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
     scale = exact.squared_frequency.max()
     np.testing.assert_allclose(exact.lowest_squared_frequency[rows, column], mu, rtol=0, atol=1e-6 * scale)
     assert np.abs(mu).max() > 1e-3 * scale  # the material moves the frequency
+    peaks = (4 * central(1e-3, "peaks") - central(2e-3, "peaks")) / 3
+    assert exact.peak_stress is not None and exact.peak_stress_slopes is not None
+    whole = [[body.max_von_mises_pa for body in scene_assembly_stress(scene, result.q[r]).links] for r in rows]
+    np.testing.assert_allclose(exact.peak_stress[rows], whole, rtol=1e-12)  # the whole field's peak
+    np.testing.assert_allclose(
+        exact.peak_stress_slopes[rows, :, column], peaks, rtol=0, atol=1e-6 * np.abs(peaks).max()
+    )
     # statics: the clamp carries the whole weight, so its vertical force changes with a link's density by that
     # link's weight and not at all with its modulus, at every pose
     weight = float(scene.system.bodies[link].moments.mass) * 9.81
@@ -117,6 +137,15 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
 def _lowest(system: MultibodySystem, solved, t: float) -> float:
     """The lowest squared frequency of Eq. (B1) at a solved equilibrium."""
     return float(equilibrium_stability(system, solved.q, solved.multipliers, t, count=1).squared_frequencies[0])
+
+
+def _at_corners(scene, q: np.ndarray, corners: np.ndarray) -> list[float]:
+    """Each link's von Mises stress at coordinates ``q`` at its (element, corner), from its whole displacement
+    field (:meth:`FEModel.vertex_strains`), not from strain modes."""
+    return [
+        corner_stress(body.mesh_model, body.reduction.basis, q[scene.system.block(k)][7:], *corners[k])
+        for k, body in enumerate(scene.bodies)
+    ]
 
 
 def test_a_fold_is_refused_not_differentiated():
@@ -134,12 +163,16 @@ def test_scaling_every_stiffness_and_density_together_moves_nothing_and_scales_t
     driving torque times that factor. So the derivatives by E and rho of all links sum to zero for the coupler
     point and to the torque itself for the torque (exact identities of statics, not of our formulation). The forces
     and the masses scale alike, so the frequencies of small vibrations do not move: the lowest squared frequency's
-    derivatives sum to zero too (measured 1.5e-7 of the largest, the eigenvalue's round-off over the step)."""
+    derivatives sum to zero too (measured 1.5e-7 of the largest, the eigenvalue's round-off over the step); the
+    strains stay while every E grows, so each link's peak stress grows with it: its derivatives sum to it."""
     scene, result = bennett_path
-    exact = material_sensitivity(scene, result.time, result.q, result.multipliers, stability=True)
+    exact = material_sensitivity(scene, result.time, result.q, result.multipliers, stability=True, stress=True)
     assert exact.lowest_squared_frequency is not None
     slopes = exact.lowest_squared_frequency
     np.testing.assert_allclose(slopes.sum(axis=1), 0.0, atol=1e-6 * np.abs(slopes).max())
+    # the strains stay, E scales: every link's peak stress scales too (measured 1.8e-11)
+    assert exact.peak_stress is not None and exact.peak_stress_slopes is not None
+    np.testing.assert_allclose(exact.peak_stress_slopes.sum(axis=2), exact.peak_stress, rtol=1e-9)
     np.testing.assert_allclose(exact.coupler_point.sum(axis=2), 0.0, atol=1e-9 * np.abs(exact.coupler_point).max())
     torque = result.sensors["driving_torque"]
     np.testing.assert_allclose(exact.driving_torque.sum(axis=1), torque, rtol=1e-8, atol=1e-10 * np.abs(torque).max())
@@ -194,14 +227,15 @@ def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_
     delta squared), within 1e-6 of the largest derivative (measured: 1e-10 to 2e-10 for the coupler, up to 2e-7 for
     the torque). The lowest squared frequency of Eq. (B1) at steps five times as wide, within 1e-5 (measured 1.2e-6
     to 2.5e-6: on both sides the eigenvalue's round-off, 1e-10 of it as the links' stiffest modes are 1e6 times the
-    lowest, over the steps)."""
+    lowest, over the steps). Every link's peak von Mises stress likewise (at the peak's corner: a bore error moves
+    the peak between corners whose stresses are close), within 1e-6."""
     from ffrf.scenes.linkage_description import BoreError
     from ffrf.scenes.linkage_scene import build_linkage
     from ffrf.scenes.path_sensitivity import bore_sensitivity
 
     loop, options, scene, result = misfit_bennett
     exact = bore_sensitivity(
-        scene, loop, options, result.time, result.q, result.multipliers, bores=((joint, link),), stability=True
+        scene, loop, options, result.time, result.q, result.multipliers, ((joint, link),), stability=True, stress=True
     )
     column = ("twist", "offset", "axial").index(field)
     assert exact.parameters[column] == f"{field} joint{joint} link{link}"
@@ -216,7 +250,8 @@ def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_
         q = np.array([s.q for s in solved])
         lam = np.array([s.multipliers for s in solved])
         mu = [_lowest(built.system, s, float(result.time[r])) for s, r in zip(solved, rows, strict=True)]
-        return path_sensors(built, result.time[rows], q, lam) | {"mu": np.array(mu)}
+        peaks = [_at_corners(built, s.q, exact.peak_stress_corner[r]) for s, r in zip(solved, rows, strict=True)]
+        return path_sensors(built, result.time[rows], q, lam) | {"mu": np.array(mu), "peaks": np.array(peaks)}
 
     def central(step: float, name: str) -> np.ndarray:
         return (outputs(step)[name] - outputs(-step)[name]) / (2 * step)
@@ -232,6 +267,11 @@ def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_
     assert exact.lowest_squared_frequency is not None
     ours = exact.lowest_squared_frequency[rows, column]
     np.testing.assert_allclose(ours, mu, rtol=0, atol=1e-5 * np.abs(mu).max())
+    narrow = delta / 10  # a misfit's stress bends fast with the error: a tenth of the step keeps the truncation low
+    peaks = (4 * central(narrow, "peaks") - central(2 * narrow, "peaks")) / 3
+    assert exact.peak_stress_slopes is not None
+    slopes = exact.peak_stress_slopes[rows, :, column]
+    np.testing.assert_allclose(slopes, peaks, rtol=0, atol=1e-6 * np.abs(peaks).max())
 
 
 def test_the_von_mises_trusss_apex_moves_with_the_bars_stiffness_as_its_closed_form(tmp_path):

@@ -12,6 +12,7 @@ from ffrf.geometry.design_velocity import SECTION_PARAMETERS, design_velocity
 from ffrf.geometry.link_geometry import build_link
 from ffrf.geometry.meshing import gmsh_session
 from ffrf.mesh.tet_mesh import TetMesh
+from ffrf.output.peak_stress import corner_stress
 from ffrf.output.sensors import path_sensors
 from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
 from ffrf.scenes.builder import morphed_body, parametric_link
@@ -80,9 +81,12 @@ def test_the_path_derivatives_agree_with_re_solved_linkages_on_the_morphed_mesh(
     rebuilt on its mesh morphed by +-3e-4 of the dimension (the same model, differentiated the long way), within
     1e-6 of the largest derivative (measured 1.3e-8 for the arm's thickness, the steps' truncation: 8e-8 at 1e-3,
     8e-6 at 1e-2). The lowest squared frequency of Eq. (B1) likewise, within 1e-5 of the largest derivative (its
-    eigenvalue's round-off, 1e-10 of it, over the steps)."""
+    eigenvalue's round-off, 1e-10 of it, over the steps), and every link's peak von Mises stress (at the peak's
+    corner; the morphed link's own stress field changes too), within 1e-6."""
     scene, result = bennett_path
-    exact = section_sensitivity(scene, result.time, result.q, result.multipliers, (parameter,), (link,), stability=True)
+    exact = section_sensitivity(
+        scene, result.time, result.q, result.multipliers, (parameter,), (link,), stability=True, stress=True
+    )
     spec = scene.description["bodies"][link]["parametric"]
     build = parametric_link(spec)
     mesh, velocity = design_velocity(build, float(spec["h"]), parameter)
@@ -99,14 +103,25 @@ def test_the_path_derivatives_agree_with_re_solved_linkages_on_the_morphed_mesh(
             equilibrium_stability(moved.system, s.q, s.multipliers, float(result.time[r]), 1).squared_frequencies[0]
             for s, r in zip(solved, ROWS, strict=True)
         ]
-        return path_sensors(moved, result.time[ROWS], q, np.array([s.multipliers for s in solved])) | {"mu": mu}
+        peaks = [
+            [
+                corner_stress(body.mesh_model, body.reduction.basis, s.q[moved.system.block(k)][7:], *corner)
+                for k, (body, corner) in enumerate(zip(moved.bodies, exact.peak_stress_corner[r], strict=True))
+            ]
+            for s, r in zip(solved, ROWS, strict=True)
+        ]
+        return path_sensors(moved, result.time[ROWS], q, np.array([s.multipliers for s in solved])) | {
+            "mu": mu,
+            "peaks": peaks,
+        }
 
     near, far = ((outputs(s * step), outputs(-s * step)) for s in (1.0, 2.0))
-    assert exact.lowest_squared_frequency is not None
+    assert exact.lowest_squared_frequency is not None and exact.peak_stress_slopes is not None
     for name, ours, tolerance in (
         ("coupler_point", exact.coupler_point[ROWS, :, 0], 1e-6),
         ("driving_torque", exact.driving_torque[ROWS, 0], 1e-6),
         ("mu", exact.lowest_squared_frequency[ROWS, 0], 1e-5),
+        ("peaks", exact.peak_stress_slopes[ROWS, :, 0], 1e-6),
     ):
         central = [
             (np.asarray(plus[name]) - np.asarray(minus[name])) / (2 * s * step)
