@@ -53,10 +53,12 @@ def run(args: argparse.Namespace) -> int:
         iterations.append({"iteration": iteration, **_point(point, problem.parameters)})
         (out / "progress.json").write_text(json.dumps(iterations, indent=2) + "\n")  # kept if the design stops
         values = ", ".join(f"{p} {1e3 * v:.3f} mm" for p, v in zip(problem.parameters, point.values, strict=True))
-        lowest = point.min_frequency_hz
+        lowest, largest = point.min_frequency_hz, point.max_stress
         frequency = (
             "" if lowest is None else f", lowest frequency {lowest:.3f} Hz (bound {problem.min_frequency_hz} Hz)"
         )
+        if largest is not None and problem.max_stress is not None:
+            frequency += f", peak stress {1e-6 * largest:.4g} MPa (bound {1e-6 * problem.max_stress:.4g} MPa)"
         print(
             f"iteration {iteration}: {values}: mass {1e3 * point.mass:.2f} g, largest deviation "
             f"{1e3 * point.max_deviation:.4f} mm (bound {1e3 * problem.max_deviation:.4f} mm){frequency}",
@@ -95,7 +97,10 @@ def _point(point: DesignPoint, parameters: tuple[str, ...]) -> dict:
         "mass_g": 1e3 * point.mass,
         "max_deviation_mm": 1e3 * point.max_deviation,
         "seconds": point.seconds,
-    } | ({} if point.min_frequency_hz is None else {"min_frequency_hz": point.min_frequency_hz})
+    } | (
+        ({} if point.min_frequency_hz is None else {"min_frequency_hz": point.min_frequency_hz})
+        | ({} if point.max_stress is None else {"max_stress_mpa": 1e-6 * point.max_stress})
+    )
 
 
 def _summary(design: SectionDesign, seconds: float) -> dict:
@@ -107,6 +112,7 @@ def _summary(design: SectionDesign, seconds: float) -> dict:
             "upper_mm": [1e3 * v for v in problem.upper],
             "max_deviation_mm": 1e3 * problem.max_deviation,
             "min_frequency_hz": problem.min_frequency_hz,
+            "max_stress_mpa": None if problem.max_stress is None else 1e-6 * problem.max_stress,
             "outputs": problem.outputs,
         },
         "start": _point(design.start, problem.parameters),

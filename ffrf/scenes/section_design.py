@@ -4,13 +4,14 @@ sensitivities (``docs/formulation.md``, Eq. (D6); issue #35).
 The links' section dimensions :math:`p` (fields of :class:`~ffrf.geometry.link_geometry.LinkDesign` that leave the
 bores in place, every link alike) solve
 
-.. math:: \min_p\ m(p) \quad\text{s.t.}\quad |d_i(p)| \le \bar d,\ \ \mu_i(p) \ge (2\pi \underline f)^2
-          \ \text{at every pose } i,\qquad p_{lo} \le p \le p_{hi},
+.. math:: \min_p\ m(p) \quad\text{s.t.}\quad |d_i(p)| \le \bar d,\ \ \mu_i(p) \ge (2\pi \underline f)^2,
+          \ \ v_{ik}(p) \le \bar v \ \text{at every pose } i \text{ and link } k,\qquad p_{lo} \le p \le p_{hi},
 
 with :math:`m` the links' mass, :math:`d_i` the coupler's deviation from the ideal path at pose :math:`i` of a
 quasi-static revolution under the linkage's load (its weight, its bore errors) and, where a lowest frequency
 :math:`\underline f` is asked for, :math:`\mu_i` the lowest squared frequency of Eq. (B1) there (its gradient by
-Eq. (D7)). Each design is meshed and run
+Eq. (D7)); where a stress bound :math:`\bar v` is asked for, :math:`v_{ik}` the peak von Mises stress of link
+:math:`k` there (Eq. (D9)). Each design is meshed and run
 afresh; the gradients are exact for the meshed model (Eq. (D1) with the section's morph, Eq. (D5),
 :func:`~ffrf.scenes.path_sensitivity.section_sensitivity`): :math:`\partial|d_i|/\partial p = d_i^T
 (\partial d_i/\partial p)/|d_i|`. scipy's SLSQP works in dimensions relative to the start, mass relative to the
@@ -63,6 +64,7 @@ DESIGN = {
     "upper": Key("numbers", True),
     "max_deviation": Key("number", True, positive),
     "min_frequency_hz": Key("number", False, positive),
+    "max_stress_mpa": Key("number", False, positive),
     "outputs": Key("integer", False, positive),
     "max_iterations": Key("integer", False, positive),
 }
@@ -84,7 +86,8 @@ ACTIVE = 1e-3
 class DesignProblem:
     """The section ``parameters`` with their ``lower`` and ``upper`` bounds (m), the bound on the coupler's
     deviation ``max_deviation`` (m) at each of ``outputs`` poses of a revolution, SLSQP's ``max_iterations`` and,
-    optionally, the least lowest vibration frequency ``min_frequency_hz`` (Hz, Eq. (B1)) at each pose."""
+    optionally, the least lowest vibration frequency ``min_frequency_hz`` (Hz, Eq. (B1)) at each pose and the
+    largest von Mises stress of any link ``max_stress`` (Pa, Eq. (D9)) at each pose."""
 
     parameters: tuple[str, ...]
     lower: tuple[float, ...]
@@ -93,6 +96,7 @@ class DesignProblem:
     outputs: int = 25
     max_iterations: int = 20
     min_frequency_hz: float | None = None
+    max_stress: float | None = None
 
     @property
     def min_squared_frequency(self) -> float | None:
@@ -113,6 +117,8 @@ class DesignProblem:
             raise SceneError(f"design: outputs must be at least 3 poses, got {self.outputs}")
         if self.min_frequency_hz is not None and not self.min_frequency_hz > 0.0:
             raise SceneError(f"design: min_frequency_hz must be > 0, got {self.min_frequency_hz!r}")
+        if self.max_stress is not None and not self.max_stress > 0.0:
+            raise SceneError(f"design: max_stress_mpa must be > 0, got {self.max_stress!r} Pa")
 
 
 @dataclass(frozen=True)
@@ -120,7 +126,8 @@ class DesignPoint:
     """One design, meshed and run: its parameter ``values`` (m), the links' ``mass`` (kg) and the coupler's
     ``deviation`` (m) at each pose, with their gradients by the parameters (``(k,)`` and ``(poses, k)``); for a
     problem with a frequency bound the lowest squared frequency of Eq. (B1) at each pose (rad^2/s^2) and its
-    gradients likewise."""
+    gradients likewise, and for one with a stress bound every link's peak von Mises stress at each pose
+    ``(poses, links)`` (Pa, Eq. (D9)) and its gradients ``(poses, links, k)``."""
 
     values: NDArray[np.float64]
     mass: float
@@ -130,10 +137,17 @@ class DesignPoint:
     seconds: float
     frequency: NDArray[np.float64] | None = None
     frequency_gradient: NDArray[np.float64] | None = None
+    stress: NDArray[np.float64] | None = None
+    stress_gradient: NDArray[np.float64] | None = None
 
     @property
     def max_deviation(self) -> float:
         return float(self.deviation.max())
+
+    @property
+    def max_stress(self) -> float | None:
+        """The largest von Mises stress of any link over the poses (Pa), where computed."""
+        return None if self.stress is None else float(np.nanmax(self.stress))
 
     @property
     def min_frequency_hz(self) -> float | None:
@@ -146,6 +160,8 @@ class DesignPoint:
         out = [1.0 - self.deviation / problem.max_deviation]
         if problem.min_squared_frequency is not None and self.frequency is not None:
             out.append(self.frequency / problem.min_squared_frequency - 1.0)
+        if problem.max_stress is not None and self.stress is not None:  # a link without elements: no bound
+            out.append(np.nan_to_num(1.0 - self.stress / problem.max_stress, nan=1.0).ravel())
         return np.concatenate(out)
 
     def margin_gradients(self, problem: DesignProblem) -> NDArray[np.float64]:
@@ -153,7 +169,20 @@ class DesignPoint:
         out = [-self.deviation_gradient / problem.max_deviation]
         if problem.min_squared_frequency is not None and self.frequency_gradient is not None:
             out.append(self.frequency_gradient / problem.min_squared_frequency)
+        if problem.max_stress is not None and self.stress_gradient is not None:
+            slopes = self.stress_gradient.reshape(-1, self.stress_gradient.shape[-1])
+            out.append(np.nan_to_num(-slopes / problem.max_stress, nan=0.0))
         return np.vstack(out)
+
+    def constraint_names(self, problem: DesignProblem) -> list[str]:
+        """What each of :meth:`margins` bounds, in order."""
+        poses = len(self.deviation)
+        names = [f"deviation at pose {i}" for i in range(poses)]
+        if problem.min_squared_frequency is not None and self.frequency is not None:
+            names += [f"frequency at pose {i}" for i in range(poses)]
+        if problem.max_stress is not None and self.stress is not None:
+            names += [f"stress of link {k} at pose {i}" for i in range(poses) for k in range(self.stress.shape[1])]
+        return names
 
     def feasible(self, problem: DesignProblem) -> bool:
         """Whether every constraint is met to :data:`FEASIBLE`."""
@@ -194,6 +223,7 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
             result.multipliers,
             problem.parameters,
             stability=problem.min_frequency_hz is not None,
+            stress=problem.max_stress is not None,
         )
     except GeometryError as error:
         section = ", ".join(f"{p} {1e3 * v:.4g} mm" for p, v in zip(problem.parameters, values, strict=True))
@@ -209,6 +239,11 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
         if exact.lowest_squared_frequency is None
         else exact.lowest_squared_frequency.reshape(len(result.time), -1, k).sum(axis=1)
     )
+    stress_gradient = (
+        None
+        if exact.peak_stress_slopes is None
+        else exact.peak_stress_slopes.reshape(len(result.time), len(scene.bodies), -1, k).sum(axis=2)
+    )
     return DesignPoint(
         np.asarray(values, dtype=float),
         float(sum(body.moments.mass for body in scene.system.bodies)),
@@ -218,6 +253,8 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
         time.perf_counter() - started,
         exact.squared_frequency,
         frequency_gradient,
+        exact.peak_stress,
+        stress_gradient,
     )
 
 
@@ -298,10 +335,10 @@ def _kkt(
     gradient = point.mass_gradient * scale / mass0
     columns, names = [], []
     margins, gradients = point.margins(problem), point.margin_gradients(problem)
-    poses = len(point.deviation)
+    labels = point.constraint_names(problem)
     for i in np.flatnonzero(margins < ACTIVE):
         columns.append(gradients[i] * scale)
-        names.append(f"deviation at pose {i}" if i < poses else f"frequency at pose {i - poses}")
+        names.append(labels[i])
     for j, name in enumerate(problem.parameters):
         unit = np.zeros(len(scale))
         unit[j] = 1.0
@@ -334,6 +371,7 @@ def load_design(document: dict, where: str = "design") -> tuple[SingleLoop, Link
             int(spec.get("outputs", 25)),
             int(spec.get("max_iterations", 20)),
             float(spec["min_frequency_hz"]) if "min_frequency_hz" in spec else None,
+            1e6 * float(spec["max_stress_mpa"]) if "max_stress_mpa" in spec else None,
         )
     except SceneError as error:
         raise SceneError(f"{where}, {error}") from error
