@@ -90,19 +90,11 @@ def test_a_failed_check_names_itself_and_its_numbers_in_the_verdict():
 
 
 def _bore_twist(twist_deg: float) -> dict:
-    return {
-        "linkage": {
-            "dh": {"a": [110, 220, 110, 220], "alpha_deg": [150, 90, 150, 90]},
-            "unit": "mm",
-            "driver": 3,
-            "tool_link": 2,
-            "start_angle_deg": -90.0,
-            "h": 0.012,
-            "order": 1,
-            "modes": 2,
-            "bore_errors": [{"joint": 3, "link": 0, "twist_deg": twist_deg}],
-        }
-    }
+    """The coarse DH Bennett of the kernels' warm-up with its base bore twisted."""
+    from ffrf.scenes.kernel_warmup import WARMUP_LINKAGE
+
+    bore = {"joint": 3, "link": 0, "twist_deg": twist_deg}
+    return {"linkage": dict(WARMUP_LINKAGE["linkage"], bore_errors=[bore])}
 
 
 def test_a_print_stressed_beyond_its_strength_when_assembled_is_warned_about():
