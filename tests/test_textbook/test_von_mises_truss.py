@@ -96,6 +96,7 @@ def test_run_with_stability_on_a_dynamic_scene_is_refused(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow  # a second run of the truss (55 s); the default suite's run above folds at the closed form's load
 def test_the_fold_and_the_landing_do_not_depend_on_the_outputs(tmp_path, truss_run):
     """The truss has no drive: its path steps t_end / PATH_STEPS_WITHOUT_DRIVE (Eq. (S10)), and the trace through the
     fold starts from where that path stops with the path's step, so 5 and 16 outputs fold at the same load
