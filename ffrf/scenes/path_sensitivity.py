@@ -1,12 +1,12 @@
 r"""Derivatives of a linkage's quasi-static path with respect to its links' materials, bore errors and sections
-(``docs/formulation.md``, Eqs. (D1)-(D2), (D5)).
+(``docs/formulation.md``, Eqs. (D1)-(D2), (D5), (D7), (D9)).
 
 At every output pose of a quasi-static run the equilibrium's response to each parameter comes from the implicit
 function theorem with the tangent Newton factored there
 (:func:`ffrf.solvers.equilibrium_sensitivity.equilibrium_response`): each link's relative Young's modulus and
 density (exact rates: the mode basis depends on neither), and each bore's three errors of
 :class:`~ffrf.scenes.linkage_description.BoreError` in the misfit model (rates of the joint's equations and reactions
-by central differences of the joint the linkage builds, :data:`TWIST_STEP`, :data:`SHIFT_STEP`).
+by central differences of the joint the linkage builds, :data:`TWIST_STEP`, :data:`SHIFT_STEP`),
 and each link's section dimensions (:data:`~ffrf.geometry.design_velocity.SECTION_PARAMETERS`: rates of the
 residual by central differences of the link rebuilt on its mesh morphed along the dimension's design velocity,
 :func:`~ffrf.geometry.design_velocity.design_velocity`, step :data:`MORPH_STEP` of the dimension).
@@ -14,7 +14,11 @@ The outputs are explicit, smooth functions of the equilibrium: the coupler point
 points, :func:`ffrf.output.sensors.path_sensors`) and the driving torque (a multiplier). They are differentiated along
 the response by central differences (Eq. (D2)): a step moving no coordinate by more than :data:`OUTPUT_STEP`, whose
 truncation error (``OUTPUT_STEP**2`` relative) and round-off (about ``eps / OUTPUT_STEP`` of the output's scale)
-stay near 1e-10 of the derivative, far below what a re-run's finite differences reach (about 1e-6).
+stay near 1e-10 of the derivative, far below what a re-run's finite differences reach (about 1e-6). Each output's
+own change with a parameter at fixed coordinates comes from the linkage built at +-step of it. On request, two
+more outputs: the lowest squared frequency of Eq. (B1) (``stability``; its derivative with the mode held, Eq. (D7):
+:func:`ffrf.solvers.stability.frequency_form`) and each link's peak von Mises stress (``stress``; closed-form
+gradient in the modal coordinates, Eq. (D9): :mod:`ffrf.output.peak_stress`).
 """
 
 from __future__ import annotations
