@@ -78,8 +78,10 @@ FEASIBLE = 1e-3
 #: An optimum is accepted when its KKT residual (relative to the objective's gradient) is below this.
 KKT_TOLERANCE = 2e-2
 
-#: A constraint or bound within this fraction of its scale counts as active in the KKT residual.
-ACTIVE = 1e-3
+#: A constraint or bound within this fraction of its scale counts as active in the KKT residual: ten times FTOL, as
+#: SLSQP stops within about FTOL of a bound (at FTOL itself a constraint 0.99e-3 from its bound counted on one BLAS
+#: kernel and not on another).
+ACTIVE = 1e-2
 
 
 @dataclass(frozen=True)
