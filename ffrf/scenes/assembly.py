@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from ffrf.errors import AssemblyDivergence, StaticDivergence
 from ffrf.scenes.builder import Scene
 from ffrf.scenes.step_sizes import DRIVE_ANGLE_PER_STEP, MAX_DRIVE_STEP, MAX_DYNAMIC_STEP, PATH_STEPS_WITHOUT_DRIVE
+from ffrf.solvers.pseudo_transient import settle
 from ffrf.solvers.static_solver import StaticSolution, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
 
@@ -83,6 +84,8 @@ def assemble(
     steps on the closable system, then the misfit in ``steps`` increments (default
     :data:`STEPS_PER_DEGREE` per degree of the largest axis misfit, at least 1). ``convert`` maps
     each intermediate system (e.g. to other joint conventions)."""
+    if scene.loose_joints:
+        return _assemble_loose(scene, steps, t, q0, convert)
     if steps is None:
         steps = max(1, math.ceil(STEPS_PER_DEGREE * scene.misfit_degrees - 1e-6))
     convert = (lambda system: system) if convert is None else convert
@@ -102,6 +105,26 @@ def assemble(
             "for a large misfit assemble in more steps (assemble(scene, steps=...))"
         ) from error
     return solution
+
+
+def _assemble_loose(
+    scene: Scene,
+    steps: int | None,
+    t: float,
+    q0: NDArray | None,
+    convert: Callable[[MultibodySystem], MultibodySystem] | None,
+) -> StaticSolution:
+    """A scene whose joints have play: assembled with ideal joints first (the pins centred in their bores), then
+    settled into its bores by pseudo-transient continuation (Eq. (P6))."""
+    ideal = assemble(scene.with_ideal_joints(), steps, t, q0, convert)
+    system = scene.system if convert is None else convert(scene.system)
+    try:
+        return settle(system, ideal.q, t)
+    except StaticDivergence as error:
+        raise AssemblyDivergence(
+            f"static assembly of scene {scene.name!r}: the pins of its joints with play "
+            f"({', '.join(j.name for j in scene.loose_joints)}) did not settle into their bores: {error}"
+        ) from error
 
 
 def starts_static(scene: Scene) -> bool:

@@ -61,9 +61,11 @@ from ffrf.reduction.mode_basis import ModeBasis
 from ffrf.reduction.reduced_io import reduction_fingerprint
 from ffrf.scenes.scene_cache import PROCESS_CACHE, LRUCache, SceneCache, content_key
 from ffrf.scenes.scene_forces import build_forces
-from ffrf.scenes.scene_joints import JointGeometry, joint_constraint, joint_geometry
+from ffrf.scenes.scene_joints import JointGeometry, joint_constraint, joint_geometry, loose_joint
 from ffrf.scenes.scene_matrices import MATRIX_FILES, NODE_TOLERANCE, matrices_interface, matrices_model
 from ffrf.scenes.scene_schema import check_scene
+from ffrf.system.clearance_joint import ClearanceJoint
+from ffrf.system.forces import ForceElement
 from ffrf.system.markers import BodyMarker, rigid_interface_marker
 from ffrf.system.multibody import MultibodySystem
 
@@ -181,12 +183,23 @@ class Scene:
     def with_misfit(self, fraction: float) -> MultibodySystem:
         """The system with every joint's side 0 moved ``fraction`` of the way from side 1's frame and
         point (0: closable) to its own (1: as built, :attr:`system`)."""
-        constraints = tuple(
-            joint_constraint(j, self.bodies, self.settings.get("joint_offsets", "body"), fraction) for j in self.joints
-        )
-        return MultibodySystem(
-            tuple(b.body for b in self.bodies), constraints, gravity=self.system.gravity, forces=self.system.forces
-        )
+        return _system(self.bodies, self.joints, self.settings, self.system.gravity, self._applied_forces, fraction)
+
+    def with_ideal_joints(self) -> Self:
+        """The same scene with every joint's play taken away (ideal revolute joints, Eqs. (J1)-(J3))."""
+        joints = tuple(replace(j, fit=None) for j in self.joints)
+        scene = replace(self, joints=joints)
+        return replace(scene, system=scene.with_misfit(1.0))
+
+    @property
+    def _applied_forces(self) -> tuple[ForceElement, ...]:
+        """The force elements of ``[[forces]]`` (the loose joints' are built with the joints)."""
+        return tuple(f for f in self.system.forces if not isinstance(f, ClearanceJoint))
+
+    @property
+    def loose_joints(self) -> tuple[ClearanceJoint, ...]:
+        """The joints with play, as force elements of :attr:`system`."""
+        return tuple(f for f in self.system.forces if isinstance(f, ClearanceJoint))
 
     def with_body(self, body: SceneBody) -> Self:
         """The same scene with ``body`` in place of the body of its index, and the joints built again on it (the
@@ -225,13 +238,17 @@ def build_scene(
             for k, entry in enumerate(description["bodies"])
         )
     index = {b.name: b.index for b in bodies}
-    joints = tuple(joint_geometry(spec, index, bodies) for spec in description.get("joints", []))
+    joints = tuple(
+        joint_geometry(spec, index, bodies, settings.get("clearance")) for spec in description.get("joints", [])
+    )
     offsets = settings.get("joint_offsets", "body")
-    system = MultibodySystem(
-        tuple(b.body for b in bodies),
-        tuple(joint_constraint(j, bodies, offsets, 1.0) for j in joints),
-        gravity=np.asarray(settings.get("gravity", [0.0, 0.0, -9.81]), dtype=float),
-        forces=build_forces(description.get("forces", []), bodies, index, offsets, where),
+    system = _system(
+        bodies,
+        joints,
+        settings,
+        np.asarray(settings.get("gravity", [0.0, 0.0, -9.81]), dtype=float),
+        build_forces(description.get("forces", []), bodies, index, offsets, where),
+        1.0,
     )
     q_initial = system.initial_state()
     for body, entry in zip(bodies, description["bodies"], strict=True):
@@ -253,6 +270,25 @@ def build_scene(
     }
     return Scene(
         settings.get("name", where), description, bodies, joints, system, q_initial, sensors, joint_sensors, settings
+    )
+
+
+def _system(
+    bodies: tuple[SceneBody, ...],
+    joints: tuple[JointGeometry, ...],
+    settings: dict,
+    gravity: NDArray[np.float64],
+    forces: tuple[ForceElement, ...],
+    fraction: float,
+) -> MultibodySystem:
+    """The system of a scene with every joint's side 0 ``fraction`` of the way to its own frame and point: ideal
+    joints as constraints, joints with play (Eqs. (P1)-(P5)) as force elements after ``forces``."""
+    offsets = settings.get("joint_offsets", "body")
+    return MultibodySystem(
+        tuple(b.body for b in bodies),
+        tuple(joint_constraint(j, bodies, offsets, fraction) for j in joints if j.fit is None),
+        gravity=gravity,
+        forces=forces + tuple(loose_joint(j, bodies, offsets, fraction) for j in joints if j.fit is not None),
     )
 
 

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.errors import SceneError
+from ffrf.system.clearance_joint import ClearanceJoint, PinFit, clearance_joint, line_contact_stiffness
 from ffrf.system.drives import CosineRamp, RampedAngle, rpm
 from ffrf.system.joints import (
     GroundFrame,
@@ -29,7 +30,15 @@ from ffrf.system.joints import (
 )
 from ffrf.system.markers import BodyMarker, attach_joint_point
 
-__all__ = ["HasMarkers", "JointGeometry", "drive_from_spec", "joint_constraint", "joint_geometry"]
+__all__ = [
+    "HasMarkers",
+    "JointGeometry",
+    "drive_from_spec",
+    "joint_constraint",
+    "joint_geometry",
+    "loose_joint",
+    "pin_fit",
+]
 
 
 class HasMarkers(Protocol):
@@ -52,6 +61,7 @@ class JointGeometry:
     axes: tuple[NDArray[np.float64], NDArray[np.float64]]
     points: tuple[NDArray[np.float64], NDArray[np.float64]]
     angle: RampedAngle | None = None
+    fit: PinFit | None = None
 
     @property
     def misfit_degrees(self) -> float:
@@ -72,8 +82,22 @@ def drive_from_spec(spec: dict) -> RampedAngle:
     return RampedAngle(float(start), CosineRamp(omega, float(spec.get("ramp_time", 1.0))))
 
 
-def joint_geometry(spec: dict, index: dict[str, int], bodies: Sequence[HasMarkers]) -> JointGeometry:
-    """The sides of a joint as described; body 1 is always a body (the ground goes to side 0)."""
+def pin_fit(spec: dict) -> PinFit:
+    """A ``clearance = {radial_mm, axial_mm, pin_length_mm, stiffness, damping}`` table in SI units."""
+    return PinFit(
+        1e-3 * float(spec["radial_mm"]),
+        1e-3 * float(spec.get("axial_mm", 0.0)),
+        1e-3 * float(spec["pin_length_mm"]),
+        float(spec["stiffness"]) if "stiffness" in spec else None,
+        float(spec.get("damping", 0.0)),
+    )
+
+
+def joint_geometry(
+    spec: dict, index: dict[str, int], bodies: Sequence[HasMarkers], clearance: dict | None = None
+) -> JointGeometry:
+    """The sides of a joint as described; body 1 is always a body (the ground goes to side 0). A passive revolute
+    joint has its own ``clearance`` table, else the scene's (``clearance``, ``None``: every joint ideal)."""
     sides = [
         (None, None) if spec[f"body{s}"] == "ground" else (index[spec[f"body{s}"]], spec[f"interface{s}"])
         for s in ("0", "1")
@@ -96,7 +120,42 @@ def joint_geometry(spec: dict, index: dict[str, int], bodies: Sequence[HasMarker
         (axis0, axis1),
         (point0, point1),
         drive_from_spec(spec["drive"]) if "drive" in spec else None,
+        _fit(spec, clearance),
     )
+
+
+def _fit(spec: dict, clearance: dict | None) -> PinFit | None:
+    if spec.get("type", "revolute") != "revolute":
+        return None
+    own = spec.get("clearance", clearance)
+    return None if own is None else pin_fit(own)
+
+
+def _material(body: HasMarkers) -> tuple[float, float] | None:
+    material = getattr(getattr(body, "fe", None), "material", None)
+    return None if material is None else (float(material.E), float(material.nu))
+
+
+def loose_joint(
+    joint: JointGeometry, bodies: Sequence[HasMarkers], joint_offsets: str, fraction: float
+) -> ClearanceJoint:
+    """The revolute ``joint`` with its play (Eqs. (P1)-(P5)): side 0 the bore, side 1 the pin; the contact stiffness,
+    unless given, from the two bodies' materials (the pin's for both on the ground)."""
+    if joint.fit is None:
+        raise SceneError(f"joint {joint.name!r} has no clearance")
+    fit = joint.fit
+    stiffness = fit.stiffness
+    if stiffness is None:
+        pin = _material(bodies[joint.bodies[1]])
+        bore = pin if joint.bodies[0] is None else _material(bodies[joint.bodies[0]])
+        if pin is None or bore is None:
+            raise SceneError(
+                f"joint {joint.name!r}: a body given by its matrices has no material for the contact stiffness; give "
+                "clearance.stiffness (N/m per contact)"
+            )
+        stiffness = line_contact_stiffness(*pin, *bore, fit.pin_length)
+    rigid = joint_constraint(joint, bodies, joint_offsets, fraction)
+    return clearance_joint(rigid, fit.radial, fit.axial, fit.pin_length, stiffness, fit.damping)
 
 
 def joint_constraint(

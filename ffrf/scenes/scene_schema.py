@@ -153,6 +153,14 @@ DRIVE = {
     "start_angle": Key("number", False, between(-2.0 * math.pi, 2.0 * math.pi, closed=True)),
     "start_angle_deg": Key("number", False, between(-360.0, 360.0, closed=True)),
 }
+#: A revolute joint's play (``docs/formulation.md``, Eqs. (P1)-(P5)): millimetres at the file's edge.
+CLEARANCE = {
+    "radial_mm": Key("number", True, non_negative),
+    "axial_mm": Key("number", False, non_negative),
+    "pin_length_mm": Key("number", True, positive),
+    "stiffness": Key("number", False, positive),
+    "damping": Key("number", False, non_negative),
+}
 JOINT = {
     "name": Key("string"),
     "type": Key("string", False, one_of(JOINT_TYPES)),
@@ -167,6 +175,7 @@ JOINT = {
     "axis1": Key("vector3", False, nonzero_vector),
     "point1": Key("vector3"),
     "drive": Key("table", keys=DRIVE),
+    "clearance": Key("table", keys=CLEARANCE),
 }
 LOAD_TABLE = {
     "time": Key("numbers", True),
@@ -215,6 +224,7 @@ SETTINGS = {
     "static_start": Key("boolean"),
     "stability": Key("boolean"),
     "max_steps": Key("number", False, positive),
+    "clearance": Key("table", keys=CLEARANCE),
 }
 #: The whole document: ``[scene]``, ``[[bodies]]``, ``[[joints]]``, ``[[sensors]]``.
 SCHEMA = {
@@ -311,6 +321,11 @@ def _check_joint(joint: dict, interfaces: Mapping[str, set[str]], where: str) ->
             raise SceneError(
                 f"{where}: give either axis/point (both sides) or axis{side}/point{side} (side {side}), not both"
             )
+    if "clearance" in joint and kind != "revolute":
+        raise SceneError(
+            f"{where}: only a passive revolute joint can have clearance, this one is {kind!r}; drive a loose joint "
+            "through a separate driven joint, or remove 'clearance'"
+        )
     sides = [joint["body0"], joint["body1"]]
     if sides == ["ground", "ground"]:
         raise SceneError(f"{where}: at least one side must be a body, both are 'ground'")

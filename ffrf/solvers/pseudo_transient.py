@@ -1,7 +1,7 @@
 r"""Equilibria where Newton's tangent is singular at the start: pseudo-transient continuation (``docs/formulation.md``,
 Eq. (P6)).
 
-A pin inside its clearance (:mod:`ffrf.system.clearance`) is held by nothing until it touches its bore, so the
+A pin inside its clearance (:mod:`ffrf.system.clearance_joint`) is held by nothing until it touches its bore, so the
 static tangent of Eq. (S1) is singular there and a Newton step is either undefined or, with a tiny stiffness,
 enormous. Pseudo-transient continuation (Kelley and Keyes, SIAM J. Numer. Anal. 35 (1998)) adds the mass matrix
 over a pseudo time step squared to the tangent,
@@ -84,7 +84,7 @@ def settle(
             continue
         if converged and mass_factor == 0.0:
             return StaticSolution(q_new, lam_new, (iteration,))
-        growth = min(4.0, max(1.0, size / size_new)) if size_new > 0.0 else 4.0
+        growth = 2.0
         dtau, halvings = dtau * growth, 0
         if converged:
             dtau = NEWTON_STEP

@@ -1,4 +1,4 @@
-"""Joints with play (ffrf.system.clearance) against closed forms: a rigid body resting on a loose pin, a pin tilted
+"""Joints with play (ffrf.system.clearance_joint) against closed forms: a rigid body resting on a loose pin, a pin tilted
 by a moment against its bore's two rims, a bar bouncing in its bore (Hunt-Crossley's restitution), a body that
 spins without touching, the limit of zero clearance (the ideal revolute joint), and forces that are the gradient of
 the stored energy."""
@@ -17,7 +17,7 @@ from ffrf.body.modal_moments import modal_moments
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.pseudo_transient import settle
 from ffrf.solvers.static_solver import static_equilibrium
-from ffrf.system.clearance import clearance_joint, line_contact_stiffness
+from ffrf.system.clearance_joint import clearance_joint, line_contact_stiffness
 from ffrf.system.forces import MarkerLoad, element_tangents
 from ffrf.system.joints import GroundFrame, frame_from_axis, revolute_joint
 from ffrf.system.markers import frame_marker, node_marker
@@ -235,5 +235,6 @@ def test_bad_clearances_are_refused_in_one_line():
     with pytest.raises(ValueError, match="pin length and stiffness"):
         clearance_joint(joint, 1e-4, 0.0, 0.0, 1e6)
     with pytest.raises(ValueError, match="E > 0"):
-        line_contact_stiffness(3.5e9, 0.6, PIN_LENGTH)
-    assert line_contact_stiffness(3.5e9, 0.35, 0.012) == pytest.approx(3.5e9 / (2 * (1 - 0.35**2)) * 0.006)
+        line_contact_stiffness(3.5e9, 0.6, 3.5e9, 0.35, PIN_LENGTH)
+    # two equal materials: E* = E / (2 (1 - nu^2))
+    assert line_contact_stiffness(3.5e9, 0.35, 3.5e9, 0.35, 0.012) == pytest.approx(3.5e9 / (2 * (1 - 0.35**2)) * 0.006)

@@ -29,20 +29,39 @@ from numpy.typing import NDArray
 from ffrf.system.forces import ForceElement, tangent_rates
 from ffrf.system.joints import GroundFrame, MarkerJoint, joint_side
 
-__all__ = ["ClearanceJoint", "Contact", "clearance_joint", "line_contact_stiffness"]
+__all__ = ["ClearanceJoint", "Contact", "PinFit", "clearance_joint", "line_contact_stiffness"]
 
 
-def line_contact_stiffness(young: float, poisson: float, length: float) -> float:
-    r"""Eq. (P5): penalty stiffness (N/m) of one rim of a pin of contact length ``length`` in a bore of the same
-    material, :math:`k = E^*\,L/2` with the plane-strain contact modulus :math:`E^* = E / (2(1 - \nu^2))` of two
-    equal solids: the order of a line contact's linearised stiffness per unit length times the rim's share of the
-    length (Johnson, Contact Mechanics, Sect. 5.2, without its logarithmic factor)."""
-    if young <= 0.0 or not 0.0 <= poisson < 0.5 or length <= 0.0:
-        raise ValueError(
-            f"line contact stiffness: needs E > 0, 0 <= nu < 0.5 and a length > 0, got E={young}, nu={poisson}, "
-            f"length={length}"
-        )
-    return young / (2.0 * (1.0 - poisson**2)) * 0.5 * length
+def line_contact_stiffness(
+    young0: float, poisson0: float, young1: float, poisson1: float, length: float
+) -> float:
+    r"""Eq. (P5): penalty stiffness (N/m) of one rim of a pin of contact length ``length`` (m) in a bore, the pin of
+    one material and the bore of the other: :math:`k = E^*\,L/2` with the plane-strain contact modulus
+    :math:`1/E^* = (1 - \nu_0^2)/E_0 + (1 - \nu_1^2)/E_1`, the order of a line contact's linearised stiffness per unit
+    length (Johnson, Contact Mechanics, Sect. 5.2, without its logarithmic factor) times the rim's share of the
+    length."""
+    for young, poisson in ((young0, poisson0), (young1, poisson1)):
+        if not young > 0.0 or not 0.0 <= poisson < 0.5:
+            raise ValueError(
+                f"line contact stiffness: needs E > 0 and 0 <= nu < 0.5 for pin and bore, got E={young}, nu={poisson}"
+            )
+    if not length > 0.0:
+        raise ValueError(f"line contact stiffness: needs a contact length > 0 m, got {length}")
+    modulus = 1.0 / ((1.0 - poisson0**2) / young0 + (1.0 - poisson1**2) / young1)
+    return modulus * 0.5 * length
+
+
+@dataclass(frozen=True)
+class PinFit:
+    """How a pin sits in its bore (SI): radial clearance (bore radius minus pin radius, m), axial play (m, in all),
+    contact length (m), penalty stiffness per contact (N/m; ``None``: from the materials, Eq. (P5)) and
+    Hunt-Crossley damping (N s/m^2)."""
+
+    radial: float
+    axial: float
+    pin_length: float
+    stiffness: float | None = None
+    damping: float = 0.0
 
 
 def _as_rows(gap, rows0, rows1):
