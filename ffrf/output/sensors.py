@@ -9,7 +9,9 @@ For every output row, and for any scene built by :mod:`ffrf.scenes.builder` (duc
   against side 0 about side 0's z axis (rad); ``J_reaction``, force and torque on side 1 in joint
   frame 0 (N, N m; :mod:`ffrf.system.reactions`); for a driven joint ``J_torque``, the multiplier of its
   angle equation, the driving torque applied to side 1 (N m); ``J_point0``, ``J_point1``, the joint
-  point on each side (world, m);
+  point on each side (world, m); a joint with play (:mod:`ffrf.system.clearance_joint`) has the angle and points
+  too, ``J_eccentricity``, the distance of the pin's centre from the bore's axis (m), and ``J_contacts``, the
+  penetration (m) and normal force (N) of its rims and its axial stop (rows x 2 x 3);
 * ``energy_kinetic``, ``energy_strain``, ``energy_potential`` (J), ``energy_elements`` (stored in force
   elements, when there are any) and ``constraint_residual``
   (largest ``|g|``), and with exactly one driven joint its work and the energy balance
@@ -25,6 +27,7 @@ from numpy.typing import NDArray
 
 from ffrf.body.flexible_body import node_positions
 from ffrf.output.energy_balance import energy_balance
+from ffrf.system.clearance_joint import ClearanceJoint
 from ffrf.system.joints import MarkerJoint
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
@@ -78,7 +81,36 @@ def joint_rows(
         for kind, value in energies.items():  # kinetic, strain, potential; elements with force elements
             rows.setdefault(f"energy_{kind}", []).append(value)
         rows["constraint_residual"].append(np.abs(model.constraint_values(qq, float(t))).max())
+    rows |= _loose_joint_rows(system, q, qd, only)
     return {name: np.array(values) for name, values in rows.items()}
+
+
+def _loose_joint_rows(
+    system: MultibodySystem, q: NDArray, qd: NDArray | None, only: Collection[str] | None
+) -> dict[str, list]:
+    """The sensors of the joints with play (module docstring), as lists of rows."""
+    rows: dict[str, list] = {}
+    for element in system.forces:
+        if not isinstance(element, ClearanceJoint) or (only is not None and element.name not in only):
+            continue
+        name = element.name
+        for kind in ("angle", "point0", "point1") + (() if only is not None else ("eccentricity", "contacts")):
+            rows[f"{name}_{kind}"] = []
+        for row in range(q.shape[0]):
+            blocks = [q[row][system.block(i)] for i in element.bodies]
+            pose = joint_poses(element.joint, blocks)
+            rows[f"{name}_angle"].append(relative_angle(pose))
+            rows[f"{name}_point0"].append(pose[0])
+            rows[f"{name}_point1"].append(pose[2])
+            if only is not None:
+                continue
+            axis = pose[1][:, 2]
+            offset = pose[2] - pose[0]
+            rows[f"{name}_eccentricity"].append(float(np.linalg.norm(offset - axis * (axis @ offset))))
+            rates = None if qd is None else [qd[row][system.block(i)] for i in element.bodies]
+            contacts = element.contacts(blocks, rates)
+            rows[f"{name}_contacts"].append([[c.penetration for c in contacts], [c.force for c in contacts]])
+    return rows
 
 
 def node_sensors(scene, q: NDArray) -> dict[str, NDArray]:
@@ -119,7 +151,7 @@ def _joint_sensors_and_drive(scene, time: NDArray, rows: dict[str, NDArray]) -> 
     out = {}
     for name, parts in scene.joint_sensors.items():  # the mean of joint points on one body
         out[name] = np.mean([rows[f"{joint}_point{side}"] for joint, side in parts], axis=0)
-    driven = [(j, j.angle) for _, j in _marker_joints(scene.system) if j.angle is not None]
+    driven = [(j, j.angle) for _, j in _marker_joints(scene.system) if j.angle is not None]  # play: never driven
     if len(driven) == 1:
         joint, angle = driven[0]
         out["drive_angle"] = np.array([angle(float(t)) for t in time])

@@ -24,6 +24,10 @@ them. The checks (those whose sensors the run has):
   the margin every two links must keep (m; a linkage file's ``clearance_margin``, default 1 mm) against the
   smallest clearance proven between two links along a revolution of the rigid motion (Eqs. (CL1)-(CL4); negative:
   they overlap). A linkage file's ``check_clearance = false`` leaves it out, with a note.
+* ``pin_penetration`` (scenes with joints with play, :mod:`ffrf.system.clearance_joint`): the deepest penetration
+  of a pin's contact into its bore along the run over the play in that direction (radial clearance, half the axial
+  play), against :data:`PENETRATION_RTOL`: the penalty regularisation's error must be small against the play the run
+  is about (Eq. (P5)). A direction without play (a bushing) is noted, not judged.
 * ``stiff_follows_rigid`` (linkages whose links are stiff: the gravity sag ``2 U / (m |g|)`` of Eq. (C3), ``U``
   the assembled state's strain energy, below :data:`STIFF_SAG` of ``L``; without bore errors or misfit): the
   largest coupler deviation from the rigid motion against :data:`SAG_FACTOR` times that sag (the sag changes along
@@ -57,6 +61,7 @@ __all__ = [
     "gravity_sag",
     "scene_length",
     "verify_run",
+    "play_check",
     "verify_scene_run",
     "weight_energy",
 ]
@@ -224,11 +229,15 @@ def _constraint_check(sensors: dict, length: float) -> Check:
 
 def _closure_check(sensors: dict, length: float) -> Check | None:
     """The loop's closure measured as a length: the largest distance between the two sides' joint points of any
-    joint (``J_point0``, ``J_point1`` of :func:`ffrf.output.sensors.joint_rows`); None without those sensors."""
+    joint (``J_point0``, ``J_point1`` of :func:`ffrf.output.sensors.joint_rows`); None without those sensors. A joint
+    with play (its ``J_eccentricity`` sensor) opens by its play, which ``pin_penetration`` judges instead."""
     gaps = [
         float(np.max(np.linalg.norm(sensors[name] - sensors[name[:-1] + "1"], axis=-1)))
         for name in sensors
-        if name.endswith("_point0") and name[:-1] + "1" in sensors and len(sensors[name])
+        if name.endswith("_point0")
+        and name[:-1] + "1" in sensors
+        and len(sensors[name])
+        and name[: -len("point0")] + "eccentricity" not in sensors
     ]
     if not gaps:
         return None
@@ -283,6 +292,9 @@ def verify_run(result: Any, scene: Any) -> Verification:
         checks.append(closure)
     if "energy_balance_residual" in sensors:
         checks.append(_energy_check(sensors, float(metadata.get("energy_floor_j", weight_energy(scene)))))
+    play, play_notes = play_check(scene, sensors)
+    checks += [] if play is None else [play]
+    notes += play_notes
     estimate = metadata.get("step_error_estimate")
     if estimate is not None:
         checks.append(
@@ -347,6 +359,40 @@ def clearance_check(clearance: dict) -> Check:
     )
 
 
+#: The largest penetration of a pin into its bore, relative to the play (Eq. (P5)): the penalty's regularisation
+#: error must stay small against the clearance the run is about.
+PENETRATION_RTOL = 0.1
+
+
+def play_check(scene: Any, sensors: dict) -> tuple[Check | None, list[str]]:
+    """The ``pin_penetration`` check of the joints with play: the largest penetration of a contact over its play
+    (radial clearance, half the axial play) along the run; joints or directions without play go to the notes."""
+    worst, where, notes = 0.0, "", []
+    for joint in getattr(scene, "loose_joints", ()):
+        contacts = sensors.get(f"{joint.name}_contacts")
+        if contacts is None:
+            continue
+        plays = {"rim -": joint.radial, "rim +": joint.radial, "axial": 0.5 * joint.axial}
+        for k, (name, play) in enumerate(plays.items()):
+            if play == 0.0:
+                notes.append(f"pin_penetration of {joint.name} {name} not checked: no play (a bushing)")
+                continue
+            ratio = float(np.max(contacts[:, 0, k])) / play
+            if ratio > worst or not where:
+                worst, where = ratio, f"{joint.name} {name}"
+    if not where:
+        return None, notes
+    check = Check(
+        "pin_penetration",
+        max(worst, 0.0),
+        PENETRATION_RTOL,
+        "of the play",
+        f"the deepest penetration of a pin into its bore against the play ({where}): the contact stiffness must be "
+        "high enough that the penalty's error is small against the clearance (Eq. (P5))",
+    )
+    return check, notes
+
+
 def verify_scene_run(scene: Any, sensors: dict, metadata: dict) -> Verification:
     """What applies to any scene's run (:func:`ffrf.scenes.scene_file.run_scene`): the joint constraints, the
     loop's closure, the energy balance when the scene has one driven joint, and the assembly's stresses against
@@ -360,6 +406,9 @@ def verify_scene_run(scene: Any, sensors: dict, metadata: dict) -> Verification:
         checks.append(_energy_check(sensors, weight_energy(scene)))
     else:
         notes.append("energy_balance not checked: the scene has no single driven joint")
+    play, play_notes = play_check(scene, sensors)
+    checks += [] if play is None else [play]
+    notes += play_notes
     warnings, strength_notes = (
         assembly_strength_warnings(scene, metadata["assembly"]) if "assembly" in metadata else ([], [])
     )

@@ -32,9 +32,7 @@ from ffrf.system.joints import GroundFrame, MarkerJoint, joint_side
 __all__ = ["ClearanceJoint", "Contact", "PinFit", "clearance_joint", "line_contact_stiffness"]
 
 
-def line_contact_stiffness(
-    young0: float, poisson0: float, young1: float, poisson1: float, length: float
-) -> float:
+def line_contact_stiffness(young0: float, poisson0: float, young1: float, poisson1: float, length: float) -> float:
     r"""Eq. (P5): penalty stiffness (N/m) of one rim of a pin of contact length ``length`` (m) in a bore, the pin of
     one material and the bore of the other: :math:`k = E^*\,L/2` with the plane-strain contact modulus
     :math:`1/E^* = (1 - \nu_0^2)/E_0 + (1 - \nu_1^2)/E_1`, the order of a line contact's linearised stiffness per unit

@@ -75,7 +75,9 @@ def test_a_bar_hanging_on_a_loose_pin_rests_on_the_clearance_plus_the_contact_co
         expected = clearance + MASS * 9.81 / (2.0 * stiffness)
         np.testing.assert_allclose(pin - hinge, [0.0, 0.0, -expected], rtol=0.0, atol=1e-15)
         rims = element.contacts([q])
-        np.testing.assert_allclose([c.force for c in rims[:2]], 0.5 * MASS * 9.81, rtol=1e-9)  # Newton's tolerance: 5e-12
+        np.testing.assert_allclose(
+            [c.force for c in rims[:2]], 0.5 * MASS * 9.81, rtol=1e-9
+        )  # Newton's tolerance: 5e-12
         assert rims[2].force == 0.0
         excess.append(-(pin - hinge)[2] - clearance)
     order = -np.polyfit(np.log(stiffnesses), np.log(excess), 1)[0]
