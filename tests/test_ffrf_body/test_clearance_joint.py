@@ -1,5 +1,5 @@
-"""Joints with play (ffrf.system.clearance_joint) against closed forms: a rigid body resting on a loose pin, a pin tilted
-by a moment against its bore's two rims, a bar bouncing in its bore (Hunt-Crossley's restitution), a body that
+"""Joints with play (ffrf.system.clearance_joint) against closed forms: a rigid body resting on a loose pin, a pin
+tilted by a moment against its bore's two rims, a bar bouncing in its bore (Hunt-Crossley's restitution), a body that
 spins without touching, the limit of zero clearance (the ideal revolute joint), and forces that are the gradient of
 the stored energy."""
 
