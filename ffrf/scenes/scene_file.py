@@ -71,6 +71,11 @@ builds the descriptions code generates (:func:`ffrf.scenes.linkage_description.l
                                       # start_angle_deg = 0 (or start_angle, rad)
     # As built: axis0/point0 (body0's side) and axis1/point1 (body1's side) instead of axis/point;
     # the run starts from a static assembly that closes the misfit (ffrf.scenes.builder).
+    clearance = {radial_mm = 0.1, axial_mm = 0.2, pin_length_mm = 12.0}
+                                      # optional, passive revolute only: a pin (body1's side) loose in a bore
+                                      # (body0's), Eqs. (P1)-(P6); stiffness = N/m per contact (default from the
+                                      # materials) and damping = N s/m^2 (Hunt-Crossley) optional; the same table
+                                      # in [scene] gives every passive revolute joint that play
 
     [[sensors]]
     name = "tip"
