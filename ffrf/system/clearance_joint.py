@@ -133,8 +133,8 @@ class ClearanceJoint(ForceElement):
             out.append(("axial", None, None, None, True, offset))
         else:
             sign = 1.0 if np.real(offset) > 0.0 else -1.0
-            gap, rows0, rows1 = sign * offset - 0.5 * self.axial, None if ground else sign * rows0, sign * rows1
-            out.append(("axial", *_as_rows(gap, rows0, rows1), True, offset))
+            signed0 = None if rows0 is None else sign * rows0
+            out.append(("axial", *_as_rows(sign * offset - 0.5 * self.axial, signed0, sign * rows1), True, offset))
         return out
 
     def _contacts(self, blocks: list[NDArray], velocities: list[NDArray]):
