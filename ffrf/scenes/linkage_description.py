@@ -263,7 +263,9 @@ class LinkageOptions:
     bore error is built, ``"remesh"`` (the link meshed on its erroneous bore, the as-built part) or ``"misfit"``
     (the nominal meshes, the error only in the joint's frame and point on that link's side: a joint-frame misfit
     closed by the assembly, the cheap model of studies, :data:`BORE_ERROR_MODELS`). ``design``: the parametric
-    links' dimensions (arm section, housings; :class:`~ffrf.geometry.link_geometry.LinkDesign`).
+    links' dimensions (arm section, housings; :class:`~ffrf.geometry.link_geometry.LinkDesign`). ``joint_play``: a
+    scene file's ``clearance`` table (mm) for every passive joint (:mod:`ffrf.system.clearance_joint`), ``None``: ideal
+    joints.
     """
 
     material: Material = PLA
@@ -288,6 +290,7 @@ class LinkageOptions:
     attach_points: ArrayLike | None = None
     bore_error_model: str = "remesh"
     design: LinkDesign = LinkDesign()
+    joint_play: dict | None = None
 
 
 def checked_tool_link(loop: SingleLoop, options: LinkageOptions) -> int:
@@ -402,5 +405,5 @@ def linkage_description(
         "mode": o.mode,
         "t_end": float(t_end),
         "outputs": int(o.outputs),
-    }
+    } | ({} if o.joint_play is None else {"clearance": dict(o.joint_play)})
     return {"scene": settings, "bodies": bodies, "joints": joints, "sensors": sensors}

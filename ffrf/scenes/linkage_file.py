@@ -425,6 +425,7 @@ def linkage_options(document: dict, where: str = "linkage") -> tuple[SingleLoop,
         exact_gravity=settings.get("exact_gravity", True),
         joint_offsets=settings.get("joint_offsets", "body"),
         attach_points=attach,
+        joint_play=settings.get("clearance"),
     )
     run = {key: settings[key] for key in ("mode", "outputs", "step", "rho_inf", "stability") if key in settings}
     run["clearance_margin"] = margin

@@ -10,9 +10,9 @@ over a pseudo time step squared to the tangent,
           \begin{bmatrix}\Delta q\\ \Delta\lambda\end{bmatrix} = -\begin{bmatrix} r \\ g\end{bmatrix},
 
 so that a free body falls by :math:`\Delta\tau^2` times its load over its mass per step, as an implicit Euler step
-from rest would move it. A step that raises the residual more than twofold (a pin driven deep into its bore) is
-retried with half the pseudo time step; after an accepted step, the step grows as the residual falls (switched
-evolution relaxation, at most fourfold). Only the iteration matrix changes: the converged state solves the same
+from rest would move it. A step that raises both the residual and the stored energy (strain, gravity, contacts:
+what settling lowers) is retried with half the pseudo time step; after an accepted step the pseudo time step
+doubles. Only the iteration matrix changes: the converged state solves the same
 equations :math:`r = 0,\ g = 0` as Newton's, which finishes once :math:`M/\Delta\tau^2` no longer matters.
 """
 
@@ -66,6 +66,7 @@ def settle(
     rhs, gap, size = _residual(system, q, lam, t)
     if not np.isfinite(size):
         raise StaticDivergence("NaN in the static residual at the start; check the model and the start")
+    energy = system.potential_energy(q, t)
     dtau, halvings = first_step, 0
     for iteration in range(1, max_iterations + 1):
         mass_factor = 0.0 if dtau >= NEWTON_STEP else 1.0 / dtau**2
@@ -73,22 +74,28 @@ def settle(
         delta = factor(matrix, what=f"pseudo-transient tangent at t = {t:g}").solve(rhs)
         q_new, lam_new, _, converged = static_update(q, lam, delta, gap, tolerance)
         rhs_new, gap_new, size_new = _residual(system, q_new, lam_new, t)
-        if size_new > 2.0 * size:
+        energy_new = system.potential_energy(q_new, t) if np.isfinite(size_new) else np.inf
+        # Settling lowers the stored energy; the residual may rise on the way (a pin meeting its bore)
+        if converged and mass_factor == 0.0:
+            return StaticSolution(q_new, lam_new, (iteration,))
+        if size_new > size and not energy_new < energy:
             halvings += 1
+            if halvings == MAX_HALVINGS:  # at round-off neither falls: see whether Newton's step converges here
+                dtau = NEWTON_STEP
+                continue
             if halvings > MAX_HALVINGS:
                 raise StaticDivergence(
-                    f"pseudo-transient continuation stalled at iteration {iteration}: the residual {size:.3e} rises "
-                    f"for every pseudo time step down to {dtau:.3e} s; check the model's contacts and the start"
+                    f"pseudo-transient continuation stalled at iteration {iteration}: the residual {size:.3e} and the "
+                    f"stored energy rise for every pseudo time step down to {dtau:.3e} s; check the model's contacts "
+                    "and the start"
                 )
             dtau *= 0.5
             continue
-        if converged and mass_factor == 0.0:
-            return StaticSolution(q_new, lam_new, (iteration,))
         growth = 2.0
         dtau, halvings = dtau * growth, 0
         if converged:
             dtau = NEWTON_STEP
-        q, lam, rhs, gap, size = q_new, lam_new, rhs_new, gap_new, size_new
+        q, lam, rhs, gap, size, energy = q_new, lam_new, rhs_new, gap_new, size_new, energy_new
         log.debug("pseudo-transient iteration %d: residual %.3e, pseudo time step %.3e s", iteration, size, dtau)
     raise StaticDivergence(
         f"pseudo-transient continuation did not reach an equilibrium in {max_iterations} iterations (residual "
