@@ -10,7 +10,7 @@ over a pseudo time step squared to the tangent,
           \begin{bmatrix}\Delta q\\ \Delta\lambda\end{bmatrix} = -\begin{bmatrix} r \\ g\end{bmatrix},
 
 so that a free body falls by :math:`\Delta\tau^2` times its load over its mass per step, as an implicit Euler step
-from rest would move it. A step that raises both the residual and the stored energy (strain, gravity, contacts:
+from rest would move it. A step that doubles the residual and raises the stored energy (strain, gravity, contacts:
 what settling lowers) is retried with half the pseudo time step; after an accepted step the pseudo time step
 doubles. Only the iteration matrix changes: the converged state solves the same
 equations :math:`r = 0,\ g = 0` as Newton's, which finishes once :math:`M/\Delta\tau^2` no longer matters.
@@ -75,10 +75,11 @@ def settle(
         q_new, lam_new, _, converged = static_update(q, lam, delta, gap, tolerance)
         rhs_new, gap_new, size_new = _residual(system, q_new, lam_new, t)
         energy_new = system.potential_energy(q_new, t) if np.isfinite(size_new) else np.inf
-        # Settling lowers the stored energy; the residual may rise on the way (a pin meeting its bore)
+        # Settling lowers the stored energy, while the residual may rise on the way (a pin meeting its bore); the
+        # energy misses the work of loads without a potential (torques), so a residual that does not double passes
         if converged and mass_factor == 0.0:
             return StaticSolution(q_new, lam_new, (iteration,))
-        if size_new > size and not energy_new < energy:
+        if size_new > 2.0 * size and not energy_new < energy:
             halvings += 1
             if halvings == MAX_HALVINGS:  # at round-off neither falls: see whether Newton's step converges here
                 dtau = NEWTON_STEP
