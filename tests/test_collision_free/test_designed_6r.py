@@ -34,7 +34,11 @@ def _document(model: str, **keys) -> dict:
     return {"linkage": {"model": model, "scale": 0.5, "modes": 1, **keys}}
 
 
-@pytest.mark.parametrize("model", sorted(DESIGNED))
+@pytest.mark.parametrize(
+    "model",
+    # collisions_free_6r takes 84 s: plane_fold_6r keeps the check in the default suite
+    [pytest.param(m, marks=pytest.mark.slow) if m == "collisions_free_6r" else m for m in sorted(DESIGNED)],
+)
 def test_the_designed_links_keep_the_margin_on_their_solids(model):
     """The stored stacking, checked as every run checks its links (Eqs. (CL1)-(CL4)): every pair keeps 1 mm along
     the whole revolution; the links at the joint points (no design) pass through each other."""

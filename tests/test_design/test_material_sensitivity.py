@@ -279,6 +279,7 @@ def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_
     np.testing.assert_allclose(slopes, peaks, rtol=0, atol=1e-6 * np.abs(peaks).max())
 
 
+@pytest.mark.slow  # 52 s; material derivatives stay checked on the Bennett
 def test_the_von_mises_trusss_apex_moves_with_the_bars_stiffness_as_its_closed_form(tmp_path):
     """The von Mises truss of two steel bars under a dead load P at the apex (tests/test_textbook): P = k h(z) with
     k = EA / L0 and h(z) = 2 (L0 - L) z / L, L = sqrt(a^2 + z^2), so at a fixed load the apex rises by

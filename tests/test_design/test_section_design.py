@@ -63,6 +63,7 @@ def test_the_design_finds_a_lighter_section_on_its_bound_and_the_designed_linkag
     assert check == pytest.approx(summary["optimum"]["max_deviation_mm"], rel=1e-9)
 
 
+@pytest.mark.slow  # 53 s; the frequency bound's derivatives stay in the default suite
 def test_a_lowest_frequency_bound_stops_the_design_where_the_linkage_would_vibrate_lower(tmp_path):
     """The same room on the deviation, and the lowest vibration frequency (Eq. (B1)) at every design pose kept above
     0.97 times the default section's (24.94 Hz on the coarse links): the frequency bound is what stops the design

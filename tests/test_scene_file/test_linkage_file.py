@@ -111,6 +111,7 @@ def test_a_linkage_file_that_keeps_no_clearance_is_verified_without_it(tmp_path,
     assert "clearance of the links" not in capsys.readouterr().out
 
 
+@pytest.mark.slow  # 95 s; collision-free links stay covered by the Goldberg example and plane_fold_6r
 def test_collision_free_links_of_a_rational_linkages_4r_from_the_command_line(tmp_path):
     """``--collision-free``: the stacking is designed for the model at the scale asked (half of bennett_ark24's unit
     size, links 121 and 209 mm), and the run's own check on the meshed solids proves every pair of links keeping the

@@ -204,6 +204,7 @@ def test_rational_linkages_design_points_attach_each_link_where_its_own_link_api
         assert np.max(axis.distance_to_point(pair)) < 1e-12
 
 
+@pytest.mark.slow  # 64 s: a comparison of two designs, not a check of ours
 def test_the_models_own_design_keeps_more_links_apart_than_ours():
     """collisions_free_6r at 1/4 scale: with the links attached at the design's connection points, fewer pairs of
     links come closer than 1 mm along the motion (signed clearance, ffrf.output.clearance) than with the housings
