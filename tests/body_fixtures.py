@@ -186,3 +186,18 @@ def two_bar_chain():
         lambda t: 0.1 * t,
     )
     return MultibodySystem(tuple(bodies), (drive, subset), gravity=np.array([0.0, 0.0, -9.81]))
+
+
+def rigid_bar(rho: float = 450.0):
+    """The 0.2 x 0.02 x 0.01 m bar (``bar_model(E=1e8, rho)``) as one rigid body (no modes), its FE model and mass."""
+    from ffrf.body.flexible_body import FlexibleBody
+    from ffrf.body.modal_moments import modal_moments
+
+    model = bar_model(E=1e8, rho=rho)
+    body = FlexibleBody(
+        "bar",
+        modal_moments(model.nodes, model.mass, np.zeros((3 * len(model.nodes), 0))),
+        np.zeros((0, 0)),
+        np.zeros((0, 0)),
+    )
+    return body, model, rho * 0.2 * 0.02 * 0.01

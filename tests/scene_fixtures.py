@@ -6,6 +6,18 @@ import meshio
 import numpy as np
 from body_fixtures import bar_model
 
+#: The paper's Bennett linkage as a linkage file (mm), coarse, joint 3 driven from -90 deg, link 2 the coupler.
+COARSE_BENNETT_FILE = """[linkage]
+dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90]}
+unit = "mm"
+driver = 3
+tool_link = 2
+start_angle_deg = -90.0
+h = 0.012
+order = 1
+modes = 2
+"""
+
 PENDULUM = """
 [scene]
 name = "bar pendulum"

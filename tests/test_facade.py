@@ -12,7 +12,7 @@ import tomllib
 
 import numpy as np
 import pytest
-from scene_fixtures import PENDULUM, write_bar
+from scene_fixtures import COARSE_BENNETT_FILE, PENDULUM, write_bar
 
 import ffrf
 from ffrf import LinkageOptions, Model, Result, SceneError, load, read_results
@@ -23,16 +23,7 @@ from kinematics import BennettLinkage, SingleLoop
 
 COARSE = {"h": 0.012, "order": 1, "n_modes": 2}
 #: The paper's Bennett linkage as a linkage file (mm), coarse, joint 3 driven from -90 deg, link 2 the coupler.
-BENNETT_FILE = """[linkage]
-dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90]}
-unit = "mm"
-driver = 3
-tool_link = 2
-start_angle_deg = -90.0
-h = 0.012
-order = 1
-modes = 2
-"""
+BENNETT_FILE = COARSE_BENNETT_FILE
 
 
 @pytest.fixture(scope="module")

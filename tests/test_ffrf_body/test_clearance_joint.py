@@ -7,13 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from body_fixtures import bar_model
+from body_fixtures import rigid_bar
 from pendulum_fixtures import pendulum
 from scipy.optimize import brentq
 
 from ffrf.body.euler_parameters import rotation_matrix
-from ffrf.body.flexible_body import FlexibleBody
-from ffrf.body.modal_moments import modal_moments
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.pseudo_transient import settle
 from ffrf.solvers.static_solver import static_equilibrium
@@ -28,17 +26,6 @@ MASS = RHO * 0.2 * 0.02 * 0.01
 PIN_LENGTH = 0.02
 GRAVITY = np.array([0.0, 0.0, -9.81])
 AXES = frame_from_axis([0.0, 1.0, 0.0])  # the pin's axis is y
-
-
-def _rigid_bar():
-    model = bar_model(E=1e8, rho=RHO)
-    body = FlexibleBody(
-        "bar",
-        modal_moments(model.nodes, model.mass, np.zeros((3 * len(model.nodes), 0))),
-        np.zeros((0, 0)),
-        np.zeros((0, 0)),
-    )
-    return body, model
 
 
 def _loose_pin(point, radial, stiffness, axial=0.0, damping=0.0, marker=None):
@@ -62,7 +49,7 @@ def test_a_bar_hanging_on_a_loose_pin_rests_on_the_clearance_plus_the_contact_co
     the pin rests at eccentricity c + m g / (2 k) straight below the bore's centre, each rim carrying half the
     weight (measured to 1e-18 m); that tends to c at order 1 in 1/k. With axial play the pin keeps the axial
     offset it started with (no axial load), where the settling iterations leave a free direction alone."""
-    body, model = _rigid_bar()
+    body, model, _ = rigid_bar(RHO)
     hinge = model.nodes[model.nodes[:, 0] < 1e-9].mean(axis=0)
     clearance = 1e-4
     excess = []
@@ -88,7 +75,7 @@ def test_a_pin_under_a_moment_tilts_against_the_two_rims_as_the_closed_form():
     """A rigid bar held at its centre of mass by a loose pin (no gravity, no axial play) under a moment M about x:
     the pin tilts by theta against opposite rims, M = k L cos(theta) (L/2 sin(theta) - c); as k grows theta tends
     to the rigid tilt asin(2 c / L)."""
-    body, model = _rigid_bar()
+    body, model, _ = rigid_bar(RHO)
     centre = model.center_of_mass
     clearance, moment = 1e-4, 2e-3
     tilts = []
@@ -111,7 +98,7 @@ def _bounce(step: float, stiffness: float, damping: float, v0: float):
     """A rigid bar on a pin at its centre of mass, no gravity, thrown at v0 along -z from the bore's centre with
     rho_inf = 1 (the trapezoidal rule, no numerical damping): it crosses the clearance, hits both rims at once and
     rebounds. Returns the run and the system."""
-    body, model = _rigid_bar()
+    body, model, _ = rigid_bar(RHO)
     element = _loose_pin(model.center_of_mass, 1e-4, stiffness, damping=damping)
     system = MultibodySystem((body,), (), forces=(element,))
     q0 = system.initial_state()
@@ -149,7 +136,7 @@ def test_a_bar_bouncing_in_its_bore_rebounds_as_hunt_and_crossleys_law_predicts(
 def test_a_spinning_body_on_a_centred_pin_never_touches_its_bore():
     """A rigid bar spinning about the pin's axis through its centre of mass, no gravity: no contact force ever,
     so the spin stays as it started and the centre moves only by the integrator's error of the rotation."""
-    body, model = _rigid_bar()
+    body, model, _ = rigid_bar(RHO)
     element = _loose_pin(model.center_of_mass, 1e-4, 1e6, axial=1e-4, damping=1e3)
     system = MultibodySystem((body,), (), forces=(element,))
     q0 = system.initial_state()

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from body_fixtures import bar_model
+from body_fixtures import bar_model, rigid_bar
 from pendulum_fixtures import pendulum
 
 from ffrf.body.flexible_body import FlexibleBody
@@ -23,18 +23,6 @@ from ffrf.system.multibody import MultibodySystem
 RHO = 450.0
 
 
-def _rigid_bar():
-    """The 0.2 x 0.02 x 0.01 m bar as one rigid body (no modes), its FE model and mass."""
-    model = bar_model(E=1e8, rho=RHO)
-    body = FlexibleBody(
-        "bar",
-        modal_moments(model.nodes, model.mass, np.zeros((3 * len(model.nodes), 0))),
-        np.zeros((0, 0)),
-        np.zeros((0, 0)),
-    )
-    return body, model, RHO * 0.2 * 0.02 * 0.01
-
-
 def _translational_spring(body, centre, stiffness, damping=0.0):
     marker = frame_marker(0, 0, centre, "centre")
     joint = MarkerJoint(
@@ -46,7 +34,7 @@ def _translational_spring(body, centre, stiffness, damping=0.0):
 def _oscillation(zeta: float, step: float):
     """A free rigid bar held at its centre of mass by a spring-damper (Exudyn's CartesianSpringDamper), pulled
     x0 = 1 mm along x and let go, integrated with generalized-alpha at rho_inf = 1 (the trapezoidal rule)."""
-    body, model, mass = _rigid_bar()
+    body, model, mass = rigid_bar(RHO)
     k = 18.0
     element = _translational_spring(body, model.center_of_mass, k, 2.0 * zeta * np.sqrt(k * mass))
     system = MultibodySystem((body,), (), forces=(element,))
@@ -96,7 +84,7 @@ def test_a_motor_with_a_torque_speed_curve_approaches_its_no_load_speed():
     """A motor tau = tau0 (1 - w / w0) on the hinge of a rigid bar (no gravity): I dw/dt = tau0 (1 - w / w0), so
     w(t) = w0 (1 - exp(-t tau0 / (I w0)))."""
     _, model, _, hinge = pendulum(n_modes=0)
-    body, _, _ = _rigid_bar()
+    body, _, _ = rigid_bar(RHO)
     axes = frame_from_axis([0.0, 1.0, 0.0])
     hinge_joint = revolute_joint(GroundFrame(point=hinge, rotation=axes), frame_marker(0, 0, hinge), rotation1=axes)
     tau0, w0 = 2e-4, 3.0
@@ -114,7 +102,7 @@ def test_a_motor_with_a_torque_speed_curve_approaches_its_no_load_speed():
 def test_a_body_hanging_from_a_bushing_sags_by_its_weight_over_the_stiffness():
     """A revolute joint made compliant (a bushing: the five locked directions elastic) holds a rigid bar at its
     centre of mass under gravity: the centre sinks by m g / k and the bar does not turn."""
-    body, model, mass = _rigid_bar()
+    body, model, mass = rigid_bar(RHO)
     centre = model.center_of_mass
     axes = frame_from_axis([0.0, 1.0, 0.0])
     joint = revolute_joint(GroundFrame(point=centre, rotation=axes), frame_marker(0, 0, centre), rotation1=axes)
@@ -247,7 +235,7 @@ def test_an_anisotropic_bushing_holds_the_weight_with_the_stiffness_along_its_fr
     m g / k_z as a spring in world components would."""
     from dataclasses import replace
 
-    body, model, mass = _rigid_bar()
+    body, model, mass = rigid_bar(RHO)
     centre = model.center_of_mass
     axes = np.array(
         [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]
@@ -263,7 +251,7 @@ def test_an_anisotropic_bushing_holds_the_weight_with_the_stiffness_along_its_fr
 def test_a_state_dependent_drag_load_damps_a_mass_on_a_spring_as_the_closed_form():
     """A load f(t, position, velocity) = -c v on the undamped spring-mass of the tests above (zeta = 0.1 from c):
     the same decay as the damper, x(t) = x0 e^(-zeta w t) (cos w_d t + ...), to the time discretisation error."""
-    body, model, mass = _rigid_bar()
+    body, model, mass = rigid_bar(RHO)
     k, zeta = 18.0, 0.1
     c = 2.0 * zeta * np.sqrt(k * mass)
     centre = model.center_of_mass
@@ -287,7 +275,7 @@ def test_a_dead_load_on_a_spring_holds_its_closed_form_potential_energy():
     -F (c_x + x) (its marker's world point), also for a force that depends on time alone, at that time. The same
     force in the marker's axes (a follower load) or as a function of the state has no potential: only the
     spring's energy is left."""
-    body, model, _ = _rigid_bar()
+    body, model, _ = rigid_bar(RHO)
     k, force = 18.0, 0.09
     centre = model.center_of_mass
     marker = frame_marker(0, 0, centre, "centre")

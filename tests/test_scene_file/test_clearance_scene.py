@@ -8,7 +8,7 @@ import tomllib
 
 import numpy as np
 import pytest
-from scene_fixtures import PENDULUM, write_bar
+from scene_fixtures import COARSE_BENNETT_FILE, PENDULUM, write_bar
 
 from ffrf.errors import SceneError
 from ffrf.scenes.builder import build_scene
@@ -71,17 +71,9 @@ def test_a_bad_clearance_table_is_refused_in_one_line(tmp_path, change, message)
     assert "\n" not in str(error.value)
 
 
-LOOSE_BENNETT = """
-[linkage]
-dh = {a = [110, 220, 110, 220], alpha_deg = [150, 90, 150, 90]}
-unit = "mm"
-driver = 3
-tool_link = 2
-start_angle_deg = -90.0
-h = 0.012
-order = 1
-modes = 2
-revolutions = 0.05
+LOOSE_BENNETT = (
+    COARSE_BENNETT_FILE
+    + """revolutions = 0.05
 check_clearance = false
 
 [scene]
@@ -89,6 +81,7 @@ mode = "quasi_static"
 outputs = 5
 clearance = {radial_mm = 0.1, pin_length_mm = 12.0}
 """
+)
 
 
 def test_a_linkage_files_clearance_loosens_every_passive_joint_and_keeps_the_drive_and_the_clamp():
