@@ -374,6 +374,11 @@ def _path_derivatives(
     response, plus, per parameter, the outputs' own change at fixed coordinates, central differences of the linkage
     built at +-step of it (``sides``: ``(plus, minus, step)``). With ``stability`` the lowest squared frequency of
     Eq. (B1) too, refused (:class:`SensitivityError`) at a pose where it is not positive."""
+    if scene.loose_joints:  # contact switches make the path non-smooth; Eq. (D1) assumes a smooth one
+        raise SensitivityError(
+            f"path sensitivities of a linkage with joints with play ({', '.join(j.name for j in scene.loose_joints)}) "
+            "are not available yet; compute them on the linkage with ideal joints (no clearance)"
+        )
     system = scene.system
     time, q, multipliers = np.asarray(time, float), np.asarray(q, float), np.asarray(multipliers, float)
     poses, k = len(time), len(names)
