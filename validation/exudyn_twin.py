@@ -137,6 +137,7 @@ def build_twin(
     import exudyn as exu
 
     from ffrf.body.euler_parameters import rotation_matrix
+    from ffrf.system.clearance_joint import ClearanceJoint
     from ffrf.system.joints import GroundFrame, MarkerJoint
 
     sc = exu.SystemContainer()
@@ -184,6 +185,9 @@ def build_twin(
 
     used_symbolic = False
     sensors = {}
+    loose = [f.name for f in system.forces if isinstance(f, ClearanceJoint)]
+    if loose:  # Exudyn has no pin-in-bore joint: a twin without the play would compare two other linkages
+        raise TypeError(f"joints with play ({', '.join(loose)}) have no Exudyn twin here; validate with ideal joints")
     for c in system.constraints:
         if not isinstance(c, MarkerJoint):
             raise TypeError(f"constraint {c.name!r} ({type(c).__name__}) has no Exudyn twin here")
