@@ -109,3 +109,20 @@ def test_a_loose_bennett_from_a_linkage_file_runs_and_verifies_itself(tmp_path, 
     path.write_text(LOOSE_BENNETT)
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
     assert "verified: true" in capsys.readouterr().out
+
+
+def test_what_does_not_model_play_yet_refuses_a_loose_linkage_in_one_line():
+    """Path sensitivities (Eq. (D1) needs a smooth path) and the Exudyn twin (Exudyn has no pin-in-bore joint) refuse
+    a linkage with play instead of answering for the linkage without it."""
+    from ffrf.errors import SensitivityError
+    from ffrf.scenes.linkage_file import load_linkage
+    from ffrf.scenes.path_sensitivity import material_sensitivity
+    from validation.exudyn_twin import build_twin
+
+    scene = load_linkage(tomllib.loads(LOOSE_BENNETT))
+    q = scene.q_initial[None]
+    with pytest.raises(SensitivityError, match="joints with play") as error:
+        material_sensitivity(scene, np.zeros(1), q, np.zeros((1, scene.system.n_constraints)))
+    assert "\n" not in str(error.value)
+    with pytest.raises(TypeError, match="joints with play .* have no Exudyn twin"):
+        build_twin([], scene.system, scene.q_initial, 0.0)
