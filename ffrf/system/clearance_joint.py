@@ -83,7 +83,7 @@ class Contact:
 class ClearanceJoint(ForceElement):
     """Eqs. (P1)-(P4): the pin (frame 1 of ``joint``) in the bore (frame 0) with radial clearance ``radial`` (m),
     axial play ``axial`` (m, in all: the pin slides by half of it either way), contact length ``pin_length`` (m),
-    penalty ``stiffness`` (N/m per contact) and ``damping`` (N s/m per contact)."""
+    penalty ``stiffness`` (N/m per contact) and Hunt-Crossley ``damping`` chi (N s/m^2 per contact)."""
 
     joint: MarkerJoint
     radial: float
@@ -186,7 +186,7 @@ class ClearanceJoint(ForceElement):
         return out
 
     def dissipation_rate(self, blocks: list[NDArray], velocities: list[NDArray]) -> float:
-        """Power the contacts' dampers take from the motion (W), c_d delta_dot^2 summed over the contacts pushing
+        """Power the contacts' dampers take from the motion (W): chi delta delta_dot^2 summed over the contacts pushing
         (a clipped contact, whose spring and damper cancel, takes what its spring gives back)."""
         rates = [tangent_rates(b, v) for b, v in zip(blocks, velocities, strict=True)]
         total = 0.0
