@@ -9,9 +9,10 @@ Instead of the revolute joint's five equations, contact forces hold the pin:
   axis :math:`d_\pm = |e_\perp|`, :math:`e_\perp = (I - z_0z_0^T)(x_\pm - p_0)`, may not exceed the radial clearance
   :math:`c` (bore radius minus pin radius); two rims give the tilt a pin of length :math:`L` has in its bore;
 * axial (P2): the pin's axial offset :math:`a = z_0\cdot(p_1 - p_0)` may not exceed half the axial play;
-* each contact is a penalty with damping, :math:`f = \max(0,\ k\,\delta + c_d\,\dot\delta)` on its penetration
-  :math:`\delta` (P3), the generalized force :math:`Q = -(\partial\delta/\partial q)^T f`; the spring part is the
-  gradient of :math:`\tfrac12 k\,\delta^2`, so the joint stores energy and its tangent is symmetric (P4).
+* each contact is a penalty with Hunt-Crossley damping, :math:`f = \max(0,\ k\,\delta + \chi\,\delta\dot\delta)` on
+  its penetration :math:`\delta` (P3), the generalized force :math:`Q = -(\partial\delta/\partial q)^T f`; the
+  spring part is the gradient of :math:`\tfrac12 k\,\delta^2`, so the joint stores energy and its tangent is
+  symmetric (P4).
 
 Rotation about the bore's axis stays free. With zero clearance a contact is bilateral (a bushing:
 :math:`\tfrac12 k |e_\perp|^2`), so the joint tends to the ideal revolute joint as :math:`k` grows. Forces are
