@@ -93,6 +93,10 @@ class ClearanceJoint(ForceElement):
     stiffness: float
     damping: float
 
+    @property
+    def reads_velocities(self) -> bool:
+        return self.damping != 0.0
+
     def _sides(self, blocks: list[NDArray]):
         j = self.joint
         q0 = None if isinstance(j.marker0, GroundFrame) else blocks[0]
@@ -106,13 +110,13 @@ class ClearanceJoint(ForceElement):
         p0, a0, dp0, da0, p1, a1, dp1, da1 = self._sides(blocks)
         ground = dp0 is None
         z0, z1 = a0[:, 2], a1[:, 2]
+        projector = np.eye(3) - np.outer(z0, z0)
         out = []
         for name, s in (("rim -", -0.5 * self.pin_length), ("rim +", 0.5 * self.pin_length)):
             e = p1 + s * z1 - p0
             h = z0 @ e
             perp = e - h * z0
             # d perp = (I - z0 z0^T) de - h dz0 - z0 (e . dz0), with de = dp1 + s dz1 - dp0 (Eq. (P1))
-            projector = np.eye(3) - np.outer(z0, z0)
             rows1 = projector @ (dp1 + s * da1[2])
             rows0 = None if ground else -(projector @ dp0) - h * da0[2] - np.outer(z0, e @ da0[2])
             distance = np.sqrt(perp @ perp)

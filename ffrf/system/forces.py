@@ -63,6 +63,11 @@ class ForceElement:
     def complex_safe(self) -> bool:
         return True
 
+    @property
+    def reads_velocities(self) -> bool:
+        """Whether the forces depend on ``qd`` (else their ``qd`` tangent is zero and not differentiated)."""
+        return True
+
     def forces(self, blocks: list[NDArray], velocities: list[NDArray], t: float) -> list[NDArray]:
         """Generalized forces ``Q`` on each body of ``bodies`` (added to the applied forces of Eq. (G1))."""
         raise NotImplementedError  # pragma: no cover - abstract
@@ -132,6 +137,10 @@ class SpringDamperJoint(ForceElement):
     damping: NDArray[np.float64]
     offset: NDArray[np.float64]
 
+    @property
+    def reads_velocities(self) -> bool:
+        return bool(np.any(self.damping))
+
     def _force(self, blocks: list[NDArray], velocities: list[NDArray], t: float):
         rows = self.joint.jacobian(blocks, t)
         rate = sum(r @ tangent_rates(b, v) for r, b, v in zip(rows, blocks, velocities, strict=True))
@@ -162,6 +171,10 @@ class AxialSpringDamper(ForceElement):
     stiffness: float
     damping: float
     length: float
+
+    @property
+    def reads_velocities(self) -> bool:
+        return self.damping != 0.0
 
     def _sides(self, blocks: list[NDArray], velocities: list[NDArray]):
         q0 = None if isinstance(self.marker0, GroundFrame) else blocks[0]
@@ -304,7 +317,7 @@ def element_tangents(
     sizes = [b.shape[0] for b in blocks]
     d_q = [[np.zeros((sizes[i], sizes[j])) for j in range(len(blocks))] for i in range(len(blocks))]
     d_qd = [[np.zeros((sizes[i], sizes[j])) for j in range(len(blocks))] for i in range(len(blocks))]
-    for target, position in ((d_q, True), (d_qd, False)):
+    for target, position in ((d_q, True), (d_qd, False))[: 2 if element.reads_velocities else 1]:
         for j, block in enumerate(blocks if position else velocities):
             for k in range(block.shape[0]):
                 if element.complex_safe:
