@@ -227,3 +227,33 @@ def test_bad_clearances_are_refused_in_one_line():
         line_contact_stiffness(3.5e9, 0.6, 3.5e9, 0.35, PIN_LENGTH)
     # two equal materials: E* = E / (2 (1 - nu^2))
     assert line_contact_stiffness(3.5e9, 0.35, 3.5e9, 0.35, 0.012) == pytest.approx(3.5e9 / (2 * (1 - 0.35**2)) * 0.006)
+
+
+def test_a_bar_swinging_on_a_loose_pin_has_the_two_freedoms_of_a_pin_rolling_in_its_bore():
+    """Eq. (B1) with play: the rigid bar hanging on a frictionless loose pin (axial play zero) has, in the plane of
+    the swing, two slow freedoms: the pin's centre rolling on the circle of radius r = c + m g / (2 k) about the
+    bore's axis (angle phi) and the bar turning about the pin (theta). With l the pin-to-centre-of-mass distance and
+    I the bar's inertia about its centre of mass, T = m/2 (r phi' + l theta')^2 + I/2 theta'^2 and
+    V = m g (r phi^2 + l theta^2) / 2: the monitoring's lowest squared frequency and one of its next are that
+    pencil's (to 1e-9), the lowest below the ideal hinge's m g l / (I + m l^2)."""
+    from scipy.linalg import eigh
+
+    from ffrf.solvers.stability import equilibrium_stability
+
+    body, model, mass = rigid_bar(RHO)
+    hinge = model.nodes[model.nodes[:, 0] < 1e-9].mean(axis=0)
+    clearance, stiffness = 1e-4, 1e6
+    element = _loose_pin(hinge, clearance, stiffness)
+    system = MultibodySystem((body,), (), gravity=GRAVITY, forces=(element,))
+    solution = settle(system, _hanging(0.5 * np.pi, hinge))
+    found = equilibrium_stability(system, solution.q, solution.multipliers, count=4)
+    radius, arm = clearance + mass * 9.81 / (2.0 * stiffness), 0.1
+    inertia = mass * (0.2**2 + 0.01**2) / 12.0  # about y through the centre of mass (0.2 m along x, 0.01 m along z)
+    kinetic = mass * np.array([[radius**2, radius * arm], [radius * arm, arm**2]]) + np.diag([0.0, inertia])
+    potential = mass * 9.81 * np.diag([radius, arm])
+    expected = eigh(potential, kinetic, eigvals_only=True)
+    assert found.squared_frequencies[0] == pytest.approx(expected[0], rel=1e-9)
+    # the second in-plane mode (the pin rolling against the swing) is among the slow ones; below it the pin yaws in
+    # its bore, its two rims rolling opposite ways
+    assert np.min(np.abs(found.squared_frequencies / expected[1] - 1.0)) < 1e-9
+    assert expected[0] < mass * 9.81 * arm / (inertia + mass * arm**2)
