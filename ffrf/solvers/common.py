@@ -14,7 +14,18 @@ from numpy.typing import NDArray
 from ffrf.numerics.rank_revealing import factor
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["IntegrationResult", "consistent_accelerations", "extrapolation_weights"]
+__all__ = ["IntegrationResult", "StaticSolution", "consistent_accelerations", "extrapolation_weights"]
+
+
+@dataclass(frozen=True)
+class StaticSolution:
+    """Equilibrium coordinates ``q``, multipliers, and Newton iterations per load step; ``times``, where given, the
+    times of the rows (a path that stopped between outputs ends with the last equilibrium it reached)."""
+
+    q: NDArray[np.float64]
+    multipliers: NDArray[np.float64]
+    iterations: tuple[int, ...]
+    times: NDArray[np.float64] | None = None
 
 
 @dataclass

@@ -25,8 +25,8 @@ from numpy.typing import NDArray
 
 from ffrf.errors import StaticDivergence
 from ffrf.numerics.rank_revealing import factor
+from ffrf.solvers.common import StaticSolution
 from ffrf.solvers.newton_kernels import static_rhs, static_update
-from ffrf.solvers.static_solver import StaticSolution
 from ffrf.system.multibody import MultibodySystem
 
 __all__ = ["settle"]

@@ -22,15 +22,16 @@ import itertools
 import logging
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.errors import Interrupted, StaticDivergence
 from ffrf.numerics.rank_revealing import FactoredMatrix, factor
-from ffrf.solvers.common import extrapolation_weights
+from ffrf.solvers.common import StaticSolution, extrapolation_weights
 from ffrf.solvers.newton_kernels import CONVERGED, NOT_FINITE, REFACTOR, static_iterations, static_rhs, static_update
+from ffrf.solvers.pseudo_transient import settle
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import PackedSystem, contiguous, newton_model
 
@@ -47,17 +48,6 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class StaticSolution:
-    """Equilibrium coordinates ``q``, multipliers, and Newton iterations per load step; ``times``, where given, the
-    times of the rows (a path that stopped between outputs ends with the last equilibrium it reached)."""
-
-    q: NDArray[np.float64]
-    multipliers: NDArray[np.float64]
-    iterations: tuple[int, ...]
-    times: NDArray[np.float64] | None = None
 
 
 def _factor_tangent(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float) -> FactoredMatrix:
@@ -326,6 +316,10 @@ class _Path:
         self.lam.append(lam)
         del self.times[: -(self.order + 1)], self.q[: -(self.order + 1)], self.lam[: -(self.order + 1)]
 
+    def restart(self, t: float, q: NDArray, lam: NDArray) -> None:
+        """The path starts again at ``(t, q, lam)``: it jumped there, and no polynomial reaches across a jump."""
+        self.times, self.q, self.lam = [t], [q], [lam]
+
 
 def _path_departure(q: NDArray, predicted: NDArray, previous: NDArray, tolerance: float) -> tuple[float, float] | None:
     """Eq. (S4): ``(correction, predicted step)`` when Newton's correction from the prediction exceeds
@@ -356,7 +350,8 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
     """Equilibrium at ``t_to`` from the path's newest one; a step that fails to converge or leaves the path
     (Eq. (S4)) is retried without secant updates, then halved, up to :data:`MAX_HALVINGS` times, each
     part predicted from the equilibria before it (Eq. (S2)); once a try left the path, the rest of the step is
-    predicted along the path's tangent at its last equilibrium instead (Eq. (S4)). Returns the Newton iterations
+    predicted along the path's tangent at its last equilibrium instead (Eq. (S4)). A step that still fails where a
+    contact with play lets go jumps to the settled pose at ``t_to`` (:func:`_jump`). Returns the Newton iterations
     spent and the kept tangent."""
     iterations, halvings, t_from, parts = 0, 0, path.times[-1], 0
     failure: StaticDivergence | None = None
@@ -413,10 +408,27 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
             t_from, halvings, parts = t_try, 0, parts + 1  # the rest of the step, whole again
             continue
         if halvings >= MAX_HALVINGS or t_try == t_from:
-            raise failure
+            return iterations + _jump(model, path, t_to, tolerance, failure), None
         halvings += 1
         tangent = None
         log.debug("quasi-static step %g -> %g halved", t_from, t_try)
+
+
+def _jump(model, path: _Path, t_to: float, tolerance: float, failure: StaticDivergence) -> int:
+    """Where a contact with play lets go (a pin crossing its bore as the load through it reverses), the path has no
+    equilibria between its last one and a pose on the far side: settle there at ``t_to`` (Eq. (P6)) and start the
+    path again from it. Returns the iterations; raises ``failure`` for a system without such contacts, or when the
+    settling fails too."""
+    if not (isinstance(model, MultibodySystem) and any(element.separates for element in model.forces)):
+        raise failure
+    t_from = path.times[-1]
+    try:
+        settled = settle(model, path.q[-1], t_to, tolerance)
+    except StaticDivergence as error:
+        raise failure from error
+    log.info("the path jumps between t = %.9g s and %.9g s: a contact let go (Eq. (P6))", t_from, t_to)
+    path.restart(t_to, settled.q, settled.multipliers)
+    return settled.iterations[0]
 
 
 def quasi_static(
@@ -555,6 +567,10 @@ class _History(_Path):
         super().add(t, q, lam)
         self.kept.append((t, q, lam))
         del self.kept[: -self._KEPT]
+
+    def restart(self, t: float, q: NDArray, lam: NDArray) -> None:
+        super().restart(t, q, lam)
+        self.kept = [(t, q, lam)]
 
     def interpolate(self, t: float, more: list[tuple[float, NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
         """Eq. (S2) through the ``order + 1`` equilibria nearest ``t`` among the kept ones and ``more`` (outputs

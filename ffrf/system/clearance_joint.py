@@ -97,6 +97,10 @@ class ClearanceJoint(ForceElement):
     def reads_velocities(self) -> bool:
         return self.damping != 0.0
 
+    @property
+    def separates(self) -> bool:
+        return self.radial > 0.0 or self.axial > 0.0
+
     def _sides(self, blocks: list[NDArray]):
         j = self.joint
         q0 = None if isinstance(j.marker0, GroundFrame) else blocks[0]

@@ -68,6 +68,12 @@ class ForceElement:
         """Whether the forces depend on ``qd`` (else their ``qd`` tangent is zero and not differentiated)."""
         return True
 
+    @property
+    def separates(self) -> bool:
+        """Whether the element can let go of what it holds (a contact with play): a quasi-static path may then jump
+        where a load through it reverses."""
+        return False
+
     def forces(self, blocks: list[NDArray], velocities: list[NDArray], t: float) -> list[NDArray]:
         """Generalized forces ``Q`` on each body of ``bodies`` (added to the applied forces of Eq. (G1))."""
         raise NotImplementedError  # pragma: no cover - abstract

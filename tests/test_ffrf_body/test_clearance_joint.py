@@ -257,3 +257,30 @@ def test_a_bar_swinging_on_a_loose_pin_has_the_two_freedoms_of_a_pin_rolling_in_
     # its bore, its two rims rolling opposite ways
     assert np.min(np.abs(found.squared_frequencies / expected[1] - 1.0)) < 1e-9
     assert expected[0] < mass * 9.81 * arm / (inertia + mass * arm**2)
+
+
+def test_a_quasi_static_path_jumps_across_the_bore_where_the_load_through_the_pin_reverses():
+    """A rigid bar held at its centre of mass by a loose pin (no gravity) under a force along x that falls
+    linearly through zero at t = 0.55 s: the pin rests against the +x side at c + F / (2k), floats where F vanishes
+    (no equilibrium path continues: Newton's tangent is singular there) and the path jumps, by settling (Eq. (P6)),
+    to the -x side, where it rests at c + |F| / (2k) again (to 1e-12 m at every output)."""
+    from ffrf.solvers.static_solver import quasi_static
+
+    body, model, _ = rigid_bar(RHO)
+    centre = model.center_of_mass
+    clearance, stiffness, force = 1e-4, 1e5, 0.2
+    element = _loose_pin(centre, clearance, stiffness)
+
+    def pull(t):
+        return [force * (1.0 - t / 0.55), 0.0, 0.0]
+
+    load = MarkerLoad((0,), "pull", frame_marker(0, 0, centre), force=pull)
+    system = MultibodySystem((body,), (), forces=(element, load))
+    start = settle(system, system.initial_state()).q
+    times = np.linspace(0.0, 1.0, 11)
+    path = quasi_static(system, start, times, max_step=0.05)
+    for t, q in zip(times, path.q, strict=True):
+        pin = q[:3] + rotation_matrix(q[3:7]) @ centre - centre
+        f = pull(t)[0]
+        expected = [np.sign(f) * (clearance + abs(f) / (2.0 * stiffness)), 0.0, 0.0]
+        np.testing.assert_allclose(pin, expected, rtol=0.0, atol=1e-12)  # measured 1.1e-13 m: Newton's tolerance
