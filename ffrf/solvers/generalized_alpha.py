@@ -255,7 +255,7 @@ def _step(newton: _Newton, state: _State, t: float, h: float, before: tuple[tupl
 
     for attempt in range(2 if newton.modified else 1):
         qdd_new, lam_new = _predicted_unknowns(state, h, before if attempt == 0 else ())
-        if isinstance(model, PackedSystem):
+        if isinstance(model, PackedSystem) and not model.forces:
             status, used, increment, gap_max = _fast_iterations(
                 newton,
                 model,

@@ -28,6 +28,7 @@ from ffrf.numerics.rank_revealing import factor
 from ffrf.solvers.common import StaticSolution
 from ffrf.solvers.newton_kernels import static_rhs, static_update
 from ffrf.system.multibody import MultibodySystem
+from ffrf.system.packed_system import PackedSystem, newton_model
 
 __all__ = ["settle"]
 
@@ -42,9 +43,11 @@ NEWTON_STEP = 1e6
 MAX_HALVINGS = 30
 
 
-def _residual(system: MultibodySystem, q: NDArray, lam: NDArray, t: float) -> tuple[NDArray, NDArray, float]:
-    zeros = np.zeros(system.n_coordinates)
-    residual, gap = system.residual(q, zeros, zeros, lam, t)
+def _residual(
+    model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray, t: float
+) -> tuple[NDArray, NDArray, float]:
+    zeros = np.zeros(model.n_coordinates)
+    residual, gap = model.residual(q, zeros, zeros, lam, t)
     rhs, finite = static_rhs(residual, gap)
     return rhs, gap, float(np.max(np.abs(rhs))) if finite else np.inf
 
@@ -63,17 +66,18 @@ def settle(
     q = np.array(q0, dtype=float)
     lam = np.zeros(system.n_constraints)
     zeros = np.zeros(system.n_coordinates)
-    rhs, gap, size = _residual(system, q, lam, t)
+    model = newton_model(system)
+    rhs, gap, size = _residual(model, q, lam, t)
     if not np.isfinite(size):
         raise StaticDivergence("NaN in the static residual at the start; check the model and the start")
     energy = system.potential_energy(q, t)
     dtau, halvings = first_step, 0
     for iteration in range(1, max_iterations + 1):
         mass_factor = 0.0 if dtau >= NEWTON_STEP else 1.0 / dtau**2
-        matrix = system.iteration_matrix(q, zeros, zeros, lam, t, mass_factor, 1.0, 0.0)
+        matrix = model.iteration_matrix(q, zeros, zeros, lam, t, mass_factor, 1.0, 0.0)
         delta = factor(matrix, what=f"pseudo-transient tangent at t = {t:g}").solve(rhs)
         q_new, lam_new, _, converged = static_update(q, lam, delta, gap, tolerance)
-        rhs_new, gap_new, size_new = _residual(system, q_new, lam_new, t)
+        rhs_new, gap_new, size_new = _residual(model, q_new, lam_new, t)
         energy_new = system.potential_energy(q_new, t) if np.isfinite(size_new) else np.inf
         # Settling lowers the stored energy, while the residual may rise on the way (a pin meeting its bore); the
         # energy misses the work of loads without a potential (torques), so a residual that does not double passes

@@ -170,7 +170,7 @@ def _newton(
             tangent = _factor_tangent(model, q, lam, t)
             free_motions = max(free_motions, tangent.rank_deficiency)
             updates = None
-        if isinstance(model, PackedSystem) and not secant and tangent.factors is not None:
+        if isinstance(model, PackedSystem) and not model.forces and not secant and tangent.factors is not None:
             lu, pivots = tangent.factors
             status, used, q, lam, gap_max = static_iterations(
                 model.bodies,
@@ -419,11 +419,12 @@ def _jump(model, path: _Path, t_to: float, tolerance: float, failure: StaticDive
     equilibria between its last one and a pose on the far side: settle there at ``t_to`` (Eq. (P6)) and start the
     path again from it. Returns the iterations; raises ``failure`` for a system without such contacts, or when the
     settling fails too."""
-    if not (isinstance(model, MultibodySystem) and any(element.separates for element in model.forces)):
+    system = model if isinstance(model, MultibodySystem) else model.source()
+    if system is None or not any(element.separates for element in system.forces):
         raise failure
     t_from = path.times[-1]
     try:
-        settled = settle(model, path.q[-1], t_to, tolerance)
+        settled = settle(system, path.q[-1], t_to, tolerance)
     except StaticDivergence as error:
         raise failure from error
     log.info("the path jumps between t = %.9g s and %.9g s: a contact let go (Eq. (P6))", t_from, t_to)

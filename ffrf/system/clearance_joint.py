@@ -27,8 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ffrf.system.forces import ForceElement, tangent_rates
+from ffrf.system.forces import ForceElement, element_tangents, tangent_rates
 from ffrf.system.joints import GroundFrame, MarkerJoint, joint_side
+from ffrf.system.marker_kernels import marker_frame_hessian
 
 __all__ = ["ClearanceJoint", "Contact", "PinFit", "clearance_joint", "line_contact_stiffness"]
 
@@ -61,11 +62,6 @@ class PinFit:
     pin_length: float
     stiffness: float | None = None
     damping: float = 0.0
-
-
-def _as_rows(gap, rows0, rows1):
-    """A scalar gap and its gradients as a one-row gap vector and one-row Jacobians (one form for every contact)."""
-    return np.reshape(gap, (1,)), None if rows0 is None else np.reshape(rows0, (1, -1)), np.reshape(rows1, (1, -1))
 
 
 @dataclass(frozen=True)
@@ -101,83 +97,132 @@ class ClearanceJoint(ForceElement):
     def separates(self) -> bool:
         return self.radial > 0.0 or self.axial > 0.0
 
-    def _sides(self, blocks: list[NDArray]):
+    def _frames(self, blocks: list[NDArray]) -> tuple[NDArray, list[NDArray]]:
+        """The joint's frame coordinates ``y = (p0, z0, p1, z1)`` (12) and, per body, ``G = dy/dq`` (12 x n): every
+        contact is a function of ``y`` (Eqs. (P1)-(P2)), its ``q``-derivatives follow by the chain rule."""
         j = self.joint
-        q0 = None if isinstance(j.marker0, GroundFrame) else blocks[0]
-        p0, a0, dp0, da0 = joint_side(j.marker0, q0, j.rotation0, j.offset0)
+        ground = isinstance(j.marker0, GroundFrame)
+        p0, a0, dp0, da0 = joint_side(j.marker0, None if ground else blocks[0], j.rotation0, j.offset0)
         p1, a1, dp1, da1 = joint_side(j.marker1, blocks[-1], j.rotation1, j.offset1)
-        return p0, a0, dp0, da0, p1, a1, dp1, da1
+        y = np.concatenate([p0, a0[:, 2], p1, a1[:, 2]])
+        dtype = np.result_type(*blocks)
+        out = []
+        for side, (dp, da) in enumerate(((dp0, da0), (dp1, da1))[1 if ground else 0 :], start=1 if ground else 0):
+            rows = np.zeros((12, dp.shape[1]), dtype=dtype)
+            rows[6 * side : 6 * side + 3] = dp
+            rows[6 * side + 3 : 6 * side + 6] = da[2]
+            out.append(rows)
+        return y, out
 
-    def _gaps(self, blocks: list[NDArray]):
-        """Per contact: name, gap (a scalar penetration when the contact has play, the bilateral vector or signed
-        offset when it has none), its rows ``d gap / dq`` per body, whether it is unilateral, and the distance."""
-        p0, a0, dp0, da0, p1, a1, dp1, da1 = self._sides(blocks)
-        ground = dp0 is None
-        z0, z1 = a0[:, 2], a1[:, 2]
-        projector = np.eye(3) - np.outer(z0, z0)
+    def _gaps(self, y: NDArray, curvature: bool = False):
+        """Per contact of the frames ``y``: name, gap (a scalar penetration when the contact has play, the bilateral
+        vector or signed offset when it has none; ``None`` when apart), its rows ``d gap / dy``, whether it is
+        unilateral, the distance, and with ``curvature`` the ``y``-Hessian of 1/2 |gap|^2 (Eq. (P7)). Written for
+        any ``z0`` (not only unit ones), so that its ``y``-derivatives are those of the chain rule."""
+        p0, z0, p1, z1 = y[:3], y[3:6], y[6:9], y[9:]
+        dtype = y.dtype
+        eye = np.eye(3)
         out = []
         for name, s in (("rim -", -0.5 * self.pin_length), ("rim +", 0.5 * self.pin_length)):
             e = p1 + s * z1 - p0
             h = z0 @ e
             perp = e - h * z0
-            # d perp = (I - z0 z0^T) de - h dz0 - z0 (e . dz0), with de = dp1 + s dz1 - dp0 (Eq. (P1))
-            rows1 = projector @ (dp1 + s * da1[2])
-            rows0 = None if ground else -(projector @ dp0) - h * da0[2] - np.outer(z0, e @ da0[2])
             distance = np.sqrt(perp @ perp)
-            if self.radial == 0.0:
-                out.append((name, perp, rows0, rows1, False, distance))
+            if self.radial > 0.0 and np.real(distance) <= self.radial:
+                out.append((name, None, None, True, distance, None))
                 continue
-            if np.real(distance) <= self.radial:
-                out.append((name, None, None, None, True, distance))
+            # d perp = (I - z0 z0^T) de - (z0 e^T + h I) dz0, de = dp1 + s dz1 - dp0 (Eq. (P1))
+            along = np.eye(3, dtype=dtype) - np.outer(z0, z0)
+            rows = np.concatenate([-along, -(np.outer(z0, e) + h * eye), along, s * along], axis=1)
+            if self.radial == 0.0:
+                hessian = rows.T @ rows + _perp_curvature(z0, e, s, perp) if curvature else None
+                out.append((name, perp, rows, False, distance, hessian))
                 continue
             normal = perp / distance
-            gap, rows0, rows1 = distance - self.radial, None if ground else normal @ rows0, normal @ rows1
-            out.append((name, *_as_rows(gap, rows0, rows1), True, distance))
+            gap = distance - self.radial
+            hessian = None
+            if curvature:  # d2 d = rows^T (I - n n^T) rows / d + d2 (n . perp) at fixed n
+                radial_rows = normal @ rows
+                bend = rows.T @ (eye - np.outer(normal, normal)) @ rows / distance
+                hessian = np.outer(radial_rows, radial_rows) + gap * (bend + _perp_curvature(z0, e, s, normal))
+            out.append((name, np.reshape(gap, (1,)), (normal @ rows)[None], True, distance, hessian))
         offset = z0 @ (p1 - p0)
-        rows1 = z0 @ dp1
-        rows0 = None if ground else -(z0 @ dp0) + (p1 - p0) @ da0[2]
+        rows = np.concatenate([-z0, p1 - p0, z0, np.zeros(3, dtype=dtype)])[None]
         if self.axial == 0.0:
-            out.append(("axial", *_as_rows(offset, rows0, rows1), False, offset))
+            sign, gap = 1.0, offset
         elif abs(np.real(offset)) <= 0.5 * self.axial:
-            out.append(("axial", None, None, None, True, offset))
+            out.append(("axial", None, None, True, offset, None))
+            return out
         else:
             sign = 1.0 if np.real(offset) > 0.0 else -1.0
-            signed0 = None if rows0 is None else sign * rows0
-            out.append(("axial", *_as_rows(sign * offset - 0.5 * self.axial, signed0, sign * rows1), True, offset))
+            gap = sign * offset - 0.5 * self.axial
+        hessian = None
+        if curvature:  # the offset's only second derivatives: d2 / dz0 dp1 = I, d2 / dz0 dp0 = -I
+            hessian = rows.T @ rows
+            mixed = np.zeros((12, 12))
+            mixed[3:6, 6:9], mixed[3:6, 0:3] = eye, -eye
+            hessian = hessian + sign * gap * (mixed + mixed.T)
+        out.append(("axial", np.reshape(gap, (1,)), sign * rows, self.axial != 0.0, offset, hessian))
         return out
 
     def _contacts(self, blocks: list[NDArray], velocities: list[NDArray]):
-        """Per contact: name, penetration, rows, force (Eq. (P3)), distance."""
-        rates = [tangent_rates(b, v) for b, v in zip(blocks, velocities, strict=True)]
-        ground = len(blocks) == 1
+        """Per contact: name, penetration, rows ``d gap / dy``, force (Eq. (P3)), distance, rate of penetration; and
+        the rows ``dy/dq`` per body."""
+        y, frames = self._frames(blocks)
+        rates = sum(g @ tangent_rates(b, v) for g, b, v in zip(frames, blocks, velocities, strict=True))
         out = []
-        for name, gap, rows0, rows1, unilateral, distance in self._gaps(blocks):
+        for name, gap, rows, unilateral, distance, _ in self._gaps(y):
             if gap is None:
-                out.append((name, None, None, None, None, distance))
+                out.append((name, None, None, None, distance, None))
                 continue
-            rate = rows1 @ rates[-1] + (0.0 if ground else rows0 @ rates[0])
+            rate = rows @ rates
             # Hunt-Crossley: damping grows with the penetration, so the force starts and ends at zero (Eq. (P3))
             force = self.stiffness * gap + self.damping * np.sqrt(gap @ gap) * rate
             if unilateral and np.real(force[0]) <= 0.0:  # a contact pushes, never pulls (Eq. (P3))
                 force = 0.0 * force
-            out.append((name, gap, rows0, rows1, force, distance))
-        return out
+            out.append((name, gap, rows, force, distance, rate))
+        return out, frames
 
     def forces(self, blocks, velocities, t):
-        dtype = np.result_type(*blocks, *velocities)
-        out = [np.zeros(b.shape[0], dtype=dtype) for b in blocks]
-        for _, gap, rows0, rows1, force, _ in self._contacts(blocks, velocities):
-            if gap is None:
-                continue
-            out[-1] = out[-1] - rows1.T @ force
-            if len(blocks) == 2:
-                out[0] = out[0] - rows0.T @ force
-        return out
+        contacts, frames = self._contacts(blocks, velocities)
+        pull = sum((rows.T @ force for _, gap, rows, force, _, _ in contacts if gap is not None), np.zeros(12))
+        return [-(g.T @ pull) for g in frames]
+
+    def tangents(self, blocks, velocities, t):
+        r"""Without damping, Eq. (P7): :math:`\partial Q/\partial q = -(G^T V_{yy} G + \sum_b V_y\cdot\partial^2
+        y_b/\partial q_b^2)` with the frames' second derivatives of Eq. (FP3), all analytic. With damping, complex
+        steps of the forces (:func:`~ffrf.system.forces.element_tangents`)."""
+        if self.damping != 0.0:
+            return element_tangents(self, blocks, velocities, t)
+        y, frames = self._frames(blocks)
+        gradient, curvature = np.zeros(12), np.zeros((12, 12))
+        for _, gap, rows, _, _, hessian in self._gaps(y, curvature=True):
+            if gap is not None:
+                gradient += self.stiffness * (rows.T @ gap)
+                curvature += self.stiffness * hessian
+        j = self.joint
+        sides = ((j.marker0, j.rotation0, j.offset0), (j.marker1, j.rotation1, j.offset1))[2 - len(blocks) :]
+        d_q = [[-(ga.T @ curvature @ gb) for gb in frames] for ga in frames]
+        for b, ((marker, rotation, offset), q) in enumerate(zip(sides, blocks, strict=True)):
+            side = 6 * (b + 2 - len(blocks))
+            weight_axes = np.zeros((3, 3))
+            weight_axes[:, 2] = gradient[side + 3 : side + 6]
+            d_q[b][b] -= marker_frame_hessian(
+                np.ascontiguousarray(q, dtype=float),
+                np.ascontiguousarray(marker.point, dtype=float),
+                np.ascontiguousarray(marker.position_modes, dtype=float),
+                np.ascontiguousarray(marker.rotation_modes, dtype=float),
+                np.ascontiguousarray(rotation, dtype=float),
+                np.ascontiguousarray(offset, dtype=float),
+                np.ascontiguousarray(gradient[side : side + 3]),
+                weight_axes,
+            )
+        return d_q, [[np.zeros_like(block) for block in row] for row in d_q]
 
     def potential_energy(self, blocks, t):
         """Eq. (P4): 1/2 k delta^2 summed over the contacts in touch (J)."""
         total = 0.0
-        for _, gap, _, _, _, _ in self._gaps(blocks):
+        for _, gap, _, _, _, _ in self._gaps(self._frames(blocks)[0]):
             if gap is not None:
                 total += 0.5 * self.stiffness * float(np.real(np.sum(gap * gap)))
         return total
@@ -187,7 +232,7 @@ class ClearanceJoint(ForceElement):
         velocities unless given): what a run reports of the pin in its bore."""
         velocities = [np.zeros_like(b) for b in blocks] if velocities is None else velocities
         out = []
-        for name, gap, _, _, force, distance in self._contacts(blocks, velocities):
+        for name, gap, _, force, distance, _ in self._contacts(blocks, velocities)[0]:
             play = self.radial if name != "axial" else 0.5 * self.axial
             magnitude = 0.0 if gap is None else float(np.linalg.norm(np.real(np.atleast_1d(force))))
             size = float(np.abs(np.real(distance)))
@@ -197,12 +242,10 @@ class ClearanceJoint(ForceElement):
     def dissipation_rate(self, blocks: list[NDArray], velocities: list[NDArray]) -> float:
         """Power the contacts' dampers take from the motion (W): chi delta delta_dot^2 summed over the contacts pushing
         (a clipped contact, whose spring and damper cancel, takes what its spring gives back)."""
-        rates = [tangent_rates(b, v) for b, v in zip(blocks, velocities, strict=True)]
         total = 0.0
-        for _, gap, rows0, rows1, force, _ in self._contacts(blocks, velocities):
+        for _, gap, _, force, _, rate in self._contacts(blocks, velocities)[0]:
             if gap is None:
                 continue
-            rate = rows1 @ rates[-1] + (0.0 if len(blocks) == 1 else rows0 @ rates[0])
             spring = self.stiffness * gap
             total += float(np.real(np.sum((force - spring) * rate)))
         return total
@@ -230,3 +273,17 @@ def clearance_joint(
             f"> 0 (m, N/m, N s/m), got {values}"
         )
     return ClearanceJoint(joint.bodies, joint.name, joint, radial, axial, pin_length, stiffness, damping)
+
+
+def _perp_curvature(z0: NDArray, e: NDArray, s: float, weight: NDArray) -> NDArray:
+    r"""Eq. (P7): the ``y``-Hessian of :math:`w\cdot e_\perp` at fixed ``w``, :math:`e_\perp = e - (z_0\cdot e) z_0`,
+    :math:`e = p_1 + s z_1 - p_0`: :math:`\partial^2/\partial e\,\partial z_0 = -(z_0 w^T + (w\cdot z_0) I)`,
+    :math:`\partial^2/\partial z_0^2 = -(w e^T + e w^T)`, ``e`` linear in ``y``."""
+    eye = np.eye(3)
+    along = np.concatenate([-eye, np.zeros((3, 3)), eye, s * eye], axis=1)  # de/dy
+    mixed = along.T @ -(np.outer(z0, weight) + (weight @ z0) * eye)  # (12, 3): columns z0
+    out = np.zeros((12, 12), dtype=np.result_type(z0, e, weight))
+    out[:, 3:6] += mixed
+    out[3:6, :] += mixed.T
+    out[3:6, 3:6] -= np.outer(weight, e) + np.outer(e, weight)
+    return out

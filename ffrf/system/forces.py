@@ -41,6 +41,8 @@ __all__ = [
     "JointTorque",
     "MarkerLoad",
     "SpringDamperJoint",
+    "assembled_forces",
+    "assembled_tangents",
     "element_tangents",
     "marker_jacobians",
     "spring_damper",
@@ -77,6 +79,13 @@ class ForceElement:
     def forces(self, blocks: list[NDArray], velocities: list[NDArray], t: float) -> list[NDArray]:
         """Generalized forces ``Q`` on each body of ``bodies`` (added to the applied forces of Eq. (G1))."""
         raise NotImplementedError  # pragma: no cover - abstract
+
+    def tangents(
+        self, blocks: list[NDArray], velocities: list[NDArray], t: float
+    ) -> tuple[list[list[NDArray]], list[list[NDArray]]]:
+        r""":math:`\partial Q/\partial q` and :math:`\partial Q/\partial\dot q` as blocks ``[i][j]``; by default
+        :func:`element_tangents` (complex steps of :meth:`forces`), an element with analytic ones overrides it."""
+        return element_tangents(self, blocks, velocities, t)
 
     def potential_energy(self, blocks: list[NDArray], t: float) -> float:
         """Energy stored in the element (J); zero for loads and drives."""
@@ -306,7 +315,7 @@ class JointTorque(ForceElement):
         return out if ground else [-(g_omega0.T @ moment)] + out
 
 
-_STEP = 1e-30
+COMPLEX_STEP = 1e-30
 
 
 def _shifted(blocks: list[NDArray], j: int, k: int, step: complex | float) -> list[NDArray]:
@@ -328,11 +337,11 @@ def element_tangents(
             for k in range(block.shape[0]):
                 if element.complex_safe:
                     if position:
-                        columns = element.forces(_shifted(blocks, j, k, 1j * _STEP), velocities, t)
+                        columns = element.forces(_shifted(blocks, j, k, 1j * COMPLEX_STEP), velocities, t)
                     else:
-                        columns = element.forces(blocks, _shifted(velocities, j, k, 1j * _STEP), t)
+                        columns = element.forces(blocks, _shifted(velocities, j, k, 1j * COMPLEX_STEP), t)
                     for i in range(len(blocks)):
-                        target[i][j][:, k] = np.imag(columns[i]) / _STEP
+                        target[i][j][:, k] = np.imag(columns[i]) / COMPLEX_STEP
                     continue
                 h = 1e-7 * max(1.0, abs(float(block[k])))
                 if position:
@@ -343,4 +352,39 @@ def element_tangents(
                     minus = element.forces(blocks, _shifted(velocities, j, k, -h), t)
                 for i in range(len(blocks)):
                     target[i][j][:, k] = (plus[i] - minus[i]) / (2.0 * h)
+    return d_q, d_qd
+
+
+def _element_blocks(element: ForceElement, offsets: NDArray, q: NDArray, qd: NDArray):
+    spans = [slice(int(offsets[i]), int(offsets[i + 1])) for i in element.bodies]
+    return spans, [q[s] for s in spans], [qd[s] for s in spans]
+
+
+def assembled_forces(
+    elements: tuple[ForceElement, ...], offsets: NDArray, q: NDArray, qd: NDArray, t: float
+) -> NDArray[np.float64]:
+    """The force elements' generalized forces ``Q`` (Eqs. (E1)-(E5), (P3)) on the whole coordinate vector, the
+    bodies' blocks starting at ``offsets``."""
+    out = np.zeros(q.shape[0], dtype=np.result_type(q, qd))
+    for element in elements:
+        spans, blocks, rates = _element_blocks(element, offsets, q, qd)
+        for span, force in zip(spans, element.forces(blocks, rates, t), strict=True):
+            out[span] += force
+    return out
+
+
+def assembled_tangents(
+    elements: tuple[ForceElement, ...], offsets: NDArray, q: NDArray, qd: NDArray, t: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``dQ/dq`` and ``dQ/dqd`` of :func:`assembled_forces` (n x n), from each element's
+    :meth:`ForceElement.tangents`."""
+    n = q.shape[0]
+    d_q, d_qd = np.zeros((n, n)), np.zeros((n, n))
+    for element in elements:
+        spans, blocks, rates = _element_blocks(element, offsets, q, qd)
+        by_q, by_qd = element.tangents(blocks, rates, t)
+        for a, row in enumerate(spans):
+            for b, column in enumerate(spans):
+                d_q[row, column] += by_q[a][b]
+                d_qd[row, column] += by_qd[a][b]
     return d_q, d_qd

@@ -25,7 +25,7 @@ from ffrf.system.constraints import (
     constraint_hessian_term,
     constraint_velocity_derivative,
 )
-from ffrf.system.forces import ForceElement, element_tangents
+from ffrf.system.forces import ForceElement, assembled_forces, assembled_tangents
 
 __all__ = ["MultibodySystem"]
 
@@ -84,10 +84,8 @@ class MultibodySystem:
         for i, body in enumerate(self.bodies):
             s = self.block(i)
             out[s] = body.residual(q[s], qd[s], qdd[s], self.gravity)
-        for element in self.forces:
-            blocks, rates = self._blocks(element.bodies, q, qd)
-            for i, force in zip(element.bodies, element.forces(blocks, rates, t), strict=True):
-                out[self.block(i)] -= force
+        if self.forces:
+            out -= assembled_forces(self.forces, self.offsets, q, qd, t)
         return out
 
     def _blocks(self, bodies: tuple[int, ...], q: NDArray, qd: NDArray) -> tuple[list[NDArray], list[NDArray]]:
@@ -152,13 +150,10 @@ class MultibodySystem:
         for i, body in enumerate(self.bodies):
             s = self.block(i)
             jq[s, s], jqd[s, s] = body.jacobians(q[s], qd[s], qdd[s], self.gravity)
-        for element in self.forces:
-            blocks, rates = self._blocks(element.bodies, q, qd)
-            d_q, d_qd = element_tangents(element, blocks, rates, t)
-            for a, i in enumerate(element.bodies):
-                for b, j in enumerate(element.bodies):
-                    jq[self.block(i), self.block(j)] -= d_q[a][b]
-                    jqd[self.block(i), self.block(j)] -= d_qd[a][b]
+        if self.forces:
+            d_q, d_qd = assembled_tangents(self.forces, self.offsets, q, qd, t)
+            jq -= d_q
+            jqd -= d_qd
         return jq, jqd
 
     def mass_matrix(self, q) -> NDArray[np.float64]:

@@ -5,9 +5,11 @@ constraints.
 :func:`pack_system` supports plain :class:`~ffrf.body.flexible_body.FlexibleBody` bodies and the
 constraints the Bennett scene uses: :class:`~ffrf.system.constraints.EulerNormalization` and
 :class:`~ffrf.system.joints.MarkerJoint` (any ``locked`` subset, optional prescribed angle, ground or
-body marker 0). Anything else, including *subclasses* of these (which may override ``value`` or
-``jacobian``), returns ``None``, and :func:`newton_model` falls back to the reference
-implementation, the ``MultibodySystem`` itself, with a debug log line. Both provide the same
+body marker 0). Force elements (springs, loads, joints with play) are added to the kernels' residual and iteration
+matrix by their own Python methods (:func:`~ffrf.system.forces.assembled_forces`); the fused Newton loops
+(``static_iterations``, ``alpha_iterations``) take only systems without them. Anything else, including
+*subclasses* of these (which may override ``value`` or ``jacobian``), returns ``None``, and :func:`newton_model`
+falls back to the reference implementation, the ``MultibodySystem`` itself, with a debug log line. Both provide the same
 Newton pieces, ``residual`` (Eq. (G1)) and ``iteration_matrix`` (Eq. (FP6)), and agree to
 round-off (``tests/test_ffrf_body/test_packed_system.py``).
 
@@ -27,6 +29,7 @@ from numpy.typing import NDArray
 
 from ffrf.body.flexible_body import FlexibleBody
 from ffrf.system.constraints import EulerNormalization
+from ffrf.system.forces import ForceElement, assembled_forces, assembled_tangents
 from ffrf.system.joints import GroundFrame, MarkerJoint
 from ffrf.system.markers import BodyMarker
 from ffrf.system.multibody import MultibodySystem
@@ -69,6 +72,9 @@ class PackedSystem:
     bodies: tuple
     joints: tuple
     angles: tuple[Callable[[float], float] | None, ...]
+    forces: tuple[ForceElement, ...] = ()
+    offsets: NDArray[np.int64] = field(default_factory=lambda: np.zeros(1, dtype=np.int64))
+    source: Callable[[], MultibodySystem | None] = field(default=lambda: None, repr=False)
     _last_angles: list = field(default_factory=lambda: [None, None], repr=False)
 
     def phi(self, t: float) -> NDArray[np.float64]:
@@ -95,22 +101,34 @@ class PackedSystem:
 
     def residual(self, q, qd, qdd, lam, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Eq. (G1): ``M qdd - Q + C_q^T lambda`` and ``g(q, t)``."""
-        return system_residual(*self._kernel_arguments(q, qd, qdd, lam, t))
+        forces, gap = system_residual(*self._kernel_arguments(q, qd, qdd, lam, t))
+        if self.forces:
+            forces -= assembled_forces(self.forces, self.offsets, contiguous(q), contiguous(qd), t)
+        return forces, gap
 
     def iteration_matrix(
         self, q, qd, qdd, lam, t: float, mass_factor: float, beta_p: float, gamma_p: float
     ) -> NDArray[np.float64]:
         """Eq. (FP6): ``[[c M + beta' (K_t + H) + gamma' D_t, C_q^T], [C_q, 0]]``."""
-        return system_iteration_matrix(
+        out = system_iteration_matrix(
             *self._kernel_arguments(q, qd, qdd, lam, t), float(mass_factor), float(beta_p), float(gamma_p)
         )
+        if self.forces:
+            n = self.n_coordinates
+            d_q, d_qd = assembled_tangents(self.forces, self.offsets, contiguous(q), contiguous(qd), t)
+            out[:n, :n] -= beta_p * d_q + gamma_p * d_qd
+        return out
 
-    def body_residuals(self, q, qd, qdd) -> NDArray[np.float64]:
-        """Eqs. (F8)-(F11) for all bodies: ``M qdd - Q``."""
-        return self.residual(q, qd, qdd, np.zeros(self.n_constraints), 0.0)[0]
+    def body_residuals(self, q, qd, qdd, t: float = 0.0) -> NDArray[np.float64]:
+        """Eqs. (F8)-(F11) for all bodies: ``M qdd - Q``, ``Q`` with the force elements' forces at ``t``."""
+        return self.residual(q, qd, qdd, np.zeros(self.n_constraints), t)[0]
 
-    def body_tangents(self, q, qd, qdd) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        return system_body_tangents(self.bodies, contiguous(q), contiguous(qd), contiguous(qdd), self.gravity)
+    def body_tangents(self, q, qd, qdd, t: float = 0.0) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        jq, jqd = system_body_tangents(self.bodies, contiguous(q), contiguous(qd), contiguous(qdd), self.gravity)
+        if self.forces:
+            d_q, d_qd = assembled_tangents(self.forces, self.offsets, contiguous(q), contiguous(qd), t)
+            jq, jqd = jq - d_q, jqd - d_qd
+        return jq, jqd
 
     def mass_matrix(self, q) -> NDArray[np.float64]:
         return system_mass_matrix(self.bodies, contiguous(q))
@@ -175,8 +193,6 @@ _PLACEHOLDER_SIDE = (-1, np.zeros(3), np.eye(3), np.zeros(3), np.zeros((3, 0)), 
 
 def _unsupported(system: MultibodySystem) -> str | None:
     """Why the fast path cannot take ``system`` (``None`` when it can)."""
-    if system.forces:
-        return f"force element {system.forces[0].name!r} (force elements run on the reference path)"
     for body in system.bodies:
         if type(body) is not FlexibleBody:
             return f"body {body.name!r} is a {type(body).__name__}"
@@ -259,6 +275,9 @@ def pack_system(system: MultibodySystem) -> PackedSystem | None:
             _pack_bodies(system.bodies, system.offsets),
             joints,
             angles,
+            tuple(system.forces),
+            system.offsets,
+            weakref.ref(system),  # not the system itself: the cache's value would keep its key alive
         )
     _CACHE[system] = packed
     return packed

@@ -176,30 +176,37 @@ def test_with_zero_clearance_a_stiffening_pin_tends_to_the_ideal_revolute_joint(
     assert abs(order - 1.0) < 0.02
 
 
-def test_contact_forces_are_the_gradient_of_the_stored_energy_and_their_tangent_is_symmetric(rng):
-    """Between two flexible bodies, at a state where both rims and the axial stop are in touch: the spring forces are
-    minus the central differences of the energy 1/2 k delta^2 (an independent check of Eq. (P4)'s gradients), and the
-    complex-step tangent is symmetric and equals central differences of the forces."""
+@pytest.mark.parametrize(("radial", "axial", "grounded"), [(1e-3, 2e-3, False), (0.0, 0.0, False), (1e-3, 2e-3, True)])
+def test_contact_forces_are_the_gradient_of_the_stored_energy_and_their_tangent_is_exact(rng, radial, axial, grounded):
+    """At a state where both rims and the axial stop are in touch (between two flexible bodies or a body and the
+    ground, with play or bilateral): the spring forces are minus the central differences of the energy
+    1/2 k delta^2 (an independent check of Eq. (P4)'s gradients); the analytic tangent (Eq. (P7)) is symmetric and
+    equals the complex-step tangent of the forces to round-off and their central differences."""
     _, model, psi, hinge = pendulum(n_modes=3)
     m = psi.shape[1]
-    bore = frame_marker(0, m, hinge, "bore")
-    pin = node_marker(1, model.nodes, psi, 5, "pin")
-    element = clearance_joint(revolute_joint(bore, pin), 1e-3, 2e-3, PIN_LENGTH, 1e4, 0.0)
+    bore = GroundFrame(point=hinge) if grounded else frame_marker(0, m, hinge, "bore")
+    pin = node_marker(0 if grounded else 1, model.nodes, psi, 5, "pin")
+    element = clearance_joint(revolute_joint(bore, pin), radial, axial, PIN_LENGTH, 1e4, 0.0)
     blocks = []
-    for _ in range(2):
+    for _ in range(1 if grounded else 2):
         p = np.array([1.0, 0.0, 0.0, 0.0]) + 0.01 * rng.normal(size=4)
         blocks.append(np.concatenate([1e-3 * rng.normal(size=3), p / np.linalg.norm(p), 1e-4 * rng.normal(size=m)]))
     # the pin 1.58 mm off the bore's axis (clearance 1 mm) and 1.5 mm along it (half the play 1 mm)
-    bore_point = blocks[0][:3] + rotation_matrix(blocks[0][3:7]) @ hinge
-    pin_point = rotation_matrix(blocks[1][3:7]) @ (model.nodes[5] + psi[15:18] @ blocks[1][7:])
-    blocks[1][:3] = bore_point - pin_point + rotation_matrix(blocks[0][3:7]) @ [1.5e-3, 0.5e-3, 1.5e-3]
+    turn = np.eye(3) if grounded else rotation_matrix(blocks[0][3:7])
+    bore_point = hinge if grounded else blocks[0][:3] + turn @ hinge
+    pin_point = rotation_matrix(blocks[-1][3:7]) @ (model.nodes[5] + psi[15:18] @ blocks[-1][7:])
+    blocks[-1][:3] = bore_point - pin_point + turn @ [1.5e-3, 0.5e-3, 1.5e-3]
     touching = element.contacts(blocks)
     assert all(c.penetration > 0.0 for c in touching), touching
     rates = [np.zeros_like(b) for b in blocks]
     forces = element.forces(blocks, rates, 0.0)
-    d_q, _ = element_tangents(element, blocks, rates, 0.0)
+    d_q, d_qd = element.tangents(blocks, rates, 0.0)
+    stepped, _ = element_tangents(element, blocks, rates, 0.0)
+    full = np.block(d_q)
+    np.testing.assert_allclose(full, np.block(stepped), rtol=0.0, atol=1e-12 * np.abs(full).max())
+    assert not np.any(np.block(d_qd))
     h = 1e-7
-    for b in range(2):
+    for b in range(len(blocks)):
         for k in range(blocks[b].shape[0]):
             plus = [x.copy() for x in blocks]
             minus = [x.copy() for x in blocks]
@@ -211,9 +218,8 @@ def test_contact_forces_are_the_gradient_of_the_stored_energy_and_their_tangent_
                 (fp - fm) / (2 * h)
                 for fp, fm in zip(element.forces(plus, rates, 0.0), element.forces(minus, rates, 0.0), strict=True)
             ]
-            for a in range(2):
+            for a in range(len(blocks)):
                 assert np.max(np.abs(d_q[a][b][:, k] - slope[a])) < 1e-5 * np.abs(d_q[a][b]).max()
-    full = np.block([[d_q[0][0], d_q[0][1]], [d_q[1][0], d_q[1][1]]])
     np.testing.assert_allclose(full, full.T, rtol=0.0, atol=1e-10 * np.abs(full).max())
 
 
