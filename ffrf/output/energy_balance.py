@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import cumulative_simpson
 
+from ffrf.system.forces import assembled_forces
 from ffrf.system.multibody import MultibodySystem
 
 __all__ = [
@@ -29,27 +30,35 @@ def cumulative_integral(values: NDArray, x: NDArray) -> NDArray[np.float64]:
 
 
 def element_work(system: MultibodySystem, time: NDArray, q: NDArray, qd: NDArray | None) -> NDArray[np.float64]:
-    """Work done on the bodies by the force elements (Eqs. (E1)-(E5)) since the first row: the integral of
-    ``Q_e . qd`` over time (dynamic runs), or of ``Q_e . dq`` along the path (quasi-static, ``qd`` None;
-    trapezoids); springs give back what they stored, dampers take, loads and motors add."""
-    if not system.forces:
-        return np.zeros(len(time))
-    forces = []
-    for t, row, rate in zip(time, q, np.zeros_like(q) if qd is None else qd, strict=True):
-        total = np.zeros(system.n_coordinates)
-        for element in system.forces:
-            blocks, rates = (
-                [row[system.block(i)] for i in element.bodies],
-                [rate[system.block(i)] for i in element.bodies],
+    """Work done on the bodies by the force elements (Eqs. (E1)-(E5), (P3)) since the first row: a conservative
+    element's (a spring, a contact without damper) is the decrease of its stored energy, exactly; the others' the
+    integral of ``Q_e . qd`` over time (dynamic runs), or of ``Q_e . dq`` along the path (quasi-static, ``qd`` None;
+    trapezoids): dampers take, loads and motors add."""
+    work = np.zeros(len(time))
+    rates = np.zeros_like(q) if qd is None else qd
+    integrated = [element for element in system.forces if not element.conservative]
+    for element in system.forces:
+        if element.conservative:
+            stored = np.array(
+                [
+                    element.potential_energy([row[system.block(i)] for i in element.bodies], float(t))
+                    for t, row in zip(time, q, strict=True)
+                ]
             )
-            for i, force in zip(element.bodies, element.forces(blocks, rates, float(t)), strict=True):
-                total[system.block(i)] += np.real(force)
-        forces.append(total)
-    forces_array = np.array(forces)
+            work -= stored - stored[0]
+    if not integrated:
+        return work
+    forces = np.array(
+        [
+            assembled_forces(tuple(integrated), system.offsets, row, rate, float(t))
+            for t, row, rate in zip(time, q, rates, strict=True)
+        ]
+    )
+    forces = np.real(forces)
     if qd is not None:
-        return cumulative_integral(np.einsum("ij,ij->i", forces_array, qd), time)
-    steps = np.einsum("ij,ij->i", 0.5 * (forces_array[1:] + forces_array[:-1]), np.diff(q, axis=0))
-    return np.concatenate([[0.0], np.cumsum(steps)])
+        return work + cumulative_integral(np.einsum("ij,ij->i", forces, qd), time)
+    steps = np.einsum("ij,ij->i", 0.5 * (forces[1:] + forces[:-1]), np.diff(q, axis=0))
+    return work + np.concatenate([[0.0], np.cumsum(steps)])
 
 
 def energy_balance(

@@ -83,7 +83,11 @@ def settle(
         # energy misses the work of loads without a potential (torques), so a residual that does not double passes
         if converged and mass_factor == 0.0:
             return StaticSolution(q_new, lam_new, (iteration,))
-        if size_new > 2.0 * size and not energy_new < energy:
+        # A start off the constraints (a drive moved on, Eq. (P6)'s jump) is first brought onto them: there the drive
+        # does work, so the energy cannot judge a step; one that brings the constraints closer passes
+        off = np.max(np.abs(gap), initial=0.0)
+        projecting = off > tolerance and np.isfinite(size_new) and np.max(np.abs(gap_new), initial=0.0) < off
+        if not projecting and size_new > 2.0 * size and not energy_new < energy:
             halvings += 1
             if halvings == MAX_HALVINGS:  # at round-off neither falls: see whether Newton's step converges here
                 dtau = NEWTON_STEP

@@ -351,8 +351,8 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
     (Eq. (S4)) is retried without secant updates, then halved, up to :data:`MAX_HALVINGS` times, each
     part predicted from the equilibria before it (Eq. (S2)); once a try left the path, the rest of the step is
     predicted along the path's tangent at its last equilibrium instead (Eq. (S4)). A step that still fails where a
-    contact with play lets go jumps to the settled pose at ``t_to`` (:func:`_jump`). Returns the Newton iterations
-    spent and the kept tangent."""
+    contact with play lets go jumps to the settled pose at the shortest step tried (:func:`_jump`) and goes on from
+    there. Returns the Newton iterations spent and the kept tangent."""
     iterations, halvings, t_from, parts = 0, 0, path.times[-1], 0
     failure: StaticDivergence | None = None
     # (t, dq/dt, dlambda/dt) at the path's last equilibrium, once a try left the path: a polynomial through
@@ -408,7 +408,11 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
             t_from, halvings, parts = t_try, 0, parts + 1  # the rest of the step, whole again
             continue
         if halvings >= MAX_HALVINGS or t_try == t_from:
-            return iterations + _jump(model, path, t_to, tolerance, failure), None
+            iterations += _jump(model, path, t_try, tolerance, failure)
+            t_from, halvings, parts, tangent, along, left_path = t_try, 0, parts + 1, None, None, False
+            if t_try == t_to:
+                return iterations, None
+            continue
         halvings += 1
         tangent = None
         log.debug("quasi-static step %g -> %g halved", t_from, t_try)
@@ -416,9 +420,9 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
 
 def _jump(model, path: _Path, t_to: float, tolerance: float, failure: StaticDivergence) -> int:
     """Where a contact with play lets go (a pin crossing its bore as the load through it reverses), the path has no
-    equilibria between its last one and a pose on the far side: settle there at ``t_to`` (Eq. (P6)) and start the
-    path again from it. Returns the iterations; raises ``failure`` for a system without such contacts, or when the
-    settling fails too."""
+    equilibria between its last one and a pose on the far side: settle there at ``t_to``, the shortest step tried
+    (Eq. (P6)), and start the path again from it. Returns the iterations; raises ``failure`` for a system without
+    such contacts, or when the settling fails too."""
     system = model if isinstance(model, MultibodySystem) else model.source()
     if system is None or not any(element.separates for element in system.forces):
         raise failure

@@ -94,6 +94,10 @@ class ClearanceJoint(ForceElement):
         return self.damping != 0.0
 
     @property
+    def conservative(self) -> bool:
+        return not self.reads_velocities
+
+    @property
     def separates(self) -> bool:
         return self.radial > 0.0 or self.axial > 0.0
 

@@ -71,6 +71,12 @@ class ForceElement:
         return True
 
     @property
+    def conservative(self) -> bool:
+        """Whether the forces are minus the gradient of :meth:`potential_energy` (a spring without damper): their work
+        over any motion is then the decrease of that energy, exactly."""
+        return False
+
+    @property
     def separates(self) -> bool:
         """Whether the element can let go of what it holds (a contact with play): a quasi-static path may then jump
         where a load through it reverses."""
@@ -156,6 +162,10 @@ class SpringDamperJoint(ForceElement):
     def reads_velocities(self) -> bool:
         return bool(np.any(self.damping))
 
+    @property
+    def conservative(self) -> bool:
+        return not self.reads_velocities
+
     def _force(self, blocks: list[NDArray], velocities: list[NDArray], t: float):
         rows = self.joint.jacobian(blocks, t)
         rate = sum(r @ tangent_rates(b, v) for r, b, v in zip(rows, blocks, velocities, strict=True))
@@ -190,6 +200,10 @@ class AxialSpringDamper(ForceElement):
     @property
     def reads_velocities(self) -> bool:
         return self.damping != 0.0
+
+    @property
+    def conservative(self) -> bool:
+        return not self.reads_velocities
 
     def _sides(self, blocks: list[NDArray], velocities: list[NDArray]):
         q0 = None if isinstance(self.marker0, GroundFrame) else blocks[0]
@@ -366,10 +380,12 @@ def assembled_forces(
     """The force elements' generalized forces ``Q`` (Eqs. (E1)-(E5), (P3)) on the whole coordinate vector, the
     bodies' blocks starting at ``offsets``."""
     out = np.zeros(q.shape[0], dtype=np.result_type(q, qd))
-    for element in elements:
-        spans, blocks, rates = _element_blocks(element, offsets, q, qd)
-        for span, force in zip(spans, element.forces(blocks, rates, t), strict=True):
-            out[span] += force
+    # a diverging Newton iterate overflows here; the solvers test the residual for finiteness and say so in one line
+    with np.errstate(over="ignore", invalid="ignore"):
+        for element in elements:
+            spans, blocks, rates = _element_blocks(element, offsets, q, qd)
+            for span, force in zip(spans, element.forces(blocks, rates, t), strict=True):
+                out[span] += force
     return out
 
 
@@ -380,11 +396,12 @@ def assembled_tangents(
     :meth:`ForceElement.tangents`."""
     n = q.shape[0]
     d_q, d_qd = np.zeros((n, n)), np.zeros((n, n))
-    for element in elements:
-        spans, blocks, rates = _element_blocks(element, offsets, q, qd)
-        by_q, by_qd = element.tangents(blocks, rates, t)
-        for a, row in enumerate(spans):
-            for b, column in enumerate(spans):
-                d_q[row, column] += by_q[a][b]
-                d_qd[row, column] += by_qd[a][b]
+    with np.errstate(over="ignore", invalid="ignore"):  # as in assembled_forces: the solvers judge finiteness
+        for element in elements:
+            spans, blocks, rates = _element_blocks(element, offsets, q, qd)
+            by_q, by_qd = element.tangents(blocks, rates, t)
+            for a, row in enumerate(spans):
+                for b, column in enumerate(spans):
+                    d_q[row, column] += by_q[a][b]
+                    d_qd[row, column] += by_qd[a][b]
     return d_q, d_qd

@@ -269,7 +269,7 @@ def test_a_quasi_static_path_jumps_across_the_bore_where_the_load_through_the_pi
     """A rigid bar held at its centre of mass by a loose pin (no gravity) under a force along x that falls
     linearly through zero at t = 0.55 s: the pin rests against the +x side at c + F / (2k), floats where F vanishes
     (no equilibrium path continues: Newton's tangent is singular there) and the path jumps, by settling (Eq. (P6)),
-    to the -x side, where it rests at c + |F| / (2k) again (to 1e-12 m at every output)."""
+    to the -x side, where it rests at c + |F| / (2k) again (to Newton's tolerance at every output)."""
     from ffrf.solvers.static_solver import quasi_static
 
     body, model, _ = rigid_bar(RHO)
@@ -289,4 +289,6 @@ def test_a_quasi_static_path_jumps_across_the_bore_where_the_load_through_the_pi
         pin = q[:3] + rotation_matrix(q[3:7]) @ centre - centre
         f = pull(t)[0]
         expected = [np.sign(f) * (clearance + abs(f) / (2.0 * stiffness)), 0.0, 0.0]
-        np.testing.assert_allclose(pin, expected, rtol=0.0, atol=1e-12)  # measured 1.1e-13 m: Newton's tolerance
+        # Newton's tolerance on increments, 1e-10 m (measured 6e-12 m along the bore, where a pin resting on it is
+        # held only by its load over the clearance: 2e3 N/m against the contact's 1e5)
+        np.testing.assert_allclose(pin, expected, rtol=0.0, atol=1e-10)
