@@ -126,6 +126,12 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         ),
     ),
     Benchmark(
+        "clearance_variants",
+        "the paper's PLA Bennett and its misaligned variants with 0 to 0.3 mm of play in their passive joints",
+        measures=(*ENGINE, "identification"),
+        records=(Recording("clearance_variants", rows_by="run", rows_name="runs"),),
+    ),
+    Benchmark(
         "blas_threads",
         "a second BLAS thread on the default scene, quiet and busy",
         records=(Recording("blas_threads"),),

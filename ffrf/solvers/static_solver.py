@@ -567,6 +567,10 @@ class _History(_Path):
     def __init__(self, t: float, q: NDArray, lam: NDArray, order: int):
         super().__init__(t, q, lam, order)
         self.kept: list[tuple[float, NDArray, NDArray]] = [(t, q, lam)]
+        # the equilibria kept before the last jump: outputs between the path's last one before it and the jump's
+        # time are solved on that side (the jump lands a little after the last equilibrium, Eq. (P6))
+        self.before_jump: list[tuple[float, NDArray, NDArray]] = []
+        self.jumped_at: float | None = None
 
     def add(self, t: float, q: NDArray, lam: NDArray) -> None:
         super().add(t, q, lam)
@@ -575,12 +579,18 @@ class _History(_Path):
 
     def restart(self, t: float, q: NDArray, lam: NDArray) -> None:
         super().restart(t, q, lam)
-        self.kept = [(t, q, lam)]
+        self.before_jump, self.kept, self.jumped_at = self.kept, [(t, q, lam)], t
+
+    def side(self, t: float) -> list[tuple[float, NDArray, NDArray]]:
+        """The kept equilibria on ``t``'s side of the last jump."""
+        return self.before_jump if self.jumped_at is not None and t < self.jumped_at else self.kept
 
     def interpolate(self, t: float, more: list[tuple[float, NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
         """Eq. (S2) through the ``order + 1`` equilibria nearest ``t`` among the kept ones and ``more`` (outputs
         solved before): a start for Newton at ``t``."""
-        points = list(self.kept)
+        points = list(self.side(t))
+        if self.jumped_at is not None:  # no polynomial across a jump
+            more = [p for p in more if (p[0] >= self.jumped_at) == (t >= self.jumped_at)]
         for point in more:  # distinct times only: the Lagrange weights divide by their differences
             if all(abs(point[0] - other[0]) > 1e-9 * max(1.0, abs(t)) for other in points):
                 points.append(point)
@@ -595,7 +605,7 @@ def _along_path(model, path: _History, t_out: float, tolerance: float, max_itera
     """The equilibrium at ``t_out`` followed from the path's last equilibrium before it, as a path step (halved
     where needed, Eq. (S4)) on a copy of the path: for an output that Newton from the interpolated start does not
     solve on the path. Returns ``(q, lambda, iterations)``."""
-    before = [point for point in path.kept if point[0] < t_out]
+    before = [point for point in path.side(t_out) if point[0] < t_out]
     start = before[-(path.order + 1) :]
     copy = _Path(start[0][0], start[0][1], start[0][2], path.order)
     for t, q, lam in start[1:]:
@@ -643,7 +653,7 @@ def _on_own_steps(
                 recent = [(done_times[j], qs[j], lams[j]) for j in range(max(0, len(qs) - path.order - 1), len(qs))]
                 q_guess, lam_guess = path.interpolate(t_out, recent)
                 kept = path_tangent if output_tangent is None else output_tangent
-                nearest = min(path.kept, key=lambda point: abs(point[0] - t_out))[1]
+                nearest = min(path.side(t_out), key=lambda point: abs(point[0] - t_out))[1]
                 try:
                     q, lam, count, output_tangent = _newton(
                         model, q_guess, lam_guess, t_out, tolerance, max_iterations, kept, False, _PATH_ADVICE
