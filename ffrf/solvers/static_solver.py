@@ -567,10 +567,9 @@ class _History(_Path):
     def __init__(self, t: float, q: NDArray, lam: NDArray, order: int):
         super().__init__(t, q, lam, order)
         self.kept: list[tuple[float, NDArray, NDArray]] = [(t, q, lam)]
-        # the equilibria kept before the last jump: outputs between the path's last one before it and the jump's
-        # time are solved on that side (the jump lands a little after the last equilibrium, Eq. (P6))
-        self.before_jump: list[tuple[float, NDArray, NDArray]] = []
-        self.jumped_at: float | None = None
+        # the kept equilibria of the stretches between the last jumps, oldest first (``kept`` is the newest): an
+        # output between a stretch's last equilibrium and the jump that ends it is solved on that stretch
+        self.stretches: list[tuple[float, list[tuple[float, NDArray, NDArray]]]] = [(t, self.kept)]
 
     def add(self, t: float, q: NDArray, lam: NDArray) -> None:
         super().add(t, q, lam)
@@ -579,19 +578,27 @@ class _History(_Path):
 
     def restart(self, t: float, q: NDArray, lam: NDArray) -> None:
         super().restart(t, q, lam)
-        self.before_jump, self.kept, self.jumped_at = self.kept, [(t, q, lam)], t
+        self.kept = [(t, q, lam)]
+        self.stretches = [*self.stretches[-self._KEPT + 1 :], (t, self.kept)]
+
+    def _stretch(self, t: float) -> tuple[float, float]:
+        """Start and end of the stretch ``t`` lies on (between two jumps)."""
+        starts = [start for start, _ in self.stretches]
+        k = max((i for i, start in enumerate(starts) if start <= t), default=0)
+        return starts[k], starts[k + 1] if k + 1 < len(starts) else np.inf
 
     def side(self, t: float) -> list[tuple[float, NDArray, NDArray]]:
-        """The kept equilibria on ``t``'s side of the last jump."""
-        return self.before_jump if self.jumped_at is not None and t < self.jumped_at else self.kept
+        """The kept equilibria of the stretch ``t`` lies on (between two jumps)."""
+        start, _ = self._stretch(t)
+        return next(points for s, points in self.stretches if s == start)
 
     def interpolate(self, t: float, more: list[tuple[float, NDArray, NDArray]]) -> tuple[NDArray, NDArray]:
         """Eq. (S2) through the ``order + 1`` equilibria nearest ``t`` among the kept ones and ``more`` (outputs
         solved before): a start for Newton at ``t``."""
+        start, end = self._stretch(t)
         points = list(self.side(t))
-        if self.jumped_at is not None:  # no polynomial across a jump
-            more = [p for p in more if (p[0] >= self.jumped_at) == (t >= self.jumped_at)]
-        for point in more:  # distinct times only: the Lagrange weights divide by their differences
+        # no polynomial across a jump; distinct times only: the Lagrange weights divide by their differences
+        for point in (p for p in more if start <= p[0] < end):
             if all(abs(point[0] - other[0]) > 1e-9 * max(1.0, abs(t)) for other in points):
                 points.append(point)
         nearest = sorted(points, key=lambda point: abs(point[0] - t))[: self.order + 1]

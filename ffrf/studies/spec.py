@@ -32,7 +32,9 @@ bore's own axis (mm, the joint's DH offset d), added to any error the base alrea
 (:class:`ffrf.scenes.linkage_description.BoreError`); every link's arm section, ``arm_width_mm`` and
 ``arm_thickness_mm`` (:class:`ffrf.geometry.link_geometry.LinkDesign`; the meshes change); the links' ``E``
 (Pa) or ``rho`` (kg/m^3); the drive's ``rpm``; the element edge ``h`` (m) or the fixed-interface ``modes`` per
-link (rounded to an integer). :func:`load_study` checks a file before anything runs: a misspelt key, a wrong
+link (rounded to an integer); ``radial_clearance_mm``, the radial play of every passive joint (pins in bores,
+:mod:`ffrf.system.clearance_joint`; the base's ``clearance`` table otherwise, or pins as long as the housings; 0:
+ideal joints). :func:`load_study` checks a file before anything runs: a misspelt key, a wrong
 type or an impossible value is one :class:`~ffrf.errors.SceneError` line naming the key, where it is and the fix.
 
 **Named bases.** An application may offer built-in base linkages by name (:class:`NamedBases`, passed to
@@ -86,6 +88,7 @@ TARGETS = {
     "rpm": "rev/min",
     "h": "m",
     "modes": "",
+    "radial_clearance_mm": "mm",
 }
 BORE_TARGETS = ("bore_twist_deg", "bore_offset_mm", "bore_axial_mm")
 RUN_MODES = ("auto", "quasi_static", "dynamic")

@@ -110,6 +110,13 @@ def _with_bore_errors(
     return tuple(by_bore.values())
 
 
+def _with_play(play: dict | None, radial_mm: float) -> dict | None:
+    """The base's ``clearance`` table (mm) with the radial play ``radial_mm``; ``None`` (ideal joints) at zero."""
+    if radial_mm == 0.0:
+        return None
+    return {**(play or {}), "radial_mm": radial_mm}
+
+
 def variant_options(study: Study, values: dict[str, float]) -> tuple[Any, LinkageOptions, dict]:
     """The loop (``None``: a named base), the linkage options and run settings of one variant."""
     loop, options, run = _base_options(study)
@@ -133,6 +140,10 @@ def variant_options(study: Study, values: dict[str, float]) -> tuple[Any, Linkag
             changes["h"] = x
         elif p.target == "modes":
             changes["n_modes"] = int(round(x))
+        elif p.target == "radial_clearance_mm":
+            changes["joint_play"] = _with_play(options.joint_play, x)
+    if "joint_play" in changes and changes["joint_play"] is not None:  # pins as long as the (varied) housings
+        changes["joint_play"].setdefault("pin_length_mm", 1e3 * design.housing_length)
     errors = _with_bore_errors(tuple(options.bore_errors), added)
     return loop, replace(options, material=material, design=design, bore_errors=errors, **changes), run
 

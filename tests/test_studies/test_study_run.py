@@ -339,3 +339,34 @@ def test_a_study_runs_on_a_scheduler_started_with_a_file_and_its_workers_warm_th
         for process in reversed(processes):
             process.terminate()
             process.wait(timeout=60)
+
+
+def test_radial_clearance_is_a_study_parameter_and_its_rows_equal_standalone_runs_with_play(tmp_path):
+    """``radial_clearance_mm`` loosens every passive joint (pins as long as the housings; 0: ideal joints): each row of
+    a grid over it equals the same linkage run alone with that play (18 deg of drive of the coarse Bennett), and the
+    play moves the coupler."""
+    study = study_from_document(
+        {
+            "study": {"name": "play", "method": "grid"},
+            "base": dict(BASE, revolutions=0.05, outputs=3),
+            "parameters": [{"name": "play", "target": "radial_clearance_mm", "values": [0.0, 0.1]}],
+        },
+        bases=STUDY_BASES,
+    )
+    run_study(study, tmp_path / "out", workers=1, progress=False)
+    rows = {row["play"]: row for row in read_rows(tmp_path / "out").to_pylist()}
+    assert sorted(rows) == [0.0, 0.1] and all(row["status"] == "ok" for row in rows.values())
+    for play, row in rows.items():
+        options = replace(
+            bennett_options("pla", h=0.012, order=1, n_modes=2, revolutions=0.05), bore_error_model="misfit"
+        )
+        if play > 0.0:
+            pin_length_mm = 1e3 * options.design.housing_length
+            options = replace(options, joint_play={"radial_mm": play, "pin_length_mm": pin_length_mm})
+        scene = build_bennett_from_options(options)
+        assert len(scene.loose_joints) == (3 if play > 0.0 else 0)
+        reference = load(scene).run(mode="quasi_static", outputs=3).summary()
+        for name in OUTPUTS[:3]:
+            assert row[name] == pytest.approx(reference[name], rel=1e-12, abs=0.0), (name, play)
+    change = abs(rows[0.1]["max_coupler_deviation_m"] - rows[0.0]["max_coupler_deviation_m"])
+    assert change > 1e-5  # a tenth of the 0.1 mm play at least: the pins move in their bores
