@@ -31,6 +31,7 @@ from bench.report import write_report
 
 def run_row(variant: str, radial_mm: float, h: float, order: int, modes: int, outputs: int) -> dict:
     """Build and run one variant with ``radial_mm`` of radial play (0: ideal joints) quasi-statically; the row."""
+    from ffrf.errors import StaticDivergence
     from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
     from ffrf.scenes.linkage_run import run_linkage
     from identification.loop import identify_dh
@@ -42,7 +43,13 @@ def run_row(variant: str, radial_mm: float, h: float, order: int, modes: int, ou
         options = replace(options, joint_play={"radial_mm": radial_mm, "pin_length_mm": pin_length_mm})
     scene = build_bennett_from_options(options, variant)
     built = time.perf_counter()
-    result = run_linkage(scene, mode="quasi_static", n_outputs=outputs)
+    try:
+        result = run_linkage(scene, mode="quasi_static", n_outputs=outputs)
+        stopped = None
+    except StaticDivergence as error:  # as measured: the row of the revolution up to where its path stopped
+        if error.partial is None:
+            raise
+        result, stopped = error.partial, result_stop(error.partial)
     ran = time.perf_counter()
     summary = result.summary()
     assembly = result.assembly
@@ -73,9 +80,16 @@ def run_row(variant: str, radial_mm: float, h: float, order: int, modes: int, ou
         "identified_axis3_twist_deviation_deg": float(np.degrees(loop.axis3_twist_deviation)),
         "energy_balance_relative": summary["energy_balance_relative"],
         "verified": None if verification is None else bool(verification.verified),
+        "stopped": stopped,
         "n_coordinates": scene.system.n_coordinates,
         "wall_time_s": {"build": built - clock, "run": ran - built, **result.metadata["timings_s"]},
     }
+
+
+def result_stop(result) -> str:
+    """Where and why a run's path stopped, in the drive's degrees."""
+    where = result.metadata["stopped"]
+    return f"stopped at {np.degrees(result.sensors['drive_angle'][-1]):.1f} deg of drive: {where['message']}"
 
 
 def table(rows: list[dict]) -> str:
@@ -93,7 +107,7 @@ def table(rows: list[dict]) -> str:
             f"| {r['variant']} | {r['radial_mm']:g} | {r['max_coupler_deviation_mm']:.4g} "
             f"| {r['max_distance_to_path_mm']:.4g} | {r['assembly_max_von_mises_MPa']:.3g} "
             f"| {r['assembly_strain_energy_mJ']:.3g} | {r['max_abs_driving_torque_Nmm']:.4g} "
-            f"| {r['max_pin_eccentricity_mm']:.4g} | {alpha} | {d} | {r['verified']} "
+            f"| {r['max_pin_eccentricity_mm']:.4g} | {alpha} | {d} | {'stopped' if r['stopped'] else r['verified']} "
             f"| {r['wall_time_s']['run']:.0f} |"
         )
     return "\n".join(lines)

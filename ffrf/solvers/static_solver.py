@@ -408,9 +408,10 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
             t_from, halvings, parts = t_try, 0, parts + 1  # the rest of the step, whole again
             continue
         if halvings >= MAX_HALVINGS or t_try == t_from:
-            iterations += _jump(model, path, t_try, tolerance, failure)
-            t_from, halvings, parts, tangent, along, left_path = t_try, 0, parts + 1, None, None, False
-            if t_try == t_to:
+            t_from, spent = _jump(model, path, t_to, tolerance, failure)
+            iterations += spent
+            halvings, parts, tangent, along, left_path = 0, parts + 1, None, None, False
+            if t_from == t_to:
                 return iterations, None
             continue
         halvings += 1
@@ -418,22 +419,27 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
         log.debug("quasi-static step %g -> %g halved", t_from, t_try)
 
 
-def _jump(model, path: _Path, t_to: float, tolerance: float, failure: StaticDivergence) -> int:
+def _jump(model, path: _Path, t_end: float, tolerance: float, failure: StaticDivergence) -> tuple[float, int]:
     """Where a contact with play lets go (a pin crossing its bore as the load through it reverses), the path has no
-    equilibria between its last one and a pose on the far side: settle there at ``t_to``, the shortest step tried
-    (Eq. (P6)), and start the path again from it. Returns the iterations; raises ``failure`` for a system without
-    such contacts, or when the settling fails too."""
+    equilibria between its last one and a pose on the far side: settle there (Eq. (P6)) at the shortest step tried,
+    or, where the pins rest on the edge of a contact there, at a step twice as long, up to ``t_end``; the path
+    starts again from the settled equilibrium. Returns the time it settled at and the iterations; raises
+    ``failure`` for a system without such contacts, or when no settling succeeds."""
     system = model if isinstance(model, MultibodySystem) else model.source()
     if system is None or not any(element.separates for element in system.forces):
         raise failure
     t_from = path.times[-1]
-    try:
-        settled = settle(system, path.q[-1], t_to, tolerance)
-    except StaticDivergence as error:
-        raise failure from error
-    log.info("the path jumps between t = %.9g s and %.9g s: a contact let go (Eq. (P6))", t_from, t_to)
-    path.restart(t_to, settled.q, settled.multipliers)
-    return settled.iterations[0]
+    tries = [t_from + (t_end - t_from) / 2.0**k for k in range(MAX_HALVINGS, -1, -1)]
+    for t_to in tries:
+        try:
+            settled = settle(system, path.q[-1], t_to, tolerance)
+        except StaticDivergence as error:
+            last = error
+            continue
+        log.info("the path jumps between t = %.9g s and %.9g s: a contact let go (Eq. (P6))", t_from, t_to)
+        path.restart(t_to, settled.q, settled.multipliers)
+        return t_to, settled.iterations[0]
+    raise failure from last
 
 
 def quasi_static(
