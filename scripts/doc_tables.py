@@ -2,7 +2,7 @@
 
 Each reads the result files it needs from ``docs/results/`` and returns the Markdown table (with a source
 line); ``scripts/update_docs.py`` writes the blocks and its ``--check`` compares them. The file is longer
-than our modules usually are because it holds one short function per table of the docs (16), which are
+than our modules usually are because it holds one short function per table of the docs (17), which are
 read best side by side; ``format_like`` is the one rule for how a figure's digits are written.
 """
 
@@ -107,6 +107,47 @@ def table_bennett_variants() -> str:
                 )
             )
     return "\n".join(lines + ["", _source(*names)])
+
+
+def table_clearance_variants() -> str:
+    """The paper's variants with radial play in their passive joints (``bench/clearance_variants.py``)."""
+    data = _results("clearance_variants")
+    lines = _header(
+        "variant",
+        "radial play (mm)",
+        "max deviation (mm)",
+        "distance to path (mm)",
+        "assembly max von Mises (MPa)",
+        "strain energy (mJ)",
+        "max abs torque (N mm)",
+        "pins' max eccentricity (mm)",
+        "identified alpha (deg)",
+        "identified d (mm)",
+        "run",
+    )
+    for r in (data or {}).get("runs", {}).values():
+        if r["stopped"]:
+            verdict = r["stopped"].split(":")[0]
+        else:
+            verdict = f"{'verified' if r['verified'] else 'not verified'}, {r['wall_time_s']['run']:.0f} s"
+        lines.append(
+            _row(
+                [
+                    r["variant"],
+                    f"{r['radial_mm']:g}",
+                    f"{r['max_coupler_deviation_mm']:.4g}",
+                    f"{r['max_distance_to_path_mm']:.4g}",
+                    f"{r['assembly_max_von_mises_MPa']:.3g}",
+                    f"{r['assembly_strain_energy_mJ']:.3g}",
+                    f"{r['max_abs_driving_torque_Nmm']:.2f}",
+                    f"{r['max_pin_eccentricity_mm']:.4f}",
+                    ", ".join(f"{a:.2f}" for a in r["identified_alpha_deg"]),
+                    ", ".join(f"{d:.2f}" for d in r["identified_d_mm"]),
+                    verdict,
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("clearance_variants")])
 
 
 def table_assembly_stress_per_link() -> str:

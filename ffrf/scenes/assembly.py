@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -20,6 +21,7 @@ from ffrf.scenes.builder import Scene
 from ffrf.scenes.step_sizes import DRIVE_ANGLE_PER_STEP, MAX_DRIVE_STEP, MAX_DYNAMIC_STEP, PATH_STEPS_WITHOUT_DRIVE
 from ffrf.solvers.pseudo_transient import settle
 from ffrf.solvers.static_solver import StaticSolution, static_equilibrium
+from ffrf.system.clearance_joint import ClearanceJoint
 from ffrf.system.multibody import MultibodySystem
 
 __all__ = [
@@ -115,16 +117,39 @@ def _assemble_loose(
     convert: Callable[[MultibodySystem], MultibodySystem] | None,
 ) -> StaticSolution:
     """A scene whose joints have play: assembled with ideal joints first (the pins centred in their bores), then
-    settled into its bores by pseudo-transient continuation (Eq. (P6))."""
+    settled into its bores by pseudo-transient continuation (Eq. (P6)); where that stalls, the play is opened in
+    :data:`PLAY_STEPS` steps from zero (bushings, which hold the pins where the ideal joints did), each settled from
+    the last."""
     ideal = assemble(scene.with_ideal_joints(), steps, t, q0, convert)
     system = scene.system if convert is None else convert(scene.system)
     try:
         return settle(system, ideal.q, t)
     except StaticDivergence as error:
+        stalled = error
+    q = ideal.q
+    try:
+        for fraction in np.linspace(0.0, 1.0, PLAY_STEPS + 1):
+            q = settle(_with_play_fraction(system, fraction), q, t).q
+        return settle(system, q, t)
+    except StaticDivergence as error:
         raise AssemblyDivergence(
             f"static assembly of scene {scene.name!r}: the pins of its joints with play "
-            f"({', '.join(j.name for j in scene.loose_joints)}) did not settle into their bores: {error}"
+            f"({', '.join(j.name for j in scene.loose_joints)}) did not settle into their bores, neither at once "
+            f"({stalled}) nor with the play opened in {PLAY_STEPS} steps ({error})"
         ) from error
+
+
+#: Steps in which the assembly of a linkage with play opens the play, where settling at once stalls.
+PLAY_STEPS = 10
+
+
+def _with_play_fraction(system: MultibodySystem, fraction: float) -> MultibodySystem:
+    """``system`` with every joint's play (radial and axial) scaled by ``fraction``."""
+    forces = tuple(
+        replace(e, radial=fraction * e.radial, axial=fraction * e.axial) if isinstance(e, ClearanceJoint) else e
+        for e in system.forces
+    )
+    return replace(system, forces=forces)
 
 
 def starts_static(scene: Scene) -> bool:

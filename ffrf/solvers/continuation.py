@@ -142,9 +142,11 @@ def path_points(
             matrix, rate = model.jacobians(y_q, y_lam, y_t)
             residual = model.residual(y_q, y_lam, y_t)
             arc = tangent_q @ (y_q - guess_q) + weight * tangent_t * (y_t - guess_t)
-            delta = factor(_bordered(matrix, rate, tangent_q, tangent_t, weight, n), what="bordered tangent").solve(
-                -np.append(residual, arc)
-            )
+            try:
+                bordered = factor(_bordered(matrix, rate, tangent_q, tangent_t, weight, n), what="bordered tangent")
+            except FloatingPointError:  # Newton left for infinity (a pin thrown out of its bore): a shorter step
+                break
+            delta = bordered.solve(-np.append(residual, arc))
             y_q, y_lam, y_t = y_q + delta[:n], y_lam + delta[n:-1], y_t + delta[-1]
             if (
                 np.abs(delta[:n]).max() <= tolerance * max(1.0, np.abs(y_q).max())

@@ -39,6 +39,8 @@ FIRST_STEP = 1e-3
 #: Pseudo time step (s) beyond which the mass term is round-off for any linkage (M / dtau^2 < 1e-12 of a stiffness
 #: of 1 N/m per kg): the iterations are Newton's.
 NEWTON_STEP = 1e6
+#: Relative rise of the stored energy that a settling step may make (round-off of the energy's sum).
+ENERGY_ROUNDOFF = 1e-12
 #: Halvings of one pseudo time step before the start is declared out of reach.
 MAX_HALVINGS = 30
 
@@ -71,6 +73,7 @@ def settle(
     if not np.isfinite(size):
         raise StaticDivergence("NaN in the static residual at the start; check the model and the start")
     energy = system.potential_energy(q, t)
+    conservative = all(element.conservative for element in system.forces)
     dtau, halvings = first_step, 0
     for iteration in range(1, max_iterations + 1):
         mass_factor = 0.0 if dtau >= NEWTON_STEP else 1.0 / dtau**2
@@ -87,7 +90,11 @@ def settle(
         # does work, so the energy cannot judge a step; one that brings the constraints closer passes
         off = np.max(np.abs(gap), initial=0.0)
         projecting = off > tolerance and np.isfinite(size_new) and np.max(np.abs(gap_new), initial=0.0) < off
-        if not projecting and size_new > 2.0 * size and not energy_new < energy:
+        if conservative:  # every force has a potential: a step may not raise it (a trust region in the metric M)
+            rejected = not energy_new <= energy + ENERGY_ROUNDOFF * abs(energy)
+        else:
+            rejected = size_new > 2.0 * size and not energy_new < energy
+        if not projecting and rejected:
             halvings += 1
             if halvings == MAX_HALVINGS:  # at round-off neither falls: see whether Newton's step converges here
                 dtau = NEWTON_STEP
