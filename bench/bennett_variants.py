@@ -80,12 +80,28 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def main(argv=None) -> dict:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def add_discretisation_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--h``, ``--order``, ``--modes`` and ``--outputs`` of a run of the paper's linkage (defaults: the default
+    discretisation, 241 quasi-static outputs)."""
     parser.add_argument("--h", type=float, default=6e-3, help="maximum tetrahedron edge (m); paper 0.002")
     parser.add_argument("--order", type=int, choices=(1, 2), default=2, help="tetrahedron order; paper 1")
     parser.add_argument("--modes", type=int, default=4, help="fixed-interface modes per link; paper 32")
     parser.add_argument("--outputs", type=int, default=241, help="quasi-static output times over ramp + revolution")
+
+
+def finish(args: argparse.Namespace, report: dict, table: str) -> dict:
+    """Print the discretisation, ``table`` and the total wall time, write ``report`` to ``--json``; the report."""
+    print(f"\nP{args.order}, h = {1e3 * args.h:g} mm, {args.modes} modes, {args.outputs} quasi-static outputs:\n")
+    print(table)
+    print(f"\ntotal wall time {report['total_wall_time_s']:.1f} s")
+    if args.json:
+        write_report(report, args.json, echo=False)
+    return report
+
+
+def main(argv=None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_discretisation_arguments(parser)
     parser.add_argument("--variants", default="rigid,pla,pla1,pla2")
     parser.add_argument(
         "--links-at-joint-points",
@@ -125,12 +141,7 @@ def main(argv=None) -> dict:
         "total_wall_time_s": time.perf_counter() - started,
         "rows": [{k: v for k, v in r.items() if k != "result"} for r in rows],
     }
-    print(f"\nP{args.order}, h = {1e3 * args.h:g} mm, {args.modes} modes, {args.outputs} quasi-static outputs:\n")
-    print(table(rows))
-    print(f"\ntotal wall time {report['total_wall_time_s']:.1f} s")
-    if args.json:
-        write_report(report, args.json, echo=False)
-    return report
+    return finish(args, report, table(rows))
 
 
 if __name__ == "__main__":

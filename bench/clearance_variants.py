@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.report import write_report
+from bench.bennett_variants import add_discretisation_arguments, finish
 
 
 def run_row(variant: str, radial_mm: float, h: float, order: int, modes: int, outputs: int) -> dict:
@@ -115,10 +115,7 @@ def table(rows: list[dict]) -> str:
 
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--h", type=float, default=6e-3, help="maximum tetrahedron edge (m); paper 0.002")
-    parser.add_argument("--order", type=int, choices=(1, 2), default=2, help="tetrahedron order; paper 1")
-    parser.add_argument("--modes", type=int, default=4, help="fixed-interface modes per link; paper 32")
-    parser.add_argument("--outputs", type=int, default=241, help="quasi-static output times over ramp + revolution")
+    add_discretisation_arguments(parser)
     parser.add_argument("--variants", default="pla,pla1,pla2")
     parser.add_argument("--clearances", default="0,0.05,0.1,0.2,0.3", help="radial clearances (mm), 0: ideal joints")
     parser.add_argument("--json", type=Path)
@@ -145,12 +142,7 @@ def main(argv=None) -> dict:
         "total_wall_time_s": time.perf_counter() - started,
         "rows": rows,
     }
-    print(f"\nP{args.order}, h = {1e3 * args.h:g} mm, {args.modes} modes, {args.outputs} quasi-static outputs:\n")
-    print(table(rows))
-    print(f"\ntotal wall time {report['total_wall_time_s']:.1f} s")
-    if args.json:
-        write_report(report, args.json, echo=False)
-    return report
+    return finish(args, report, table(rows))
 
 
 if __name__ == "__main__":

@@ -130,6 +130,7 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         "the paper's PLA Bennett and its misaligned variants with 0 to 0.3 mm of play in their passive joints",
         measures=(*ENGINE, "identification"),
         records=(Recording("clearance_variants", rows_by="run", rows_name="runs"),),
+        helpers=("bennett_variants",),
     ),
     Benchmark(
         "blas_threads",
