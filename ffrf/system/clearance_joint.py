@@ -126,7 +126,7 @@ class ClearanceJoint(ForceElement):
         p0, z0, p1, z1 = y[:3], y[3:6], y[6:9], y[9:]
         dtype = y.dtype
         eye = np.eye(3)
-        out = []
+        out: list[tuple] = []
         for name, s in (("rim -", -0.5 * self.pin_length), ("rim +", 0.5 * self.pin_length)):
             e = p1 + s * z1 - p0
             h = z0 @ e
