@@ -259,6 +259,11 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         records=(Recording("snap_plane_fold_6r"),),
     ),
     Benchmark(
+        "snap_with_play",
+        "plane_fold_6r's folds with ideal joints and with 0.1 mm of play in its passive joints",
+        records=(Recording("snap_with_play"),),
+    ),
+    Benchmark(
         "speed_vs_error",
         "our solver and its Exudyn twin: speed against error over meshes, modes and steps",
         measures=WITH_VALIDATION,
