@@ -294,6 +294,8 @@ MAX_CORRECTION = 0.5
 MAX_HALVINGS = 8
 #: Parts one quasi-static step may be done in (each a halved step that converged).
 MAX_PARTS = 64
+#: Jumps (Eq. (P6)) within one path step: one per shortest step at most.
+MAX_JUMPS = 2**MAX_HALVINGS
 
 
 class _Path:
@@ -353,7 +355,7 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
     predicted along the path's tangent at its last equilibrium instead (Eq. (S4)). A step that still fails where a
     contact with play lets go jumps to the settled pose at the shortest step tried (:func:`_jump`) and goes on from
     there. Returns the Newton iterations spent and the kept tangent."""
-    iterations, halvings, t_from, parts = 0, 0, path.times[-1], 0
+    iterations, halvings, t_from, parts, jumps = 0, 0, path.times[-1], 0, 0
     failure: StaticDivergence | None = None
     # (t, dq/dt, dlambda/dt) at the path's last equilibrium, once a try left the path: a polynomial through
     # equilibria a whole step apart misses the path by a fixed fraction of any shorter step (Eq. (S4))
@@ -410,7 +412,12 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
         if halvings >= MAX_HALVINGS or t_try == t_from:
             t_from, spent = _jump(model, path, t_to, tolerance, failure)
             iterations += spent
-            halvings, parts, tangent, along, left_path = 0, parts + 1, None, None, False
+            # a jump is no part: a path that slides from contact switch to contact switch may need a jump per
+            # shortest step (MAX_JUMPS), which the bound on parts would cut short
+            jumps += 1
+            if jumps > MAX_JUMPS:
+                raise failure
+            halvings, tangent, along, left_path = 0, None, None, False
             if t_from == t_to:
                 return iterations, None
             continue
@@ -624,6 +631,8 @@ def _along_path(model, path: _History, t_out: float, tolerance: float, max_itera
     where needed, Eq. (S4)) on a copy of the path: for an output that Newton from the interpolated start does not
     solve on the path. Returns ``(q, lambda, iterations)``."""
     before = [point for point in path.side(t_out) if point[0] < t_out]
+    if not before:  # the stretch's equilibria before t_out are no longer kept (many jumps in a row)
+        raise StaticDivergence(f"no equilibrium of the path is kept before the output at t = {t_out:.9g} s")
     start = before[-(path.order + 1) :]
     copy = _Path(start[0][0], start[0][1], start[0][2], path.order)
     for t, q, lam in start[1:]:
@@ -662,7 +671,7 @@ def _on_own_steps(
         nonlocal output_tangent
         while len(qs) < outputs.size and outputs[len(qs)] <= upto + 1e-12 * max(1.0, abs(upto)):
             t_out = float(outputs[len(qs)])
-            exact = [point for point in path.kept if abs(point[0] - t_out) <= 1e-12 * max(1.0, abs(t_out))]
+            exact = [point for point in path.side(t_out) if abs(point[0] - t_out) <= 1e-12 * max(1.0, abs(t_out))]
             if exact:
                 q, lam, count = exact[-1][1], exact[-1][2], 0
             else:
