@@ -233,6 +233,11 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         records=(Recording("section_design"),),
     ),
     Benchmark(
+        "play_design",
+        "the largest play of the PLA Bennett's passive joints that keeps its coupler within 1 mm",
+        records=(Recording("play_design"),),
+    ),
+    Benchmark(
         "linear_tolerance",
         "the 2000-print tolerance study to first order against its full Monte Carlo, at four tolerance levels",
         records=(Recording("linear_tolerance", rows_by="level", rows_name="levels"),),

@@ -1,12 +1,13 @@
-"""``python -m ffrf design DESIGN.toml --out DIR``: the lightest section of a linkage's links that keeps its coupler
-within a bound of the ideal path (:mod:`ffrf.scenes.section_design`), then the designed linkage run and verified as
-``python -m ffrf run`` does.
+"""``python -m ffrf design DESIGN.toml --out DIR``: with a ``[design]`` table, the lightest section of a linkage's
+links that keeps its coupler within a bound of the ideal path (:mod:`ffrf.scenes.section_design`); with a ``[play]``
+table, the largest play of its passive joints that does (:mod:`ffrf.scenes.play_design`); then the designed linkage
+run and verified as ``python -m ffrf run`` does.
 
-Writes ``progress.json`` after every SLSQP iteration (what is kept if the design stops), ``design.json`` (the
-problem, every design evaluated, the start and the optimum, SLSQP's end, the KKT residual), ``designed.toml`` (the
-linkage file of the optimum) and, in ``check/``, the designed linkage's own run; the exit status is that run's (0
-only when it verified itself), or 1 when the optimum is not accepted (no design met the bound, or its KKT residual
-is above :data:`~ffrf.scenes.section_design.KKT_TOLERANCE`).
+Writes ``progress.json`` after every SLSQP iteration or play run (what is kept if the design stops), ``design.json``
+(the problem, every design evaluated, the answer and, for a section, SLSQP's end and the KKT residual),
+``designed.toml`` (the linkage file of the answer) and, in ``check/``, the designed linkage's own run; the exit status
+is that run's (0 only when it verified itself), or 1 when there is no accepted answer (no design met the bound, or a
+section's KKT residual is above :data:`~ffrf.scenes.section_design.KKT_TOLERANCE`).
 """
 
 from __future__ import annotations
@@ -22,19 +23,27 @@ from ffrf.cli.arguments import output_folder
 from ffrf.cli.report import run_and_report
 from ffrf.errors import SceneError
 from ffrf.model import load
+from ffrf.scenes.play_design import (
+    PlayPoint,
+    PlayProblem,
+    evaluate_play,
+    largest_play,
+    load_play_design,
+    played_document,
+)
 from ffrf.scenes.scene_toml import scene_toml
 from ffrf.scenes.section_design import DesignPoint, SectionDesign, designed_document, load_design, optimise_section
 
 __all__ = ["HELP", "configure", "run"]
 
 HELP = (
-    "find the lightest link section that keeps the coupler on its path and, if asked, a lowest vibration frequency "
-    "(a design file: linkage + [design])"
+    "find the lightest link section that keeps the coupler on its path (a linkage file + [design]), or the largest "
+    "play of its joints that does (+ [play])"
 )
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("design", type=Path, help="design file (TOML): a linkage file with a [design] table")
+    parser.add_argument("design", type=Path, help="design file (TOML): a linkage file with a [design] or [play] table")
     parser.add_argument("--out", type=Path, required=True, help="output directory")
 
 
@@ -43,6 +52,10 @@ def run(args: argparse.Namespace) -> int:
     if not args.design.is_file():
         raise SceneError(f"design file {args.design} not found")
     document = tomllib.loads(args.design.read_text())
+    if ("design" in document) == ("play" in document):
+        raise SceneError(f"{args.design}: give either a [design] table (a section) or a [play] table (joint play)")
+    if "play" in document:
+        return _design_play(document, args, started)
     loop, options, problem = load_design(document, str(args.design))
     out = output_folder(args.out)
     print(f"Designing {options.name}: {', '.join(problem.parameters)} for the least mass", file=sys.stderr)
@@ -80,8 +93,7 @@ def run(args: argparse.Namespace) -> int:
         f"--out {out / 'exudyn'}",
         file=sys.stderr,
     )
-    model = load(designed)
-    status = run_and_report(model, out / "check", model.name, time.perf_counter(), model.settings() | {"vtk_every": 0})
+    status = _check(designed, out)
     if not design.success:
         print(
             f"error: the design is not accepted (KKT residual {design.kkt_residual:.2g}; SLSQP: {design.message})",
@@ -89,6 +101,97 @@ def run(args: argparse.Namespace) -> int:
         )
         return max(status, 1)
     return status
+
+
+def _check(designed: Path, out: Path) -> int:
+    """Run the designed linkage file as ``python -m ffrf run`` does, into ``out/check``; its exit status."""
+    model = load(designed)
+    return run_and_report(model, out / "check", model.name, time.perf_counter(), model.settings() | {"vtk_every": 0})
+
+
+def _design_play(document: dict, args: argparse.Namespace, started: float) -> int:
+    loop, options, problem = load_play_design(document, str(args.design))
+    out = output_folder(args.out)
+    print(
+        f"Designing {options.name}: the largest radial play of its passive joints (0..{1e3 * problem.largest:g} mm) "
+        f"with the coupler within {1e3 * problem.max_deviation:g} mm",
+        file=sys.stderr,
+    )
+    evaluated: list[dict] = []
+
+    def progress(point: PlayPoint) -> None:
+        evaluated.append(_play_point(point, problem))
+        (out / "progress.json").write_text(json.dumps(evaluated, indent=2) + "\n")  # kept if the design stops
+        end = "" if point.stopped is None else f", stopped: {point.stopped}"
+        print(
+            f"play {1e3 * point.radial:.4g} mm: largest deviation {1e3 * point.max_deviation:.4f} mm (bound "
+            f"{1e3 * problem.max_deviation:.4g} mm), verified {point.verified}{end} -> "
+            f"{'meets' if point.meets(problem) else 'misses'} ({point.seconds:.0f} s)",
+            file=sys.stderr,
+        )
+
+    design = largest_play(problem, lambda radial: evaluate_play(loop, options, problem, radial), progress)
+    summary = {
+        "problem": {
+            "max_deviation_mm": 1e3 * problem.max_deviation,
+            "largest_mm": 1e3 * problem.largest,
+            "resolution_mm": 1e3 * problem.resolution,
+            "grid": problem.grid,
+            "outputs": problem.outputs,
+        },
+        "largest": None if design.largest is None else _play_point(design.largest, problem),
+        "failing": None if design.failing is None else _play_point(design.failing, problem),
+        "monotone": design.monotone,
+        "evaluated": [_play_point(p, problem) for p in design.points],
+        "seconds": time.perf_counter() - started,
+    }
+    (out / "design.json").write_text(json.dumps(summary, indent=2) + "\n")
+    designed = out / "designed.toml"
+    designed.write_text(scene_toml(played_document(document, design, options)))
+    if not design.monotone:
+        print(
+            "warning: the bound is met again above a play that misses it; the answer is the largest play below the "
+            "first that misses (see design.json's evaluated plays)",
+            file=sys.stderr,
+        )
+    if design.largest is None:
+        print(f"error: even ideal joints miss the bound ({_miss(design.failing)}); nothing designed", file=sys.stderr)
+        return 1
+    above = (
+        f"the largest considered; {1e3 * problem.largest:g} mm meets it"
+        if design.failing is None
+        else f"{1e3 * design.failing.radial:.4g} mm misses it: {_miss(design.failing)}"
+    )
+    print(
+        f"{options.name}: the coupler stays within {1e3 * problem.max_deviation:g} mm up to a play of "
+        f"{1e3 * design.largest.radial:.4g} mm ({above}) -> {designed}",
+        file=sys.stderr,
+    )
+    return _check(designed, out)
+
+
+def _miss(point: PlayPoint | None) -> str:
+    """Why a play's run missed the bound, in a few words."""
+    if point is None:
+        return ""
+    if point.stopped is not None:
+        return f"its path stopped: {point.stopped}"
+    if not point.verified:
+        return "its run did not verify itself"
+    return f"largest deviation {1e3 * point.max_deviation:.4f} mm"
+
+
+def _play_point(point: PlayPoint, problem: PlayProblem) -> dict:
+    return {
+        "radial_mm": 1e3 * point.radial,
+        "max_deviation_mm": 1e3 * point.max_deviation,
+        "assembly_max_von_mises_mpa": 1e-6 * point.assembly_stress,
+        "max_pin_eccentricity_mm": 1e3 * point.max_eccentricity,
+        "verified": point.verified,
+        "stopped": point.stopped,
+        "meets": point.meets(problem),
+        "seconds": point.seconds,
+    }
 
 
 def _point(point: DesignPoint, parameters: tuple[str, ...]) -> dict:

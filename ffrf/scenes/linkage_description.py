@@ -25,7 +25,7 @@ rotation of side 1 against side 0 (Eq. (J3)), which is :math:`\varphi_i` of Eq. 
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -51,6 +51,7 @@ __all__ = [
     "seated_joint_points",
     "start_pose",
     "checked_tool_link",
+    "with_radial_play",
 ]
 
 #: Materials of the built-in linkage variants (as the paper's Bennett variants).
@@ -302,6 +303,15 @@ def checked_tool_link(loop: SingleLoop, options: LinkageOptions) -> int:
     if not 0 < tool < n:
         raise ValueError(f"tool_link must be a moving link 1..{n - 1}, got {tool}")
     return tool
+
+
+def with_radial_play(options: LinkageOptions, radial_mm: float) -> LinkageOptions:
+    """``options`` with ``radial_mm`` of radial play in every passive joint (the rest of its ``joint_play`` kept;
+    pins as long as the housings unless it says otherwise); ideal joints at zero."""
+    if radial_mm == 0.0:
+        return replace(options, joint_play=None)
+    play = {"pin_length_mm": 1e3 * options.design.housing_length, **(options.joint_play or {})}
+    return replace(options, joint_play=play | {"radial_mm": float(radial_mm)})
 
 
 def linkage_description(

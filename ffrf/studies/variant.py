@@ -32,7 +32,7 @@ from typing import Any
 
 from ffrf.errors import AssemblyDivergence, FEInputError, NewtonDivergence, StaticDivergence
 from ffrf.output.result import Result
-from ffrf.scenes.linkage_description import BoreError, LinkageOptions
+from ffrf.scenes.linkage_description import BoreError, LinkageOptions, with_radial_play
 from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
@@ -110,18 +110,12 @@ def _with_bore_errors(
     return tuple(by_bore.values())
 
 
-def _with_play(play: dict | None, radial_mm: float) -> dict | None:
-    """The base's ``clearance`` table (mm) with the radial play ``radial_mm``; ``None`` (ideal joints) at zero."""
-    if radial_mm == 0.0:
-        return None
-    return {**(play or {}), "radial_mm": radial_mm}
-
-
 def variant_options(study: Study, values: dict[str, float]) -> tuple[Any, LinkageOptions, dict]:
     """The loop (``None``: a named base), the linkage options and run settings of one variant."""
     loop, options, run = _base_options(study)
     material, design, changes = options.material, options.design, dict[str, Any]()
     added: dict[tuple[int, int], dict[str, float]] = {}
+    play: float | None = None
     for p in study.parameters:
         x = values[p.name]
         if p.target in BORE_FIELDS:
@@ -141,11 +135,10 @@ def variant_options(study: Study, values: dict[str, float]) -> tuple[Any, Linkag
         elif p.target == "modes":
             changes["n_modes"] = int(round(x))
         elif p.target == "radial_clearance_mm":
-            changes["joint_play"] = _with_play(options.joint_play, x)
-    if "joint_play" in changes and changes["joint_play"] is not None:  # pins as long as the (varied) housings
-        changes["joint_play"].setdefault("pin_length_mm", 1e3 * design.housing_length)
+            play = x
     errors = _with_bore_errors(tuple(options.bore_errors), added)
-    return loop, replace(options, material=material, design=design, bore_errors=errors, **changes), run
+    varied = replace(options, material=material, design=design, bore_errors=errors, **changes)
+    return loop, varied if play is None else with_radial_play(varied, play), run  # pins as long as varied housings
 
 
 def build_variant(study: Study, values: dict[str, float], cache: SceneCache | None = None) -> tuple[LinkageScene, dict]:
