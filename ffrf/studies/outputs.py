@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["OUTPUTS", "STABILITY_OUTPUTS", "output_names"]
+__all__ = ["ASSEMBLY_OUTPUTS", "OUTPUTS", "STABILITY_OUTPUTS", "WHERE", "is_assembly_output", "output_names"]
 
 #: Outputs of every linkage; the assembly stresses add one column per link (:func:`output_names`).
 OUTPUTS = (
@@ -12,10 +12,21 @@ OUTPUTS = (
     "assembly_strain_energy_J",
 )
 
+#: Outputs of the assembled state, which a print that assembled has even where its path stopped later.
+ASSEMBLY_OUTPUTS = ("assembly_strain_energy_J",)
+#: The drive angles (deg, the drive sensor's) where each print's largest coupler deviation and largest |driving
+#: torque| occur, and where its path ended (its end, or where it stopped): where to look, not outputs to rank by.
+WHERE = ("max_coupler_deviation_at_deg", "max_abs_driving_torque_at_deg", "last_drive_angle_deg")
+
 
 #: Outputs of a study with stability monitoring: the snaps of the path, the energy they release (J, summed) and the
 #: lowest vibration frequency over the equilibria (Hz; NaN where one is unstable).
 STABILITY_OUTPUTS = ("snaps", "snap_energy_released_J", "min_frequency_hz")
+
+
+def is_assembly_output(name: str) -> bool:
+    """Whether the output ``name`` is of the assembled state (:data:`ASSEMBLY_OUTPUTS`, the links' stresses)."""
+    return name in ASSEMBLY_OUTPUTS or name.startswith("max_assembly_stress_link")
 
 
 def output_names(n_links: int, stability: bool = False) -> tuple[str, ...]:

@@ -1,15 +1,20 @@
 """The analysis of a finished (or partly finished) study: percentiles, distributions, sensitivities, report.md.
 
 :func:`write_report` reads ``DIR/study.json`` and the rows (:func:`ffrf.studies.runner.read_rows`) and writes
-``DIR/report.md`` with ``DIR/figures/*.png`` and the numbers in ``DIR/analysis.json``: per output the
-percentile table of its ok variants, a histogram with the empirical CDF, the standardised regression
-coefficients on all ok rows, the first-order and total Sobol indices of a Saltelli design
-(:mod:`ffrf.studies.sensitivity`), scatter plots of the output against the most influential parameters, and for a
-grid of two or more parameters a contour plot over the first two (the mean over the others).
+``DIR/report.md`` with ``DIR/figures/*.png`` and the numbers in ``DIR/analysis.json`` (SI units; the report shows
+mm, MPa, N mm and mJ): per output the percentile table of its ok variants (of every assembled variant for the
+assembly's outputs, whose path may have stopped later), how its p50 and p95 settle as variants are added, a
+histogram with the empirical CDF, the standardised regression coefficients on all ok rows, the first-order and
+total Sobol indices of a Saltelli design (:mod:`ffrf.studies.sensitivity`), the parameters' contributions, scatter
+plots of the output against the most influential parameters, and for a grid of two or more parameters a contour
+plot over the first two (the mean over the others); for the print shop (:mod:`ffrf.studies.prints`) the prints
+that did not finish with their parameters and reasons (also ``DIR/unfinished.csv``), the worst prints, and the
+drive angles where the maxima occur.
 """
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
@@ -17,6 +22,8 @@ import numpy as np
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
+from ffrf.studies.outputs import WHERE, is_assembly_output
+from ffrf.studies.prints import CONVERGING, convergence, display, unfinished_prints, worst_prints
 from ffrf.studies.runner import read_rows
 from ffrf.studies.sensitivity import given_data_indices, sobol_indices, standardised_regression
 from ffrf.studies.statistics import exceedance, percentile_interval
@@ -30,6 +37,8 @@ TOP_PARAMETERS = 3
 LOW_R2 = 0.5
 #: A Sobol index whose 95 % interval is wider than this either way is too uncertain to rank by: the report says so.
 WIDE_INDEX = 0.2
+#: The report lists this many unfinished prints (``unfinished.csv`` all of them).
+UNFINISHED_SHOWN = 20
 #: Designs of random rows, whose first-order indices come from the rows as given (RBD-FAST).
 RANDOM_DESIGNS = ("monte_carlo", "lhs", "sobol")
 
@@ -87,11 +96,13 @@ def analyse(directory: str | Path) -> dict:
             f"the study is unfinished: {len(ok)} of its {variants} variants have a row, and every number here is of "
             "those (a Saltelli design's indices of its complete sample rows only)"
         )
+    assembled = columns["assembles"] == True  # noqa: E712 -- an object array with None
     for output in study["outputs"]:
-        y = np.where(ok, columns[output].astype(float), np.nan)
+        y = np.where(assembled if is_assembly_output(output) else ok, columns[output].astype(float), np.nan)
         regression = standardised_regression(x, y)
         entry = {
             "percentiles": percentile_table(y),
+            "convergence": convergence(columns, y),
             "src": dict(zip(names, regression.beta.tolist(), strict=True)),
             "src_interval": {
                 n: [lo, hi] for n, lo, hi in zip(names, regression.low.tolist(), regression.high.tolist(), strict=True)
@@ -125,14 +136,19 @@ def analyse(directory: str | Path) -> dict:
         output: exceedance(np.where(ok, columns[output].astype(float), np.nan), above)
         for output, above in study.get("limits", [])
     }
+    worst = {o: worst_prints(columns, names, o) for o in ("max_coupler_deviation_m", "max_abs_driving_torque_Nm")}
+    where = {w: percentile_table(np.where(ok, columns[w].astype(float), np.nan)) for w in WHERE if w in columns}
     return {
         "study": study,
         "warnings": warnings,
         "limits": limits,
+        "unfinished": unfinished_prints(columns, names),
+        "worst": worst,
+        "where": where,
         "rows": int(len(ok)),
         "ok": int(ok.sum()),
         "failed": failures,
-        "assembles": int(np.sum(columns["assembles"] == True)),  # noqa: E712 -- an object array with None
+        "assembles": int(np.sum(assembled)),
         "wall_time_s": percentile_table(columns["wall_time_s"].astype(float)),
         "outputs": outputs,
     }
@@ -206,7 +222,7 @@ def _contour_figure(x1: NDArray, x2: NDArray, y: NDArray, labels: tuple[str, str
 def _influence(entry: dict, names: list[str]) -> list[str]:
     """Parameters by influence: total Sobol index where there is one, else the given-data first-order index, else
     ``|SRC|``."""
-    score = entry.get("sobol_total", entry.get("given_data_first", {n: abs(entry["src"][n]) for n in names}))
+    score = _contributions(entry, names)[1]
     return sorted(names, key=lambda n: -np.nan_to_num(score[n], nan=-1.0))
 
 
@@ -222,6 +238,116 @@ def _interval(table: dict, level: int) -> str:
     return f"[{low}, {high}]"
 
 
+def _scaled(table: dict, factor: float) -> dict:
+    """A percentile table in the report's unit (``factor`` from SI)."""
+    out = {k: factor * v if isinstance(v, float) and k != "n" else v for k, v in table.items()}
+    if "intervals" in table:
+        out["intervals"] = {
+            k: [None if x is None else factor * x for x in pair] for k, pair in table["intervals"].items()
+        }
+    return out
+
+
+def _print_shop(analysis: dict, names: list[str]) -> list[str]:
+    """The report's lines on the prints one by one (:mod:`ffrf.studies.prints`)."""
+    lines = ["## Prints that did not finish", ""]
+    unfinished = analysis["unfinished"]
+    if not unfinished:
+        lines += ["Every print ran to the end of its path.", ""]
+    else:
+        lines += [
+            f"{len(unfinished)} prints (all in `unfinished.csv`; parameters in the study's units):",
+            "",
+        ]
+        rows = [
+            [
+                p["id"],
+                {True: "yes", False: "no", None: "-"}[p["assembles"]],
+                "-" if p["last_drive_angle_deg"] is None else f"{p['last_drive_angle_deg']:.1f}",
+                p["reason"][:120].replace("|", "/"),
+            ]
+            + [f"{p['parameters'][n]:.4g}" for n in names]
+            for p in unfinished[:UNFINISHED_SHOWN]
+        ]
+        lines += _table(["id", "assembled", "path ended at (deg)", "reason", *names], rows)
+        more = len(unfinished) - UNFINISHED_SHOWN
+        lines += ([f"... and {more} more in `unfinished.csv`."] if more > 0 else []) + [""]
+    lines += ["## The worst prints and where their maxima occur", ""]
+    where = analysis.get("where", {})
+    for output, worst in analysis["worst"].items():
+        if not worst:
+            continue
+        label, unit, _ = display(output)
+        angles = where.get(f"{label}_at_deg", {})
+        if angles.get("n"):
+            lines.append(
+                f"{label}: over the ok prints its maximum occurs between {angles['p5']:.1f} and "
+                f"{angles['p95']:.1f} deg of drive (p5 to p95; median {angles['p50']:.1f} deg)."
+            )
+        rows = [
+            [p["id"], f"{p['value']:.4g}", "-" if p["at_deg"] is None else f"{p['at_deg']:.1f}"]
+            + [f"{p['parameters'][n]:.4g}" for n in names]
+            for p in worst
+        ]
+        lines += [""] + _table(["id", f"{label} ({unit})", "at (deg)", *names], rows) + [""]
+    return lines
+
+
+def _write_unfinished(unfinished: list[dict], names: list[str], path: Path) -> None:
+    """Every print that did not finish, one line each: id, assembled, drive angle where it ended, parameters,
+    reason."""
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["id", "assembles", "last_drive_angle_deg", *names, "reason"])
+        for p in unfinished:
+            writer.writerow(
+                [p["id"], p["assembles"], p["last_drive_angle_deg"], *(p["parameters"][n] for n in names), p["reason"]]
+            )
+
+
+def _convergence_figure(points: list[dict], name: str, path: Path) -> None:
+    """The output's p50 and p95 with their 95 % intervals against the number of variants they are of."""
+    label, unit, factor = display(name)
+    figure = Figure(figsize=(5, 3.5))
+    ax = figure.subplots()
+    n = np.array([p["n"] for p in points])
+    for level in CONVERGING:
+        value = factor * np.array([p[f"p{level}"] for p in points])
+        bounds = np.array([[np.nan if x is None else factor * x for x in p[f"p{level}_interval"]] for p in points])
+        ax.plot(n, value, "o-", label=f"p{level}")
+        ax.fill_between(n, bounds[:, 0], bounds[:, 1], alpha=0.2)
+    ax.set_xlabel("variants")
+    ax.set_ylabel(f"{label} ({unit})" if unit else label)
+    ax.legend()
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+
+
+def _contributions_figure(entry: dict, names: list[str], name: str, path: Path) -> None:
+    """The parameters by contribution (:func:`_influence`'s measure, its 95 % interval as error bars), largest on
+    top: a tornado chart."""
+    kind, values, half = _contributions(entry, names)
+    ranked = _influence(entry, names)[::-1]
+    figure = Figure(figsize=(5, 0.4 * len(names) + 1.2))
+    ax = figure.subplots()
+    ax.barh(ranked, [values[n] for n in ranked], xerr=[half.get(n, 0.0) for n in ranked])
+    ax.set_xlabel(f"{kind} of {display(name)[0]}")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+
+
+def _contributions(entry: dict, names: list[str]) -> tuple[str, dict[str, float], dict[str, float]]:
+    """What ranks the parameters (total Sobol index, given-data first-order index, or |SRC|) and its intervals'
+    half widths."""
+    if "sobol_total" in entry:
+        return "total Sobol index", entry["sobol_total"], entry["sobol_total_conf"]
+    if "given_data_first" in entry:
+        return "first-order index (given data)", entry["given_data_first"], entry["given_data_first_conf"]
+    src = {n: abs(entry["src"][n]) for n in names}
+    half = {n: 0.5 * (entry["src_interval"][n][1] - entry["src_interval"][n][0]) for n in names}
+    return "|standardised regression coefficient|", src, half
+
+
 def _table(header: list[str], rows: list[list[str]]) -> list[str]:
     return ["| " + " | ".join(header) + " |", "|" + " --- |" * len(header)] + [
         "| " + " | ".join(r) + " |" for r in rows
@@ -233,6 +359,9 @@ def write_report(directory: str | Path) -> Path:
     directory = Path(directory)
     analysis = analyse(directory)
     (directory / "analysis.json").write_text(json.dumps(analysis, indent=2))
+    _write_unfinished(
+        analysis["unfinished"], [p["name"] for p in analysis["study"]["parameters"]], directory / "unfinished.csv"
+    )
     figures = directory / "figures"
     figures.mkdir(exist_ok=True)
     columns = _columns(directory)
@@ -249,23 +378,33 @@ def write_report(directory: str | Path) -> Path:
     ]
     if analysis["warnings"]:
         lines += ["## Warnings", ""] + [f"- {warning}" for warning in analysis["warnings"]] + [""]
-    lines += ["## Percentiles of the ok variants", ""]
-    header = ["output", "n"] + [f"p{p}" for p in PERCENTILES] + ["p50, 95 % interval", "p95, 95 % interval"]
-    rows = [
-        [o, str(e["percentiles"].get("n", 0))]
-        + [f"{e['percentiles'].get(f'p{p}', float('nan')):.4g}" for p in PERCENTILES]
-        + [_interval(e["percentiles"], level) for level in (50, 95)]
-        for o, e in analysis["outputs"].items()
+    lines += [
+        "## Percentiles",
+        "",
+        "Of the ok variants (the assembly's outputs: of every assembled variant); 95 % intervals distribution-free.",
+        "",
     ]
+    header = ["output", "unit", "n"] + [f"p{p}" for p in PERCENTILES] + ["p50, 95 % interval", "p95, 95 % interval"]
+    rows = []
+    for o, e in analysis["outputs"].items():
+        label, unit, factor = display(o)
+        scaled = _scaled(e["percentiles"], factor)
+        rows.append(
+            [label, unit, str(scaled.get("n", 0))]
+            + [f"{scaled.get(f'p{p}', float('nan')):.4g}" for p in PERCENTILES]
+            + [_interval(scaled, level) for level in (50, 95)]
+        )
     lines += _table(header, rows) + [""]
     for output, limit in analysis.get("limits", {}).items():
         if limit["n"] == 0:
             continue
+        label, unit, factor = display(output)
         lines.append(
-            f"Limit {output} <= {limit['above']:.4g}: {limit['exceeding']} of {limit['n']} ok prints exceed it; yield "
-            f"{100 * limit['yield']:.4g} % (95 % interval {100 * limit['yield_low']:.4g} to "
+            f"Limit {label} <= {factor * limit['above']:.4g} {unit}: {limit['exceeding']} of {limit['n']} ok prints "
+            f"exceed it; yield {100 * limit['yield']:.4g} % (95 % interval {100 * limit['yield_low']:.4g} to "
             f"{100 * limit['yield_high']:.4g} %); failed prints are not counted."
         )
+    lines += [""] + _print_shop(analysis, names)
     lines += ["", "## Sensitivities", ""]
     for output, entry in analysis["outputs"].items():
         lines += [
@@ -294,9 +433,14 @@ def write_report(directory: str | Path) -> Path:
         if np.isfinite(y).sum() < 2:
             continue
         _distribution_figure(y, output, figures / f"{output}_distribution.png")
+        _convergence_figure(entry["convergence"], output, figures / f"{output}_convergence.png")
+        _contributions_figure(entry, names, output, figures / f"{output}_contributions.png")
         top = _influence(entry, names)[:TOP_PARAMETERS]
         _scatter_figure({n: columns[n].astype(float) for n in top}, y, output, figures / f"{output}_scatter.png")
-        lines += [f"![{output}](figures/{output}_distribution.png)", f"![{output}](figures/{output}_scatter.png)"]
+        lines += [
+            f"![{output}](figures/{output}_{kind}.png)"
+            for kind in ("distribution", "convergence", "contributions", "scatter")
+        ]
         if study["method"] == "grid" and len(names) >= 2:
             x1, x2 = columns[names[0]].astype(float), columns[names[1]].astype(float)
             _contour_figure(x1, x2, y, (names[0], names[1], output), figures / f"{output}_contour.png")

@@ -7,7 +7,8 @@ the outputs (SI, NaN where not computed; :func:`row_outputs` reads them from the
 :class:`~ffrf.output.result.Result`): ``max_coupler_deviation_m`` (same drive angle) and
 ``max_coupler_distance_to_path_m`` (closest point of the ideal curve), ``max_abs_driving_torque_Nm``,
 ``assembly_strain_energy_J`` (all links, assembled state) and ``max_assembly_stress_link{k}_Pa`` (von Mises,
-:mod:`ffrf.output.assembly_stress`), and ``wall_time_s`` (building and running the variant) and ``worker``.
+:mod:`ffrf.output.assembly_stress`), the drive angles of the largest deviation and torque and of the path's end or
+stop (:data:`~ffrf.studies.outputs.WHERE`), and ``wall_time_s`` (building and running the variant) and ``worker``.
 
 **Cheap bore errors.** With ``bore_error_model = "misfit"`` (a study's default) a bore error is modelled on the
 nominal meshes: the link keeps its nominal mesh and bore interface, and only that link's side of the joint takes
@@ -30,6 +31,8 @@ import time
 from dataclasses import replace
 from typing import Any
 
+import numpy as np
+
 from ffrf.errors import AssemblyDivergence, FEInputError, NewtonDivergence, StaticDivergence
 from ffrf.output.result import Result
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, with_radial_play
@@ -37,7 +40,7 @@ from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_cache import SceneCache
-from ffrf.studies.outputs import OUTPUTS, output_names
+from ffrf.studies.outputs import OUTPUTS, WHERE, output_names
 from ffrf.studies.sampling import Variant
 from ffrf.studies.spec import NamedBases, Study
 from ffrf.system.drives import rpm
@@ -58,7 +61,8 @@ log = logging.getLogger(__name__)
 def row_names(study: Study) -> tuple[str, ...]:
     """Every column of a study's rows, in order."""
     head = ("id", "block", "sample", "status", "reason", "assembles")
-    return head + study.parameter_names + output_names(study.n_links, study.stability) + ("wall_time_s", "worker")
+    outputs = output_names(study.n_links, study.stability)
+    return head + study.parameter_names + outputs + WHERE + ("wall_time_s", "worker")
 
 
 def _named(study: Study) -> NamedBases:
@@ -156,9 +160,17 @@ def row_outputs(result: Result | None, n_links: int, path: bool, stability: bool
     ``path``, a path run to its end), the assembly's from ``result.assembly``, the stability's from its metadata.
     NaN where not computed: no result, or a path that stopped; the snaps of a path that stopped count those before
     the stop. A row holds scalars only, so that a study's rows are one table."""
-    out = dict.fromkeys(output_names(n_links, stability), math.nan)
+    out = dict.fromkeys(output_names(n_links, stability) + WHERE, math.nan)
     if result is None:
         return out
+    angle = result.sensors.get("drive_angle")
+    if angle is not None and len(angle):
+        degrees = np.degrees(np.asarray(angle, dtype=float))
+        out["last_drive_angle_deg"] = float(degrees[-1])
+        if path:
+            deviation = np.linalg.norm(result.sensors["coupler_deviation"], axis=1)
+            out["max_coupler_deviation_at_deg"] = float(degrees[np.argmax(deviation)])
+            out["max_abs_driving_torque_at_deg"] = float(degrees[np.argmax(np.abs(result.sensors["driving_torque"]))])
     monitored = result.metadata.get("stability")
     if stability and monitored:
         snaps = monitored.get("snaps", [])

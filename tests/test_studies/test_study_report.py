@@ -5,6 +5,7 @@ Ishigami function, Saltelli et al., Global Sensitivity Analysis: The Primer, 200
 import json
 
 import numpy as np
+import pytest
 
 from ffrf.paper.bennett_scene import STUDY_BASES
 from ffrf.studies.report import analyse, write_report
@@ -83,3 +84,76 @@ def test_an_unfinished_study_says_so_and_a_random_design_gets_given_data_indices
     for name, exact in zip(("x1", "x2", "x3"), (0.3139, 0.4424, 0.0), strict=True):
         value, half = entry["given_data_first"][name], entry["given_data_first_conf"][name]
         assert abs(value - exact) <= half + 0.05, (name, value, half)
+
+
+def test_the_print_shop_report_lists_every_unfinished_print_the_worst_and_where_their_maxima_occur(tmp_path):
+    """A Monte Carlo design of 200 prints whose rows are written here: every 25th print did not assemble (8), every
+    other 10th stopped on its path after assembling (16, their assembly energy kept). The report lists the 24
+    unfinished prints in the design's order with their parameters and reasons (all in unfinished.csv), shows outputs
+    in mm, counts the stopped prints' assembly energy, names the five worst prints by deviation with the drive angle
+    of their maximum, and the percentiles' convergence ends at the percentiles of all ok prints."""
+    parameters = [{"name": "twist", "target": "E", "uniform": {"low": 0.0, "high": 1.0}}]
+    study = study_from_document(
+        {
+            "study": {"method": "monte_carlo", "samples": 200, "seed": 3},
+            "base": {"bennett": "pla"},
+            "parameters": parameters,
+        },
+        bases=STUDY_BASES,
+    )
+    design = study_design(study)
+    rows, stopped, unassembled = [], [], []
+    for v in design:
+        x = v.values["twist"]
+        row = {
+            "id": v.id,
+            "block": v.block,
+            "sample": v.sample,
+            "wall_time_s": 1.0,
+            "status": "ok",
+            "reason": "",
+            "assembles": True,
+            "assembly_strain_energy_J": 1e-3 * x,
+            "last_drive_angle_deg": 270.0,
+        } | v.values
+        if v.sample % 25 == 0:
+            row |= {
+                "status": "failed",
+                "reason": "no assembly: diverged",
+                "assembles": False,
+                "assembly_strain_energy_J": None,
+                "last_drive_angle_deg": None,
+            }
+            unassembled.append(v.id)
+        elif v.sample % 10 == 0:
+            row |= {"status": "failed", "reason": "the run stopped: no equilibrium", "last_drive_angle_deg": 16.0 * x}
+            stopped.append(v.id)
+        else:
+            row |= {OUTPUT: 2e-3 * x, "max_coupler_deviation_at_deg": 90.0 + x}
+        rows.append(row)
+    (tmp_path / "study.json").write_text(json.dumps(_description(study)))
+    _write_batch(rows, row_schema(study), tmp_path)
+    analysis = analyse(tmp_path)
+    unfinished = analysis["unfinished"]
+    by_sample = sorted(design, key=lambda v: v.sample)
+    assert [p["id"] for p in unfinished] == [v.id for v in by_sample if v.id in stopped or v.id in unassembled]
+    assert len(unfinished) == 8 + 16 and len(stopped) == 16
+    first = next(p for p in unfinished if p["id"] in stopped)
+    twist = first["parameters"]["twist"]
+    assert first["assembles"] is True and first["last_drive_angle_deg"] == pytest.approx(16.0 * twist)
+    assert "no equilibrium" in first["reason"]
+    assert analysis["outputs"]["assembly_strain_energy_J"]["percentiles"]["n"] == 200 - 8
+    ok = np.array([v.values["twist"] for v in design if v.id not in stopped and v.id not in unassembled])
+    worst = analysis["worst"]["max_coupler_deviation_m"]
+    np.testing.assert_allclose([p["value"] for p in worst], 2.0 * np.sort(ok)[::-1][:5], rtol=1e-12)  # mm
+    np.testing.assert_allclose([p["at_deg"] for p in worst], 90.0 + np.sort(ok)[::-1][:5], rtol=1e-12)
+    final = analysis["outputs"][OUTPUT]["convergence"][-1]
+    assert final["n"] == ok.size
+    np.testing.assert_allclose([final["p50"], final["p95"]], np.percentile(2e-3 * ok, [50, 95]), rtol=1e-12)
+    report = write_report(tmp_path).read_text()
+    assert "## Prints that did not finish" in report and "24 prints" in report
+    assert f"| max_coupler_deviation | mm | {ok.size} |" in report
+    assert f"{2.0 * ok.max():.4g}" in report  # the worst print in mm
+    lines = (tmp_path / "unfinished.csv").read_text().strip().splitlines()
+    assert len(lines) == 1 + 24 and lines[0].startswith("id,assembles,last_drive_angle_deg,twist,reason")
+    assert (tmp_path / "figures" / f"{OUTPUT}_convergence.png").is_file()
