@@ -34,6 +34,7 @@ def run_row(variant: str, radial_mm: float, h: float, order: int, modes: int, ou
     from ffrf.errors import StaticDivergence
     from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
     from ffrf.scenes.linkage_run import run_linkage
+    from identification.circle_fit import IdentificationError
     from identification.loop import identify_dh
 
     clock = time.perf_counter()
@@ -57,7 +58,12 @@ def run_row(variant: str, radial_mm: float, h: float, order: int, modes: int, ou
         raise RuntimeError(f"the {variant} run reports no assembly stress")
     sensors = result.sensors
     tracked = {k: np.stack([sensors[f"link{k}_node{j}"] for j in range(3)], axis=1) for k in (1, 2, 3)}
-    loop = identify_dh(tracked)
+    try:
+        loop = identify_dh(tracked)
+    except IdentificationError as error:  # a path that stopped early turns the links too little to fit their axes
+        loop, unidentified = None, str(error)
+    else:
+        unidentified = None
     loose = [j.name for j in scene.loose_joints]
     eccentricity = max((float(np.max(sensors[f"{name}_eccentricity"])) for name in loose), default=0.0)
     penetration = max((float(np.max(sensors[f"{name}_contacts"][:, 0, :2])) for name in loose), default=0.0)
@@ -74,10 +80,11 @@ def run_row(variant: str, radial_mm: float, h: float, order: int, modes: int, ou
         "assembly_strain_energy_mJ": 1e3 * assembly.as_dict()["strain_energy_j"],
         "max_pin_eccentricity_mm": 1e3 * eccentricity,
         "max_penetration_over_play": penetration / (1e-3 * radial_mm) if radial_mm > 0.0 else None,
-        "identified_a_mm": (1e3 * loop.dh.a).tolist(),
-        "identified_alpha_deg": np.degrees(loop.dh.alpha).tolist(),
-        "identified_d_mm": (1e3 * loop.dh.d).tolist(),
-        "identified_axis3_twist_deviation_deg": float(np.degrees(loop.axis3_twist_deviation)),
+        "identified_a_mm": None if loop is None else (1e3 * loop.dh.a).tolist(),
+        "identified_alpha_deg": None if loop is None else np.degrees(loop.dh.alpha).tolist(),
+        "identified_d_mm": None if loop is None else (1e3 * loop.dh.d).tolist(),
+        "identified_axis3_twist_deviation_deg": None if loop is None else float(np.degrees(loop.axis3_twist_deviation)),
+        "unidentified": unidentified,
         "energy_balance_relative": summary["energy_balance_relative"],
         "verified": None if verification is None else bool(verification.verified),
         "stopped": stopped,
@@ -101,8 +108,8 @@ def table(rows: list[dict]) -> str:
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
-        alpha = ", ".join(f"{a:.3f}" for a in r["identified_alpha_deg"])
-        d = ", ".join(f"{x:.3f}" for x in r["identified_d_mm"])
+        alpha = ", ".join(f"{a:.3f}" for a in r["identified_alpha_deg"] or []) or "-"
+        d = ", ".join(f"{x:.3f}" for x in r["identified_d_mm"] or []) or "-"
         lines.append(
             f"| {r['variant']} | {r['radial_mm']:g} | {r['max_coupler_deviation_mm']:.4g} "
             f"| {r['max_distance_to_path_mm']:.4g} | {r['assembly_max_von_mises_MPa']:.3g} "

@@ -141,8 +141,8 @@ def table_clearance_variants() -> str:
                     f"{r['assembly_strain_energy_mJ']:.3g}",
                     f"{r['max_abs_driving_torque_Nmm']:.2f}",
                     f"{r['max_pin_eccentricity_mm']:.4f}",
-                    ", ".join(f"{a:.2f}" for a in r["identified_alpha_deg"]),
-                    ", ".join(f"{d:.2f}" for d in r["identified_d_mm"]),
+                    ", ".join(f"{a:.2f}" for a in r["identified_alpha_deg"] or []) or "-",
+                    ", ".join(f"{d:.2f}" for d in r["identified_d_mm"] or []) or "-",
                     verdict,
                 ]
             )

@@ -216,8 +216,10 @@ def run_linkage(
         values["stability_squared_frequencies"] = np.array(
             [s.squared_frequencies for s in stability_along(scene.system, times, q, lam, count=3)]
         )
+    # the scene's play table is kept as ``joint_play``: ``clearance`` is the links' clearance (Result.add_clearance)
+    settings = {("joint_play" if k == "clearance" else k): v for k, v in scene.settings.items()}
     metadata = dict(
-        scene.settings,
+        settings,
         mode=mode,
         quasi_static_ratio=ratio,
         inertia_number=inertia_number(scene),

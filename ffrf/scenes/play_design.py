@@ -42,7 +42,8 @@ __all__ = [
 
 #: A design file's ``[play]`` table: the bound on the coupler's deviation (in the linkage's ``unit``), the largest
 #: radial play considered and the resolution of the answer (mm, as a ``clearance`` table's), the number of even
-#: intervals of the first scan, and the poses of each revolution.
+#: intervals of the first scan, and the poses of each revolution (default the linkage's own ``outputs``: a run
+#: keeps its energy books at its outputs, and the drive's work across a pin's jump needs them dense to close).
 PLAY = {
     "max_deviation": Key("number", True, positive),
     "largest_mm": Key("number", True, positive),
@@ -186,7 +187,7 @@ def load_play_design(document: dict, where: str = "design") -> tuple[SingleLoop,
             largest,
             1e-3 * float(spec.get("resolution_mm", 1e3 * largest / 32.0)),
             int(spec.get("grid", 4)),
-            int(spec.get("outputs", 37)),
+            int(spec.get("outputs", options.outputs)),
         )
     except SceneError as error:
         raise SceneError(f"{where}, {error}") from error

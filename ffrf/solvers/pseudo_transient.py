@@ -91,7 +91,9 @@ def settle(
         off = np.max(np.abs(gap), initial=0.0)
         projecting = off > tolerance and np.isfinite(size_new) and np.max(np.abs(gap_new), initial=0.0) < off
         if conservative:  # every force has a potential: a step may not raise it (a trust region in the metric M)
-            rejected = not energy_new <= energy + ENERGY_ROUNDOFF * abs(energy)
+            # unless it halves the residual: near the equilibrium a Newton step changes the energy by less than its
+            # sum's round-off, and a pin that the step moves onto its bore raises it a little on the way
+            rejected = not energy_new <= energy + ENERGY_ROUNDOFF * abs(energy) and not size_new < 0.5 * size
         else:
             rejected = size_new > 2.0 * size and not energy_new < energy
         if not projecting and rejected:

@@ -155,3 +155,16 @@ def test_a_loose_bennett_runs_dynamically_and_its_energy_books_close_with_the_co
     path.write_text(dynamic.replace("revolutions = 0.05", "revolutions = 0.1").replace("outputs = 5", "outputs = 41"))
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
     assert "verified: true" in capsys.readouterr().out
+
+
+def test_a_loose_linkages_play_and_its_links_clearance_are_kept_apart_in_the_metadata():
+    """The ``[scene] clearance`` (the pins' play) is the run's ``joint_play``; ``clearance`` is the links' clearance
+    along the rigid motion (a loose linkage that checks it crashed on the name before)."""
+    from ffrf.scenes.linkage_file import load_linkage
+    from ffrf.scenes.linkage_run import run_linkage
+
+    scene = load_linkage(tomllib.loads(LOOSE_BENNETT.replace("check_clearance = false\n", "")))
+    result = run_linkage(scene, mode="quasi_static", n_outputs=3, t_end=0.5)
+    assert result.metadata["joint_play"] == {"radial_mm": 0.1, "pin_length_mm": 12.0}
+    clearance = result.add_clearance()
+    assert clearance is not None and "summary" in clearance and len(clearance["pairs"]) == 6
