@@ -238,6 +238,11 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         records=(Recording("play_design"),),
     ),
     Benchmark(
+        "study_stability",
+        "stability monitoring in a study (its default): how the 2000-print study's first prints end, and the cost",
+        records=(Recording("study_stability"),),
+    ),
+    Benchmark(
         "linear_tolerance",
         "the 2000-print tolerance study to first order against its full Monte Carlo, at four tolerance levels",
         records=(Recording("linear_tolerance", rows_by="level", rows_name="levels"),),

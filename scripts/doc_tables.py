@@ -150,6 +150,31 @@ def table_clearance_variants() -> str:
     return "\n".join(lines + ["", _source("clearance_variants")])
 
 
+def table_play_design() -> str:
+    """Every play the PLA Bennett's play design ran (``bench/play_design.py``), in the order of the plays."""
+    data = _results("play_design")
+    lines = _header("radial play (mm)", "largest deviation (mm)", "assembly max von Mises (MPa)", "run", "bound")
+    for r in sorted((data or {}).get("evaluated", []), key=lambda r: r["radial_mm"]):
+        if r["stopped"]:
+            run = "stopped: " + r["stopped"].split(":")[0]
+        else:
+            why = [reason.split()[0] for reason in r.get("not_verified_because", [])]
+            verdict = "verified" if r["verified"] else "not verified" + (f" ({', '.join(why)})" if why else "")
+            run = f"{verdict}, {r['seconds']:.0f} s"
+        lines.append(
+            _row(
+                [
+                    f"{r['radial_mm']:.4g}",
+                    f"{r['max_deviation_mm']:.4g}",
+                    f"{r['assembly_max_von_mises_mpa']:.3g}",
+                    run,
+                    "meets" if r["meets"] else "misses",
+                ]
+            )
+        )
+    return "\n".join(lines + ["", _source("play_design")])
+
+
 def table_assembly_stress_per_link() -> str:
     """Largest von Mises stress per link, default discretisation (paper's in brackets)."""
     default, paper = _results("bennett_variants_default"), _results("bennett_variants_paper")

@@ -123,6 +123,7 @@ def _design_play(document: dict, args: argparse.Namespace, started: float) -> in
         evaluated.append(_play_point(point, problem))
         (out / "progress.json").write_text(json.dumps(evaluated, indent=2) + "\n")  # kept if the design stops
         end = "" if point.stopped is None else f", stopped: {point.stopped}"
+        end += "" if point.verified or not point.reasons else f" ({point.reasons[0]})"
         print(
             f"play {1e3 * point.radial:.4g} mm: largest deviation {1e3 * point.max_deviation:.4f} mm (bound "
             f"{1e3 * problem.max_deviation:.4g} mm), verified {point.verified}{end} -> "
@@ -177,7 +178,7 @@ def _miss(point: PlayPoint | None) -> str:
     if point.stopped is not None:
         return f"its path stopped: {point.stopped}"
     if not point.verified:
-        return "its run did not verify itself"
+        return "its run did not verify itself" + (f": {point.reasons[0]}" if point.reasons else "")
     return f"largest deviation {1e3 * point.max_deviation:.4f} mm"
 
 
@@ -188,6 +189,7 @@ def _play_point(point: PlayPoint, problem: PlayProblem) -> dict:
         "assembly_max_von_mises_mpa": 1e-6 * point.assembly_stress,
         "max_pin_eccentricity_mm": 1e3 * point.max_eccentricity,
         "verified": point.verified,
+        "not_verified_because": list(point.reasons),
         "stopped": point.stopped,
         "meets": point.meets(problem),
         "seconds": point.seconds,

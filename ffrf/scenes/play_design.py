@@ -86,7 +86,7 @@ class PlayProblem:
 class PlayPoint:
     """One play ``radial`` (m), run: the coupler's largest deviation (m; over the poses reached), the assembly's
     largest von Mises stress (Pa), the pins' largest eccentricity in their bores (m), whether the run ``verified``
-    itself, where it ``stopped`` (``None``: at its end) and its ``seconds``."""
+    itself (and the ``reasons`` where not), where it ``stopped`` (``None``: at its end) and its ``seconds``."""
 
     radial: float
     max_deviation: float
@@ -95,6 +95,7 @@ class PlayPoint:
     verified: bool
     stopped: str | None
     seconds: float
+    reasons: tuple[str, ...] = ()
 
     def meets(self, problem: PlayProblem) -> bool:
         """Whether the run went to its end, verified itself and kept the coupler within the bound."""
@@ -139,6 +140,7 @@ def evaluate_play(loop: SingleLoop, options: LinkageOptions, problem: PlayProble
         result.verification is not None and bool(result.verification.verified),
         stopped,
         time.perf_counter() - started,
+        () if result.verification is None else tuple(result.verification.reasons),
     )
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["ASSEMBLY_OUTPUTS", "OUTPUTS", "STABILITY_OUTPUTS", "WHERE", "is_assembly_output", "output_names"]
+__all__ = ["ASSEMBLY_OUTPUTS", "ENDS", "OUTPUTS", "STABILITY_OUTPUTS", "WHERE", "is_assembly_output", "output_names"]
 
 #: Outputs of every linkage; the assembly stresses add one column per link (:func:`output_names`).
 OUTPUTS = (
@@ -22,6 +22,20 @@ WHERE = ("max_coupler_deviation_at_deg", "max_abs_driving_torque_at_deg", "last_
 #: Outputs of a study with stability monitoring: the snaps of the path, the energy they release (J, summed) and the
 #: lowest vibration frequency over the equilibria (Hz; NaN where one is unstable).
 STABILITY_OUTPUTS = ("snaps", "snap_energy_released_J", "min_frequency_hz")
+
+
+#: How a print's run ended (a row's ``end``): its path to the end, with or without snaps on the way (stability
+#: monitoring follows a fold to where the path lands), or where and why not. A stop that none of the named causes
+#: explains is ``stopped (unclassified)``: what a study's report counts as the solver's, not the print's, failure.
+ENDS = (
+    "completed",
+    "completed through snaps",
+    "no assembly",
+    "stopped at a near-dead pose",
+    "stopped (unclassified)",
+    "bad input",
+    "error",
+)
 
 
 def is_assembly_output(name: str) -> bool:

@@ -83,6 +83,7 @@ def row_schema(study: Study) -> pa.Schema:
         "block": pa.string(),
         "sample": pa.int64(),
         "status": pa.string(),
+        "end": pa.string(),
         "reason": pa.string(),
         "assembles": pa.bool_(),
         "worker": pa.string(),

@@ -71,6 +71,7 @@ __all__ = [
     "Study",
     "design_size",
     "load_study",
+    "monitors_stability",
     "study_from_document",
 ]
 
@@ -210,7 +211,7 @@ class Study:
     @property
     def stability(self) -> bool:
         """Whether variants run with stability monitoring (quasi-static, snaps followed: ``docs/stability.md``)."""
-        return bool(self.base.overrides.get("stability", False))
+        return monitors_stability(self.base.overrides)
 
 
 def _distribution(entry: dict, where: str, method: str) -> tuple[str, tuple[float, ...]]:
@@ -282,6 +283,12 @@ def _base(table: dict, directory: Path, where: str, bases: NamedBases | None) ->
     return Base(named, table.get("linkage"), document, overrides, table.get("bore_error_model", "misfit"), bases)
 
 
+def monitors_stability(overrides: dict) -> bool:
+    """A base's ``stability``: as given, by default on unless its mode is ``"dynamic"`` (a print that snaps is
+    followed to where it lands instead of stopping there: issue #37; stability is judged at equilibria only)."""
+    return bool(overrides.get("stability", overrides.get("mode", "auto") != "dynamic"))
+
+
 def _check_bores(parameters: tuple[Parameter, ...], n: int, where: str) -> None:
     """Every bore target names a link and one of the two joints it carries (link k carries joints k-1 and k)."""
     for k, p in enumerate(parameters):
@@ -332,7 +339,7 @@ def study_from_document(
         json.dumps({"base": document["base"], "document": base.document}, sort_keys=True, default=str).encode()
     ).hexdigest()[:16]
     name = head.get("name", "study")
-    limits = _limits(document.get("limits", []), n, bool(base.overrides.get("stability", False)), where)
+    limits = _limits(document.get("limits", []), n, monitors_stability(base.overrides), where)
     return Study(name, method, samples, int(head.get("seed", 0)), base, parameters, fingerprint, n, limits)
 
 

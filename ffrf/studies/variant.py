@@ -1,10 +1,10 @@
 r"""One variant of a study: its linkage options, its scene and its row of results (a pure function of the study
 and the parameter values, so that any worker computes the same row).
 
-The row holds the parameters, ``status`` (``"ok"`` or ``"failed"``), ``reason`` (the error message of a failed
-variant), ``assembles`` (whether the static assembly found an equilibrium; empty when the variant failed before),
-the outputs (SI, NaN where not computed; :func:`row_outputs` reads them from the variant's
-:class:`~ffrf.output.result.Result`): ``max_coupler_deviation_m`` (same drive angle) and
+The row holds the parameters, ``status`` (``"ok"`` or ``"failed"``), ``end`` (how its run ended, :func:`print_end`),
+``reason`` (the error message of a failed variant), ``assembles`` (whether the static assembly found an equilibrium;
+empty when the variant failed before), the outputs (SI, NaN where not computed; :func:`row_outputs` reads them from
+the variant's :class:`~ffrf.output.result.Result`): ``max_coupler_deviation_m`` (same drive angle) and
 ``max_coupler_distance_to_path_m`` (closest point of the ideal curve), ``max_abs_driving_torque_Nm``,
 ``assembly_strain_energy_J`` (all links, assembled state) and ``max_assembly_stress_link{k}_Pa`` (von Mises,
 :mod:`ffrf.output.assembly_stress`), the drive angles of the largest deviation and torque and of the path's end or
@@ -40,7 +40,7 @@ from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_cache import SceneCache
-from ffrf.studies.outputs import OUTPUTS, WHERE, output_names
+from ffrf.studies.outputs import ENDS, OUTPUTS, WHERE, output_names
 from ffrf.studies.sampling import Variant
 from ffrf.studies.spec import NamedBases, Study
 from ffrf.system.drives import rpm
@@ -49,6 +49,7 @@ __all__ = [
     "OUTPUTS",
     "output_names",
     "row_names",
+    "print_end",
     "row_outputs",
     "variant_options",
     "build_variant",
@@ -60,7 +61,7 @@ log = logging.getLogger(__name__)
 
 def row_names(study: Study) -> tuple[str, ...]:
     """Every column of a study's rows, in order."""
-    head = ("id", "block", "sample", "status", "reason", "assembles")
+    head = ("id", "block", "sample", "status", "end", "reason", "assembles")
     outputs = output_names(study.n_links, study.stability)
     return head + study.parameter_names + outputs + WHERE + ("wall_time_s", "worker")
 
@@ -189,6 +190,19 @@ def row_outputs(result: Result | None, n_links: int, path: bool, stability: bool
     return out
 
 
+def print_end(row: dict) -> str:
+    """How the row's run ended, one of :data:`~ffrf.studies.outputs.ENDS`, from its status, reason and snaps."""
+    reason = str(row.get("reason", ""))
+    if row["status"] == "ok":
+        snaps = row.get("snaps", math.nan)
+        return ENDS[1] if snaps == snaps and snaps > 0 else ENDS[0]
+    if reason.startswith("no assembly"):
+        return ENDS[2]
+    if reason.startswith("the run stopped"):
+        return ENDS[3] if "near-dead point" in reason else ENDS[4]
+    return ENDS[5] if reason.startswith("bad input") else ENDS[6]
+
+
 def run_variant(study: Study, variant: Variant, cache: SceneCache | None = None) -> dict:
     """Build and run one variant; its row (module docstring). A variant that fails is a row with its reason, never
     an exception (bad input from the parameters, no assembly, a diverging path, or any other error)."""
@@ -214,6 +228,7 @@ def run_variant(study: Study, variant: Variant, cache: SceneCache | None = None)
         log.exception("variant %s failed", variant.id)
         row["reason"] = f"{type(error).__name__}: {error}"
     row |= row_outputs(result, study.n_links, path, study.stability)
+    row["end"] = print_end(row)
     row["wall_time_s"] = time.perf_counter() - started
     row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
     return row

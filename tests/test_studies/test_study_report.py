@@ -12,6 +12,7 @@ from ffrf.studies.report import analyse, write_report
 from ffrf.studies.runner import _description, _write_batch, row_schema
 from ffrf.studies.sampling import study_design
 from ffrf.studies.spec import study_from_document
+from ffrf.studies.variant import print_end
 
 OUTPUT = "max_coupler_deviation_m"
 
@@ -130,7 +131,7 @@ def test_the_print_shop_report_lists_every_unfinished_print_the_worst_and_where_
             stopped.append(v.id)
         else:
             row |= {OUTPUT: 2e-3 * x, "max_coupler_deviation_at_deg": 90.0 + x}
-        rows.append(row)
+        rows.append(row | {"end": print_end(row)})
     (tmp_path / "study.json").write_text(json.dumps(_description(study)))
     _write_batch(rows, row_schema(study), tmp_path)
     analysis = analyse(tmp_path)
@@ -143,6 +144,10 @@ def test_the_print_shop_report_lists_every_unfinished_print_the_worst_and_where_
     assert first["assembles"] is True and first["last_drive_angle_deg"] == pytest.approx(16.0 * twist)
     assert "no equilibrium" in first["reason"]
     assert analysis["outputs"]["assembly_strain_energy_J"]["percentiles"]["n"] == 200 - 8
+    ends = analysis["ends"]
+    assert (ends["completed"], ends["no assembly"], ends["stopped (unclassified)"]) == (176, 8, 16)
+    assert analysis["unclassified"]["exceeding"] == 16 and analysis["unclassified"]["n"] == 200
+    assert any("16 of 200 prints stopped for a reason the solver does not classify" in w for w in analysis["warnings"])
     ok = np.array([v.values["twist"] for v in design if v.id not in stopped and v.id not in unassembled])
     worst = analysis["worst"]["max_coupler_deviation_m"]
     np.testing.assert_allclose([p["value"] for p in worst], 2.0 * np.sort(ok)[::-1][:5], rtol=1e-12)  # mm
