@@ -58,12 +58,11 @@ def run_row(variant: str, radial_mm: float, h: float, order: int, modes: int, ou
         raise RuntimeError(f"the {variant} run reports no assembly stress")
     sensors = result.sensors
     tracked = {k: np.stack([sensors[f"link{k}_node{j}"] for j in range(3)], axis=1) for k in (1, 2, 3)}
+    unidentified: str | None = None
     try:
         loop = identify_dh(tracked)
     except IdentificationError as error:  # a path that stopped early turns the links too little to fit their axes
         loop, unidentified = None, str(error)
-    else:
-        unidentified = None
     loose = [j.name for j in scene.loose_joints]
     eccentricity = max((float(np.max(sensors[f"{name}_eccentricity"])) for name in loose), default=0.0)
     penetration = max((float(np.max(sensors[f"{name}_contacts"][:, 0, :2])) for name in loose), default=0.0)
