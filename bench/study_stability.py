@@ -6,7 +6,7 @@ interval, and the wall time per print (median and mean), with and without.
 
 Usage::
 
-    .venv/bin/python -m bench study_stability --variants 200 --json out/study_stability.json
+    .venv/bin/python -m bench study_stability --variants 60 --json out/study_stability.json
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ def summary(rows: list[dict]) -> dict:
 
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--variants", type=int, default=200, help="the first prints of the study's design")
+    parser.add_argument("--variants", type=int, default=60, help="the first prints of the study's design")
     parser.add_argument("--json", type=Path)
     args = parser.parse_args(argv)
     document = tomllib.loads(EXAMPLE.read_text())
