@@ -18,6 +18,19 @@ order = 1
 modes = 2
 """
 
+#: The coarse Bennett with 0.1 mm of play in its passive joints (12 mm pins), 18 deg of drive, 5 outputs.
+LOOSE_BENNETT_FILE = (
+    COARSE_BENNETT_FILE
+    + """revolutions = 0.05
+check_clearance = false
+
+[scene]
+mode = "quasi_static"
+outputs = 5
+clearance = {radial_mm = 0.1, pin_length_mm = 12.0}
+"""
+)
+
 PENDULUM = """
 [scene]
 name = "bar pendulum"

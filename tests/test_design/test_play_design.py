@@ -9,7 +9,7 @@ import tomllib
 
 import numpy as np
 import pytest
-from scene_fixtures import COARSE_BENNETT_FILE
+from scene_fixtures import LOOSE_BENNETT_FILE
 
 from ffrf.errors import SceneError
 from ffrf.scenes.play_design import PlayPoint, PlayProblem, largest_play, load_play_design
@@ -77,15 +77,8 @@ def test_when_ideal_joints_miss_the_bound_there_is_no_answer():
 
 
 PLAY_FILE = (
-    COARSE_BENNETT_FILE
-    + """revolutions = 0.05
-check_clearance = false
-
-[scene]
-mode = "quasi_static"
-outputs = 5
-clearance = {radial_mm = 0.1, pin_length_mm = 12.0}
-
+    LOOSE_BENNETT_FILE
+    + """
 [play]
 max_deviation = 5.0
 largest_mm = 0.1

@@ -8,7 +8,7 @@ import tomllib
 
 import numpy as np
 import pytest
-from scene_fixtures import COARSE_BENNETT_FILE, PENDULUM, write_bar
+from scene_fixtures import LOOSE_BENNETT_FILE, PENDULUM, write_bar
 
 from ffrf.errors import SceneError
 from ffrf.scenes.builder import build_scene
@@ -71,26 +71,13 @@ def test_a_bad_clearance_table_is_refused_in_one_line(tmp_path, change, message)
     assert "\n" not in str(error.value)
 
 
-LOOSE_BENNETT = (
-    COARSE_BENNETT_FILE
-    + """revolutions = 0.05
-check_clearance = false
-
-[scene]
-mode = "quasi_static"
-outputs = 5
-clearance = {radial_mm = 0.1, pin_length_mm = 12.0}
-"""
-)
-
-
 def test_a_linkage_files_clearance_loosens_every_passive_joint_and_keeps_the_drive_and_the_clamp():
     """``[scene] clearance`` of a linkage file: joints 0, 1 and 2 become pins in bores with the PLA contact stiffness
     (Eq. (P5): 12 mm pins, E* = E / (2 (1 - nu^2))), the driven joint 3 and the clamp stay constraints."""
     from ffrf.fe.materials import PLA
     from ffrf.scenes.linkage_file import load_linkage
 
-    scene = load_linkage(tomllib.loads(LOOSE_BENNETT))
+    scene = load_linkage(tomllib.loads(LOOSE_BENNETT_FILE))
     assert [j.name for j in scene.loose_joints] == ["joint0", "joint1", "joint2"]
     assert [c.name for c in scene.system.constraints] == ["clamp", "joint3 (drive)"]
     expected = line_contact_stiffness(PLA.E, PLA.nu, PLA.E, PLA.nu, 0.012)
@@ -105,7 +92,7 @@ def test_a_loose_bennett_from_a_linkage_file_runs_and_verifies_itself(tmp_path, 
     from ffrf.cli import main
 
     path = tmp_path / "loose.toml"
-    path.write_text(LOOSE_BENNETT)
+    path.write_text(LOOSE_BENNETT_FILE)
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
     assert "verified: true" in capsys.readouterr().out
 
@@ -120,7 +107,7 @@ def test_a_loose_bennett_turns_a_whole_revolution_and_verifies_itself(tmp_path, 
 
     path = tmp_path / "loose.toml"
     path.write_text(
-        LOOSE_BENNETT.replace("revolutions = 0.05", "revolutions = 1.0").replace("outputs = 5", "outputs = 73")
+        LOOSE_BENNETT_FILE.replace("revolutions = 0.05", "revolutions = 1.0").replace("outputs = 5", "outputs = 73")
     )
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
     assert "verified: true" in capsys.readouterr().out
@@ -134,7 +121,7 @@ def test_what_does_not_model_play_yet_refuses_a_loose_linkage_in_one_line():
     from ffrf.scenes.path_sensitivity import material_sensitivity
     from validation.exudyn_twin import build_twin
 
-    scene = load_linkage(tomllib.loads(LOOSE_BENNETT))
+    scene = load_linkage(tomllib.loads(LOOSE_BENNETT_FILE))
     q = scene.q_initial[None]
     with pytest.raises(SensitivityError, match="joints with play") as error:
         material_sensitivity(scene, np.zeros(1), q, np.zeros((1, scene.system.n_constraints)))
@@ -151,7 +138,7 @@ def test_a_loose_bennett_runs_dynamically_and_its_energy_books_close_with_the_co
     from ffrf.cli import main
 
     path = tmp_path / "loose.toml"
-    dynamic = LOOSE_BENNETT.replace('mode = "quasi_static"', 'mode = "dynamic"')
+    dynamic = LOOSE_BENNETT_FILE.replace('mode = "quasi_static"', 'mode = "dynamic"')
     path.write_text(dynamic.replace("revolutions = 0.05", "revolutions = 0.1").replace("outputs = 5", "outputs = 41"))
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
     assert "verified: true" in capsys.readouterr().out
@@ -163,7 +150,7 @@ def test_a_loose_linkages_play_and_its_links_clearance_are_kept_apart_in_the_met
     from ffrf.scenes.linkage_file import load_linkage
     from ffrf.scenes.linkage_run import run_linkage
 
-    scene = load_linkage(tomllib.loads(LOOSE_BENNETT.replace("check_clearance = false\n", "")))
+    scene = load_linkage(tomllib.loads(LOOSE_BENNETT_FILE.replace("check_clearance = false\n", "")))
     result = run_linkage(scene, mode="quasi_static", n_outputs=3, t_end=0.5)
     assert result.metadata["joint_play"] == {"radial_mm": 0.1, "pin_length_mm": 12.0}
     clearance = result.add_clearance()
