@@ -14,8 +14,8 @@ OUTPUTS = (
 
 #: Outputs of the assembled state, which a print that assembled has even where its path stopped later.
 ASSEMBLY_OUTPUTS = ("assembly_strain_energy_J",)
-#: The drive angles (deg, the drive sensor's) where each print's largest coupler deviation and largest |driving
-#: torque| occur, and where its path ended (its end, or where it stopped): where to look, not outputs to rank by.
+#: The drive angles (deg, the drive sensor's) where each print's largest coupler deviation and largest absolute driving
+#: torque occur, and where its path ended (its end, or where it stopped): where to look, not outputs to rank by.
 WHERE = ("max_coupler_deviation_at_deg", "max_abs_driving_torque_at_deg", "last_drive_angle_deg")
 
 
