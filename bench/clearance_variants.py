@@ -15,12 +15,16 @@ Usage::
 
     .venv/bin/python -m bench clearance_variants --json out/clearance_variants.json
     .venv/bin/python -m bench clearance_variants --variants pla2 --clearances 0,0.1 --outputs 73
+    .venv/bin/python -m bench clearance_variants --workers 2   # two runs at once (their wall times share the cores)
 """
 
 from __future__ import annotations
 
 import argparse
+import multiprocessing
+import os
 import time
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from pathlib import Path
 
@@ -119,32 +123,47 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def _printed(r: dict) -> dict:
+    """The row, printed in a line."""
+    print(
+        f"{r['variant']}, {r['radial_mm']:g} mm: deviation {r['max_coupler_deviation_mm']:.4f} mm, assembly "
+        f"{r['assembly_max_von_mises_MPa']:.3f} MPa, torque {r['max_abs_driving_torque_Nmm']:.3f} N mm, "
+        f"eccentricity {r['max_pin_eccentricity_mm']:.4f} mm, verified {r['verified']}, "
+        f"run {r['wall_time_s']['run']:.1f} s",
+        flush=True,
+    )
+    return r
+
+
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_discretisation_arguments(parser)
     parser.add_argument("--variants", default="pla,pla1,pla2")
     parser.add_argument("--clearances", default="0,0.05,0.1,0.2,0.3", help="radial clearances (mm), 0: ideal joints")
     parser.add_argument("--json", type=Path)
+    parser.add_argument(
+        "--workers", type=int, default=1, help="runs at once, each in its own process with one BLAS thread"
+    )
     args = parser.parse_args(argv)
 
     started = time.perf_counter()
-    rows = []
-    for variant in args.variants.split(","):
-        for radial in (float(c) for c in args.clearances.split(",")):
-            rows.append(run_row(variant, radial, args.h, args.order, args.modes, args.outputs))
-            r = rows[-1]
-            print(
-                f"{variant}, {radial:g} mm: deviation {r['max_coupler_deviation_mm']:.4f} mm, assembly "
-                f"{r['assembly_max_von_mises_MPa']:.3f} MPa, torque {r['max_abs_driving_torque_Nmm']:.3f} N mm, "
-                f"eccentricity {r['max_pin_eccentricity_mm']:.4f} mm, verified {r['verified']}, "
-                f"run {r['wall_time_s']['run']:.1f} s",
-                flush=True,
-            )
+    cases = [
+        (variant, radial, args.h, args.order, args.modes, args.outputs)
+        for variant in args.variants.split(",")
+        for radial in (float(c) for c in args.clearances.split(","))
+    ]
+    if args.workers > 1:
+        os.environ["OPENBLAS_NUM_THREADS"] = "1"  # read by the spawned workers' BLAS as it loads
+        with ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            rows = [_printed(row) for row in pool.map(run_row, *zip(*cases, strict=True))]
+    else:
+        rows = [_printed(run_row(*case)) for case in cases]
     report = {
         "h": args.h,
         "order": args.order,
         "modes": args.modes,
         "outputs": args.outputs,
+        "workers": args.workers,
         "total_wall_time_s": time.perf_counter() - started,
         "rows": rows,
     }

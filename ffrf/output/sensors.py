@@ -20,20 +20,21 @@ For every output row, and for any scene built by :mod:`ffrf.scenes.builder` (duc
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.body.flexible_body import node_positions
 from ffrf.output.energy_balance import energy_balance
+from ffrf.solvers.common import PathJump
 from ffrf.system.clearance_joint import ClearanceJoint
 from ffrf.system.joints import MarkerJoint
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
 from ffrf.system.reactions import driving_torques, joint_poses, joint_reactions, relative_angle
 
-__all__ = ["relative_angle", "joint_rows", "node_sensors", "scene_sensors", "path_sensors"]
+__all__ = ["relative_angle", "joint_rows", "node_sensors", "scene_sensors", "path_sensors", "with_jump_ends"]
 
 
 def _marker_joints(system: MultibodySystem) -> list[tuple[int, MarkerJoint]]:
@@ -123,16 +124,73 @@ def node_sensors(scene, q: NDArray) -> dict[str, NDArray]:
 
 
 def scene_sensors(
-    scene, time: NDArray, q: NDArray, multipliers: NDArray, qd: NDArray | None = None
+    scene,
+    time: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+    qd: NDArray | None = None,
+    jumps: Sequence[PathJump] = (),
 ) -> dict[str, NDArray]:
     """Every sensor of the module docstring; with exactly one driven joint also ``drive_angle``,
-    ``driving_torque`` and the energy balance."""
+    ``driving_torque`` and the energy balance. ``jumps`` of a quasi-static path: the balance is kept on the rows
+    and the equilibria on both sides of each jump, the stretches between jumps apart
+    (:func:`ffrf.output.energy_balance.energy_balance`); the sensors are those of the rows."""
     system = scene.system
+    if qd is None and jumps:
+        time, q, multipliers, rows, breaks = with_jump_ends(time, q, multipliers, jumps)
+    else:
+        rows, breaks = np.arange(len(time)), []
     out = {**node_sensors(scene, q), **joint_rows(system, time, q, multipliers, qd)}
     out |= _joint_sensors_and_drive(scene, time, out)
     if "drive_angle" in out:
-        out.update(energy_balance(system, time, out, qd, q))
-    return out
+        out.update(energy_balance(system, time, out, qd, q, breaks))
+    return out if len(rows) == len(time) else {name: value[rows] for name, value in out.items()}
+
+
+def with_jump_ends(
+    time: NDArray, q: NDArray, multipliers: NDArray, jumps: Sequence[PathJump]
+) -> tuple[NDArray, NDArray, NDArray, NDArray[np.int64], list[int]]:
+    """The rows with the equilibria on both sides of each jump within them, in the order of t (a state that is a row
+    already, or both jumps' end, once): ``(time, q, multipliers, rows, breaks)``, ``rows`` where the given rows are
+    and ``breaks`` the rows i where the path jumps from i to i + 1. A jump whose ends do not follow each other
+    there (an output at a snap's t between them) is no break: the balance then spans it, and misses what it
+    released."""
+    scale = 1e-12 * max(1.0, float(np.max(np.abs(time), initial=0.0)))
+    inside = [jump for jump in jumps if time[0] - scale <= jump.t_from and jump.t_to <= time[-1] + scale]
+    states = [(float(t), 1, q[k], multipliers[k], k) for k, t in enumerate(time)]
+    for jump in inside:  # at one t: the state a jump leaves, the rows, the state it lands on
+        states.append((jump.t_from, 0, jump.q_from, jump.multipliers_from, -1))
+        states.append((jump.t_to, 2, jump.q_to, jump.multipliers_to, -1))
+    states.sort(key=lambda state: state[:2])
+    kept: list[tuple] = []
+    for state in states:
+        twins = [
+            k
+            for k in range(len(kept))
+            if (state[4] < 0 or kept[k][4] < 0) and kept[k][0] >= state[0] - scale and _same(kept[k], state)
+        ]
+        if not twins:
+            kept.append(state)
+        elif state[4] >= 0:  # a given row stands for its twin
+            kept[twins[0]] = state
+    breaks = []
+    for jump in inside:
+        start = [k for k, state in enumerate(kept) if _same(state, (jump.t_from, 0, jump.q_from))]
+        if start and start[0] + 1 < len(kept) and _same(kept[start[0] + 1], (jump.t_to, 0, jump.q_to)):
+            breaks.append(start[0])
+    rows = np.array([k for k, state in enumerate(kept) if state[4] >= 0], dtype=np.int64)
+    return (
+        np.array([state[0] for state in kept]),
+        np.array([state[2] for state in kept]),
+        np.array([state[3] for state in kept]),
+        rows,
+        sorted(set(breaks)),
+    )
+
+
+def _same(a: tuple, b: tuple) -> bool:
+    """Two states at the same t with the same coordinates."""
+    return abs(a[0] - b[0]) <= 1e-12 * max(1.0, abs(a[0])) and np.array_equal(a[2], b[2])
 
 
 def path_sensors(scene, time: NDArray, q: NDArray, multipliers: NDArray) -> dict[str, NDArray]:

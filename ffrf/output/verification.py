@@ -12,7 +12,11 @@ them. The checks (those whose sensors the run has):
 * ``energy_balance``: the largest residual of the balance (drive and force elements' work against the changes of
   kinetic, potential and strain energy and the damping dissipation, J) against :data:`ENERGY_RTOL` times the energy
   scale of Eq. (C2) (at least the links' weight-length energy ``m g_n L``) plus the estimated quadrature error of
-  the drive's work over the output rows (:func:`ffrf.output.energy_balance.work_quadrature_error`).
+  the drive's work over the output rows (:func:`ffrf.output.energy_balance.work_quadrature_error`). Where a
+  quasi-static path jumps (a contact letting go, a snap), what the jump releases counts as dissipated.
+* ``jumps_release_energy`` (quasi-static paths that jump): the largest energy a jump between two output rows
+  gained, against the same :data:`ENERGY_RTOL` of the energy scale: a jump between equilibria under a
+  position-controlled drive goes downhill; one that gains energy has left the path for a wrong state.
 * ``step_error`` (dynamic runs): the median over the steps of the local error estimate of Eq. (G5) (m) against
   :data:`STEP_ERROR_RTOL` times ``L``. The median is the steady motion's; the largest estimate is the start's
   transient, which the numerical damping removes in the first steps (``docs/speed_vs_error.md``) and which is
@@ -44,6 +48,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ffrf.output.energy_balance import energy_scale, work_quadrature_error
 
@@ -250,17 +255,39 @@ def _closure_check(sensors: dict, length: float) -> Check | None:
     )
 
 
-def _energy_check(sensors: dict, floor: float) -> Check:
+def _energy_checks(sensors: dict, floor: float) -> list[Check]:
+    """The energy balance's check, and where the path jumped, that its jumps released energy."""
     residual = sensors["energy_balance_residual"]
     scale = energy_scale(sensors, floor)
+    released = np.diff(sensors.get("energy_released_in_jumps", np.zeros(0)))
+    jumps = (
+        [
+            Check(
+                "jumps_release_energy",
+                max(0.0, -float(np.min(released))),
+                ENERGY_RTOL * scale,
+                "J",
+                f"largest energy the path's jumps between two outputs gained (they released "
+                f"{float(np.sum(released)):.3g} J in all) against {ENERGY_RTOL:g} of the energy scale {scale:.3g} J",
+            )
+        ]
+        if np.any(released != 0.0)
+        else []
+    )
+    return jumps + [_balance_check(residual, scale, sensors)]
+
+
+def _balance_check(residual: NDArray, scale: float, sensors: dict) -> Check:
+    """The energy balance's largest residual against the scale of Eq. (C2) and the work's quadrature error."""
     return Check(
         "energy_balance",
         float(np.max(np.abs(residual))) if len(residual) else 0.0,
         ENERGY_RTOL * scale + work_quadrature_error(sensors),
         "J",
         f"largest residual of the energy balance against {ENERGY_RTOL:g} of the energy scale {scale:.3g} J "
-        "(Eq. (C2)) plus the quadrature error of the drive's work (the books are kept at the outputs: where the "
-        "driving torque changes faster than they sample it, as in a snap, more outputs close them further)",
+        "(Eq. (C2)) plus the quadrature error of the drive's work (the books are kept at the outputs and on both "
+        "sides of each jump of a quasi-static path: where the driving torque changes faster than they sample it, "
+        "more outputs close them further)",
     )
 
 
@@ -291,7 +318,7 @@ def verify_run(result: Any, scene: Any) -> Verification:
     if closure is not None:
         checks.append(closure)
     if "energy_balance_residual" in sensors:
-        checks.append(_energy_check(sensors, float(metadata.get("energy_floor_j", weight_energy(scene)))))
+        checks += _energy_checks(sensors, float(metadata.get("energy_floor_j", weight_energy(scene))))
     play, play_notes = play_check(scene, sensors)
     checks += [] if play is None else [play]
     notes += play_notes
@@ -403,7 +430,7 @@ def verify_scene_run(scene: Any, sensors: dict, metadata: dict) -> Verification:
     checks += [] if closure is None else [closure]
     notes: list[str] = []
     if "energy_balance_residual" in sensors:
-        checks.append(_energy_check(sensors, weight_energy(scene)))
+        checks += _energy_checks(sensors, weight_energy(scene))
     else:
         notes.append("energy_balance not checked: the scene has no single driven joint")
     play, play_notes = play_check(scene, sensors)

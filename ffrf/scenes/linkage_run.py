@@ -27,7 +27,7 @@ from __future__ import annotations
 import logging
 import platform
 import time as wallclock
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,6 +48,7 @@ from ffrf.scenes.linkage_steps import (
     near_dead_poses,
     quasi_static_path_step,
 )
+from ffrf.solvers.common import PathJump
 from ffrf.solvers.simulate import MODES, Run, simulate
 from ffrf.solvers.snap_through import SnapThrough, run_critical_pose, snap_summary
 from ffrf.solvers.stability import check_judged_at_equilibria, stability_along, stability_summary
@@ -115,15 +116,22 @@ def _joints(scene: LinkageScene) -> list[MarkerJoint]:
 
 
 def evaluate_sensors(
-    scene: LinkageScene, time: NDArray, q: NDArray, qd: NDArray | None, multipliers: NDArray, which: str = "all"
+    scene: LinkageScene,
+    time: NDArray,
+    q: NDArray,
+    qd: NDArray | None,
+    multipliers: NDArray,
+    which: str = "all",
+    jumps: Sequence[PathJump] = (),
 ) -> dict[str, NDArray]:
     """The sensors of the module docstring at every output row: with ``which="all"`` every one, the scene sensors of
-    any run (:func:`ffrf.output.sensors.scene_sensors`) and the linkage ones built from them; with ``"path"`` only
-    those of :data:`PATH_SENSORS` (:func:`ffrf.output.sensors.path_sensors`), the same values."""
+    any run (:func:`ffrf.output.sensors.scene_sensors`, its energy balance kept apart across the path's ``jumps``)
+    and the linkage ones built from them; with ``"path"`` only those of :data:`PATH_SENSORS`
+    (:func:`ffrf.output.sensors.path_sensors`), the same values."""
     if which not in SENSOR_SETS:
         raise ValueError(f"which must be one of {SENSOR_SETS}, got {which!r}")
     if which == "all":
-        out = scene_sensors(scene, time, q, multipliers, qd)
+        out = scene_sensors(scene, time, q, multipliers, qd, jumps)
         joints = _joints(scene)
         out["joint_angles"] = np.column_stack([out[f"{j.name}_angle"] for j in joints])
         names = [c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)]
@@ -211,7 +219,7 @@ def run_linkage(
         run, stopped = error.partial, error
     times, q, qd, lam = run.time, run.q, run.qd, run.multipliers
     solved = wallclock.perf_counter()
-    values = evaluate_sensors(scene, times, q, qd, lam, sensors)
+    values = evaluate_sensors(scene, times, q, qd, lam, sensors, run.jumps)
     if stability:
         values["stability_squared_frequencies"] = np.array(
             [s.squared_frequencies for s in stability_along(scene.system, times, q, lam, count=3)]
@@ -239,6 +247,7 @@ def run_linkage(
         n_coordinates=scene.system.n_coordinates,
         n_constraints=scene.system.n_constraints,
         energy_floor_j=weight_energy(scene),
+        path_jumps=len(run.jumps),
         modes_per_link=[link.reduction.n_modes for link in scene.links],
         assembly=stress.as_dict(),
     )

@@ -237,7 +237,7 @@ def run_scene(scene: Scene, progress: Callable[[float, float], None] | None = No
             error.partial = None
             raise
         run, stopped = error.partial, error
-    sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd)
+    sensors = scene_sensors(scene, run.time, run.q, run.multipliers, run.qd, run.jumps)
     critical = None
     if s.get("stability", False):
         metadata["stability"], critical = _monitor_stability(scene, run, sensors)

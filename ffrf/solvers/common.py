@@ -14,18 +14,34 @@ from numpy.typing import NDArray
 from ffrf.numerics.rank_revealing import factor
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["IntegrationResult", "StaticSolution", "consistent_accelerations", "extrapolation_weights"]
+__all__ = ["IntegrationResult", "PathJump", "StaticSolution", "consistent_accelerations", "extrapolation_weights"]
+
+
+@dataclass(frozen=True)
+class PathJump:
+    """Where a quasi-static path jumps between two equilibria with none between them (a contact with play letting
+    go, Eq. (P6); a snap at a fold, Eq. (S6)): the equilibrium it leaves at ``t_from`` and the one it lands on at
+    ``t_to`` (the same t for a snap). The energy balance keeps its books apart across it (Eq. (C2))."""
+
+    t_from: float
+    q_from: NDArray[np.float64]
+    multipliers_from: NDArray[np.float64]
+    t_to: float
+    q_to: NDArray[np.float64]
+    multipliers_to: NDArray[np.float64]
 
 
 @dataclass(frozen=True)
 class StaticSolution:
     """Equilibrium coordinates ``q``, multipliers, and Newton iterations per load step; ``times``, where given, the
-    times of the rows (a path that stopped between outputs ends with the last equilibrium it reached)."""
+    times of the rows (a path that stopped between outputs ends with the last equilibrium it reached); ``jumps``,
+    where the path jumped (oldest first)."""
 
     q: NDArray[np.float64]
     multipliers: NDArray[np.float64]
     iterations: tuple[int, ...]
     times: NDArray[np.float64] | None = None
+    jumps: tuple[PathJump, ...] = ()
 
 
 @dataclass

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.errors import Interrupted, NewtonDivergence, StaticDivergence
+from ffrf.solvers.common import PathJump, StaticSolution
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.snap_through import SnapThrough, quasi_static_through_snaps
 from ffrf.solvers.static_solver import quasi_static
@@ -29,7 +30,8 @@ class Run:
     """Output times and coordinates, velocities (``None`` for quasi-static runs) and multipliers, and the snaps a
     quasi-static run went through (:func:`ffrf.solvers.snap_through.quasi_static_through_snaps`); of a dynamic run,
     the steps' local error estimates of the bodies' positions (m, Eq. (G5), the largest of each step) and the steps'
-    lengths (s)."""
+    lengths (s); ``jumps``, every jump of a quasi-static path between equilibria, snaps that landed included, in the
+    order of t."""
 
     time: NDArray[np.float64]
     q: NDArray[np.float64]
@@ -38,6 +40,14 @@ class Run:
     snaps: tuple[SnapThrough, ...] = ()
     position_errors: NDArray[np.float64] | None = None
     step_sizes: NDArray[np.float64] | None = None
+    jumps: tuple[PathJump, ...] = ()
+
+
+def _all_jumps(solution: StaticSolution | None, snaps: tuple[SnapThrough, ...]) -> tuple[PathJump, ...]:
+    """The path's jumps where contacts let go and its snaps that landed, in the order of t."""
+    landed = [snap.as_jump() for snap in snaps]
+    found = [*(() if solution is None else solution.jumps), *(jump for jump in landed if jump is not None)]
+    return tuple(sorted(found, key=lambda jump: jump.t_from))
 
 
 def output_stride(t_end: float, step: float, outputs: int) -> int:
@@ -102,10 +112,12 @@ def simulate(
             done = error.partial
             if done is not None:
                 reached = times[: len(done.q)] if done.times is None else done.times
-                error.partial = Run(reached, done.q, None, done.multipliers, error.snaps)
+                error.partial = Run(
+                    reached, done.q, None, done.multipliers, error.snaps, jumps=_all_jumps(done, error.snaps)
+                )
             raise
         reached = times if solution.times is None else solution.times
-        return Run(reached, solution.q, None, solution.multipliers, snaps)
+        return Run(reached, solution.q, None, solution.multipliers, snaps, jumps=_all_jumps(solution, snaps))
     if mode == "dynamic":
         try:
             result = generalized_alpha(

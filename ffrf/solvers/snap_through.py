@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ffrf.errors import Interrupted, StaticDivergence
+from ffrf.solvers.common import PathJump
 from ffrf.solvers.continuation import EquilibriumPath, equilibrium_path, parabola_vertex, path_points, path_speed
 from ffrf.solvers.stability import CriticalPose, critical_pose, equilibrium_stability, mode_shares
 from ffrf.solvers.static_solver import StaticSolution, path_times, quasi_static, static_equilibrium
@@ -59,6 +60,14 @@ class SnapThrough:
         if self.landing_q is None:
             return None
         return system.potential_energy(self.fold_q, self.fold_t) - system.potential_energy(self.landing_q, self.fold_t)
+
+    def as_jump(self) -> PathJump | None:
+        """The snap as a jump of the path at the fold's t, from the fold to the landing; ``None`` without one."""
+        if self.landing_q is None or self.landing_multipliers is None:
+            return None
+        return PathJump(
+            self.fold_t, self.fold_q, self.fold_multipliers, self.fold_t, self.landing_q, self.landing_multipliers
+        )
 
 
 def snap_summary(system: MultibodySystem, snap: SnapThrough) -> dict:
@@ -261,6 +270,7 @@ def quasi_static_through_snaps(
     lams: list[NDArray] = []
     counts: list[int] = []
     snaps: list[SnapThrough] = []
+    jumps: list[PathJump] = []  # those of the quasi-static legs (contacts letting go), not the snaps
     start, todo, landed = np.asarray(q0, dtype=float), times, False
     while True:
         try:
@@ -273,17 +283,19 @@ def quasi_static_through_snaps(
                 qs.extend(error.partial.q[1 if landed else 0 :])
                 lams.extend(error.partial.multipliers[1 if landed else 0 :])
                 counts.extend(error.partial.iterations[1 if landed else 0 :])
-            error.partial = StaticSolution(np.array(qs), np.array(lams), tuple(counts))
+                jumps.extend(error.partial.jumps)
+            error.partial = StaticSolution(np.array(qs), np.array(lams), tuple(counts), jumps=tuple(jumps))
             error.snaps = tuple(snaps)
             raise
         skip = 1 if landed else 0  # the landing itself, solved again at the fold's t, is no output
         qs.extend(part.q[skip:])
         lams.extend(part.multipliers[skip:])
         counts.extend(part.iterations[skip:])
+        jumps.extend(part.jumps)
         if stop is None:
-            return StaticSolution(np.array(qs), np.array(lams), tuple(counts)), tuple(snaps)
+            return StaticSolution(np.array(qs), np.array(lams), tuple(counts), jumps=tuple(jumps)), tuple(snaps)
         if not qs or len(snaps) >= max_snaps:
-            raise _with_partial(stop, qs, lams, counts, snaps)
+            raise _with_partial(stop, qs, lams, counts, snaps, jumps)
         reached = times[len(qs) - 1]
         remaining = times[len(qs) :]
         crossed = None
@@ -298,15 +310,15 @@ def quasi_static_through_snaps(
             continue
         snap = trace_snap(system, qs[-1], lams[-1], float(reached), float(times[-1]), step=spacing)
         if snap is None:
-            raise _with_partial(stop, qs, lams, counts, snaps)
+            raise _with_partial(stop, qs, lams, counts, snaps, jumps)
         if not _lands(system, snap):
             snaps.append(replace(snap, landing_q=None, landing_multipliers=None))
-            raise _with_partial(stop, qs, lams, counts, snaps, _NO_LANDING.format(t=snap.fold_t))
+            raise _with_partial(stop, qs, lams, counts, snaps, jumps, _NO_LANDING.format(t=snap.fold_t))
         log.info("snap at t = %.6g: fold of the equilibrium path, landing on another branch", snap.fold_t)
         snaps.append(snap)
         remaining = times[len(qs) :]
         if remaining.size == 0 or remaining[0] <= snap.fold_t:
-            raise _with_partial(stop, qs, lams, counts, snaps)
+            raise _with_partial(stop, qs, lams, counts, snaps, jumps)
         start, todo, landed = np.asarray(snap.landing_q), np.concatenate([[snap.fold_t], remaining]), True
 
 
@@ -334,6 +346,7 @@ def _through_snaps_on_own_steps(
     lams: list[NDArray] = []
     counts: list[int] = []
     snaps: list[SnapThrough] = []
+    jumps: list[PathJump] = []  # those of the legs (contacts letting go), not the snaps
 
     def keep(t: float, q: NDArray, lam: NDArray, count: int) -> None:
         times.append(float(t))
@@ -351,7 +364,7 @@ def _through_snaps_on_own_steps(
             rows_q.append(end[1])
             rows_lam.append(end[2])
             rows_n.append(0)
-        return StaticSolution(np.array(rows_q), np.array(rows_lam), tuple(rows_n), np.array(rows_t))
+        return StaticSolution(np.array(rows_q), np.array(rows_lam), tuple(rows_n), np.array(rows_t), tuple(jumps))
 
     def stopped(stop: StaticDivergence, end, reason: str | None = None) -> StaticDivergence:
         error = StaticDivergence(f"{stop}; {reason}") if reason else stop
@@ -371,10 +384,12 @@ def _through_snaps_on_own_steps(
         except Interrupted as error:  # asked to stop: leave with the outputs solved and the snaps passed
             for t, q, lam, n in _rows(error.partial)[skip:]:
                 keep(t, q, lam, n)
+            jumps.extend(() if error.partial is None else error.partial.jumps)
             error.partial = result()
             error.snaps = tuple(snaps)
             raise
         rows = _rows(part)
+        jumps.extend(() if part is None else part.jumps)
         end = (float(rows[-1][0]), rows[-1][1], rows[-1][2]) if rows else None
         for t, q, lam, n in rows[skip:]:
             if is_output(float(t)):  # a stopped leg ends with the path's last equilibrium, no output
@@ -456,11 +471,18 @@ def _lands(system: MultibodySystem, snap: SnapThrough) -> bool:
 
 
 def _with_partial(
-    stop: StaticDivergence, qs: list, lams: list, counts: list, snaps: list, reason: str | None = None
+    stop: StaticDivergence,
+    qs: list,
+    lams: list,
+    counts: list,
+    snaps: list,
+    jumps: list[PathJump],
+    reason: str | None = None,
 ) -> StaticDivergence:
-    """The run's stop, with every equilibrium found as ``partial`` and the snaps passed (or found) as ``snaps``."""
+    """The run's stop, with every equilibrium found (and the legs' jumps) as ``partial`` and the snaps passed (or
+    found) as ``snaps``."""
     error = StaticDivergence(f"{stop}; {reason}") if reason else stop
-    error.partial = StaticSolution(np.array(qs), np.array(lams), tuple(counts))
+    error.partial = StaticSolution(np.array(qs), np.array(lams), tuple(counts), jumps=tuple(jumps))
     error.snaps = tuple(snaps)
     return error
 

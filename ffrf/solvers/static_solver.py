@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from ffrf.errors import Interrupted, StaticDivergence
 from ffrf.numerics.rank_revealing import FactoredMatrix, factor
-from ffrf.solvers.common import StaticSolution, extrapolation_weights
+from ffrf.solvers.common import PathJump, StaticSolution, extrapolation_weights
 from ffrf.solvers.newton_kernels import CONVERGED, NOT_FINITE, REFACTOR, static_iterations, static_rhs, static_update
 from ffrf.solvers.pseudo_transient import settle
 from ffrf.system.multibody import MultibodySystem
@@ -139,6 +139,20 @@ def _static_rhs(model: MultibodySystem | PackedSystem, q: NDArray, lam: NDArray,
     return rhs, gap
 
 
+#: Iterations without a new smallest increment after which Newton gives up in a system with contacts that separate:
+#: where a contact with play switches within the step, the iterates cycle between contact states, and the step is
+#: halved (Eq. (S4)) sooner than after every iteration allowed. (Without such contacts Newton may wander longer from
+#: a far start and still converge: the two-bar chain from a stretched start, 7 iterations before its first new
+#: smallest increment.)
+STALLED_ITERATIONS = 6
+
+
+def _separating_contacts(model: MultibodySystem | PackedSystem) -> bool:
+    """Whether the model has force elements whose contacts separate (joints with play)."""
+    system = model if isinstance(model, MultibodySystem) else model.source()
+    return system is not None and any(element.separates for element in system.forces)
+
+
 def _newton(
     model: MultibodySystem | PackedSystem,
     q: NDArray,
@@ -154,9 +168,12 @@ def _newton(
     Newton and refactors whenever an iteration contracts the increment by less than a half.
     ``secant``: Broyden-update the kept tangent (Eq. (S3)) and refactor only when an increment
     grows (a secant step need not contract monotonically). ``advice`` ends the error message
-    when Newton diverges or stalls. On the fast path the iterations between factorisations of a regular tangent
-    run in one kernel (:func:`ffrf.solvers.newton_kernels.static_iterations`, the same steps and tests)."""
+    when Newton diverges or stalls (with contacts that separate, :data:`STALLED_ITERATIONS` without a new smallest
+    increment). On the fast path
+    (no force elements, hence no contacts) the iterations between factorisations of a regular tangent run in one
+    kernel (:func:`ffrf.solvers.newton_kernels.static_iterations`, the same steps and tests)."""
     previous = np.inf
+    smallest, stalled, may_stall = np.inf, 0, _separating_contacts(model)
     increments = np.empty(max_iterations)
     free_motions = 0
     updates = None
@@ -215,6 +232,9 @@ def _newton(
         gap_max = float(np.abs(gap).max())
         if converged:
             return q, lam, iteration, tangent
+        smallest, stalled = (increment, 0) if increment < smallest else (smallest, stalled + 1)
+        if may_stall and stalled >= STALLED_ITERATIONS:
+            break
         if increment > refactor_above * previous:
             tangent = None
         previous = increment
@@ -223,7 +243,7 @@ def _newton(
             f"the static tangent is singular ({free_motions} free motion(s)) and Newton found no equilibrium: the "
             "system is a mechanism or a body is not held; prescribe the drive or add the missing support"
         )
-    raise _not_converged(list(increments), gap_max, tolerance, advice)
+    raise _not_converged(list(increments[:iteration]), gap_max, tolerance, advice)
 
 
 #: Halvings of one gravity increment of :func:`static_equilibrium` before the equilibrium is declared out of reach.
@@ -303,6 +323,7 @@ class _Path:
 
     def __init__(self, t: float, q: NDArray, lam: NDArray, order: int):
         self.times, self.q, self.lam, self.order = [t], [q], [lam], order
+        self.jumps: list[PathJump] = []
 
     def predict(self, t: float) -> tuple[NDArray, NDArray] | None:
         """Extrapolated ``(q, lam)`` at ``t`` from the last ``order + 1`` equilibria; ``None`` from one."""
@@ -320,6 +341,7 @@ class _Path:
 
     def restart(self, t: float, q: NDArray, lam: NDArray) -> None:
         """The path starts again at ``(t, q, lam)``: it jumped there, and no polynomial reaches across a jump."""
+        self.jumps.append(PathJump(self.times[-1], self.q[-1], self.lam[-1], t, q, lam))
         self.times, self.q, self.lam = [t], [q], [lam]
 
 
@@ -439,7 +461,7 @@ def _jump(model, path: _Path, t_end: float, tolerance: float, failure: StaticDiv
     starts again from the settled equilibrium. Returns the time it settled at and the iterations; raises
     ``failure`` for a system without such contacts, or when no settling succeeds."""
     system = model if isinstance(model, MultibodySystem) else model.source()
-    if system is None or not any(element.separates for element in system.forces):
+    if system is None or not _separating_contacts(system):
         raise failure
     t_from = path.times[-1]
     tries = [t_from + (t_end - t_from) / 2.0**k for k in range(MAX_HALVINGS, -1, -1)]
@@ -526,7 +548,9 @@ def quasi_static(
                 iterations, tangent = _advance(model, path, float(t), tolerance, max_iterations, tangent, secant)
         except StaticDivergence as error:
             keep = np.flatnonzero(returned[:k])
-            found = StaticSolution(np.array(qs)[keep], np.array(lams)[keep], tuple(counts[j] for j in keep))
+            found = StaticSolution(
+                np.array(qs)[keep], np.array(lams)[keep], tuple(counts[j] for j in keep), jumps=tuple(path.jumps)
+            )
             raise StaticDivergence(f"quasi-static step {k} at t = {t:.6g} s: {error}", found) from error
         qs.append(path.q[-1].copy())
         lams.append(path.lam[-1].copy())
@@ -536,10 +560,14 @@ def quasi_static(
                 progress(float(t), float(times[-1]))
             except Interrupted as error:  # asked to stop: leave with the equilibria at the times reached
                 keep = np.flatnonzero(returned[: k + 1])
-                error.partial = StaticSolution(np.array(qs)[keep], np.array(lams)[keep], tuple(counts[j] for j in keep))
+                error.partial = StaticSolution(
+                    np.array(qs)[keep], np.array(lams)[keep], tuple(counts[j] for j in keep), jumps=tuple(path.jumps)
+                )
                 raise
     keep = np.flatnonzero(returned)
-    return StaticSolution(np.array(qs)[keep], np.array(lams)[keep], tuple(counts[k] for k in keep))
+    return StaticSolution(
+        np.array(qs)[keep], np.array(lams)[keep], tuple(counts[k] for k in keep), jumps=tuple(path.jumps)
+    )
 
 
 def refined_times(times: NDArray, max_step: float | None) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
@@ -709,18 +737,22 @@ def _on_own_steps(
             q_rows.append(last_q.copy())
             lam_rows.append(last_lam.copy())
             count_rows.append(0)
-        return StaticSolution(np.array(q_rows), np.array(lam_rows), tuple(count_rows), np.array(times))
+        return StaticSolution(
+            np.array(q_rows), np.array(lam_rows), tuple(count_rows), np.array(times), (*jumps, *path.jumps)
+        )
 
     q, lam, _, path_tangent = _newton(
         model, q0, np.zeros(model.n_constraints), float(own[0]), tolerance, max_iterations, None, secant, _START_ADVICE
     )
     path = _History(float(own[0]), q, lam, order)
+    jumps: list[PathJump] = []  # those of the paths before the last break
     emit(float(own[0]), path)
     for k, t in enumerate(own[1:], start=1):
         try:
             _, path_tangent = _advance(model, path, float(t), tolerance, max_iterations, path_tangent, secant)
             emit(float(t), path)
             if float(t) in restart:  # a kink of the path: the polynomial through points before it would miss after
+                jumps += path.jumps
                 path = _History(float(t), path.q[-1], path.lam[-1], order)
         except StaticDivergence as error:
             try:
@@ -736,7 +768,9 @@ def _on_own_steps(
             try:
                 progress(float(t), float(own[-1]))
             except Interrupted as error:  # asked to stop: leave with the outputs solved so far
-                error.partial = StaticSolution(np.array(qs), np.array(lams), tuple(counts), np.array(done_times))
+                error.partial = StaticSolution(
+                    np.array(qs), np.array(lams), tuple(counts), np.array(done_times), (*jumps, *path.jumps)
+                )
                 raise
     emit(float(outputs[-1]), path)
-    return StaticSolution(np.array(qs), np.array(lams), tuple(counts), np.array(done_times))
+    return StaticSolution(np.array(qs), np.array(lams), tuple(counts), np.array(done_times), (*jumps, *path.jumps))

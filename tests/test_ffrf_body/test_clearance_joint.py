@@ -269,7 +269,8 @@ def test_a_quasi_static_path_jumps_across_the_bore_where_the_load_through_the_pi
     """A rigid bar held at its centre of mass by a loose pin (no gravity) under a force along x that falls
     linearly through zero at t = 0.55 s: the pin rests against the +x side at c + F / (2k), floats where F vanishes
     (no equilibrium path continues: Newton's tangent is singular there) and the path jumps, by settling (Eq. (P6)),
-    to the -x side, where it rests at c + |F| / (2k) again (to Newton's tolerance at every output)."""
+    to the -x side, where it rests at c + |F| / (2k) again (to Newton's tolerance at every output). The path
+    records the jump."""
     from ffrf.solvers.static_solver import quasi_static
 
     body, model, _ = rigid_bar(RHO)
@@ -292,3 +293,9 @@ def test_a_quasi_static_path_jumps_across_the_bore_where_the_load_through_the_pi
         # Newton's tolerance on increments, 1e-10 m (measured 6e-12 m along the bore, where a pin resting on it is
         # held only by its load over the clearance: 2e3 N/m against the contact's 1e5)
         np.testing.assert_allclose(pin, expected, rtol=0.0, atol=1e-10)
+    # the path records its jump (the energy books are kept apart across it): once, where the load passes zero,
+    # from the +x side of the bore to the -x side within one path step
+    print("jumps", [(jump.t_from, jump.t_to, jump.q_from[0], jump.q_to[0]) for jump in path.jumps])
+    (jump,) = path.jumps
+    assert jump.t_from <= 0.55 < jump.t_to <= jump.t_from + 0.05
+    assert jump.q_from[0] > 0.9 * clearance and jump.q_to[0] < -0.9 * clearance
