@@ -27,7 +27,15 @@ from ffrf.solvers.stability import CriticalPose, critical_pose, equilibrium_stab
 from ffrf.solvers.static_solver import StaticSolution, path_times, quasi_static, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["SnapThrough", "run_critical_pose", "snap_summary", "trace_snap", "quasi_static_through_snaps"]
+__all__ = [
+    "NO_LANDING",
+    "NO_LANDING_WORDS",
+    "SnapThrough",
+    "run_critical_pose",
+    "snap_summary",
+    "trace_snap",
+    "quasi_static_through_snaps",
+]
 
 log = logging.getLogger(__name__)
 
@@ -313,7 +321,7 @@ def quasi_static_through_snaps(
             raise _with_partial(stop, qs, lams, counts, snaps, jumps)
         if not _lands(system, snap):
             snaps.append(replace(snap, landing_q=None, landing_multipliers=None))
-            raise _with_partial(stop, qs, lams, counts, snaps, jumps, _NO_LANDING.format(t=snap.fold_t))
+            raise _with_partial(stop, qs, lams, counts, snaps, jumps, NO_LANDING.format(t=snap.fold_t))
         log.info("snap at t = %.6g: fold of the equilibrium path, landing on another branch", snap.fold_t)
         snaps.append(snap)
         remaining = times[len(qs) :]
@@ -420,7 +428,7 @@ def _through_snaps_on_own_steps(
             raise stopped(stop, end)
         if not _lands(system, snap):
             snaps.append(replace(snap, landing_q=None, landing_multipliers=None))
-            raise stopped(stop, end, _NO_LANDING.format(t=snap.fold_t))
+            raise stopped(stop, end, NO_LANDING.format(t=snap.fold_t))
         log.info("snap at t = %.6g: fold of the equilibrium path, landing on another branch", snap.fold_t)
         snaps.append(snap)
         for t in todo[(todo > t_last + 1e-12 * scale) & (todo < snap.fold_t)]:  # outputs between the stop and the fold
@@ -454,10 +462,12 @@ def _before_fold(system: MultibodySystem, snap: SnapThrough, t: float) -> tuple[
     raise StaticDivergence(f"t = {t:.9g} s lies outside the traced path before the fold at t = {snap.fold_t:.9g} s")
 
 
-_NO_LANDING = (
+#: What a stop at a fold without a landing says (``{t}``: the fold's t); :data:`NO_LANDING_WORDS` name it in a message.
+NO_LANDING = (
     "the equilibrium path folds at t = {t:.6g} s, and the path traced beyond it meets no stable equilibrium at that "
     "t with less potential energy: where the jump goes takes a dynamic run"
 )
+NO_LANDING_WORDS = "meets no stable equilibrium at that t"
 
 
 def _lands(system: MultibodySystem, snap: SnapThrough) -> bool:

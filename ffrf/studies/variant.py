@@ -40,7 +40,8 @@ from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
 from ffrf.scenes.scene_cache import SceneCache
-from ffrf.studies.outputs import ENDS, OUTPUTS, WHERE, output_names
+from ffrf.solvers.snap_through import NO_LANDING_WORDS
+from ffrf.studies.outputs import OUTPUTS, WHERE, output_names
 from ffrf.studies.sampling import Variant
 from ffrf.studies.spec import NamedBases, Study
 from ffrf.system.drives import rpm
@@ -195,12 +196,18 @@ def print_end(row: dict) -> str:
     reason = str(row.get("reason", ""))
     if row["status"] == "ok":
         snaps = row.get("snaps", math.nan)
-        return ENDS[1] if snaps == snaps and snaps > 0 else ENDS[0]
-    if reason.startswith("no assembly"):
-        return ENDS[2]
-    if reason.startswith("the run stopped"):
-        return ENDS[3] if "near-dead point" in reason else ENDS[4]
-    return ENDS[5] if reason.startswith("bad input") else ENDS[6]
+        end = "completed through snaps" if snaps == snaps and snaps > 0 else "completed"
+    elif reason.startswith("no assembly"):
+        end = "no assembly"
+    elif reason.startswith("the run stopped") and "near-dead point" in reason:
+        end = "stopped at a near-dead pose"
+    elif reason.startswith("the run stopped") and NO_LANDING_WORDS in reason:
+        end = "stopped at a fold without landing"
+    elif reason.startswith("the run stopped"):
+        end = "stopped (unclassified)"
+    else:
+        end = "bad input" if reason.startswith("bad input") else "error"
+    return end
 
 
 def run_variant(study: Study, variant: Variant, cache: SceneCache | None = None) -> dict:

@@ -162,3 +162,27 @@ def test_the_print_shop_report_lists_every_unfinished_print_the_worst_and_where_
     lines = (tmp_path / "unfinished.csv").read_text().strip().splitlines()
     assert len(lines) == 1 + 24 and lines[0].startswith("id,assembles,last_drive_angle_deg,twist,reason")
     assert (tmp_path / "figures" / f"{OUTPUT}_convergence.png").is_file()
+
+
+def test_every_end_of_a_print_is_named_from_its_row():
+    """Each way a print's run ends (ffrf.studies.outputs.ENDS) is told from its row: the snaps it went through, and
+    the reason of a stop as the solver words it (a fold whose traced path finds no landing, a near-dead pose)."""
+    from ffrf.solvers.snap_through import NO_LANDING
+    from ffrf.studies.outputs import ENDS
+
+    stopped = {"status": "failed", "assembles": True}
+    rows = {
+        "completed": {"status": "ok", "snaps": 0},
+        "completed through snaps": {"status": "ok", "snaps": 2},
+        "no assembly": {"status": "failed", "reason": "no assembly: Newton diverged"},
+        "stopped at a near-dead pose": stopped
+        | {"reason": "the run stopped: near-dead point of the rigid loop at drive angle 16 deg: joint 2 turns fast"},
+        "stopped at a fold without landing": stopped
+        | {"reason": f"the run stopped: quasi-static path step 9 at t = 3 s: {NO_LANDING.format(t=2.9)}"},
+        "stopped (unclassified)": stopped | {"reason": "the run stopped: static Newton did not converge"},
+        "bad input": {"status": "failed", "reason": "bad input: the mesh is empty"},
+        "error": {"status": "failed", "reason": "ValueError: something else"},
+    }
+    assert set(rows) == set(ENDS)
+    for end, row in rows.items():
+        assert print_end(row) == end
