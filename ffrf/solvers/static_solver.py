@@ -314,6 +314,10 @@ MAX_CORRECTION = 0.5
 MAX_HALVINGS = 8
 #: Parts one quasi-static step may be done in (each a halved step that converged).
 MAX_PARTS = 64
+#: The same where contacts separate (joints with play): the path may crawl from contact switch to contact switch,
+#: each part a few 1/256 of the step (the PLA Bennett's 1 deg print with 0.1 mm of play took more than 64 parts
+#: for one path step at 98 deg of drive).
+MAX_PARTS_WITH_PLAY = 1024
 #: Jumps (Eq. (P6)) within one path step: one per shortest step at most.
 MAX_JUMPS = 2**MAX_HALVINGS
 
@@ -378,6 +382,7 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
     contact with play lets go jumps to the settled pose at the shortest step tried (:func:`_jump`) and goes on from
     there. Returns the Newton iterations spent and the kept tangent."""
     iterations, halvings, t_from, parts, jumps = 0, 0, path.times[-1], 0, 0
+    max_parts = MAX_PARTS_WITH_PLAY if _separating_contacts(model) else MAX_PARTS
     failure: StaticDivergence | None = None
     # (t, dq/dt, dlambda/dt) at the path's last equilibrium, once a try left the path: a polynomial through
     # equilibria a whole step apart misses the path by a fixed fraction of any shorter step (Eq. (S4))
@@ -385,7 +390,7 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
     left_path = False
     while True:
         t_try = t_from + (t_to - t_from) / 2.0**halvings
-        if t_try == t_from or parts >= MAX_PARTS:
+        if t_try == t_from or parts >= max_parts:
             # Halved steps that keep converging ever closer to t_to without reaching it: a limit point at t_to.
             raise StaticDivergence(
                 f"the steps towards t = {t_to:.9g} s shrink without reaching it ({parts} parts, the last at "
@@ -608,12 +613,14 @@ def path_times(
 
 
 class _History(_Path):
-    """A :class:`_Path` that also keeps the last :data:`_KEPT` equilibria, to interpolate outputs among them."""
+    """A :class:`_Path` that also keeps the last :data:`_KEPT` equilibria, and every one after the last solved output
+    (a path step that crawls past contact switches may take hundreds of parts), to interpolate outputs among them."""
 
     _KEPT = 32
 
     def __init__(self, t: float, q: NDArray, lam: NDArray, order: int):
         super().__init__(t, q, lam, order)
+        self.solved = -np.inf  # every output up to this t is solved
         self.kept: list[tuple[float, NDArray, NDArray]] = [(t, q, lam)]
         # the kept equilibria of the stretches between the last jumps, oldest first (``kept`` is the newest): an
         # output between a stretch's last equilibrium and the jump that ends it is solved on that stretch
@@ -622,12 +629,27 @@ class _History(_Path):
     def add(self, t: float, q: NDArray, lam: NDArray) -> None:
         super().add(t, q, lam)
         self.kept.append((t, q, lam))
-        del self.kept[: -self._KEPT]
+        self._trim()
+
+    def _trim(self) -> None:
+        """Keep the newest :data:`_KEPT` equilibria, or every one after the last solved output and ``order + 1``
+        before it."""
+        unsolved = sum(1 for point in self.kept if point[0] > self.solved)
+        del self.kept[: -max(self._KEPT, unsolved + self.order + 1)]
 
     def restart(self, t: float, q: NDArray, lam: NDArray) -> None:
         super().restart(t, q, lam)
         self.kept = [(t, q, lam)]
-        self.stretches = [*self.stretches[-self._KEPT + 1 :], (t, self.kept)]
+        self.stretches.append((t, self.kept))
+
+    def forget_before(self, t: float) -> None:
+        """Every output up to ``t`` is solved: drop the stretches that end at or before it (a path step may jump many
+        times, up to :data:`MAX_JUMPS`, and an output before the first jump still needs its stretch) and the
+        equilibria no output needs any more."""
+        while len(self.stretches) > 1 and self.stretches[1][0] <= t:
+            del self.stretches[0]
+        self.solved = t
+        self._trim()
 
     def _stretch(self, t: float) -> tuple[float, float]:
         """Start and end of the stretch ``t`` lies on (between two jumps)."""
@@ -727,6 +749,8 @@ def _on_own_steps(
             lams.append(lam.copy())
             counts.append(count)
             done_times.append(t_out)
+        if done_times:
+            path.forget_before(done_times[-1])
 
     def partial(path: _History) -> StaticSolution:
         times = list(done_times)

@@ -178,3 +178,30 @@ def test_secant_steps_equal_broyden_with_the_dense_updated_matrix():
         b = b + np.outer(y - b @ step_dense, weights * step_dense) / (step_dense @ (weights * step_dense))
         x_product, x_dense = x_product + step_product, x_dense + step_dense
     assert np.abs(f(x_product)).max() < 1e-11  # and it converged without refactoring
+
+
+def test_the_path_history_keeps_what_unsolved_outputs_need_across_many_jumps_and_long_crawls():
+    """The path's history (``_History``) for outputs solved after a path step: after 40 jumps in one step, the
+    stretch an earlier output lies on is still found (only 32 stretches were once kept, and the output was then
+    solved on a later stretch, or not at all); after 100 parts of one stretch past the last solved output, every
+    one is kept (once only the newest 32); once outputs are solved, the old stretches and equilibria go."""
+    from ffrf.solvers.static_solver import _History
+
+    def state(t: float) -> tuple[float, np.ndarray, np.ndarray]:
+        return t, np.full(3, t), np.full(2, -t)
+
+    path = _History(*state(0.0), order=2)
+    path.forget_before(0.0)
+    for k in range(1, 101):  # a crawl: 100 parts between outputs
+        path.add(*state(0.001 * k))
+    assert [point[0] for point in path.side(0.05)][0] == 0.0 and len(path.side(0.05)) == 101
+    for k in range(40):  # 40 jumps in a row
+        path.restart(*state(0.2 + 0.01 * k))
+    before = [point for point in path.side(0.05) if point[0] < 0.05]
+    assert len(before) == 50 and path.side(0.25)[0][0] == pytest.approx(0.25)
+    path.forget_before(0.305)
+    assert len(path.stretches) == 30 and path.stretches[0][0] == pytest.approx(0.3)
+    for k in range(100):
+        path.add(*state(0.6 + 0.001 * k))
+    path.forget_before(0.7)
+    assert len(path.kept) == 32
