@@ -279,6 +279,64 @@ def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_
     np.testing.assert_allclose(slopes, peaks, rtol=0, atol=1e-6 * np.abs(peaks).max())
 
 
+@pytest.fixture(scope="module")
+def misfit_6r():
+    """Rational Linkages' collisions_free_6r at a tenth of its size, coarse PLA links, bore errors as misfits,
+    along part of its revolution."""
+    from ffrf.scenes.linkage_description import LinkageOptions
+    from ffrf.scenes.linkage_scene import build_linkage
+    from kinematics.rational_mechanism import load_model, loop_from_mechanism, regular_start
+
+    mechanism = load_model("collisions_free_6r")
+    loop = loop_from_mechanism(mechanism, scale=0.1)
+    origin = regular_start(mechanism, loop)
+    options = LinkageOptions(
+        h=12e-3, order=1, n_modes=2, start_angle=float(origin[0]), origin=origin, bore_error_model="misfit"
+    )
+    scene = build_linkage(loop, options)
+    result = run_linkage(scene, mode="quasi_static", n_outputs=5, t_end=0.4 * scene.t_end, sensors="path")
+    return loop, options, scene, result
+
+
+@pytest.mark.parametrize("field, joint, link", [("twist", 2, 2), ("offset", 4, 5)])
+def test_a_6r_s_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_6r, field, joint, link):
+    """Eq. (D1) on a 6R (collisions_free_6r, six joints, five moving links): the coupler point's and the driving
+    torque's derivatives by a bore's twist (rad) or offset (m) against central differences of the linkage built with
+    that BoreError and its equilibria re-solved by Newton, at +-delta and +-2 delta combined by Richardson's rule,
+    within 1e-6 of the largest derivative, as on the Bennett (measured: 1e-10 to 3e-10 for the coupler, 2e-11 to
+    2e-10 for the torque)."""
+    from ffrf.scenes.linkage_description import BoreError
+    from ffrf.scenes.linkage_scene import build_linkage
+    from ffrf.scenes.path_sensitivity import bore_sensitivity
+
+    loop, options, scene, result = misfit_6r
+    exact = bore_sensitivity(scene, loop, options, result.time, result.q, result.multipliers, ((joint, link),))
+    column = ("twist", "offset", "axial").index(field)
+    rows = [1, 3, 4]
+    delta = 5e-5 if field == "twist" else 1e-5
+
+    def outputs(error: float) -> dict:
+        built = build_linkage(loop, replace(options, bore_errors=(BoreError.single(joint, link, field, error),)))
+        solved = []
+        for r in rows:
+            first = static_equilibrium(built.system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
+            solved.append(static_equilibrium(built.system, first.q, t=float(result.time[r]), tolerance=1e-15))
+        q = np.array([s.q for s in solved])
+        return path_sensors(built, result.time[rows], q, np.array([s.multipliers for s in solved]))
+
+    def central(step: float, name: str) -> np.ndarray:
+        return (outputs(step)[name] - outputs(-step)[name]) / (2 * step)
+
+    coupler = (4 * central(delta, "coupler_point") - central(2 * delta, "coupler_point")) / 3
+    torque = (4 * central(delta, "driving_torque") - central(2 * delta, "driving_torque")) / 3
+    ours_coupler, ours_torque = exact.coupler_point[rows, :, column], exact.driving_torque[rows, column]
+    print(field, "coupler error", np.abs(ours_coupler - coupler).max() / np.abs(coupler).max())
+    print(field, "torque error", np.abs(ours_torque - torque).max() / np.abs(torque).max())
+    assert np.abs(ours_coupler).max() > 1e-3  # a bore error moves the coupler
+    np.testing.assert_allclose(ours_coupler, coupler, rtol=0, atol=1e-6 * np.abs(coupler).max())
+    np.testing.assert_allclose(ours_torque, torque, rtol=0, atol=1e-6 * np.abs(torque).max())
+
+
 @pytest.mark.slow  # 52 s; material derivatives stay checked on the Bennett
 def test_the_von_mises_trusss_apex_moves_with_the_bars_stiffness_as_its_closed_form(tmp_path):
     """The von Mises truss of two steel bars under a dead load P at the apex (tests/test_textbook): P = k h(z) with
