@@ -2,7 +2,7 @@
 
 Each reads the result files it needs from ``docs/results/`` and returns the Markdown table (with a source
 line); ``scripts/update_docs.py`` writes the blocks and its ``--check`` compares them. The file is longer
-than our modules usually are because it holds one short function per table of the docs (17), which are
+than our modules usually are because it holds one short function per table of the docs (22), which are
 read best side by side; ``format_like`` is the one rule for how a figure's digits are written.
 """
 
@@ -173,6 +173,32 @@ def table_play_design() -> str:
             )
         )
     return "\n".join(lines + ["", _source("play_design")])
+
+
+def table_study_ends() -> str:
+    """How each print of the 2000-print study ended (``python -m ffrf study``'s analysis, ``ends``)."""
+    data = _results("study_pla_2000") or {}
+    lines = _header("how the print's run ended", "prints")
+    for end, count in data.get("ends", {}).items():
+        lines.append(_row([end, count]))
+    share = data.get("unclassified", {})
+    if share.get("n"):
+        lines += [
+            "",
+            f"Stopped for a reason the solver does not classify: {share['exceeding']} of {share['n']} "
+            f"(95 % interval {100 * share['fraction_low']:.2g} to {100 * share['fraction_high']:.2g} %).",
+        ]
+    return "\n".join(lines + ["", _source("study_pla_2000")])
+
+
+def table_study_worst() -> str:
+    """The 2000-print study's five prints with the largest coupler deviation and where it occurs."""
+    data = _results("study_pla_2000") or {}
+    lines = _header("print", "largest coupler deviation (mm)", "at drive angle (deg)")
+    for p in data.get("worst", {}).get("max_coupler_deviation_m", []):
+        at = "-" if p["at_deg"] is None else f"{p['at_deg']:.1f}"
+        lines.append(_row([p["id"], f"{p['value']:.4g}", at]))
+    return "\n".join(lines + ["", _source("study_pla_2000")])
 
 
 def table_assembly_stress_per_link() -> str:

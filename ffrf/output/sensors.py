@@ -20,6 +20,7 @@ For every output row, and for any scene built by :mod:`ffrf.scenes.builder` (duc
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Collection, Sequence
 
 import numpy as np
@@ -35,6 +36,8 @@ from ffrf.system.packed_system import newton_model
 from ffrf.system.reactions import driving_torques, joint_poses, joint_reactions, relative_angle
 
 __all__ = ["relative_angle", "joint_rows", "node_sensors", "scene_sensors", "path_sensors", "with_jump_ends"]
+
+log = logging.getLogger(__name__)
 
 
 def _marker_joints(system: MultibodySystem) -> list[tuple[int, MarkerJoint]]:
@@ -150,47 +153,59 @@ def scene_sensors(
 def with_jump_ends(
     time: NDArray, q: NDArray, multipliers: NDArray, jumps: Sequence[PathJump]
 ) -> tuple[NDArray, NDArray, NDArray, NDArray[np.int64], list[int]]:
-    """The rows with the equilibria on both sides of each jump within them, in the order of t (a state that is a row
-    already, or both jumps' end, once): ``(time, q, multipliers, rows, breaks)``, ``rows`` where the given rows are
-    and ``breaks`` the rows i where the path jumps from i to i + 1. A jump whose ends do not follow each other
-    there (an output at a snap's t between them) is no break: the balance then spans it, and misses what it
-    released."""
+    """The rows with the equilibria on both sides of each jump within them, in the order of t:
+    ``(time, q, multipliers, rows, breaks)``, ``rows`` where the given rows are and ``breaks`` the rows i where the
+    path jumps from i to i + 1. A jump's end that is a row already, or another jump's end (a path that jumps again
+    from where it landed), is that one (the same t, coordinates within :data:`SAME_STATE` of their size: Newton may
+    have solved it twice). Where the states cannot be put in an order of strictly increasing t between the jumps
+    (an output at a snap's t, between its fold and its landing), the rows alone are returned, without breaks: the
+    balance then spans the jumps and misses what they released, which its check says."""
     scale = 1e-12 * max(1.0, float(np.max(np.abs(time), initial=0.0)))
+    entries: list[list] = [[float(t), q[k], multipliers[k], k] for k, t in enumerate(time)]
+    starts: list[list] = []
     inside = [jump for jump in jumps if time[0] - scale <= jump.t_from and jump.t_to <= time[-1] + scale]
-    states = [(float(t), 1, q[k], multipliers[k], k) for k, t in enumerate(time)]
-    for jump in inside:  # at one t: the state a jump leaves, the rows, the state it lands on
-        states.append((jump.t_from, 0, jump.q_from, jump.multipliers_from, -1))
-        states.append((jump.t_to, 2, jump.q_to, jump.multipliers_to, -1))
-    states.sort(key=lambda state: state[:2])
-    kept: list[tuple] = []
-    for state in states:
-        twins = [
-            k
-            for k in range(len(kept))
-            if (state[4] < 0 or kept[k][4] < 0) and kept[k][0] >= state[0] - scale and _same(kept[k], state)
-        ]
-        if not twins:
-            kept.append(state)
-        elif state[4] >= 0:  # a given row stands for its twin
-            kept[twins[0]] = state
-    breaks = []
-    for jump in inside:
-        start = [k for k, state in enumerate(kept) if _same(state, (jump.t_from, 0, jump.q_from))]
-        if start and start[0] + 1 < len(kept) and _same(kept[start[0] + 1], (jump.t_to, 0, jump.q_to)):
-            breaks.append(start[0])
-    rows = np.array([k for k, state in enumerate(kept) if state[4] >= 0], dtype=np.int64)
+    for jump in sorted(inside, key=lambda jump: (jump.t_from, jump.t_to)):
+        start = _find(entries, jump.t_from, jump.q_from, scale)
+        if start is None:
+            start = sum(1 for entry in entries if entry[0] <= jump.t_from + scale)
+            entries.insert(start, [jump.t_from, jump.q_from, jump.multipliers_from, -1])
+        landing = _find(entries, jump.t_to, jump.q_to, scale)
+        if landing is None:
+            entries.insert(start + 1, [jump.t_to, jump.q_to, jump.multipliers_to, -1])
+        elif landing != start + 1:
+            continue  # other states lie between its ends: no break
+        starts.append(entries[start])
+    breaks = sorted({next(k for k, entry in enumerate(entries) if entry is start) for start in starts})
+    times = np.array([entry[0] for entry in entries])
+    steps = np.diff(times)
+    steps[breaks] = 1.0  # a snap's two ends share their t
+    if np.any(steps <= 0.0):
+        log.warning("the energy balance spans the path's jumps: their ends are not in an order of t among the rows")
+        return time, q, multipliers, np.arange(len(time)), []
     return (
-        np.array([state[0] for state in kept]),
-        np.array([state[2] for state in kept]),
-        np.array([state[3] for state in kept]),
-        rows,
-        sorted(set(breaks)),
+        times,
+        np.array([entry[1] for entry in entries]),
+        np.array([entry[2] for entry in entries]),
+        np.array([k for k, entry in enumerate(entries) if entry[3] >= 0], dtype=np.int64),
+        breaks,
     )
 
 
-def _same(a: tuple, b: tuple) -> bool:
-    """Two states at the same t with the same coordinates."""
-    return abs(a[0] - b[0]) <= 1e-12 * max(1.0, abs(a[0])) and np.array_equal(a[2], b[2])
+#: Coordinates of one state solved twice differ by Newton's tolerance; those of two states of a jump by far more.
+SAME_STATE = 1e-8
+
+
+def _find(entries: list[list], t: float, q: NDArray, scale: float) -> int | None:
+    """The index of the entry at ``t`` with the coordinates ``q`` (within :data:`SAME_STATE` of their size)."""
+    size = SAME_STATE * max(1.0, float(np.max(np.abs(q))))
+    return next(
+        (
+            k
+            for k, entry in enumerate(entries)
+            if abs(entry[0] - t) <= scale and float(np.max(np.abs(entry[1] - q))) <= size
+        ),
+        None,
+    )
 
 
 def path_sensors(scene, time: NDArray, q: NDArray, multipliers: NDArray) -> dict[str, NDArray]:

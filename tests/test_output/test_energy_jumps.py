@@ -92,3 +92,29 @@ def test_the_sides_of_each_jump_are_put_among_the_rows_in_the_order_of_t():
     np.testing.assert_array_equal(rows, [0, 1, 4, 8])
     assert breaks == [1, 2, 5, 7]
     np.testing.assert_array_equal(states[rows], q)
+
+
+def test_a_state_solved_twice_is_one_and_a_snap_lands_before_the_next_jump_from_its_landing():
+    """A snap at t = 1.5 whose landing the next leg re-solved (1e-12 off) and jumped from at once, listed before the
+    snap as the run lists them; a jump that leaves a row re-solved likewise: each state once, in the order of the
+    path. States that cannot be ordered (an output between a snap's fold and landing) give the rows alone."""
+    time = np.array([0.0, 1.0, 2.0])
+    q = np.array([_state(v) for v in (0.0, 1.0, 2.0)])
+    lam = -q
+    polished = _state(1.6) + 1e-12
+    jumps = [
+        PathJump(1.5, polished, -polished, 1.7, _state(1.7), -_state(1.7)),
+        PathJump(1.5, _state(1.4), -_state(1.4), 1.5, _state(1.6), -_state(1.6)),
+        PathJump(1.0, _state(1.0) + 1e-12, -_state(1.0), 1.2, _state(1.2), -_state(1.2)),
+    ]
+    series, states, _, rows, breaks = with_jump_ends(time, q, lam, jumps)
+    np.testing.assert_array_equal(series, [0.0, 1.0, 1.2, 1.5, 1.5, 1.7, 2.0])
+    np.testing.assert_allclose(states[:, 0], [0.0, 1.0, 1.2, 1.4, 1.6, 1.7, 2.0])
+    np.testing.assert_array_equal(rows, [0, 1, 6])
+    assert breaks == [1, 3, 4]
+    # an output row at a snap's t that is neither its fold nor its landing: no order, no breaks
+    crowded = np.array([0.0, 1.5, 2.0])
+    series, _, _, rows, breaks = with_jump_ends(crowded, q, lam, jumps[1:2])
+    np.testing.assert_array_equal(series, crowded)
+    np.testing.assert_array_equal(rows, [0, 1, 2])
+    assert breaks == []
