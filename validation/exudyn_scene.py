@@ -34,6 +34,7 @@ __all__ = [
     "SceneValidation",
     "scene_bodies",
     "run_exudyn_scene",
+    "twin_schedule",
     "compared_sensors",
     "validate_scene",
     "write_scene_report",
@@ -79,10 +80,21 @@ def _torque_keys(scene) -> dict[str, str]:
     return {name: f"torque:{joint_key(name)}" for name in scene.driven}
 
 
-def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> TwinRun:
-    """Exudyn's run of ``scene`` at our output ``times``: ``q`` in our layout and basis, the sensors of
-    :func:`compared_sensors` named as ours (positions, ``<joint>_torque`` with our sign), the set-up and solution
-    wall times."""
+def twin_schedule(scene, run: Result) -> tuple[str, float | None]:
+    """The mode and the dynamic step (s; ``None`` quasi-statically) of our ``run`` of ``scene``, which its twin takes:
+    a linkage's run chooses both (the mode by its quasi-static ratio, the step by its drive,
+    :func:`ffrf.scenes.assembly.dynamic_step`) and records them; a scene file's run takes its settings'."""
+    mode = str(run.metadata.get("mode") or scene.settings.get("mode", "dynamic"))
+    if mode != "dynamic":
+        return mode, None
+    step = run.metadata.get("step")
+    return mode, float(scene.settings.get("step", 1e-3) if step is None else step)
+
+
+def run_exudyn_scene(scene, bases, times: NDArray, mode: str, step: float | None, tolerance: float = 1e-10) -> TwinRun:
+    """Exudyn's run of ``scene`` at our output ``times``, in our run's ``mode`` with its dynamic ``step``
+    (:func:`twin_schedule`): ``q`` in our layout and basis, the sensors of :func:`compared_sensors` named as ours
+    (positions, ``<joint>_torque`` with our sign), the set-up and solution wall times."""
     import exudyn
 
     from ffrf.scenes.assembly import quasi_static_step
@@ -93,7 +105,6 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
     from .twin_bases import to_twin_layout
 
     s = scene.settings
-    mode = s.get("mode", "dynamic")
     beta = float(s.get("beta", 0.0))
     bodies = scene_bodies(scene)
     started = time.perf_counter()
@@ -115,7 +126,8 @@ def run_exudyn_scene(scene, bases, times: NDArray, tolerance: float = 1e-10) -> 
     started = time.perf_counter()
     t_end = float(times[-1])
     if mode == "dynamic":
-        step = float(s.get("step", 1e-3))
+        if step is None:
+            raise ValueError("a dynamic twin needs our run's step")
         settings = dynamic_settings(t_end, step, float(s.get("rho_inf", 0.9)), tolerance, tolerance)
         solve_dynamic(twin.mbs, settings, "the scene")
     else:  # the same intermediate equilibria as ours (ffrf.scenes.assembly.quasi_static_step)
@@ -176,7 +188,8 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
     convention_arrays = compared_sensors(run_convention)
     run_exact = load(exact).run()
     exact_arrays = compared_sensors(run_exact)
-    twin = run_exudyn_scene(scene, bases, times)
+    mode, step = twin_schedule(scene, run)
+    twin = run_exudyn_scene(scene, bases, times, mode, step)
     theirs, setup_exudyn, solve_exudyn = (
         twin.sensors,
         twin.metadata["timings_s"]["setup"],
@@ -185,7 +198,8 @@ def validate_scene(path: str | Path, basis: str = "exudyn") -> SceneValidation:
 
     metrics: dict = {
         "scene": scene.name,
-        "mode": scene.settings.get("mode", "dynamic"),
+        "mode": mode,
+        "step_s": step,  # both solvers' (Exudyn's fixed; ours the base step, its parts where the drive turns fast)
         "modes": {n: c.metrics() for n, c in modes.items()},
         "sensors": {},
         "torques": {},

@@ -76,6 +76,27 @@ def test_flexible_6r_linkage_file_against_its_exudyn_twin(tmp_path):
     # Exudyn's approximate marker Jacobian copied into ours: the solvers agree to round-off (measured 4.6e-13 m).
     assert max(s["with_exudyn_jacobian_max_abs_diff_m"] for s in m["sensors"].values()) < 1e-11
     assert m["torques"]["joint0 (drive)"]["max_rel_diff"] < 1e-5  # measured 8.9e-8
+    assert m["mode"] == "quasi_static" and m["step_s"] is None
+
+
+def test_the_twin_runs_with_the_mode_and_step_our_run_chose():
+    """A linkage's run chooses its mode and step (the drive's step rule) and records them; its twin takes them, not
+    the settings' defaults (a linkage file names neither: Exudyn was once asked for 1 ms steps over a minute of
+    drive, 61,000 steps, where ours took the drive's step); a scene file's run takes its settings."""
+    from types import SimpleNamespace
+
+    from validation.exudyn_scene import twin_schedule
+
+    linkage = SimpleNamespace(settings={"outputs": 61})
+    assert twin_schedule(linkage, SimpleNamespace(metadata={"mode": "dynamic", "step": 4.2e-3})) == ("dynamic", 4.2e-3)
+    assert twin_schedule(linkage, SimpleNamespace(metadata={"mode": "quasi_static", "step": None})) == (
+        "quasi_static",
+        None,
+    )
+    scene = SimpleNamespace(settings={"mode": "dynamic", "step": 5e-4})
+    assert twin_schedule(scene, SimpleNamespace(metadata={"settings": scene.settings})) == ("dynamic", 5e-4)
+    default = SimpleNamespace(settings={})
+    assert twin_schedule(default, SimpleNamespace(metadata={})) == ("dynamic", 1e-3)
 
 
 #: A linkage as ``python -m ffrf design`` writes it (``designed.toml`` of the coarse PLA Bennett design of
