@@ -75,10 +75,7 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
         factor = np.exp(change)
         bodies[link] = bodies[link].scaled(**({"stiffness": factor} if kind == "E" else {"density": factor}))
         system = replace(scene.system, bodies=tuple(bodies))
-        solved = []
-        for r in rows:  # solved, then polished by Newton from a freshly factored tangent (round-off, not 1e-13)
-            first = static_equilibrium(system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
-            solved.append(static_equilibrium(system, first.q, t=float(result.time[r]), tolerance=1e-15))
+        solved = _re_solved(system, result, rows)
         q = np.array([s.q for s in solved])
         lam = np.array([s.multipliers for s in solved])
         mu = [_lowest(system, s, float(result.time[r])) for s, r in zip(solved, rows, strict=True)]
@@ -137,6 +134,16 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
     clamp = exact.reaction_forces["clamp"][:, :, column]
     np.testing.assert_allclose(clamp[:, 2], expected, rtol=0, atol=1e-9 * weight)
     np.testing.assert_allclose(clamp[:, :2], 0.0, atol=1e-9 * weight)
+
+
+def _re_solved(system: MultibodySystem, result, rows: list[int]) -> list:
+    """The equilibria of ``system`` at ``result``'s rows, by Newton from them, polished from a freshly factored
+    tangent (round-off, not the 1e-13 of the first solve)."""
+    solved = []
+    for r in rows:
+        first = static_equilibrium(system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
+        solved.append(static_equilibrium(system, first.q, t=float(result.time[r]), tolerance=1e-15))
+    return solved
 
 
 def _lowest(system: MultibodySystem, solved, t: float) -> float:
@@ -248,10 +255,7 @@ def test_bore_error_derivatives_agree_with_linkages_built_with_the_error(misfit_
 
     def outputs(error: float) -> dict:
         built = build_linkage(loop, replace(options, bore_errors=(BoreError.single(joint, link, field, error),)))
-        solved = []
-        for r in rows:
-            first = static_equilibrium(built.system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
-            solved.append(static_equilibrium(built.system, first.q, t=float(result.time[r]), tolerance=1e-15))
+        solved = _re_solved(built.system, result, rows)
         q = np.array([s.q for s in solved])
         lam = np.array([s.multipliers for s in solved])
         mu = [_lowest(built.system, s, float(result.time[r])) for s, r in zip(solved, rows, strict=True)]
@@ -317,10 +321,7 @@ def test_a_6r_s_bore_error_derivatives_agree_with_linkages_built_with_the_error(
 
     def outputs(error: float) -> dict:
         built = build_linkage(loop, replace(options, bore_errors=(BoreError.single(joint, link, field, error),)))
-        solved = []
-        for r in rows:
-            first = static_equilibrium(built.system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
-            solved.append(static_equilibrium(built.system, first.q, t=float(result.time[r]), tolerance=1e-15))
+        solved = _re_solved(built.system, result, rows)
         q = np.array([s.q for s in solved])
         return path_sensors(built, result.time[rows], q, np.array([s.multipliers for s in solved]))
 
