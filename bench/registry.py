@@ -23,6 +23,9 @@ ENGINE = ("ffrf", "kinematics")
 WITH_VALIDATION = (*ENGINE, "validation", "identification")
 #: The arguments of a command that writes its JSON to the file ``--json`` names.
 JSON = ("--json", "{out}/report.json")
+#: The built-in linkages beyond the paper's Bennett (whose four variants ``validation summary`` compares): each one's
+#: linkage file in ``examples/`` and its recorded twin report, ``validation_<name>.json`` (issue #39).
+TWIN_LINKAGES = ("goldberg_5r", "bennett_ark24", "collisions_free_6r", "plane_fold_6r", "interp_4poses_6r")
 
 
 @dataclass(frozen=True)
@@ -392,14 +395,17 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         "validation",
         "the comparisons with Exudyn of `python -m validation`",
         module="validation",
-        measures=(*WITH_VALIDATION, "examples/collisions_free_6r.toml"),
+        measures=(*WITH_VALIDATION, *(f"examples/{name}.toml" for name in TWIN_LINKAGES)),
         records=(
             Recording("validation_summary", ("summary", "--out", "{out}"), ("summary.json",)),
             Recording("testmodels", ("testmodels", *JSON)),
-            Recording(
-                "validation_collisions_free_6r",
-                ("report", "--scene", "examples/collisions_free_6r.toml", "--out", "{out}"),
-                ("metrics.json",),
+            *(
+                Recording(
+                    f"validation_{name}",
+                    ("report", "--scene", f"examples/{name}.toml", "--out", "{out}", "--max-minutes", "10"),
+                    ("metrics.json",),
+                )
+                for name in TWIN_LINKAGES
             ),
         ),
     ),

@@ -126,6 +126,7 @@ class Model:
         sensors: str = "all",
         error_tolerance: float | None = None,
         blas_threads: int | None = 1,
+        step_parts: list[list[int]] | None = None,
     ) -> Result:
         """Run the model; what is not given comes from the scene (:meth:`settings`). ``mode``: ``auto`` (linkages),
         ``quasi_static`` or ``dynamic``; ``outputs``: output rows; ``step``: the dynamic time step (s); ``t_end``
@@ -136,7 +137,8 @@ class Model:
         step's local error bound (Eq. (G8)); ``blas_threads``: the BLAS library's threads during the run (default 1,
         as ``python -m ffrf`` and a study's workers run: our dense matrices are small, and under some OpenBLAS
         kernels, Haswell's among them, a dense solve's last digits depend on the thread count; ``None`` keeps the
-        process's setting).
+        process's setting); ``step_parts`` (dynamic linkages): another run's parts per step (its metadata's
+        ``step_parts``), taken again instead of the step rules' (:func:`ffrf.scenes.linkage_run.run_linkage`).
 
         A run checks itself (the metadata's ``verification``). A run that stops raises the solver's error
         (:class:`ffrf.errors.StaticDivergence`, :class:`ffrf.errors.NewtonDivergence`,
@@ -155,6 +157,7 @@ class Model:
                     sensors=sensors,
                     error_tolerance=error_tolerance,
                     blas_threads=None,
+                    step_parts=step_parts,
                 )
         chosen, _ = self.choose_mode(mode, stability)  # refuses stability with a dynamic run
         s = self.settings(outputs=outputs, step=step, t_end=t_end, rho_inf=rho_inf, stability=stability)
@@ -170,9 +173,12 @@ class Model:
                 s["stability"],
                 sensors,
                 error_tolerance,
+                step_parts,
             )
-        if sensors != "all" or error_tolerance is not None:
-            raise SceneError(f"sensors={sensors!r} and error_tolerance are of linkages; {self.name!r} is a scene")
+        if sensors != "all" or error_tolerance is not None or step_parts is not None:
+            raise SceneError(
+                f"sensors={sensors!r}, error_tolerance and step_parts are of linkages; {self.name!r} is a scene"
+            )
         given = {"mode": None if mode is None else chosen, "outputs": outputs, "step": step, "t_end": t_end}
         given |= {"rho_inf": rho_inf, "stability": stability}
         overrides = {key: value for key, value in given.items() if value is not None}

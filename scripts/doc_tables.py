@@ -201,6 +201,94 @@ def table_study_worst() -> str:
     return "\n".join(lines + ["", _source("study_pla_2000")])
 
 
+#: The linkage files of the recorded twin reports (``bench/registry.py``'s ``TWIN_LINKAGES``), in the table's order.
+TWIN_LINKAGES = ("goldberg_5r", "bennett_ark24", "collisions_free_6r", "plane_fold_6r", "interp_4poses_6r")
+
+
+def _twin_row(name: str, run: str, m: dict, same: dict, wall: str) -> list:
+    """One row of :func:`table_twins`; ``same``: the differences with Exudyn's marker Jacobian in both."""
+    t_ours, t_exudyn = m["timing_s"]["inhouse"]["total"], m["timing_s"]["exudyn"]["total"]
+    verdict = "met" if m["passed"] else "missed: " + "; ".join(c["name"] for c in m["checks"] if not c["passed"])
+    if "stopped" in m:
+        verdict = f"incomplete ({m['outputs_compared']} of {m['outputs']} outputs)"
+    return [
+        name,
+        run,
+        f"{1e3 * m['deviation']:.3g}",
+        f"{m['worst']:.2g}",
+        f"{same['worst']:.2g}",
+        f"{m['torque']:.2g}",
+        f"{same['torque']:.2g}",
+        f"{t_ours:.0f} / {t_exudyn:.0f}",
+        wall,
+        verdict,
+    ]
+
+
+def table_twins() -> str:
+    """The Exudyn twin of every built-in linkage: the paper's four Bennett variants (``validation summary``) and the
+    linkage files of :data:`TWIN_LINKAGES` (``validation report --scene``)."""
+    lines = _header(
+        "linkage",
+        "run",
+        "coupler's elastic deviation (mm)",
+        "max difference / elastic deviation",
+        "with Exudyn's Jacobian",
+        "driving torque difference / max",
+        "with Exudyn's Jacobian",
+        "time ours / Exudyn (s)",
+        "report's wall time (s)",
+        "targets",
+    )
+    summary = _results("validation_summary") or {}
+    summary_wall = (
+        json.loads((RESULTS / "validation_summary.json").read_text())["meta"]["wall_time_s"] if summary else 0
+    )
+    for variant, entry in summary.items():
+        m = entry["metrics"]
+        same = m["modelling_differences"]["with_exudyn_jacobian_vs_exudyn"]
+        row = {
+            **m,
+            "deviation": m["coupler_deviation_from_ideal_m"]["exudyn"],
+            "worst": max(v["relative_to_elastic_deviation"] for v in m["trajectories"].values()),
+            "torque": m["torque"]["max_rel_diff"],
+        }
+        run = f"quasi-static, {m['settings']['outputs']} outputs; {m['settings']['dynamic_t_end']:g} s dynamic"
+        wall = f"{summary_wall:.0f} (all four)"
+        lines.append(
+            _row(
+                _twin_row(
+                    f"Bennett {variant}",
+                    run,
+                    row,
+                    {"worst": same["relative_to_elastic_deviation"], "torque": same["torque_max_rel_diff"]},
+                    wall,
+                )
+            )
+        )
+    for name in TWIN_LINKAGES:
+        m = _results(f"validation_{name}")
+        if m is None or m.get("elastic_deviation_m") is None:
+            continue
+        sensors, torques = m["sensors"].values(), m["torques"].values()
+        row = {
+            **m,
+            "deviation": m["elastic_deviation_m"],
+            "worst": max(v["relative_to_elastic_deviation"] for v in sensors),
+            "torque": max(v["max_rel_diff"] for v in torques),
+        }
+        same = {
+            "worst": max(v["with_exudyn_jacobian_relative_to_elastic_deviation"] for v in sensors),
+            "torque": max(v["with_exudyn_jacobian_max_rel_diff"] for v in torques),
+        }
+        step = "" if m["step_s"] is None else f", {1e3 * m['step_s']:g} ms steps"
+        run = f"{m['mode'].replace('_', '-')}, {m['outputs']} outputs{step}"
+        wall = json.loads((RESULTS / f"validation_{name}.json").read_text())["meta"]["wall_time_s"]
+        lines.append(_row(_twin_row(m["scene"], run, row, same, f"{wall:.0f}")))
+    sources = _source("validation_summary", *(f"validation_{name}" for name in TWIN_LINKAGES))
+    return "\n".join(lines + ["", sources])
+
+
 def table_assembly_stress_per_link() -> str:
     """Largest von Mises stress per link, default discretisation (paper's in brackets)."""
     default, paper = _results("bennett_variants_default"), _results("bennett_variants_paper")

@@ -10,12 +10,15 @@ results; ``testmodels`` runs our twins of Exudyn's TestModels with modal flexibl
 (:mod:`validation.testmodels`) next to Exudyn's own runs and the values Exudyn stores. Exit status
 (scripts and CI rely on it): 0 when every target is met, 1 when a target is
 missed (the reports are written and say which), 2 when a run fails (the reason is printed, the
-reports written so far stay).
+reports written so far stay). A scene's report shows each run's progress on stderr; with ``--max-minutes``
+Exudyn's run stops at that time and the outputs it reached are compared (exit status 1, the report says
+"incomplete" and why).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -92,6 +95,11 @@ def main(argv: list[str] | None = None) -> int:
     which = report.add_mutually_exclusive_group()
     which.add_argument("--variant", choices=VARIANTS, default="pla")
     which.add_argument("--scene", type=Path, help="a TOML scene file (see ffrf/scenes/scene_file.py)")
+    report.add_argument(
+        "--max-minutes",
+        type=number_in(0.0, math.inf, closed_low=False, unit=" min"),
+        help="with --scene: stop Exudyn's run this long after the start and compare the outputs it reached",
+    )
     _settings_arguments(report)
     summary = commands.add_parser("summary", help="several variants and a summary in the paper's layout")
     summary.add_argument("--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS))
@@ -108,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
         return testmodels_main(args.models, not args.no_exudyn, args.json)
 
     if args.command == "report" and args.scene is not None:
-        return _scene_report(args.scene, args.basis, args.out)
+        return _scene_report(args.scene, args.basis, args.out, args.max_minutes)
     variants = [args.variant] if args.command == "report" else args.variants
     validations = []
     try:
@@ -136,19 +144,21 @@ def main(argv: list[str] | None = None) -> int:
     return 0 if all(v.metrics["passed"] for v in validations) else 1
 
 
-def _scene_report(scene: Path, basis: str, out: Path) -> int:
+def _scene_report(scene: Path, basis: str, out: Path, max_minutes: float | None) -> int:
     from .exudyn_scene import validate_scene, write_scene_report
 
     try:
-        validation = validate_scene(scene, basis)
+        validation = validate_scene(scene, basis, max_minutes)
     except Exception as error:  # noqa: BLE001 - command-line boundary: any failure is reported, exit code 2
         print(f"validation failed: {type(error).__name__}: {error}", file=sys.stderr)
         return 2
     path = write_scene_report(validation, out)
-    print(
-        f"[{validation.name}] {'all targets met' if validation.metrics['passed'] else 'targets missed'}; report: {path}"
-    )
-    return 0 if validation.metrics["passed"] else 1
+    m = validation.metrics
+    state = "all targets met" if m["passed"] else "targets missed"
+    if "stopped" in m:
+        state = f"incomplete ({m['stopped']['reason']}; {m['outputs_compared']} of {m['outputs']} outputs compared)"
+    print(f"[{validation.name}] {state}; report: {path}")
+    return 0 if m["passed"] else 1
 
 
 if __name__ == "__main__":

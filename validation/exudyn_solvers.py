@@ -61,7 +61,8 @@ def dynamic_settings(
 
 def static_settings(load_steps: int, tolerance: float, duration: float = 1.0, load_factor: bool = True):
     """``SolveStatic`` settings: fixed load steps over ``duration`` of quasi-time (drives turn with
-    it), loads ramped with the steps only if ``load_factor``; dense solver; Newton to ``tolerance``."""
+    it), loads ramped with the steps only if ``load_factor``; dense solver; Newton to ``tolerance``; sensors stored at
+    every load step."""
     import exudyn as exu
 
     s = exu.SimulationSettings()
@@ -75,6 +76,8 @@ def static_settings(load_steps: int, tolerance: float, duration: float = 1.0, lo
     s.staticSolver.verboseMode = 0
     s.linearSolver.solverType = exu.LinearSolverType.EXUdense
     s.solution.file.write = False
+    # every load step's sensor values: Exudyn's default period (10 ms) skips load steps shorter than it
+    s.solution.sensors.writePeriod = 0.5 * duration / load_steps
     return s
 
 
@@ -84,14 +87,26 @@ def sweep_settings(times: NDArray, tolerance: float):
     return static_settings(len(times) - 1, tolerance, duration=float(times[-1]), load_factor=False)
 
 
-def solve_dynamic(mbs, settings, what: str) -> tuple[float, int]:
+def solve_dynamic(mbs, settings, what: str, schedule: tuple[NDArray, NDArray] | None = None) -> tuple[float, int]:
     """Integrate the assembled ``mbs`` with ``settings`` (:func:`dynamic_settings`); returns the wall
     time (s) and the Newton iterations (-1 where Exudyn does not report them). ``what`` names the
-    run in the error raised when Exudyn stops."""
+    run in the error raised when Exudyn stops. ``schedule``: the end times and lengths of the steps to take
+    (:func:`ffrf.solvers.generalized_alpha.part_schedule`: our run's steps, each fixed step in as many parts as ours
+    took), set by Exudyn's UpdateCurrentTime user function; sensors are then stored at every one of them."""
     import exudyn as exu
 
     started = time.perf_counter()
     solver = exu.MainSolverImplicitSecondOrder()
+    if schedule is not None:
+        times, sizes = schedule
+        settings.solution.sensors.writePeriod = 0.5 * float(np.min(sizes))
+
+        def take_our_step(solver, mbs, settings) -> bool:
+            k = solver.it.currentStepIndex - 1  # Exudyn counts its steps from 1
+            solver.it.currentStepSize, solver.it.currentTime = float(sizes[k]), float(times[k])
+            return True
+
+        solver.SetUserFunctionUpdateCurrentTime(mbs, take_our_step)
     success = solver.SolveSystem(mbs, settings)
     seconds = time.perf_counter() - started
     if not success:

@@ -35,7 +35,15 @@ from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import newton_model
 from ffrf.system.reactions import driving_torques, joint_poses, joint_reactions, relative_angle
 
-__all__ = ["relative_angle", "joint_rows", "node_sensors", "scene_sensors", "path_sensors", "with_jump_ends"]
+__all__ = [
+    "relative_angle",
+    "joint_rows",
+    "joint_point_sensors",
+    "node_sensors",
+    "scene_sensors",
+    "path_sensors",
+    "with_jump_ends",
+]
 
 log = logging.getLogger(__name__)
 
@@ -48,14 +56,17 @@ def joint_rows(
     system: MultibodySystem,
     time: NDArray,
     q: NDArray,
-    multipliers: NDArray,
+    multipliers: NDArray | None,
     qd: NDArray | None = None,
     only: Collection[str] | None = None,
 ) -> dict[str, NDArray]:
     """Per joint ``J``: ``J_angle``, ``J_reaction`` (rows x 6), ``J_torque`` (driven joints), the joint
     points of side 0 and side 1 ``J_point0``, ``J_point1`` (world; equal where the joint holds), plus
     energies and ``constraint_residual``; rows = ``q``'s rows. ``only``: just the angles, points and torques of the
-    joints so named (no reactions, energies or residual), each value as the whole evaluation gives it."""
+    joints so named (no reactions, energies or residual), each value as the whole evaluation gives it; there
+    ``multipliers=None`` leaves out the torques (the points of a state known by its coordinates alone)."""
+    if multipliers is None and only is None:
+        raise ValueError("joint_rows needs the multipliers for the reactions; give them, or name the joints (only)")
     model = newton_model(system)  # its constraint values: the fast path's kernel when supported
     joints = [(k, j) for k, j in _marker_joints(system) if only is None or j.name in only]
     rows: dict[str, list] = {}
@@ -63,19 +74,19 @@ def joint_rows(
         rows = {k: [] for k in ("energy_kinetic", "energy_strain", "energy_potential", "constraint_residual")}
     for _, joint in joints:
         kinds = ("angle", "reaction", "point0", "point1") if only is None else ("angle", "point0", "point1")
-        for kind in kinds + (("torque",) if joint.angle is not None else ()):
+        for kind in kinds + (("torque",) if joint.angle is not None and multipliers is not None else ()):
             rows[f"{joint.name}_{kind}"] = []
     for row, t in enumerate(time):
         qq = q[row]
         poses = {j.name: joint_poses(j, [qq[system.block(i)] for i in j.bodies]) for _, j in joints}
-        torques = driving_torques(system, multipliers[row])
+        torques = {} if multipliers is None else driving_torques(system, multipliers[row])
         for _, joint in joints:
             rows[f"{joint.name}_angle"].append(relative_angle(poses[joint.name]))
             rows[f"{joint.name}_point0"].append(poses[joint.name][0])
             rows[f"{joint.name}_point1"].append(poses[joint.name][2])
-            if joint.angle is not None:
+            if joint.name in torques and joint.angle is not None:
                 rows[f"{joint.name}_torque"].append(torques[joint.name])
-        if only is not None:
+        if only is not None or multipliers is None:
             continue
         reactions = joint_reactions(system, qq, multipliers[row], float(t), poses)
         for _, joint in joints:
@@ -208,6 +219,20 @@ def _find(entries: list[list], t: float, q: NDArray, scale: float) -> int | None
     )
 
 
+def joint_point_sensors(scene, time: NDArray, q: NDArray) -> dict[str, NDArray]:
+    """The joint-point sensors of ``scene`` (each the mean of joint points on one body: a linkage's
+    ``coupler_point``) at ``q``'s rows, from the coordinates alone (a state another solver computed)."""
+    needed = {joint for parts in scene.joint_sensors.values() for joint, _ in parts}
+    return _joint_point_means(scene, joint_rows(scene.system, time, q, None, only=needed))
+
+
+def _joint_point_means(scene, rows: dict[str, NDArray]) -> dict[str, NDArray]:
+    return {
+        name: np.mean([rows[f"{joint}_point{side}"] for joint, side in parts], axis=0)
+        for name, parts in scene.joint_sensors.items()
+    }
+
+
 def path_sensors(scene, time: NDArray, q: NDArray, multipliers: NDArray) -> dict[str, NDArray]:
     """Of :func:`scene_sensors`, only the joint-point sensors (the mean of joint points on one body) and, with
     exactly one driven joint, ``drive_angle`` and ``driving_torque``: the same values, without the node sensors,
@@ -221,9 +246,7 @@ def path_sensors(scene, time: NDArray, q: NDArray, multipliers: NDArray) -> dict
 def _joint_sensors_and_drive(scene, time: NDArray, rows: dict[str, NDArray]) -> dict[str, NDArray]:
     """The joint-point sensors from the joints' points in ``rows`` (:func:`joint_rows`) and, with exactly one driven
     joint, ``drive_angle`` (its prescribed angle at each time) and ``driving_torque``."""
-    out = {}
-    for name, parts in scene.joint_sensors.items():  # the mean of joint points on one body
-        out[name] = np.mean([rows[f"{joint}_point{side}"] for joint, side in parts], axis=0)
+    out = _joint_point_means(scene, rows)
     driven = [(j, j.angle) for _, j in _marker_joints(scene.system) if j.angle is not None]  # play: never driven
     if len(driven) == 1:
         joint, angle = driven[0]

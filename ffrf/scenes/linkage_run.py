@@ -49,6 +49,7 @@ from ffrf.scenes.linkage_steps import (
     quasi_static_path_step,
 )
 from ffrf.solvers.common import PathJump
+from ffrf.solvers.generalized_alpha import replayed_limit, step_parts
 from ffrf.solvers.simulate import MODES, Run, simulate
 from ffrf.solvers.snap_through import SnapThrough, run_critical_pose, snap_summary
 from ffrf.solvers.stability import check_judged_at_equilibria, stability_along, stability_summary
@@ -157,6 +158,7 @@ def run_linkage(
     stability: bool = False,
     sensors: str = "all",
     error_tolerance: float | None = None,
+    step_parts: list[list[int]] | None = None,
 ) -> Result:
     """Assemble (static, with misalignment continuation), then run over the drive's ramp and
     revolution(s): ``quasi_static`` equilibria at ``n_outputs`` times, or ``dynamic``
@@ -172,7 +174,9 @@ def run_linkage(
     With ``stability`` (quasi-static runs) every equilibrium's three smallest squared frequencies of Eq. (B1) are
     the sensor ``stability_squared_frequencies`` (rad^2/s^2) and the metadata's ``stability`` sums them up.
     ``sensors``: ``"all"``, or ``"path"`` for only the coupler's path and the drive's (:data:`PATH_SENSORS`, what a
-    study's row reads; the same values, without the reactions, energies and tracked nodes)."""
+    study's row reads; the same values, without the reactions, energies and tracked nodes). ``step_parts`` (dynamic):
+    another run's parts per step (its metadata's ``step_parts``), taken again instead of the step rules' (Eqs. (G7),
+    (G8)): runs of variants of one scene that must take the same steps (a cross-validation's)."""
     if sensors not in SENSOR_SETS:
         raise ValueError(f"sensors must be one of {SENSOR_SETS}, got {sensors!r}")
     chosen, ratio = choose_mode(scene)
@@ -187,6 +191,9 @@ def run_linkage(
     t_end = scene.t_end if t_end is None else float(t_end)
     step = dynamic_step(scene) if step is None else float(step)
     tolerance = dynamic_error_tolerance(scene) if error_tolerance is None else error_tolerance
+    step_limit = dynamic_step_limit(scene) if mode == "dynamic" else None
+    if step_parts is not None and mode == "dynamic":  # another run's steps, taken again (no error control)
+        step_limit, tolerance = replayed_limit(t_end / max(1, round(t_end / step)), step_parts), None
     try:
         run = simulate(
             scene.system,
@@ -200,7 +207,7 @@ def run_linkage(
             max_static_step=quasi_static_step(scene),
             through_snaps=stability,
             static_path_step=quasi_static_path_step(scene) if mode == "quasi_static" else None,
-            step_limit=dynamic_step_limit(scene) if mode == "dynamic" else None,
+            step_limit=step_limit,
             error_tolerance=tolerance if mode == "dynamic" else None,
         )
         stopped = None
@@ -235,6 +242,8 @@ def run_linkage(
         n_outputs=len(times),
         joint_reaction_names=[c.name for c in scene.system.constraints if isinstance(c, MarkerJoint)],
         step=step if mode == "dynamic" else None,
+        # how many parts each step took (Eqs. (G7), (G8)): what the run's Exudyn twin is told to take
+        step_parts=_step_parts(run, t_end, step) if mode == "dynamic" else None,
         step_error_estimate=_step_error_summary(run),
         rho_inf=rho_inf if mode == "dynamic" else None,
         timings_s={
@@ -282,6 +291,14 @@ def run_linkage(
         stopped.partial = out
         raise stopped
     return out
+
+
+def _step_parts(run: Run, t_end: float, step: float) -> list[list[int]] | None:
+    """:func:`~ffrf.solvers.generalized_alpha.step_parts` of a dynamic run (its fixed step as the integrator takes
+    it: ``t_end`` in a whole number of steps)."""
+    if run.step_sizes is None or run.step_sizes.size == 0:
+        return None
+    return step_parts(run.step_sizes, t_end / max(1, round(t_end / step)))
 
 
 def _step_error_summary(run: Run) -> dict | None:

@@ -52,7 +52,7 @@ from ffrf.solvers.step_control import DisplacementScales, StepControl, displacem
 from ffrf.system.multibody import MultibodySystem
 from ffrf.system.packed_system import PackedSystem, contiguous, newton_model
 
-__all__ = ["AlphaParameters", "generalized_alpha", "precision_floor"]
+__all__ = ["AlphaParameters", "generalized_alpha", "part_schedule", "precision_floor", "replayed_limit", "step_parts"]
 
 log = logging.getLogger(__name__)
 
@@ -344,6 +344,55 @@ def _failure_advice(newton: _Newton, state: _State, h: float, remedy: str) -> st
     )
 
 
+def _part(k: int, j: int, parts: int, h: float) -> tuple[float, float]:
+    """End time and length (s) of part ``j`` of ``parts`` of fixed step ``k`` (from 1) of length ``h`` (Eq. (G7))."""
+    return (k * h, h) if parts == 1 else ((k - 1) * h + j * h / parts, h / parts)
+
+
+def step_parts(step_sizes: NDArray, h: float) -> list[list[int]]:
+    """How many parts each fixed step ``h`` of a run was done in (from its accepted ``step_sizes``, Eq. (G7)),
+    run-length encoded: ``[[parts, steps], ...]`` in the order of the run."""
+    encoded: list[list[int]] = []
+    i = 0
+    while i < len(step_sizes):
+        parts = max(1, round(h / float(step_sizes[i])))
+        if encoded and encoded[-1][0] == parts:
+            encoded[-1][1] += 1
+        else:
+            encoded.append([parts, 1])
+        i += parts
+    return encoded
+
+
+def part_schedule(h: float, parts: list[list[int]]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The end times and lengths (s) of every part of a run whose fixed steps ``h`` were done in ``parts``
+    (:func:`step_parts`), as :func:`generalized_alpha` computes them: another solver takes the very same steps."""
+    times, sizes = [], []
+    k = 0
+    for count, steps in parts:
+        for _ in range(steps):
+            k += 1
+            for j in range(1, count + 1):
+                t, size = _part(k, j, count, h)
+                times.append(t)
+                sizes.append(size)
+    return np.array(times), np.array(sizes)
+
+
+def replayed_limit(h: float, parts: list[list[int]]) -> Callable[[float, float], float]:
+    """A ``step_limit`` for :func:`generalized_alpha` with fixed steps ``h`` that makes it take ``parts`` (another run's
+    :func:`step_parts`) again: step ``k`` in exactly as many parts, whatever the run's own rules would choose."""
+    counts = np.repeat([p for p, _ in parts], [n for _, n in parts])
+
+    def limit(t0: float, t1: float) -> float:
+        k = int(round(t1 / h))
+        if not 1 <= k <= counts.size:
+            raise ValueError(f"the replayed steps end at t = {counts.size * h:.6g} s; the run asks for t = {t1:.6g} s")
+        return h / float(counts[k - 1])
+
+    return limit
+
+
 def generalized_alpha(
     system: MultibodySystem,
     q0: NDArray,
@@ -469,7 +518,7 @@ def generalized_alpha(
                 failure = None
                 largest, slowest = 0.0, 0  # the parts' largest (G8) estimate and most Newton iterations
                 for j in range(1, parts + 1):
-                    t_part, h_part = (t, h) if parts == 1 else ((k - 1) * h + j * h / parts, h / parts)
+                    t_part, h_part = _part(k, j, parts, h)
                     try:
                         new, count, diagnostics = _step(newton, state, t_part, h_part, before)
                     except _Singular as error:

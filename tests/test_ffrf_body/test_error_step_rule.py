@@ -146,3 +146,19 @@ def test_a_tolerance_beyond_the_cap_is_said(caplog):
         result = generalized_alpha(system, q0, qd0, 2 * H, H, rho_inf=RHO, error_tolerance=1e-9)
     assert np.all(_parts(result) == MAX_PARTS)
     assert "above error_tolerance" in caplog.text
+
+
+def test_a_refined_run_replayed_by_its_parts_is_the_same_run():
+    """The damped vibration's refined run, encoded by ``step_parts`` and taken again with ``replayed_limit`` and no
+    error control, is the same run to the last bit (what a cross-validation's variants of one scene rely on)."""
+    from ffrf.solvers.generalized_alpha import replayed_limit, step_parts
+
+    system, q0, qd0 = _start(0.01, beta=2e-3)
+    refined = generalized_alpha(system, q0, qd0, 0.3, H, rho_inf=RHO, error_tolerance=5e-3 * BAR)
+    parts = step_parts(refined.step_sizes, H)
+    assert parts[0][0] > 1 and parts[-1][0] == 1  # refined at the start, back to whole steps later
+    replayed = generalized_alpha(system, q0, qd0, 0.3, H, rho_inf=RHO, step_limit=replayed_limit(H, parts))
+    np.testing.assert_array_equal(replayed.step_sizes, refined.step_sizes)
+    np.testing.assert_array_equal(replayed.q, refined.q)
+    with pytest.raises(ValueError, match="replayed steps end at t = 0.3"):
+        generalized_alpha(system, q0, qd0, 0.31, H, rho_inf=RHO, step_limit=replayed_limit(H, parts))

@@ -117,6 +117,32 @@ def test_generalized_alpha_steps_in_parts_as_the_step_limit_asks():
     np.testing.assert_allclose(parts.q, quarter.q, rtol=0, atol=1e-9)
 
 
+def test_a_runs_parts_encoded_and_replayed_are_its_steps():
+    """``step_parts`` of a run whose step limit changes with time (1, 2, then 4 parts per step) and ``part_schedule``
+    of them give back the run's own part lengths (the same floats) and end times at the fixed steps' ends: what an
+    Exudyn twin is told to take (validation.exudyn_scene)."""
+    from ffrf.solvers.generalized_alpha import part_schedule, step_parts
+
+    system, _, _, _ = pendulum(n_modes=2, E=1e6)
+    q0 = system.initial_state()
+    run = generalized_alpha(
+        system,
+        q0,
+        np.zeros_like(q0),
+        0.03,
+        1e-3,
+        rho_inf=0.8,
+        step_limit=lambda a, b: 1e-3 / (1 + int(b > 0.01)) if b <= 0.02 else 2.5e-4,
+    )
+    parts = step_parts(run.step_sizes, 1e-3)
+    assert parts == [[1, 10], [2, 10], [4, 10]]
+    times, sizes = part_schedule(1e-3, parts)
+    np.testing.assert_array_equal(sizes, run.step_sizes)
+    assert times.size == 70
+    np.testing.assert_allclose(times[[9, 29, 69]], [0.01, 0.02, 0.03], rtol=0, atol=1e-17)  # the fixed steps' ends
+    np.testing.assert_allclose(np.diff(times, prepend=0.0), sizes, rtol=0, atol=1e-17)
+
+
 def _driven_bar(end: float = 2.15) -> MultibodySystem:
     """A rigid bar held by a driven hinge whose drive table ends at ``end`` (NaN after)."""
     from ffrf.system.joints import GroundFrame, driven_revolute_joint
