@@ -190,7 +190,7 @@ def run_linkage(
     assembled = wallclock.perf_counter()
     t_end = scene.t_end if t_end is None else float(t_end)
     step = dynamic_step(scene) if step is None else float(step)
-    tolerance = dynamic_error_tolerance(scene) if error_tolerance is None else error_tolerance
+    tolerance: float | None = dynamic_error_tolerance(scene) if error_tolerance is None else error_tolerance
     step_limit = dynamic_step_limit(scene) if mode == "dynamic" else None
     if step_parts is not None and mode == "dynamic":  # another run's steps, taken again (no error control)
         step_limit, tolerance = replayed_limit(t_end / max(1, round(t_end / step)), step_parts), None
