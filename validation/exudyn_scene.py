@@ -356,6 +356,16 @@ def validate_scene(
     return SceneValidation(scene.name, run, twin, modes, metrics)
 
 
+def _schedule_text(m: dict) -> str:
+    """Both solvers' steps, as the report states them."""
+    if m["step_s"] is None:
+        return f"Both: quasi-static, {m['outputs']} outputs."
+    return (
+        f"Both: dynamic, {m['outputs']} outputs, {1e3 * m['step_s']:g} ms steps in {m['steps_taken']} parts "
+        "(ours, taken by Exudyn too)."
+    )
+
+
 def write_scene_report(v: SceneValidation, directory: str | Path) -> Path:
     """``report.md`` (verdict first), ``metrics.json``, ``difference.png`` and ``mac.png``."""
     from . import figures
@@ -397,7 +407,7 @@ def write_scene_report(v: SceneValidation, directory: str | Path) -> Path:
         "",
         f"**Verdict: {state}.** Same meshes, M, K, interfaces, joints, drives, gravity model and solver "
         f"settings; Exudyn {m['versions']['exudyn']} reduces the bodies itself. Time: ours "
-        f"{ti['integration']:.2f} s, Exudyn {te['integration']:.2f} s.",
+        f"{ti['integration']:.2f} s, Exudyn {te['integration']:.2f} s. {_schedule_text(m)}",
         "",
         checks_table(m["checks"]),
         "",
