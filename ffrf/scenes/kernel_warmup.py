@@ -26,8 +26,12 @@ WARMUP_LINKAGE = {
 }
 
 
-def warm_kernels() -> None:
+def warm_kernels(dynamic: bool = False) -> None:
     """Run :data:`WARMUP_LINKAGE` through three quasi-static equilibria with stability monitoring: every kernel
-    of a quasi-static run is compiled, or loaded from numba's cache."""
+    of a quasi-static run is compiled, or loaded from numba's cache; with ``dynamic`` also two dynamic steps, for
+    the kernels of generalized-alpha and its error estimate (what a cross-validation's dynamic runs call)."""
     loop, options, _ = linkage_options(WARMUP_LINKAGE, "the warm-up linkage")
-    run_linkage(build_linkage(loop, options), mode="quasi_static", n_outputs=3, t_end=0.2, stability=True)
+    scene = build_linkage(loop, options)
+    run_linkage(scene, mode="quasi_static", n_outputs=3, t_end=0.2, stability=True)
+    if dynamic:
+        run_linkage(scene, mode="dynamic", n_outputs=3, t_end=0.02, step=0.01)
