@@ -80,15 +80,24 @@ class RunClock:
         return self.tick(t)
 
 
+#: Whether this process has compiled or loaded our kernels already (numba keeps them for the process's life).
+_KERNELS_READY = False
+
+
 def compiled_kernels(stream: TextIO | None = sys.stderr) -> float:
     """Compile our solver's kernels, or load them from numba's cache, before any run is timed
     (:func:`ffrf.scenes.kernel_warmup.warm_kernels`, the dynamic ones included): the report's times are then the
-    runs', not the compiler's (issue #38). Returns the wall seconds it took, which the report states apart."""
+    runs', not the compiler's (issue #38). Returns the wall seconds it took, which the report states apart (0 when
+    this process had them already: a summary's second variant, a test session's later reports)."""
+    global _KERNELS_READY
+    if _KERNELS_READY:
+        return 0.0
     from ffrf.scenes.kernel_warmup import warm_kernels
 
     started = time.monotonic()
     warm_kernels(dynamic=True)
     seconds = time.monotonic() - started
+    _KERNELS_READY = True
     if stream is not None:
         print(f"  our kernels compiled or loaded in {seconds:.1f} s (not in the runs' times)", file=stream, flush=True)
     return seconds

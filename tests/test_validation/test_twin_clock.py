@@ -39,3 +39,15 @@ def test_our_progress_callback_takes_the_runs_end_and_never_stops_it():
     clock = RunClock("ours", 1.0, deadline=time.monotonic() - 1.0, stream=None)
     clock.progress(3.0, 12.0)  # no Interrupted: our runs finish, the limit is the twin's
     assert clock.t_end == 12.0 and clock.reached == 3.0
+
+
+def test_our_kernels_are_compiled_once_per_process_before_any_run_is_timed(monkeypatch):
+    """The reports call ``compiled_kernels`` first; it warms the dynamic kernels too, and only once per process."""
+    import validation.twin_clock as twin_clock
+
+    calls = []
+    monkeypatch.setattr("ffrf.scenes.kernel_warmup.warm_kernels", lambda dynamic=False: calls.append(dynamic))
+    monkeypatch.setattr(twin_clock, "_KERNELS_READY", False)
+    first = twin_clock.compiled_kernels(None)
+    assert twin_clock.compiled_kernels(None) == 0.0
+    assert calls == [True] and first >= 0.0
