@@ -2,11 +2,18 @@
 
 import numpy as np
 import skfem
+from scipy.optimize import brentq
 
 from ffrf.body.euler_parameters import g_bar, rotation_matrix
+from ffrf.body.flexible_body import FlexibleBody
+from ffrf.body.modal_moments import modal_moments
 from ffrf.fe.fe_model import FEModel
 from ffrf.mesh.tet_mesh import orient_positive
 from ffrf.numerics.small_linalg import skew
+from ffrf.system.forces import AxialSpringDamper, MarkerLoad
+from ffrf.system.joints import GroundFrame, MarkerJoint
+from ffrf.system.markers import frame_marker
+from ffrf.system.multibody import MultibodySystem
 
 
 def bar_model(order: int = 1, E: float = 2.1e11, rho: float = 7850.0):
@@ -201,3 +208,54 @@ def rigid_bar(rho: float = 450.0):
         np.zeros((0, 0)),
     )
     return body, model, rho * 0.2 * 0.02 * 0.01
+
+
+#: The spring truss's half span and rise (m), its springs' stiffness (N/m) and its load per unit of t (N).
+TRUSS_HALF_SPAN, TRUSS_RISE, TRUSS_STIFFNESS, TRUSS_LOAD_RATE = 0.3, 0.1, 1e4, 10.0
+
+
+def spring_truss() -> tuple[MultibodySystem, float]:
+    """A von Mises truss of axial springs (Eq. (E6)) whose apex, a rigid bar, slides along world z at its centre of
+    mass under a downward load TRUSS_LOAD_RATE t; and the limit load of its closed form
+    P_max = 2 k (L0 - L*) z* / L*, L* = (L0 a^2)^(1/3), z* = sqrt(L*^2 - a^2)."""
+    model = bar_model(E=1e8, rho=450.0)
+    body = FlexibleBody(
+        "apex",
+        modal_moments(model.nodes, model.mass, np.zeros((3 * len(model.nodes), 0))),
+        np.zeros((0, 0)),
+        np.zeros((0, 0)),
+    )
+    centre = model.center_of_mass
+    marker = frame_marker(0, 0, centre, "apex")
+    slide = MarkerJoint((0,), "slide", GroundFrame(point=centre), marker, locked=(True, True, False, True, True, True))
+    length = float(np.hypot(TRUSS_HALF_SPAN, TRUSS_RISE))
+    springs = tuple(
+        AxialSpringDamper(
+            (0,),
+            f"bar {side}",
+            GroundFrame(point=centre + [side * TRUSS_HALF_SPAN, 0.0, -TRUSS_RISE]),
+            marker,
+            TRUSS_STIFFNESS,
+            0.0,
+            length,
+        )
+        for side in (-1.0, 1.0)
+    )
+    load = MarkerLoad((0,), "load", marker, force=lambda t: [0.0, 0.0, -TRUSS_LOAD_RATE * t])
+    system = MultibodySystem((body,), (slide,), forces=springs + (load,))
+    critical = (length * TRUSS_HALF_SPAN**2) ** (1.0 / 3.0)
+    rise = np.sqrt(critical**2 - TRUSS_HALF_SPAN**2)
+    return system, 2.0 * TRUSS_STIFFNESS * (length - critical) * rise / critical
+
+
+def spring_truss_landing(load: float) -> float:
+    """The rise (m) of the spring truss's apex on its inverted branch under ``load`` (N, downward), from the closed
+    form P(z) = 2 k (L0 - L) z / L, L = sqrt(a^2 + z^2), beyond the other fold z < -z*."""
+    length0 = np.hypot(TRUSS_HALF_SPAN, TRUSS_RISE)
+
+    def closed_form(rise: float) -> float:
+        length = np.hypot(TRUSS_HALF_SPAN, rise)
+        return 2.0 * TRUSS_STIFFNESS * (length0 - length) * rise / length
+
+    critical_rise = np.sqrt((length0 * TRUSS_HALF_SPAN**2) ** (2.0 / 3.0) - TRUSS_HALF_SPAN**2)
+    return float(brentq(lambda z: closed_form(z) - load, -10.0 * TRUSS_RISE, -critical_rise, xtol=1e-15))

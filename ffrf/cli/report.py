@@ -158,9 +158,10 @@ def _print_stability(result: Result, out: Path) -> None:
         links = sorted(snap["critical_mode_body_shares"].items(), key=lambda item: -item[1])[:2]
         jump = (
             f"the linkage jumps to another branch, coupler point {1e3 * snap['coupler_jump_m']:.4g} mm away, "
-            f"releasing {1e3 * snap['energy_released_J']:.4g} mJ"
+            f"releasing {1e3 * snap['energy_released_J']:.4g} mJ (landing found by the {snap['landed_by']})"
             if snap["landed"]
-            else "no stable equilibrium to land on was found along the traced path (run it dynamically)"
+            else "no stable equilibrium to land on was found along the traced path nor by a dynamic passage from the "
+            "fold (run it dynamically)"
         )
         print(
             f"snap: the equilibrium path folds at drive angle {snap['drive_angle_deg']:.4g} deg "

@@ -64,7 +64,11 @@ def run(args: argparse.Namespace) -> int:
         released = snap["energy_released_J"]
         print(
             f"snap: the equilibrium path folds at t = {snap['time_s']:.6g} s; "
-            + (f"it lands on another branch, releasing {released:.4g} J" if snap["landed"] else "no landing found")
+            + (
+                f"it lands on another branch ({snap['landed_by']}), releasing {released:.4g} J"
+                if snap["landed"]
+                else "no landing found"
+            )
         )
     print(f"{scene.name}: wall time {result.metadata['wall_time_s']:.1f} s -> {args.out}")
     return report_verification(result.metadata.get("verification"))

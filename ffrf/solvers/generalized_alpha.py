@@ -146,6 +146,10 @@ class _Newton:
     modified: bool
     factors: tuple | None = None
     factored_step: float = 0.0
+    held_time: float | None = None  # the time the model is evaluated at, if not the step's own
+
+    def model_time(self, t: float) -> float:
+        return t if self.held_time is None else self.held_time
 
 
 def _fast_iterations(
@@ -236,6 +240,7 @@ def _step(newton: _Newton, state: _State, t: float, h: float, before: tuple[tupl
     from the prediction (G6) with ``before`` (a retry starts from the state's own values). Returns
     the new state and the Newton iterations, or ``(None, iterations, diagnostics)`` if Newton failed."""
     par, model = newton.par, newton.model
+    t = newton.model_time(t)  # from here on the time of the drives and loads, not of the step
     beta_p = h * h * par.beta * (1.0 - par.alpha_f) / (1.0 - par.alpha_m)
     gamma_p = h * par.gamma * (1.0 - par.alpha_f) / (1.0 - par.alpha_m)
     to_accel = (1.0 - par.alpha_f) / (1.0 - par.alpha_m)
@@ -410,6 +415,7 @@ def generalized_alpha(
     step_control: StepControl | None = None,
     step_limit: Callable[[float, float], float] | None = None,
     error_tolerance: float | None = None,
+    held_time: float | None = None,
 ) -> IntegrationResult:
     """Integrate from ``t = 0`` to ``t_end`` with fixed steps ``step`` (s), or, with a
     :class:`StepControl`, with steps chosen by its error estimate (starting from ``step``);
@@ -439,6 +445,8 @@ def generalized_alpha(
     :data:`SLOW_NEWTON` iterations makes the next one start in twice as many, and the parts grow back, halving per
     step, once a step's estimate is below ``error_tolerance / GROW_MARGIN``. A run whose estimates stay below that
     takes the very same steps as without it.
+    ``held_time`` (s; default ``None``): the drives and loads stay at their values at that time while the
+    integration's own time runs from 0 (the passage of a snap at a fixed drive angle, Eq. (S11)).
     """
     if step <= 0 or t_end <= 0:
         raise ValueError(f"step and t_end must be positive, got step={step}, t_end={t_end}")
@@ -447,11 +455,12 @@ def generalized_alpha(
     h = t_end / n_steps
     n = system.n_coordinates
     newton = _Newton(newton_model(system, fast_path), par, tolerance, max_iterations, modified_newton)
+    newton.held_time = held_time
 
     q, qd = np.array(q0, dtype=float), np.array(qd0, dtype=float)
     if q.shape != (n,) or qd.shape != (n,):
         raise ValueError(f"initial state must have {n} coordinates, got {q.shape} and {qd.shape}")
-    qdd, lam = consistent_accelerations(system, q, qd, 0.0)
+    qdd, lam = consistent_accelerations(system, q, qd, newton.model_time(0.0))
     state = _State(q, qd, qdd, qdd.copy(), lam)
     before: tuple[tuple, ...] = ()  # (qdd, lambda, h) of the accepted steps before ``state``, for Newton's start (G6)
     history: dict[str, list] = {

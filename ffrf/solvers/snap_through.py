@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 from ffrf.errors import Interrupted, StaticDivergence
 from ffrf.solvers.common import PathJump
 from ffrf.solvers.continuation import EquilibriumPath, equilibrium_path, parabola_vertex, path_points, path_speed
+from ffrf.solvers.snap_passage import Passage, dynamic_passage
 from ffrf.solvers.stability import CriticalPose, critical_pose, equilibrium_stability, mode_shares
 from ffrf.solvers.static_solver import StaticSolution, path_times, quasi_static, static_equilibrium
 from ffrf.system.multibody import MultibodySystem
@@ -45,13 +46,16 @@ REFINEMENT = 10
 MAX_STEP_CUTS = 12
 #: Snaps one quasi-static run may pass before it is stopped.
 MAX_SNAPS = 4
+#: Points a trace through a fold may take to come back to the fold's t (else the landing is the passage's, (S11)).
+TRACE_POINTS = 600
 
 
 @dataclass(frozen=True)
 class SnapThrough:
     """A fold at ``fold_t`` (equilibrium ``fold_q``, ``fold_multipliers`` there), the other fold ``return_t``
     where the path turns forward again (``None`` if it does not within the traced points), the landing
-    equilibrium at ``fold_t`` beyond it (``None`` likewise) and the traced ``path``."""
+    equilibrium at ``fold_t`` beyond it (``None`` likewise), the traced ``path``, and what found the landing:
+    the traced path (Eq. (S6)) or a dynamic passage (Eq. (S11), ``passage`` its record)."""
 
     fold_t: float
     fold_q: NDArray[np.float64]
@@ -60,6 +64,7 @@ class SnapThrough:
     landing_q: NDArray[np.float64] | None
     landing_multipliers: NDArray[np.float64] | None
     path: EquilibriumPath
+    passage: Passage | None = None
 
     def energy_released(self, system: MultibodySystem) -> float | None:
         """Potential energy at the fold less that at the landing (J): strain, gravity, force elements and the dead
@@ -89,6 +94,8 @@ def snap_summary(system: MultibodySystem, snap: SnapThrough) -> dict:
         "time_s": snap.fold_t,
         "landed": snap.landing_q is not None and snap.landing_multipliers is not None,
         "energy_released_J": snap.energy_released(system),
+        "landed_by": None if snap.landing_q is None else "traced path" if snap.passage is None else "dynamic passage",
+        "passage_peak_kinetic_energy_J": None if snap.passage is None else snap.passage.peak_kinetic_energy_j,
         "return_time_s": snap.return_t,
         "squared_frequency_at_fold": float(critical.squared_frequencies[0]),
         "critical_mode_body_shares": {
@@ -104,7 +111,7 @@ def trace_snap(
     t0: float,
     t_end: float,
     step: float,
-    max_points: int = 600,
+    max_points: int = TRACE_POINTS,
     tolerance: float = 1e-10,
     max_step: float | None = None,
 ) -> SnapThrough | None:
@@ -257,12 +264,15 @@ def quasi_static_through_snaps(
     max_snaps: int = MAX_SNAPS,
     path_step: Callable[[float], float] | None = None,
     path_breaks: tuple[float, ...] = (),
+    trace_points: int = TRACE_POINTS,
 ) -> tuple[StaticSolution, tuple[SnapThrough, ...]]:
     """:func:`ffrf.solvers.static_solver.quasi_static` over ``times`` that goes on past folds: where it stops,
     the path is traced from the last equilibrium (:func:`trace_snap`, first step the spacing of ``times``); at a
     fold the run jumps to the landing equilibrium and resumes from it over the remaining times. Returns the
     equilibria at ``times`` and the snaps. A stop with no fold ahead, or a fold with no landing, is raised as it
-    was, ``partial`` holding every equilibrium found (before and after earlier snaps).
+    was, ``partial`` holding every equilibrium found (before and after earlier snaps). A trace that does not come
+    back to the fold's t within ``trace_points`` points, or meets no stable landing there, leaves the landing to a
+    dynamic passage from the fold (:func:`~ffrf.solvers.snap_passage.dynamic_passage`, Eq. (S11)).
 
     With ``path_step`` (s, from a time; Eq. (S10)) the path is followed on its own times, the outputs solved from it
     (:func:`ffrf.solvers.static_solver.quasi_static`), and the traces and bridges start with the path's step, not
@@ -271,7 +281,7 @@ def quasi_static_through_snaps(
     times = np.asarray(times, dtype=float)
     if path_step is not None:
         return _through_snaps_on_own_steps(
-            system, np.asarray(q0, dtype=float), times, path_step, progress, max_snaps, tuple(path_breaks)
+            system, np.asarray(q0, dtype=float), times, path_step, progress, max_snaps, tuple(path_breaks), trace_points
         )
     spacing = float(np.max(np.diff(times))) if times.size > 1 else 1.0
     qs: list[NDArray] = []
@@ -316,13 +326,14 @@ def quasi_static_through_snaps(
             counts.append(0)
             start, todo, landed = crossed[0], remaining, True
             continue
-        snap = trace_snap(system, qs[-1], lams[-1], float(reached), float(times[-1]), step=spacing)
+        snap = trace_snap(system, qs[-1], lams[-1], float(reached), float(times[-1]), spacing, trace_points)
         if snap is None:
             raise _with_partial(stop, qs, lams, counts, snaps, jumps)
-        if not _lands(system, snap):
-            snaps.append(replace(snap, landing_q=None, landing_multipliers=None))
+        snap = _landed(system, snap)
+        if snap.landing_q is None:
+            snaps.append(snap)
             raise _with_partial(stop, qs, lams, counts, snaps, jumps, NO_LANDING.format(t=snap.fold_t))
-        log.info("snap at t = %.6g: fold of the equilibrium path, landing on another branch", snap.fold_t)
+        _log_snap(snap)
         snaps.append(snap)
         remaining = times[len(qs) :]
         if remaining.size == 0 or remaining[0] <= snap.fold_t:
@@ -338,6 +349,7 @@ def _through_snaps_on_own_steps(
     progress,
     max_snaps: int,
     breaks: tuple[float, ...] = (),
+    trace_points: int = TRACE_POINTS,
 ) -> tuple[StaticSolution, tuple[SnapThrough, ...]]:
     """:func:`quasi_static_through_snaps` with the path on its own steps (``breaks``: as ``path_breaks`` of
     :func:`~ffrf.solvers.static_solver.quasi_static`). Each leg is
@@ -423,13 +435,16 @@ def _through_snaps_on_own_steps(
         # The stop lies within 1/256 of a path step of the fold (the halvings, Eq. (S4)): a whole path step as the
         # first arclength can cross the fold's turn unseen (plane_fold_6r, 8e-4 s from it); an eighth of it, growing
         # to eight path steps along the unstable branch, finds it.
-        snap = trace_snap(system, q_last, lam_last, t_last, float(outputs[-1]), step=step / 8.0, max_step=8.0 * step)
+        snap = trace_snap(
+            system, q_last, lam_last, t_last, float(outputs[-1]), step / 8.0, trace_points, max_step=8.0 * step
+        )
         if snap is None:
             raise stopped(stop, end)
-        if not _lands(system, snap):
-            snaps.append(replace(snap, landing_q=None, landing_multipliers=None))
+        snap = _landed(system, snap)
+        if snap.landing_q is None:
+            snaps.append(snap)
             raise stopped(stop, end, NO_LANDING.format(t=snap.fold_t))
-        log.info("snap at t = %.6g: fold of the equilibrium path, landing on another branch", snap.fold_t)
+        _log_snap(snap)
         snaps.append(snap)
         for t in todo[(todo > t_last + 1e-12 * scale) & (todo < snap.fold_t)]:  # outputs between the stop and the fold
             q, lam = _before_fold(system, snap, float(t))
@@ -465,9 +480,47 @@ def _before_fold(system: MultibodySystem, snap: SnapThrough, t: float) -> tuple[
 #: What a stop at a fold without a landing says (``{t}``: the fold's t); :data:`NO_LANDING_WORDS` name it in a message.
 NO_LANDING = (
     "the equilibrium path folds at t = {t:.6g} s, and the path traced beyond it meets no stable equilibrium at that "
-    "t with less potential energy: where the jump goes takes a dynamic run"
+    "t with less potential energy, nor does a dynamic passage from the fold settle on one: where the jump goes takes "
+    "a dynamic run"
 )
 NO_LANDING_WORDS = "meets no stable equilibrium at that t"
+
+
+def _landed(system: MultibodySystem, snap: SnapThrough) -> SnapThrough:
+    """``snap`` with the landing the jump ends on: the traced path's if the jump can end there (:func:`_lands`),
+    else the dynamic passage's from the fold (Eq. (S11)) if it can end there, else none."""
+    if _lands(system, snap):
+        return snap
+    beyond = _beyond_fold(snap.path)
+    passage = None
+    if beyond is not None:
+        passage = dynamic_passage(system, snap.fold_t, snap.fold_q, snap.fold_multipliers, beyond)
+    if passage is not None:
+        passed = replace(snap, landing_q=passage.q, landing_multipliers=passage.multipliers, passage=passage)
+        if _lands(system, passed):
+            return passed
+    return replace(snap, landing_q=None, landing_multipliers=None)
+
+
+def _beyond_fold(path: EquilibriumPath) -> tuple[float, NDArray, NDArray] | None:
+    """The traced path's first point past its first turn in t, on the unstable branch; ``None`` if it has none."""
+    direction = np.sign(path.t[1] - path.t[0]) if len(path.t) > 1 else 0.0
+    for k in range(1, len(path.t)):
+        if (path.t[k] - path.t[k - 1]) * direction < 0.0:
+            return float(path.t[k]), path.q[k], path.multipliers[k]
+    return None
+
+
+def _log_snap(snap: SnapThrough) -> None:
+    if snap.passage is None:
+        log.info("snap at t = %.6g: fold of the equilibrium path, landing on another branch", snap.fold_t)
+    else:
+        log.info(
+            "snap at t = %.6g: fold of the equilibrium path; the path traced beyond it lands nowhere, a dynamic "
+            "passage at that t (%d steps) settles on another branch",
+            snap.fold_t,
+            snap.passage.steps,
+        )
 
 
 def _lands(system: MultibodySystem, snap: SnapThrough) -> bool:

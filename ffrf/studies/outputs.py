@@ -26,9 +26,10 @@ STABILITY_OUTPUTS = ("snaps", "snap_energy_released_J", "min_frequency_hz")
 
 #: How a print's run ended (a row's ``end``): its path to the end, with or without snaps on the way (stability
 #: monitoring follows a fold to where the path lands), or where and why not: a stop near a dead pose of the rigid
-#: loop, or at a fold of the path where the traced path meets no stable equilibrium to land on (the print snaps
-#: there, to where only a dynamic run can tell). A stop that none of the named causes explains is
-#: ``stopped (unclassified)``: what a study's report counts as the solver's, not the print's, failure.
+#: loop, or at a fold of the path where neither the traced path nor a dynamic passage from the fold finds a stable
+#: equilibrium to land on (Eqs. (S6), (S11); the print snaps there, to where only a dynamic run can tell). A stop
+#: that none of the named causes explains is ``stopped (unclassified)``: what a study's report counts as the
+#: solver's, not the print's, failure.
 ENDS = (
     "completed",
     "completed through snaps",
