@@ -71,7 +71,10 @@ def run(args: argparse.Namespace) -> int:
             "" if lowest is None else f", lowest frequency {lowest:.3f} Hz (bound {problem.min_frequency_hz} Hz)"
         )
         if largest is not None and problem.max_stress is not None:
-            frequency += f", peak stress {1e-6 * largest:.4g} MPa (bound {1e-6 * problem.max_stress:.4g} MPa)"
+            frequency += (
+                f", peak stress {1e-6 * largest:.4g} MPa, its norm (D10) {1e-6 * (point.max_stress_norm or 0.0):.4g} "
+                f"MPa (bound {1e-6 * problem.max_stress:.4g} MPa)"
+            )
         print(
             f"iteration {iteration}: {values}: mass {1e3 * point.mass:.2f} g, largest deviation "
             f"{1e3 * point.max_deviation:.4f} mm (bound {1e3 * problem.max_deviation:.4f} mm){frequency}",
@@ -205,6 +208,7 @@ def _point(point: DesignPoint, parameters: tuple[str, ...]) -> dict:
     } | (
         ({} if point.min_frequency_hz is None else {"min_frequency_hz": point.min_frequency_hz})
         | ({} if point.max_stress is None else {"max_stress_mpa": 1e-6 * point.max_stress})
+        | ({} if point.max_stress_norm is None else {"max_stress_norm_mpa": 1e-6 * point.max_stress_norm})
     )
 
 

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from ffrf.errors import SceneError, SensitivityError
 from ffrf.fe.fe_model import FEModel
 from ffrf.geometry.design_velocity import SECTION_PARAMETERS, design_velocity
-from ffrf.output.peak_stress import corner_stress, peak_stress, strain_modes
+from ffrf.output.peak_stress import corner_stress, peak_stress, strain_modes, stress_norm, stress_norm_at
 from ffrf.output.sensors import path_sensors
 from ffrf.scenes.builder import morphed_body, parametric_link
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, bore_side
@@ -88,7 +88,9 @@ class PathSensitivity:
     derivatives ``lowest_squared_frequency`` ``(poses, k)``; with stress, each link's peak von Mises stress at each
     pose ``peak_stress`` ``(poses, links)`` (Pa; NaN for a body without elements of ours), where it lies
     ``peak_stress_corner`` ``(poses, links, 2)`` (element, its corner; -1 without elements) and its derivatives
-    ``peak_stress_slopes`` ``(poses, links, k)`` (Eq. (D9): those of the stress at that corner)."""
+    ``peak_stress_slopes`` ``(poses, links, k)`` (Eq. (D9): those of the stress at that corner), and the p-norm of
+    each link's corner stresses that a design bounds, ``stress_norm`` ``(poses, links)`` (Pa, Eq. (D10)) with its
+    derivatives ``stress_norm_slopes`` ``(poses, links, k)``."""
 
     parameters: tuple[str, ...]
     drive_angle: NDArray[np.float64]
@@ -101,6 +103,8 @@ class PathSensitivity:
     peak_stress: NDArray[np.float64] | None = None
     peak_stress_slopes: NDArray[np.float64] | None = None
     peak_stress_corner: NDArray[np.int64] | None = None
+    stress_norm: NDArray[np.float64] | None = None
+    stress_norm_slopes: NDArray[np.float64] | None = None
 
     def fold_distance(self) -> NDArray[np.float64]:
         """``(poses, k)``: the change of each parameter alone that brings the pose's lowest squared frequency of
@@ -148,9 +152,13 @@ def material_sensitivity(
         stability,
         stress,
     )
-    if found.peak_stress_slopes is not None and found.peak_stress is not None:
-        for column, k in enumerate(links):  # at fixed strain a link's stress is proportional to its E
-            found.peak_stress_slopes[:, k, column] += found.peak_stress[:, k]
+    for values, slopes in (
+        (found.peak_stress, found.peak_stress_slopes),
+        (found.stress_norm, found.stress_norm_slopes),
+    ):
+        if values is not None and slopes is not None:
+            for column, k in enumerate(links):  # at fixed strain a link's stress is proportional to its E
+                slopes[:, k, column] += values[:, k]
     masses = [float(system.bodies[k].moments.mass) for k in links]
     return replace(found, mass=np.array([0.0] * len(links) + masses))
 
@@ -409,7 +417,7 @@ def _path_derivatives(
         upper, lower = (_outputs(side, time, q, multipliers, modes) for side in (plus, minus))
         for name, values in derivatives.items():
             values[:, column] += (upper[name] - lower[name]) / (2.0 * step)
-    peaks, peak_slopes, corners = _peak_stress_derivatives(scene, q, dq, sides) if stress else (None, None, None)
+    stresses = _stress_derivatives(scene, q, dq, sides) if stress else None
     angles = np.array([scene.drive_angle(float(t)) for t in time])
     # a joint's reaction force is its first three multipliers (Eq. (J2)): its derivative is the response's, exactly
     reactions = {
@@ -425,36 +433,48 @@ def _path_derivatives(
         reaction_forces=reactions,
         squared_frequency=frequencies,
         lowest_squared_frequency=derivatives.get("lowest_squared_frequency"),
-        peak_stress=peaks,
-        peak_stress_slopes=peak_slopes,
-        peak_stress_corner=corners,
+        **({} if stresses is None else stresses),
     )
 
 
-def _peak_stress_derivatives(
+def _stress_derivatives(
     scene: LinkageScene, q: NDArray, dq: NDArray, sides: list[tuple[LinkageScene, LinkageScene, float]]
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+) -> dict[str, NDArray]:
     """Each link's peak von Mises stress at every pose ``(poses, links)``, its element and corner, and its
-    derivatives ``(poses, links, k)``
-    (Eq. (D9)): along the response ``dq`` ``(poses, k, n)`` exactly, by the peak's gradient in the link's modal
-    coordinates; plus, for a parameter whose linkage at +-step has that link rebuilt (a section), the stress at the
-    peak's corner of the rebuilt link at the same coordinates, by central differences. A material's own share (the
-    stress is proportional to E at fixed strain) is the caller's (:func:`material_sensitivity`)."""
+    derivatives ``(poses, links, k)`` (Eq. (D9)); the p-norm of its corner stresses and its derivatives likewise
+    (Eq. (D10)); as :class:`PathSensitivity`'s fields. Along the response ``dq`` ``(poses, k, n)`` exactly, by the
+    gradients in the link's modal coordinates; plus, for a parameter whose linkage at +-step has that link rebuilt (a
+    section), the stress at the peak's corner (and the norm) of the rebuilt link at the same coordinates, by central
+    differences. A material's own share (the stress is proportional to E at fixed strain) is the caller's
+    (:func:`material_sensitivity`)."""
     system = scene.system
     poses, k = dq.shape[:2]
-    peaks = np.full((poses, len(scene.bodies)), np.nan)
-    slopes = np.full((poses, len(scene.bodies), k), np.nan)
-    corners = np.full((poses, len(scene.bodies), 2), -1, dtype=np.int64)
+    links = len(scene.bodies)
+    out = {
+        "peak_stress": np.full((poses, links), np.nan),
+        "peak_stress_slopes": np.full((poses, links, k), np.nan),
+        "peak_stress_corner": np.full((poses, links, 2), -1, dtype=np.int64),
+        "stress_norm": np.full((poses, links), np.nan),
+        "stress_norm_slopes": np.full((poses, links, k), np.nan),
+    }
     for link, body in enumerate(scene.bodies):
         if not isinstance(body.fe, FEModel):
             continue
         modes = strain_modes(body.fe, body.reduction.basis)
         block = system.block(link)
+        material = body.fe.material
         for row in range(poses):
             zeta = q[row, block][7:]
-            peak = peak_stress(modes, zeta, body.fe.material.E, body.fe.material.nu)
-            peaks[row, link], corners[row, link] = peak.value, (peak.element, peak.corner)
-            slopes[row, link] = dq[row, :, block.start + 7 : block.stop] @ peak.gradient
+            response = dq[row, :, block.start + 7 : block.stop]
+            peak = peak_stress(modes, zeta, material.E, material.nu)
+            norm = stress_norm(modes, zeta, material.E, material.nu)
+            out["peak_stress"][row, link], out["peak_stress_corner"][row, link] = (
+                peak.value,
+                (peak.element, peak.corner),
+            )
+            out["stress_norm"][row, link] = norm.value
+            out["peak_stress_slopes"][row, link] = response @ peak.gradient
+            out["stress_norm_slopes"][row, link] = response @ norm.gradient
             for column, (plus, minus, step) in enumerate(sides):
                 rebuilt = [side.bodies[link] for side in (plus, minus)]
                 if all(other is body for other in rebuilt):
@@ -463,8 +483,10 @@ def _peak_stress_derivatives(
                     corner_stress(other.mesh_model, other.reduction.basis, zeta, peak.element, peak.corner)
                     for other in rebuilt
                 ]
-                slopes[row, link, column] += (at[0] - at[1]) / (2.0 * step)
-    return peaks, slopes, corners
+                out["peak_stress_slopes"][row, link, column] += (at[0] - at[1]) / (2.0 * step)
+                norms = [stress_norm_at(other.mesh_model, other.reduction.basis, zeta) for other in rebuilt]
+                out["stress_norm_slopes"][row, link, column] += (norms[0] - norms[1]) / (2.0 * step)
+    return out
 
 
 def _along_response(

@@ -10,9 +10,9 @@ bores in place, every link alike) solve
 with :math:`m` the links' mass, :math:`d_i` the coupler's deviation from the ideal path at pose :math:`i` of a
 quasi-static revolution under the linkage's load (its weight, its bore errors) and, where a lowest frequency
 :math:`\underline f` is asked for, :math:`\mu_i` the lowest squared frequency of Eq. (B1) there (its gradient by
-Eq. (D7)); where a stress bound :math:`\bar v` is asked for, :math:`v_{ik}` the peak von Mises stress of link
-:math:`k` there (Eq. (D9)). Each design is meshed and run
-afresh; the gradients are exact for the meshed model (Eq. (D1) with the section's morph, Eq. (D5),
+Eq. (D7)); where a stress bound :math:`\bar v` is asked for, :math:`v_{ik}` the p-norm of link :math:`k`'s corner
+von Mises stresses there (Eq. (D10): smooth where the peak of Eq. (D9) is not, and never below it). Each design is
+meshed and run afresh; the gradients are exact for the meshed model (Eq. (D1) with the section's morph, Eq. (D5),
 :func:`~ffrf.scenes.path_sensitivity.section_sensitivity`): :math:`\partial|d_i|/\partial p = d_i^T
 (\partial d_i/\partial p)/|d_i|`. scipy's SLSQP works in dimensions relative to the start, mass relative to the
 start's and deviations relative to the bound. At its end the first-order optimality (KKT) residual is measured
@@ -129,7 +129,8 @@ class DesignPoint:
     ``deviation`` (m) at each pose, with their gradients by the parameters (``(k,)`` and ``(poses, k)``); for a
     problem with a frequency bound the lowest squared frequency of Eq. (B1) at each pose (rad^2/s^2) and its
     gradients likewise, and for one with a stress bound every link's peak von Mises stress at each pose
-    ``(poses, links)`` (Pa, Eq. (D9)) and its gradients ``(poses, links, k)``."""
+    ``(poses, links)`` (Pa, Eq. (D9)) and the norm of its corner stresses that the bound holds, ``stress_norm``
+    (Pa, Eq. (D10)), with the norm's gradients ``(poses, links, k)``."""
 
     values: NDArray[np.float64]
     mass: float
@@ -141,6 +142,7 @@ class DesignPoint:
     frequency_gradient: NDArray[np.float64] | None = None
     stress: NDArray[np.float64] | None = None
     stress_gradient: NDArray[np.float64] | None = None
+    stress_norm: NDArray[np.float64] | None = None
 
     @property
     def max_deviation(self) -> float:
@@ -150,6 +152,11 @@ class DesignPoint:
     def max_stress(self) -> float | None:
         """The largest von Mises stress of any link over the poses (Pa), where computed."""
         return None if self.stress is None else float(np.nanmax(self.stress))
+
+    @property
+    def max_stress_norm(self) -> float | None:
+        """The largest norm of Eq. (D10) of any link over the poses (Pa): what the stress bound holds."""
+        return None if self.stress_norm is None else float(np.nanmax(self.stress_norm))
 
     @property
     def min_frequency_hz(self) -> float | None:
@@ -162,8 +169,8 @@ class DesignPoint:
         out = [1.0 - self.deviation / problem.max_deviation]
         if problem.min_squared_frequency is not None and self.frequency is not None:
             out.append(self.frequency / problem.min_squared_frequency - 1.0)
-        if problem.max_stress is not None and self.stress is not None:  # a link without elements: no bound
-            out.append(np.nan_to_num(1.0 - self.stress / problem.max_stress, nan=1.0).ravel())
+        if problem.max_stress is not None and self.stress_norm is not None:  # a link without elements: no bound
+            out.append(np.nan_to_num(1.0 - self.stress_norm / problem.max_stress, nan=1.0).ravel())
         return np.concatenate(out)
 
     def margin_gradients(self, problem: DesignProblem) -> NDArray[np.float64]:
@@ -182,8 +189,9 @@ class DesignPoint:
         names = [f"deviation at pose {i}" for i in range(poses)]
         if problem.min_squared_frequency is not None and self.frequency is not None:
             names += [f"frequency at pose {i}" for i in range(poses)]
-        if problem.max_stress is not None and self.stress is not None:
-            names += [f"stress of link {k} at pose {i}" for i in range(poses) for k in range(self.stress.shape[1])]
+        if problem.max_stress is not None and self.stress_norm is not None:
+            links = self.stress_norm.shape[1]
+            names += [f"stress of link {k} at pose {i}" for i in range(poses) for k in range(links)]
         return names
 
     def feasible(self, problem: DesignProblem) -> bool:
@@ -243,8 +251,8 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
     )
     stress_gradient = (
         None
-        if exact.peak_stress_slopes is None
-        else exact.peak_stress_slopes.reshape(len(result.time), len(scene.bodies), -1, k).sum(axis=2)
+        if exact.stress_norm_slopes is None
+        else exact.stress_norm_slopes.reshape(len(result.time), len(scene.bodies), -1, k).sum(axis=2)
     )
     return DesignPoint(
         np.asarray(values, dtype=float),
@@ -257,6 +265,7 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
         frequency_gradient,
         exact.peak_stress,
         stress_gradient,
+        exact.stress_norm,
     )
 
 

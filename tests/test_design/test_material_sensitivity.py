@@ -10,7 +10,7 @@ from body_fixtures import clamped_cantilever
 from ffrf.errors import SensitivityError
 from ffrf.fe.materials import PLA
 from ffrf.output.assembly_stress import scene_assembly_stress
-from ffrf.output.peak_stress import corner_stress
+from ffrf.output.peak_stress import corner_stress, stress_norm_at
 from ffrf.output.sensors import path_sensors
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.path_sensitivity import material_sensitivity
@@ -61,7 +61,8 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
     largest squared frequency (measured 1e-7: both sides' eigenvalue round-off, 1e-10 of mu, over the steps). Every
     link's peak von Mises stress likewise (Eq. (D9)): the peak is the whole stress field's as the assembly report
     computes it, and its derivative, that of the stress at the peak's corner, agrees with the re-solved linkages'
-    stress at that corner within 1e-6 of the largest (measured 7e-10 to 8e-9)."""
+    stress at that corner within 1e-6 of the largest (measured 7e-10 to 8e-9); the p-norm of each link's corner
+    stresses (Eq. (D10)) too, against the norms of the re-solved linkages' whole fields."""
     scene, result = bennett_path
     kind, link = parameter
     exact = material_sensitivity(
@@ -82,12 +83,15 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
         peaks = np.array(
             [_at_corners(scene, s.q, exact.peak_stress_corner[r]) for s, r in zip(solved, rows, strict=True)]
         )
+        norms = np.array([_norms(scene, s.q) for s in solved])
         if kind == "E":  # the FE model's E is the nominal one: the stress at a strain is proportional to E
             peaks[:, link] *= factor
+            norms[:, link] *= factor
         return path_sensors(replace(scene, system=system), result.time[rows], q, lam) | {
             "multipliers": lam,
             "mu": np.array(mu),
             "peaks": peaks,
+            "norms": norms,
         }
 
     def central(step: float, name: str) -> np.ndarray:
@@ -127,6 +131,14 @@ def test_the_coupler_and_torque_derivatives_agree_with_re_solved_perturbed_linka
     np.testing.assert_allclose(
         exact.peak_stress_slopes[rows, :, column], peaks, rtol=0, atol=1e-6 * np.abs(peaks).max()
     )
+    norms = (4 * central(1e-3, "norms") - central(2e-3, "norms")) / 3
+    assert exact.stress_norm is not None and exact.stress_norm_slopes is not None
+    np.testing.assert_allclose(exact.stress_norm[rows], [_norms(scene, result.q[r]) for r in rows], rtol=1e-12)
+    assert np.all(exact.stress_norm >= exact.peak_stress)  # never below the peak
+    print("norm slopes", np.abs(exact.stress_norm_slopes[rows, :, column] - norms).max() / np.abs(norms).max())
+    np.testing.assert_allclose(
+        exact.stress_norm_slopes[rows, :, column], norms, rtol=0, atol=1e-6 * np.abs(norms).max()
+    )
     # statics: the clamp carries the whole weight, so its vertical force changes with a link's density by that
     # link's weight and not at all with its modulus, at every pose
     weight = float(scene.system.bodies[link].moments.mass) * 9.81
@@ -160,6 +172,14 @@ def _at_corners(scene, q: np.ndarray, corners: np.ndarray) -> list[float]:
     ]
 
 
+def _norms(scene, q: np.ndarray) -> list[float]:
+    """Each link's norm of Eq. (D10) at coordinates ``q``, from its whole displacement field, not strain modes."""
+    return [
+        stress_norm_at(body.mesh_model, body.reduction.basis, q[scene.system.block(k)][7:])
+        for k, body in enumerate(scene.bodies)
+    ]
+
+
 def test_a_fold_is_refused_not_differentiated():
     """A free bar (nothing holds it) under gravity: its tangent is singular and gravity loads the free motion, so
     no equilibrium responds to its density; the error says so instead of a number."""
@@ -176,7 +196,8 @@ def test_scaling_every_stiffness_and_density_together_moves_nothing_and_scales_t
     point and to the torque itself for the torque (exact identities of statics, not of our formulation). The forces
     and the masses scale alike, so the frequencies of small vibrations do not move: the lowest squared frequency's
     derivatives sum to zero too (measured 1.5e-7 of the largest, the eigenvalue's round-off over the step); the
-    strains stay while every E grows, so each link's peak stress grows with it: its derivatives sum to it."""
+    strains stay while every E grows, so each link's peak stress grows with it: its derivatives sum to it (and so do
+    the derivatives of its norm, Eq. (D10))."""
     scene, result = bennett_path
     exact = material_sensitivity(scene, result.time, result.q, result.multipliers, stability=True, stress=True)
     assert exact.lowest_squared_frequency is not None
@@ -185,6 +206,8 @@ def test_scaling_every_stiffness_and_density_together_moves_nothing_and_scales_t
     # the strains stay, E scales: every link's peak stress scales too (measured 1.8e-11)
     assert exact.peak_stress is not None and exact.peak_stress_slopes is not None
     np.testing.assert_allclose(exact.peak_stress_slopes.sum(axis=2), exact.peak_stress, rtol=1e-9)
+    assert exact.stress_norm is not None and exact.stress_norm_slopes is not None
+    np.testing.assert_allclose(exact.stress_norm_slopes.sum(axis=2), exact.stress_norm, rtol=1e-9)
     np.testing.assert_allclose(exact.coupler_point.sum(axis=2), 0.0, atol=1e-9 * np.abs(exact.coupler_point).max())
     torque = result.sensors["driving_torque"]
     np.testing.assert_allclose(exact.driving_torque.sum(axis=1), torque, rtol=1e-8, atol=1e-10 * np.abs(torque).max())

@@ -103,16 +103,17 @@ def test_a_lowest_frequency_bound_stops_the_design_where_the_linkage_would_vibra
 
 def test_a_stress_bound_is_one_constraint_per_link_and_pose_with_its_gradient():
     """``max_stress_mpa``: the margins and their gradients SLSQP gets are 1 - v_ik / bound and -dv_ik/dp / bound for
-    every pose i and link k (a link without elements of ours, NaN stress, is not bounded), after the deviations',
-    named for the KKT report."""
+    every pose i and link k, v_ik the norm of Eq. (D10), not the peak (a link without elements of ours, NaN stress,
+    is not bounded), after the deviations', named for the KKT report."""
     from ffrf.scenes.section_design import DesignPoint, DesignProblem
 
     problem = DesignProblem(("arm_width",), (0.008,), (0.03,), 2e-4, max_stress=2e6)
-    stress = np.array([[1e6, 3e6], [np.nan, 2e6]])  # (poses, links)
+    stress = np.array([[1e6, 3e6], [np.nan, 2e6]])  # (poses, links): the norms
+    peaks = 0.9 * stress
     slopes = np.array([[[1e8], [-2e8]], [[np.nan], [4e8]]])  # (poses, links, k)
     point = DesignPoint(
         np.array([0.016]), 0.08, np.array([1e-4, 3e-4]), np.array([1.0]), np.array([[0.01], [0.02]]), 0.0,
-        stress=stress, stress_gradient=slopes,
+        stress=peaks, stress_gradient=slopes, stress_norm=stress,
     )  # fmt: skip
     np.testing.assert_allclose(point.margins(problem), [0.5, -0.5, 0.5, -0.5, 1.0, 0.0])
     np.testing.assert_allclose(point.margin_gradients(problem)[2:, 0], [-50.0, 100.0, 0.0, -200.0])
@@ -120,7 +121,7 @@ def test_a_stress_bound_is_one_constraint_per_link_and_pose_with_its_gradient():
         "stress of link 0 at pose 0", "stress of link 1 at pose 0", "stress of link 0 at pose 1",
         "stress of link 1 at pose 1",
     ]  # fmt: skip
-    assert point.max_stress == 3e6 and not point.feasible(problem)
+    assert point.max_stress_norm == 3e6 and point.max_stress == 2.7e6 and not point.feasible(problem)
     assert load_design(tomllib.loads(EXAMPLE.read_text() + "max_stress_mpa = 20\n"))[2].max_stress == 2e7
 
 

@@ -12,7 +12,7 @@ from ffrf.geometry.design_velocity import SECTION_PARAMETERS, design_velocity
 from ffrf.geometry.link_geometry import build_link
 from ffrf.geometry.meshing import gmsh_session
 from ffrf.mesh.tet_mesh import TetMesh
-from ffrf.output.peak_stress import corner_stress
+from ffrf.output.peak_stress import corner_stress, stress_norm_at
 from ffrf.output.sensors import path_sensors
 from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
 from ffrf.scenes.builder import morphed_body, parametric_link
@@ -82,7 +82,8 @@ def test_the_path_derivatives_agree_with_re_solved_linkages_on_the_morphed_mesh(
     1e-6 of the largest derivative (measured 1.3e-8 for the arm's thickness, the steps' truncation: 8e-8 at 1e-3,
     8e-6 at 1e-2). The lowest squared frequency of Eq. (B1) likewise, within 1e-5 of the largest derivative (its
     eigenvalue's round-off, 1e-10 of it, over the steps), and every link's peak von Mises stress (at the peak's
-    corner; the morphed link's own stress field changes too), within 1e-6."""
+    corner; the morphed link's own stress field changes too), within 1e-6, and the p-norm of every link's corner
+    stresses (Eq. (D10)) likewise."""
     scene, result = bennett_path
     exact = section_sensitivity(
         scene, result.time, result.q, result.multipliers, (parameter,), (link,), stability=True, stress=True
@@ -110,24 +111,33 @@ def test_the_path_derivatives_agree_with_re_solved_linkages_on_the_morphed_mesh(
             ]
             for s, r in zip(solved, ROWS, strict=True)
         ]
+        norms = [
+            [stress_norm_at(body.mesh_model, body.reduction.basis, s.q[moved.system.block(k)][7:])
+             for k, body in enumerate(moved.bodies)]
+            for s in solved
+        ]  # fmt: skip
         return path_sensors(moved, result.time[ROWS], q, np.array([s.multipliers for s in solved])) | {
             "mu": mu,
             "peaks": peaks,
+            "norms": norms,
         }
 
     near, far = ((outputs(s * step), outputs(-s * step)) for s in (1.0, 2.0))
     assert exact.lowest_squared_frequency is not None and exact.peak_stress_slopes is not None
+    assert exact.stress_norm_slopes is not None
     for name, ours, tolerance in (
         ("coupler_point", exact.coupler_point[ROWS, :, 0], 1e-6),
         ("driving_torque", exact.driving_torque[ROWS, 0], 1e-6),
         ("mu", exact.lowest_squared_frequency[ROWS, 0], 1e-5),
         ("peaks", exact.peak_stress_slopes[ROWS, :, 0], 1e-6),
+        ("norms", exact.stress_norm_slopes[ROWS, :, 0], 1e-6),
     ):
         central = [
             (np.asarray(plus[name]) - np.asarray(minus[name])) / (2 * s * step)
             for s, (plus, minus) in ((1, near), (2, far))
         ]
         theirs = (4 * central[0] - central[1]) / 3  # Richardson's rule: truncation step^4
+        print(name, np.abs(np.asarray(ours) - theirs).max() / np.abs(theirs).max())
         assert np.abs(theirs).max() > 0.0
         np.testing.assert_allclose(ours, theirs, rtol=0, atol=tolerance * np.abs(theirs).max())
 
