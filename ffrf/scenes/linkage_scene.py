@@ -23,6 +23,7 @@ from ffrf.errors import SceneError
 from ffrf.fe.interfaces import boundary_triangles
 from ffrf.geometry.link_geometry import LinkDesign
 from ffrf.output.clearance import Clearance, signed_clearance
+from ffrf.output.clearance_sensitivity import clearance_slopes
 from ffrf.output.loop_poses import LoopPoses
 from ffrf.output.path_distance import ExactCurve
 from ffrf.output.solid_distance import JointZone, LinkSolid
@@ -125,13 +126,44 @@ class LinkageScene(Scene):
         """Signed clearance of every pair of links along one revolution of the rigid nominal motion from the start,
         sampled at ``n_poses`` poses and bounded between them, against ``margin`` (m)
         (:func:`ffrf.output.clearance.signed_clearance`, ``docs/formulation.md`` Eqs. (CL1)-(CL4))."""
-        sign = drive_sign(self.driver, self.loop.n)  # turn the way the drive turns
-        motion = LoopPoses.revolution(self.loop, self.driver, n_poses, self.start_phi, sign)
-        solids = [
+        return signed_clearance(self.link_solids(), self._revolution(n_poses), self.joint_zones(), margin)
+
+    def link_solids(self) -> list[LinkSolid]:
+        """Every link's solid at home: its mesh's points and boundary triangles (normals out)."""
+        return [
             LinkSolid(body.mesh_model.mesh.points, boundary_triangles(body.mesh_model.mesh, outward=True), body.name)
             for body in self.bodies
         ]
-        return signed_clearance(solids, motion, self.joint_zones(), margin)
+
+    def _revolution(self, n_poses: int) -> LoopPoses:
+        sign = drive_sign(self.driver, self.loop.n)  # turn the way the drive turns
+        return LoopPoses.revolution(self.loop, self.driver, n_poses, self.start_phi, sign)
+
+    def clearance_slopes(
+        self,
+        found: Clearance,
+        velocities: dict[tuple[int, str], NDArray],
+        parameters: tuple[str, ...],
+        steps: ArrayLike,
+        n_poses: int = 72,
+    ) -> NDArray[np.float64]:
+        """The derivatives ``(pairs, k)`` of each pair's smallest clearance in ``found`` (:meth:`clearance`) by
+        ``parameters``, whose velocities at each link's mesh points are ``velocities[link, parameter]`` ``(m, 3)``
+        (a link without one does not move), central differences over ``steps`` (m) along them (Eq. (CL5)): at the
+        pose that holds the smallest, for the rigid motion does not depend on the links' shape; ``n_poses``: those of
+        :meth:`clearance`'s samples, from which each pose is closed."""
+        solids, zones = self.link_solids(), self.joint_zones()
+        transforms, _ = self._revolution(n_poses).poses(found.drive_angle)  # one pose per pair, (pairs, links, 4, 4)
+        fields = [
+            np.stack([velocities.get((k, p), np.zeros_like(solid.vertices)) for p in parameters], axis=-1)
+            for k, solid in enumerate(solids)
+        ]
+        out = np.empty((len(found.pairs), len(parameters)))
+        for row, (a, b) in enumerate(found.pairs):
+            relative = np.linalg.solve(transforms[row, a], transforms[row, b])
+            zone = zones.get((int(a), int(b)))
+            out[row] = clearance_slopes(solids[a], solids[b], relative, fields[a], fields[b], steps, zone)[1]
+        return out
 
     def joint_zones(self) -> dict[tuple[int, int], JointZone]:
         """The zone of each joint (Eq. (CL3)), keyed by the two links that share it: about the nominal axis, around
