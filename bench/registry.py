@@ -236,6 +236,11 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         records=(Recording("section_design"),),
     ),
     Benchmark(
+        "stress_convergence",
+        "each link's peak von Mises stress of the PLA Bennett against the element size: a singular stress or not",
+        records=(Recording("stress_convergence"),),
+    ),
+    Benchmark(
         "play_design",
         "the largest play of the PLA Bennett's passive joints that keeps its coupler within 1 mm",
         records=(Recording("play_design"),),

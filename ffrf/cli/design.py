@@ -75,6 +75,11 @@ def run(args: argparse.Namespace) -> int:
                 f", peak stress {1e-6 * largest:.4g} MPa, its norm (D10) {1e-6 * (point.max_stress_norm or 0.0):.4g} "
                 f"MPa (bound {1e-6 * problem.max_stress:.4g} MPa)"
             )
+        if point.clearance is not None and problem.min_clearance is not None:
+            frequency += (
+                f", smallest clearance {1e3 * float(point.clearance.min()):.3f} mm "
+                f"(bound {1e3 * problem.min_clearance:.3f} mm)"
+            )
         print(
             f"iteration {iteration}: {values}: mass {1e3 * point.mass:.2f} g, largest deviation "
             f"{1e3 * point.max_deviation:.4f} mm (bound {1e3 * problem.max_deviation:.4f} mm){frequency}",
@@ -209,6 +214,7 @@ def _point(point: DesignPoint, parameters: tuple[str, ...]) -> dict:
         ({} if point.min_frequency_hz is None else {"min_frequency_hz": point.min_frequency_hz})
         | ({} if point.max_stress is None else {"max_stress_mpa": 1e-6 * point.max_stress})
         | ({} if point.max_stress_norm is None else {"max_stress_norm_mpa": 1e-6 * point.max_stress_norm})
+        | ({} if point.clearance is None else {"min_clearance_mm": 1e3 * float(point.clearance.min())})
     )
 
 
@@ -222,6 +228,7 @@ def _summary(design: SectionDesign, seconds: float) -> dict:
             "max_deviation_mm": 1e3 * problem.max_deviation,
             "min_frequency_hz": problem.min_frequency_hz,
             "max_stress_mpa": None if problem.max_stress is None else 1e-6 * problem.max_stress,
+            "min_clearance_mm": None if problem.min_clearance is None else 1e3 * problem.min_clearance,
             "outputs": problem.outputs,
         },
         "start": _point(design.start, problem.parameters),

@@ -36,7 +36,7 @@ from ffrf.scenes.linkage_description import LinkageOptions
 from ffrf.scenes.linkage_file import LINKAGE_SCHEMA, linkage_options
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import build_linkage
-from ffrf.scenes.path_sensitivity import section_sensitivity
+from ffrf.scenes.path_sensitivity import MORPH_STEP, section_sensitivity, section_velocities
 from ffrf.scenes.scene_schema import Key, check_table
 from ffrf.scenes.schema_keys import positive
 from kinematics.single_loop import SingleLoop
@@ -65,6 +65,7 @@ DESIGN = {
     "max_deviation": Key("number", True, positive),
     "min_frequency_hz": Key("number", False, positive),
     "max_stress_mpa": Key("number", False, positive),
+    "min_clearance": Key("number", False, positive),
     "outputs": Key("integer", False, positive),
     "max_iterations": Key("integer", False, positive),
 }
@@ -73,6 +74,8 @@ DESIGN = {
 #: and deviations carry the meshes' own differences (about 1e-4 and 3e-3 of a change by a millimetre, measured), and
 #: on the bound SLSQP wanders within them at a tighter tolerance (measured on the PLA Bennett: 3e-4 of the mass).
 FTOL = 1e-3
+#: Poses of the rigid revolution at which a clearance bound is checked (and bounded between them, Eq. (CL4)).
+CLEARANCE_POSES = 72
 #: A design meets the bound when its largest deviation exceeds it by at most this fraction.
 FEASIBLE = 1e-3
 #: An optimum is accepted when its KKT residual (relative to the objective's gradient) is below this.
@@ -89,7 +92,8 @@ class DesignProblem:
     """The section ``parameters`` with their ``lower`` and ``upper`` bounds (m), the bound on the coupler's
     deviation ``max_deviation`` (m) at each of ``outputs`` poses of a revolution, SLSQP's ``max_iterations`` and,
     optionally, the least lowest vibration frequency ``min_frequency_hz`` (Hz, Eq. (B1)) at each pose and the
-    largest von Mises stress of any link ``max_stress`` (Pa, Eq. (D9)) at each pose."""
+    largest von Mises stress of any link ``max_stress`` (Pa, Eq. (D9)) at each pose, and the least clearance of
+    every pair of links along a revolution of the rigid motion ``min_clearance`` (m, Eqs. (CL1)-(CL5))."""
 
     parameters: tuple[str, ...]
     lower: tuple[float, ...]
@@ -99,6 +103,7 @@ class DesignProblem:
     max_iterations: int = 20
     min_frequency_hz: float | None = None
     max_stress: float | None = None
+    min_clearance: float | None = None
 
     @property
     def min_squared_frequency(self) -> float | None:
@@ -121,6 +126,8 @@ class DesignProblem:
             raise SceneError(f"design: min_frequency_hz must be > 0, got {self.min_frequency_hz!r}")
         if self.max_stress is not None and not self.max_stress > 0.0:
             raise SceneError(f"design: max_stress_mpa must be > 0, got {self.max_stress!r} Pa")
+        if self.min_clearance is not None and not self.min_clearance > 0.0:
+            raise SceneError(f"design: min_clearance must be > 0, got {self.min_clearance!r} m")
 
 
 @dataclass(frozen=True)
@@ -130,7 +137,9 @@ class DesignPoint:
     problem with a frequency bound the lowest squared frequency of Eq. (B1) at each pose (rad^2/s^2) and its
     gradients likewise, and for one with a stress bound every link's peak von Mises stress at each pose
     ``(poses, links)`` (Pa, Eq. (D9)) and the norm of its corner stresses that the bound holds, ``stress_norm``
-    (Pa, Eq. (D10)), with the norm's gradients ``(poses, links, k)``."""
+    (Pa, Eq. (D10)), with the norm's gradients ``(poses, links, k)``; for one with a clearance bound the smallest
+    clearance of each pair of links along the revolution ``clearance`` ``(pairs,)`` (m, Eq. (CL1)) and its gradients
+    ``(pairs, k)`` (Eq. (CL5)), the pairs ``clearance_pairs`` ``(pairs, 2)``."""
 
     values: NDArray[np.float64]
     mass: float
@@ -143,6 +152,9 @@ class DesignPoint:
     stress: NDArray[np.float64] | None = None
     stress_gradient: NDArray[np.float64] | None = None
     stress_norm: NDArray[np.float64] | None = None
+    clearance: NDArray[np.float64] | None = None
+    clearance_gradient: NDArray[np.float64] | None = None
+    clearance_pairs: NDArray[np.int64] | None = None
 
     @property
     def max_deviation(self) -> float:
@@ -171,6 +183,8 @@ class DesignPoint:
             out.append(self.frequency / problem.min_squared_frequency - 1.0)
         if problem.max_stress is not None and self.stress_norm is not None:  # a link without elements: no bound
             out.append(np.nan_to_num(1.0 - self.stress_norm / problem.max_stress, nan=1.0).ravel())
+        if problem.min_clearance is not None and self.clearance is not None:
+            out.append(self.clearance / problem.min_clearance - 1.0)
         return np.concatenate(out)
 
     def margin_gradients(self, problem: DesignProblem) -> NDArray[np.float64]:
@@ -181,6 +195,8 @@ class DesignPoint:
         if problem.max_stress is not None and self.stress_gradient is not None:
             slopes = self.stress_gradient.reshape(-1, self.stress_gradient.shape[-1])
             out.append(np.nan_to_num(-slopes / problem.max_stress, nan=0.0))
+        if problem.min_clearance is not None and self.clearance_gradient is not None:
+            out.append(self.clearance_gradient / problem.min_clearance)
         return np.vstack(out)
 
     def constraint_names(self, problem: DesignProblem) -> list[str]:
@@ -192,6 +208,8 @@ class DesignPoint:
         if problem.max_stress is not None and self.stress_norm is not None:
             links = self.stress_norm.shape[1]
             names += [f"stress of link {k} at pose {i}" for i in range(poses) for k in range(links)]
+        if problem.min_clearance is not None and self.clearance_pairs is not None:
+            names += [f"clearance of links {a}-{b}" for a, b in self.clearance_pairs]
         return names
 
     def feasible(self, problem: DesignProblem) -> bool:
@@ -226,12 +244,14 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
     result = run_linkage(scene, mode="quasi_static", n_outputs=problem.outputs, sensors="path")
     assert result.multipliers is not None  # a quasi-static run keeps its equilibria's multipliers
     try:
+        velocities = section_velocities(scene, problem.parameters)
         exact = section_sensitivity(
             scene,
             result.time,
             result.q,
             result.multipliers,
             problem.parameters,
+            velocities=velocities,
             stability=problem.min_frequency_hz is not None,
             stress=problem.max_stress is not None,
         )
@@ -254,6 +274,12 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
         if exact.stress_norm_slopes is None
         else exact.stress_norm_slopes.reshape(len(result.time), len(scene.bodies), -1, k).sum(axis=2)
     )
+    clearance = gradient = pairs = None
+    if problem.min_clearance is not None:  # every link alike: each velocity moves all links, so both of a pair
+        found = scene.clearance(CLEARANCE_POSES, problem.min_clearance)
+        steps = MORPH_STEP * np.asarray(values, dtype=float)
+        clearance, pairs = found.distance, found.pairs
+        gradient = scene.clearance_slopes(found, velocities, problem.parameters, steps, CLEARANCE_POSES)
     return DesignPoint(
         np.asarray(values, dtype=float),
         float(sum(body.moments.mass for body in scene.system.bodies)),
@@ -266,6 +292,9 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
         exact.peak_stress,
         stress_gradient,
         exact.stress_norm,
+        clearance,
+        gradient,
+        pairs,
     )
 
 
@@ -383,6 +412,7 @@ def load_design(document: dict, where: str = "design") -> tuple[SingleLoop, Link
             int(spec.get("max_iterations", 20)),
             float(spec["min_frequency_hz"]) if "min_frequency_hz" in spec else None,
             1e6 * float(spec["max_stress_mpa"]) if "max_stress_mpa" in spec else None,
+            length * float(spec["min_clearance"]) if "min_clearance" in spec else None,
         )
     except SceneError as error:
         raise SceneError(f"{where}, {error}") from error

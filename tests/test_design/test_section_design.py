@@ -125,6 +125,24 @@ def test_a_stress_bound_is_one_constraint_per_link_and_pose_with_its_gradient():
     assert load_design(tomllib.loads(EXAMPLE.read_text() + "max_stress_mpa = 20\n"))[2].max_stress == 2e7
 
 
+def test_a_clearance_bound_is_one_constraint_per_pair_of_links_with_its_gradient():
+    """``min_clearance`` (in the linkage's unit): the margins SLSQP gets are c_ab / bound - 1 and their gradients
+    dc_ab/dp / bound for every pair of links, after the deviations', named by the pair."""
+    from ffrf.scenes.section_design import DesignPoint, DesignProblem
+
+    problem = DesignProblem(("arm_width",), (0.008,), (0.03,), 2e-4, min_clearance=1e-3)
+    point = DesignPoint(
+        np.array([0.016]), 0.08, np.array([1e-4]), np.array([1.0]), np.array([[0.01]]), 0.0,
+        clearance=np.array([3e-3, 0.5e-3]), clearance_gradient=np.array([[-0.5], [0.25]]),
+        clearance_pairs=np.array([[0, 1], [1, 3]]),
+    )  # fmt: skip
+    np.testing.assert_allclose(point.margins(problem), [0.5, 2.0, -0.5])
+    np.testing.assert_allclose(point.margin_gradients(problem)[1:, 0], [-500.0, 250.0])
+    assert point.constraint_names(problem)[1:] == ["clearance of links 0-1", "clearance of links 1-3"]
+    assert not point.feasible(problem)
+    assert load_design(tomllib.loads(EXAMPLE.read_text() + "min_clearance = 1.5\n"))[2].min_clearance == 1.5e-3
+
+
 def load_design_free(path: Path):
     """The linkage a designed linkage file builds."""
     from ffrf.scenes.linkage_file import linkage_options
@@ -141,6 +159,7 @@ def load_design_free(path: Path):
         (("max_deviation = 0.2", "max_deviation = -0.2"), "max_deviation"),
         (("outputs = 37", "outputs = 37\nmin_frequency_hz = 0"), "min_frequency_hz"),
         (("outputs = 37", "outputs = 37\nmax_stress_mpa = -5"), "max_stress_mpa"),
+        (("outputs = 37", "outputs = 37\nmin_clearance = 0"), "min_clearance"),
         (("[design]", "[designs]"), "unknown key 'designs'"),
     ],
 )
