@@ -51,14 +51,14 @@ def _row(size_mm: float) -> dict:
         links.append(
             {
                 "link": k,
-                "peak_mpa": 1e-6 * peaks[pose].value,
-                "norm_mpa": 1e-6 * max(norms),
+                "peak_pa": peaks[pose].value,
+                "norm_pa": max(norms),
                 "pose": pose,
-                "from_housing_centre_mm": 1e3 * housing,
+                "from_housing_centre_m": housing,
                 "elements": int(len(body.fe.mesh.tets)),
             }
         )
-    return {"size_mm": size_mm, "links": links, "seconds": time.perf_counter() - started}
+    return {"size_m": size_mm / 1e3, "links": links, "seconds": time.perf_counter() - started}
 
 
 def main() -> int:
@@ -69,7 +69,7 @@ def main() -> int:
     for size in SIZES_MM:
         rows.append(_row(size))
         write_report({"example": EXAMPLE.name, "poses": POSES, "meshes": rows}, args.json, echo=False)
-    peaks = np.array([[link["peak_mpa"] for link in row["links"]] for row in rows])
+    peaks = np.array([[link["peak_pa"] for link in row["links"]] for row in rows])
     summary = {"peak_growth_finest_over_coarsest": (peaks[-1] / peaks[0]).tolist()}
     write_report({"example": EXAMPLE.name, "poses": POSES, "meshes": rows, "summary": summary}, args.json)
     return 0
