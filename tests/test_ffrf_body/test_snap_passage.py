@@ -8,6 +8,7 @@ import pytest
 from body_fixtures import TRUSS_HALF_SPAN, TRUSS_LOAD_RATE, TRUSS_RISE, TRUSS_STIFFNESS, spring_truss
 from body_fixtures import spring_truss_landing as landing_rise
 
+from ffrf.errors import NewtonDivergence
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.snap_passage import dynamic_passage
 from ffrf.solvers.snap_through import quasi_static_through_snaps, snap_summary, trace_snap
@@ -88,3 +89,27 @@ def test_a_run_whose_trace_lands_nowhere_goes_on_from_the_passage(short_trace):
     expected = np.array([landing_rise(TRUSS_LOAD_RATE * t) for t in times[after]])
     print("rows against the closed form", np.abs(rises - expected).max())
     assert after.sum() >= 2 and np.abs(rises - expected).max() < 1e-11
+
+
+def test_held_time_holds_a_linkage_s_drive_on_the_whole_system_kernels():
+    """The PLA Bennett (coarse links) runs on the packed kernels, whose drive angles come from the held time too: an
+    equilibrium of its quasi-static run stays at rest over 20 ms with the drive held at its t (to Newton's tolerance
+    over the coordinates' size, measured 4.5e-14 m), while the same start with the drive at the integration's own time,
+    from 0, is yanked back towards the drive's start angle within a step, which Newton cannot follow."""
+    from dataclasses import replace
+
+    from ffrf.fe.materials import PLA
+    from ffrf.paper.bennett_scene import bennett_options, build_bennett_from_options
+    from ffrf.scenes.linkage_run import run_linkage
+    from ffrf.system.packed_system import pack_system
+
+    scene = build_bennett_from_options(replace(bennett_options("pla", h=8e-3, order=1, n_modes=2), material=PLA))
+    assert pack_system(scene.system) is not None  # the fast path runs it
+    result = run_linkage(scene, mode="quasi_static", n_outputs=5, t_end=0.4 * scene.t_end)
+    q, t = result.q[-1], float(result.time[-1])
+    rest = np.zeros_like(q)
+    held = generalized_alpha(scene.system, q, rest, 0.02, 1e-3, held_time=t)
+    print("held drift", np.abs(held.q - q).max())
+    assert np.abs(held.q - q).max() < 1e-9
+    with pytest.raises(NewtonDivergence):  # the drive at t = 1 ms of its ramp: the links yanked through the loop
+        generalized_alpha(scene.system, q, rest, 0.02, 1e-3)
