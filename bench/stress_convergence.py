@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.report import write_report
+from ffrf.fe.fe_model import FEModel
 from ffrf.output.peak_stress import peak_stress, strain_modes, stress_norm
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import build_linkage
@@ -40,6 +41,7 @@ def _row(size_mm: float) -> dict:
     result = run_linkage(scene, mode="quasi_static", n_outputs=POSES, sensors="path")
     links = []
     for k, body in enumerate(scene.bodies):
+        assert isinstance(body.fe, FEModel) and body.geometry is not None  # parametric links, meshed by us
         modes = strain_modes(body.fe, body.reduction.basis)
         block = scene.system.block(k)
         material = body.fe.material
