@@ -113,3 +113,32 @@ def test_held_time_holds_a_linkage_s_drive_on_the_whole_system_kernels():
     assert np.abs(held.q - q).max() < 1e-9
     with pytest.raises(NewtonDivergence):  # the drive at t = 1 ms of its ramp: the links yanked through the loop
         generalized_alpha(scene.system, q, rest, 0.02, 1e-3)
+
+
+@pytest.mark.slow  # two monitored runs of a 6R to its fold, 25 s
+def test_a_printed_6r_whose_trace_is_cut_short_lands_by_the_passage_where_the_trace_lands(monkeypatch):
+    """plane_fold_6r printed in PLA (6 mm quadratic links, the snap of docs/stability.md), run with stability
+    monitoring past its first fold twice: once as it is (the trace comes back to the fold's drive angle and lands),
+    once with every trace cut at 12 points, so that the landing is the dynamic passage's (667 steps, measured). Both
+    snap at the same drive angle, release the same energy and go on from the same equilibrium: the coupler point of
+    every output after the snap agrees to round-off (measured 1.5e-16 m against a jump of 8.6 mm)."""
+    import ffrf.solvers.snap_through as snap_through
+    from bench.snap_plane_fold import _scene
+    from ffrf.scenes.linkage_run import run_linkage
+
+    scene = _scene(6.0, 2, 4)
+    traced = run_linkage(scene, "quasi_static", 31, t_end=30.0, stability=True)
+    original = snap_through.trace_snap
+
+    def cut(system, q0, multipliers0, t0, t_end, step, max_points=600, *args, **kwargs):
+        return original(system, q0, multipliers0, t0, t_end, step, min(max_points, SHORT_TRACE), *args, **kwargs)
+
+    monkeypatch.setattr(snap_through, "trace_snap", cut)
+    passed = run_linkage(scene, "quasi_static", 31, t_end=30.0, stability=True)
+    (first,), (second,) = traced.metadata["stability"]["snaps"], passed.metadata["stability"]["snaps"]
+    assert first["landed_by"] == "traced path" and second["landed_by"] == "dynamic passage"
+    assert second["drive_angle_deg"] == pytest.approx(first["drive_angle_deg"], abs=1e-9)
+    assert second["energy_released_J"] == pytest.approx(first["energy_released_J"], rel=1e-6)
+    difference = np.abs(traced.sensors["coupler_point"] - passed.sensors["coupler_point"]).max()
+    print("coupler difference", difference, "jump", first["coupler_jump_m"])
+    assert difference < 1e-9 * first["coupler_jump_m"]
