@@ -403,6 +403,10 @@ def _advance(model, path: _Path, t_to: float, tolerance: float, max_iterations: 
             if along is None or along[0] != t_from:
                 along = (t_from, *path_rate(model, q, lam, t_from))
             predicted = (q + (t_try - t_from) * along[1], lam + (t_try - t_from) * along[2])
+        elif tangent is not None and tangent.rank_deficiency:
+            # a free motion (a pin's rotation in its bore) is fixed by nothing but round-off: a polynomial through
+            # equilibria would extrapolate its drift, so the step starts from the last equilibrium
+            predicted = None
         else:
             predicted = path.predict(t_try)
         q_guess, lam_guess = (q, lam) if predicted is None else predicted

@@ -295,7 +295,6 @@ def test_a_quasi_static_path_jumps_across_the_bore_where_the_load_through_the_pi
         np.testing.assert_allclose(pin, expected, rtol=0.0, atol=1e-10)
     # the path records its jump (the energy books are kept apart across it): once, where the load passes zero,
     # from the +x side of the bore to the -x side within one path step
-    print("jumps", [(jump.t_from, jump.t_to, jump.q_from[0], jump.q_to[0]) for jump in path.jumps])
     (jump,) = path.jumps
     assert jump.t_from <= 0.55 < jump.t_to <= jump.t_from + 0.05
     assert jump.q_from[0] > 0.9 * clearance and jump.q_to[0] < -0.9 * clearance

@@ -120,7 +120,9 @@ def test_chain_equilibrium_is_the_same_under_round_off(chain, monkeypatch):
         assert np.abs(q - reference).max() <= 1e-10 * np.abs(reference).max()
         assert np.abs(weightless.constraint_values(q, 0.0)).max() <= 1e-10
     monkeypatch.undo()
-    with pytest.raises(StaticDivergence, match=r"singular \(1 free motion"):
+    # bar 1's free translation, and its rotation where gravity's geometric stiffness at the iterate Newton gives up
+    # on leaves it free: which iterate that is depends on round-off
+    with pytest.raises(StaticDivergence, match=r"singular \([12] free motion"):
         static_equilibrium(chain, q0, fast_path=False)
 
 
