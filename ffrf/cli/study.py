@@ -6,10 +6,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 
 from ffrf.cli.arguments import number_in, output_folder, positive_count
-from ffrf.errors import Interrupted, SceneError
+from ffrf.errors import Interrupted, SceneError, SensitivityError
 from ffrf.paper.bennett_scene import STUDY_BASES
 from ffrf.studies.linear_tolerance import check_linear, linear_report
 from ffrf.studies.spec import Study, load_study
@@ -37,6 +38,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="bore-error studies: to first order instead (exact sensitivities of the base path, docs/studies.md): "
         "--prints random prints in seconds, checked against --check prints run in full; writes linear.json",
+    )
+    parser.add_argument(
+        "--second-order",
+        action="store_true",
+        help="--linear: to second order in the errors (Eq. (D11): k (k + 1) full runs of the base, for k parameters); "
+        "the driving torque, of second order in the errors, needs it",
     )
     parser.add_argument("--prints", type=positive_count, default=10**6, help="prints of --linear (default 10^6)")
     parser.add_argument(
@@ -73,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
             raise SceneError(str(error)) from None
     out = output_folder(args.out)
     if args.linear:
-        return _linear(study, out, args.prints, args.check, args.target, args.level)
+        return _linear(study, out, args.prints, args.check, args.target, args.level, args.second_order)
     # Dask, pyarrow and matplotlib take seconds to import: only the command that uses them does
     from ffrf.studies.report import write_report
     from ffrf.studies.runner import run_study
@@ -93,15 +100,30 @@ def run(args: argparse.Namespace) -> int:
     return 1 if result.lost else 0
 
 
-def _linear(study: Study, out: Path, prints: int, checks: int, target: float | None, level: float) -> int:
-    """``--linear``: the study to first order (:func:`ffrf.studies.linear_tolerance.linear_report`), ``linear.json``
-    in ``out``; exit 3 when a full run disagrees with the model (the estimate did not check itself)."""
-    report = linear_report(study, prints, checks, None if target is None else 1e-3 * target, level)
+def _linear(study: Study, out: Path, prints: int, checks: int, target: float | None, level: float, second: bool) -> int:
+    """``--linear``: the study to first order, or to second (:func:`ffrf.studies.linear_tolerance.linear_report`),
+    ``linear.json`` in ``out``; exit 3 when a full run disagrees with the model (the estimate did not check
+    itself)."""
+    from tqdm import tqdm
+
+    with tqdm(unit="run", desc="second order", disable=not second) as bar:
+
+        def progress(done: int, total: int) -> None:
+            bar.total = total
+            bar.update(done - bar.n)
+
+        metres = None if target is None else 1e-3 * target
+        try:
+            report = linear_report(study, prints, checks, metres, level, second, progress)
+        except SensitivityError as error:  # the second order's full runs left the base's smooth path
+            print(f"error: {error}", file=sys.stderr)
+            return 3
+    order = "first" if report["order"] == 1 else "second"
     path = out / "linear.json"
     path.write_text(json.dumps(report, indent=2) + "\n")
     p = report["max_coupler_deviation_m"]
     print(
-        f"{study.name}, to first order: {prints} prints in {report['seconds']['prints']:.2f} s (base run "
+        f"{study.name}, to {order} order: {prints} prints in {report['seconds']['prints']:.2f} s (base run "
         f"{report['seconds']['base_run']:.1f} s, sensitivities {report['seconds']['sensitivities']:.1f} s); largest "
         "coupler deviation "
         + ", ".join(
@@ -112,7 +134,7 @@ def _linear(study: Study, out: Path, prints: int, checks: int, target: float | N
     )
     torque = report["max_abs_driving_torque_Nm"]
     print(
-        f"largest driving torque: {torque['refused']}: not given to first order"
+        f"largest driving torque: {torque['refused']}: not given to {order} order"
         if "refused" in torque
         else "largest driving torque " + ", ".join(f"{name} {1e3 * v['value']:.4g} N mm" for name, v in torque.items())
     )
@@ -131,7 +153,7 @@ def _linear(study: Study, out: Path, prints: int, checks: int, target: float | N
         if report["verified"]
         else f"verified: false: print {worst['id']} run in full deviates {1e3 * worst['full_m']:.4g} mm, the model "
         f"says {1e3 * worst['linear_m']:.4g} mm ({100 * worst['relative_difference']:.2g} %): the errors are too large "
-        "for the first order; run the study in full"
+        f"for the {order} order; run the study in full"
     )
     print(verdict)
     return 0 if report["verified"] else 3

@@ -1,4 +1,5 @@
-r"""Tolerance analysis of bore errors to first order: a study's prints in a second (``docs/formulation.md``, (D3)).
+r"""Tolerance analysis of bore errors to first and second order: a study's prints in a second
+(``docs/formulation.md``, (D3), (D11)).
 
 A study whose parameters are bore errors (twist, offset, axial of :class:`~ffrf.scenes.linkage_description.BoreError`
 in the misfit model) varies a linkage whose quasi-static path responds smoothly to them. To first order the coupler's
@@ -13,6 +14,14 @@ the largest :math:`|d_i(e)|` over the poses, the study's ``max_coupler_deviation
 95 % confidence interval from the order statistics of the sample (:func:`percentiles`). The model holds while the
 errors are small against what bends the path; :func:`check_with_full_runs` compares it with full runs of some of the
 study's own prints and says where they disagree.
+
+Where the first order is not enough (the driving torque: the misfit's strain energy is of second order in the
+errors), :func:`second_order` adds each output's second derivatives by every pair of parameters, Eq. (D11),
+
+.. math:: d_i(e) \approx d_i(0) + S_i\,e + \tfrac12\,e^T H_i\,e,
+
+from central second differences of full runs of the base (:func:`second_differences`): the same sampling, checks
+and percentiles then hold to second order.
 """
 
 from __future__ import annotations
@@ -20,11 +29,12 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ffrf.errors import SensitivityError
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.path_sensitivity import bore_sensitivity
 from ffrf.studies.sampling import study_design, values_from_unit
@@ -36,7 +46,10 @@ __all__ = [
     "CHECK_TOLERANCE",
     "LinearPath",
     "check_linear",
+    "check_first_differences",
     "check_with_full_runs",
+    "second_differences",
+    "second_order",
     "first_order_stability",
     "linear_path",
     "allocate",
@@ -47,8 +60,13 @@ __all__ = [
 
 #: Largest relative difference between the linear model's and a full run's largest deviation before a check warns.
 CHECK_TOLERANCE = 0.05
-#: Prints per block of :meth:`LinearPath.max_deviation` (memory: poses x 3 x block doubles).
+#: Largest difference, relative to the largest exact slope of a parameter, between the exact slopes and the first
+#: differences of the second order's full runs (their third-order term: a few percent at a spread's step).
+SLOPE_AGREEMENT = 0.2
+#: Prints per block of :meth:`LinearPath.max_deviation` (memory: poses x 3 x block doubles; with curvature, times
+#: the parameters: hence a smaller block).
 _BLOCK = 20_000
+_CURVED_BLOCK = 2_000
 
 
 @dataclass(frozen=True)
@@ -58,7 +76,9 @@ class LinearPath:
     study's units: deg, mm), at the ``drive_angle`` (rad) of the base run's outputs; ``seconds``: the base run's and
     the sensitivities' wall time; the driving torque likewise, ``torque`` ``(poses,)`` (N m) and ``torque_slopes``
     ``(poses, k)``, where given; and for a study that monitors stability the lowest squared frequency of Eq. (B1),
-    ``frequency`` ``(poses,)`` (rad^2/s^2) and ``frequency_slopes`` ``(poses, k)``."""
+    ``frequency`` ``(poses,)`` (rad^2/s^2) and ``frequency_slopes`` ``(poses, k)``; to second order (Eq. (D11),
+    :func:`second_order`) the deviation's second derivatives ``curvature`` ``(poses, 3, k, k)`` and the torque's
+    ``torque_curvature`` ``(poses, k, k)`` (per unit of each pair of parameters), which every print then includes."""
 
     parameters: tuple[str, ...]
     drive_angle: NDArray[np.float64]
@@ -69,6 +89,16 @@ class LinearPath:
     torque_slopes: NDArray[np.float64] | None = None
     frequency: NDArray[np.float64] | None = None
     frequency_slopes: NDArray[np.float64] | None = None
+    curvature: NDArray[np.float64] | None = None
+    torque_curvature: NDArray[np.float64] | None = None
+
+    @property
+    def order(self) -> int:
+        """1 for the first-order model, 2 where its second derivatives are given."""
+        return 1 if self.curvature is None else 2
+
+    def _block(self) -> int:
+        return _BLOCK if self.curvature is None else _CURVED_BLOCK
 
     def min_squared_frequency(self, values: NDArray) -> NDArray[np.float64]:
         """``(n,)``: each print's lowest squared frequency of Eq. (B1) over the poses (rad^2/s^2); zero or below
@@ -82,33 +112,56 @@ class LinearPath:
         """``(n,)``: each print's largest driving torque magnitude over the poses (N m)."""
         if self.torque is None or self.torque_slopes is None:
             raise ValueError("this linear model has no driving torque")
-        nominal, slopes = self.torque, self.torque_slopes
-        return _blockwise(values, lambda block: np.abs(nominal[:, None] + slopes @ block.T).max(axis=0))
+        nominal, slopes, curvature = self.torque, self.torque_slopes, self.torque_curvature
+
+        def largest(block: NDArray) -> NDArray[np.float64]:
+            torque = nominal[:, None] + slopes @ block.T
+            if curvature is not None:
+                torque += _half_quadratic(curvature, block)
+            return np.abs(torque).max(axis=0)
+
+        return _blockwise(values, largest, self._block())
 
     def deviations(self, values: NDArray) -> NDArray[np.float64]:
         """``(n, poses, 3)``: the deviation at every pose of each print ``values`` ``(n, k)``."""
         values = np.atleast_2d(np.asarray(values, dtype=float))
-        return self.nominal[None] + np.einsum("pck,nk->npc", self.slopes, values)
+        moved = self.nominal[None] + np.einsum("pck,nk->npc", self.slopes, values)
+        if self.curvature is not None:
+            poses, k = self.nominal.shape[0], len(self.parameters)
+            moved += _half_quadratic(self.curvature.reshape(poses * 3, k, k), values).T.reshape(-1, poses, 3)
+        return moved
 
     def max_deviation(self, values: NDArray) -> NDArray[np.float64]:
         """``(n,)``: each print's largest deviation over the poses (m)."""
-        poses = self.nominal.shape[0]
+        poses, k = self.nominal.shape[0], len(self.parameters)
         flat = self.slopes.reshape(poses * 3, -1)
+        curvature = None if self.curvature is None else self.curvature.reshape(poses * 3, k, k)
 
         def largest(block: NDArray) -> NDArray[np.float64]:
-            moved = (flat @ block.T).reshape(poses, 3, -1) + self.nominal[:, :, None]
+            moved = flat @ block.T
+            if curvature is not None:
+                moved += _half_quadratic(curvature, block)
+            moved = moved.reshape(poses, 3, -1) + self.nominal[:, :, None]
             return np.sqrt(np.einsum("pcn,pcn->pn", moved, moved)).max(axis=0)
 
-        return _blockwise(values, largest)
+        return _blockwise(values, largest, self._block())
 
 
-def _blockwise(values: NDArray, per_block: Callable[[NDArray], NDArray]) -> NDArray[np.float64]:
-    """``per_block`` of the prints ``values`` ``(n, k)`` in blocks of :data:`_BLOCK` (memory: poses x 3 x block
-    doubles), one value per print."""
+def _half_quadratic(curvature: NDArray, values: NDArray) -> NDArray[np.float64]:
+    """``(rows, n)``: e^T H_r e / 2 for every row's second derivatives ``curvature`` ``(rows, k, k)`` and every print
+    e of ``values`` ``(n, k)`` (Eq. (D11)'s last term)."""
+    rows, k, _ = curvature.shape
+    products = (curvature.reshape(rows * k, k) @ values.T).reshape(rows, k, -1)
+    return 0.5 * np.einsum("rkn,nk->rn", products, values)
+
+
+def _blockwise(values: NDArray, per_block: Callable[[NDArray], NDArray], block: int = _BLOCK) -> NDArray[np.float64]:
+    """``per_block`` of the prints ``values`` ``(n, k)`` in blocks of ``block`` prints (memory: poses x 3 x block
+    doubles, with curvature times k), one value per print."""
     values = np.atleast_2d(np.asarray(values, dtype=float))
     out = np.empty(len(values))
-    for start in range(0, len(values), _BLOCK):
-        out[start : start + _BLOCK] = per_block(values[start : start + _BLOCK])
+    for start in range(0, len(values), block):
+        out[start : start + block] = per_block(values[start : start + block])
     return out
 
 
@@ -167,6 +220,98 @@ def linear_path(study: Study) -> LinearPath:
         exact.squared_frequency,
         np.stack(frequencies, axis=1) if frequencies else None,
     )
+
+
+def second_differences(
+    outputs: Callable[[NDArray], NDArray],
+    steps: NDArray,
+    at_zero: NDArray,
+    progress: Callable[[int, int], None] | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Second derivatives ``(rows, k, k)`` at e = 0 of the vector ``outputs(e)`` ``(rows,)`` (``at_zero`` its value
+    there) by central second differences with ``steps`` ``(k,)`` (Eq. (D11)): from f(+-h_i u_i) the diagonal,
+    (f(h_i u_i) + f(-h_i u_i) - 2 f(0)) / h_i^2, and from f(+-(h_i u_i + h_j u_j)) each pair's mixed derivative,
+    the rest once the diagonal's part is taken away: k (k + 1) evaluations, exact for polynomials up to the third
+    degree (the odd terms cancel in each +- pair). Also the first derivatives ``(rows, k)`` the same evaluations give,
+    (f(h_i u_i) - f(-h_i u_i)) / (2 h_i), to check the exact ones against. ``progress(done, total)`` after each."""
+    steps = np.asarray(steps, dtype=float)
+    k, f0 = steps.size, np.asarray(at_zero, dtype=float)
+    total, done = k * (k + 1), 0
+
+    def symmetric_sum(direction: NDArray) -> tuple[NDArray, NDArray]:
+        nonlocal done
+        plus, minus = np.asarray(outputs(direction), dtype=float), np.asarray(outputs(-direction), dtype=float)
+        done += 2
+        if progress is not None:
+            progress(done, total)
+        return plus + minus - 2.0 * f0, plus - minus
+
+    hessian = np.empty((f0.size, k, k))
+    slopes = np.empty((f0.size, k))
+    for i in range(k):
+        even, odd = symmetric_sum(steps[i] * np.eye(k)[i])
+        hessian[:, i, i] = even / steps[i] ** 2
+        slopes[:, i] = odd / (2.0 * steps[i])
+    for i in range(k):
+        for j in range(i + 1, k):
+            even, _ = symmetric_sum(steps[i] * np.eye(k)[i] + steps[j] * np.eye(k)[j])
+            mixed = (even - steps[i] ** 2 * hessian[:, i, i] - steps[j] ** 2 * hessian[:, j, j]) / (
+                2.0 * steps[i] * steps[j]
+            )
+            hessian[:, i, j] = hessian[:, j, i] = mixed
+    return hessian, slopes
+
+
+def second_order(
+    study: Study, model: LinearPath, steps: NDArray | None = None, progress: Callable[[int, int], None] | None = None
+) -> LinearPath:
+    """``model`` (:func:`linear_path` of ``study``) with the second derivatives of the coupler's deviation and of the
+    driving torque at every pose by each pair of parameters (Eq. (D11)): :func:`second_differences` of full
+    quasi-static runs of the study's base with the parameters at +-``steps`` (study units; default each parameter's
+    spread, the standard deviation of 10^4 of its prints), k (k + 1) runs. The first differences of the deviation
+    from the same runs must agree with its exact slopes (:func:`check_first_differences`; a run that left the base's
+    branch would not): else :class:`~ffrf.errors.SensitivityError` naming the parameter."""
+    if model.torque is None or model.torque_slopes is None:
+        raise ValueError("this linear model has no driving torque to take to second order")
+    if steps is None:
+        steps = sample_values(study, 10_000, study.seed).std(axis=0)
+    steps = np.asarray(steps, dtype=float)
+    poses = model.nominal.shape[0]
+
+    def outputs(values: NDArray) -> NDArray[np.float64]:
+        named = dict(zip(model.parameters, (float(v) for v in values), strict=True))
+        scene, run = build_variant(study, named)
+        result = run_linkage(scene, mode="quasi_static", n_outputs=int(run["outputs"]), sensors="path")
+        deviation = np.asarray(result.sensors["coupler_deviation"], dtype=float)
+        return np.concatenate([deviation.ravel(), np.asarray(result.sensors["driving_torque"], dtype=float)])
+
+    base = np.concatenate([model.nominal.ravel(), model.torque])
+    hessian, slopes = second_differences(outputs, steps, base, progress)
+    # the deviation's rows only: a snap or jump moves the coupler, while the torque's small first derivative is
+    # easily outgrown by its third-order term (measured 29 % at 0.4 mm steps on a smooth path)
+    rows = poses * 3
+    check_first_differences(model.parameters, steps, slopes[:rows], model.slopes.reshape(rows, -1))
+    k = len(model.parameters)
+    return replace(
+        model,
+        curvature=hessian[: poses * 3].reshape(poses, 3, k, k),
+        torque_curvature=hessian[poses * 3 :],
+    )
+
+
+def check_first_differences(parameters: tuple[str, ...], steps: NDArray, differences: NDArray, exact: NDArray) -> None:
+    """Raise :class:`~ffrf.errors.SensitivityError` where a parameter's first differences ``(rows, k)`` from the
+    runs at +-``steps`` differ from the exact slopes ``(rows, k)`` by more than :data:`SLOPE_AGREEMENT` of its
+    largest exact slope: the path is not smooth over the step (a snap or a jump between the runs)."""
+    scale = np.abs(exact).max(axis=0)
+    off = np.abs(differences - exact).max(axis=0) / np.where(scale > 0.0, scale, 1.0)
+    if off.max() > SLOPE_AGREEMENT:
+        worst = int(np.argmax(off))
+        raise SensitivityError(
+            f"{parameters[worst]}: the full runs at +-{steps[worst]:g} give a first derivative "
+            f"{100 * off[worst]:.3g} % off the exact one: the path is not smooth over that step (a snap, a jump); "
+            "give smaller steps or run the study in full"
+        )
 
 
 def sample_values(study: Study, n: int, seed: int) -> NDArray[np.float64]:
@@ -276,7 +421,8 @@ def _torque_percentiles(model: LinearPath, values: NDArray, rows: list[dict]) ->
     worst = max((row["torque_difference"] for row in rows if "torque_difference" in row), default=math.inf)
     if worst <= CHECK_TOLERANCE:
         return percentiles(model.max_torque(values))
-    return {"refused": f"prints run in full differ from the first order by up to {100 * worst:.3g} %"}
+    order = "first" if model.order == 1 else "second"
+    return {"refused": f"prints run in full differ from the {order} order by up to {100 * worst:.3g} %"}
 
 
 def _hertz(squared: NDArray) -> NDArray[np.float64]:
@@ -304,8 +450,19 @@ def first_order_stability(model: LinearPath, values: NDArray) -> dict:
     return out
 
 
-def linear_report(study: Study, prints: int, checks: int, target: float | None = None, level: float = 95.0) -> dict:
-    """The study to first order as plain data (``linear.json`` of ``python -m ffrf study --linear``): ``prints``
+def linear_report(
+    study: Study,
+    prints: int,
+    checks: int,
+    target: float | None = None,
+    level: float = 95.0,
+    second: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+    model: LinearPath | None = None,
+) -> dict:
+    """The study to first order (to second with ``second``: :func:`second_order`, its full runs reported to
+    ``progress(done, total)``; or by a ``model`` of the same base built before, as for several tolerance levels of one
+    study) as plain data (``linear.json`` of ``python -m ffrf study --linear``): ``prints``
     random prints of its distributions (seeded by the study's seed), the percentiles of their largest deviation (m)
     with 95 % intervals, per parameter the largest move of the coupler along the path for one standard deviation of
     it (``one_std_moves``, m: which bores matter), the first ``checks`` prints of its design run in full against the
@@ -313,7 +470,12 @@ def linear_report(study: Study, prints: int, checks: int, target: float | None =
     no print reaches a fold to first order (``stability``: :func:`first_order_stability`), and the seconds each part
     took; with a ``target`` (m), the tolerances that keep the ``level``-th percentile within it (:func:`allocate`, on
     10^5 of the prints)."""
-    model = linear_path(study)
+    if model is None:
+        model = linear_path(study)
+    if second and model.order == 1:
+        started = time.perf_counter()
+        model = second_order(study, model, progress=progress)
+        model = replace(model, seconds=dict(model.seconds, second_order=time.perf_counter() - started))
     values = sample_values(study, prints, study.seed)
     started = time.perf_counter()
     largest = model.max_deviation(values)
@@ -327,6 +489,7 @@ def linear_report(study: Study, prints: int, checks: int, target: float | None =
     folds = 0 if stability is None else stability["folds"]["exceeding"]
     return {
         "study": study.name,
+        "order": model.order,
         "prints": prints,
         "nominal_max_deviation_m": float(np.linalg.norm(model.nominal, axis=1).max()),
         "max_coupler_deviation_m": percentiles(largest),
