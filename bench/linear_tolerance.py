@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -54,7 +55,9 @@ def main() -> int:
     frequency = outputs["min_frequency_hz"]["percentiles"]
     first = linear_path(study)
     print(f"first order: {first.seconds}", flush=True)
+    started = time.perf_counter()
     second = second_order(study, first, progress=lambda done, total: print(f"second order: {done}/{total} runs"))
+    second_order_s = time.perf_counter() - started
     levels = []
     for factor in LEVELS:
         level = scaled(study, factor)
@@ -68,6 +71,7 @@ def main() -> int:
             "study": str(STUDY),
             "full_study": {key: full[key] for key in ("n", "mean", "p50", "p95", "p99")},
             "full_study_min_frequency_hz": {key: frequency[key] for key in ("n", "p0", "p1", "p5", "p50", "p95")},
+            "second_order_runs_s": second_order_s,
             "rows": levels,
         },
         args.json,

@@ -252,7 +252,7 @@ BENCHMARKS: tuple[Benchmark, ...] = (
     ),
     Benchmark(
         "linear_tolerance",
-        "the 2000-print tolerance study to first and second order against its full Monte Carlo, at four tolerance levels",
+        "the 2000-print tolerance study to first and second order against its full Monte Carlo, at four levels",
         records=(Recording("linear_tolerance", rows_by="level", rows_name="levels"),),
     ),
     Benchmark(
