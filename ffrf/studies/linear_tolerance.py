@@ -63,10 +63,9 @@ CHECK_TOLERANCE = 0.05
 #: Largest difference, relative to the largest exact slope of a parameter, between the exact slopes and the first
 #: differences of the second order's full runs (their third-order term: a few percent at a spread's step).
 SLOPE_AGREEMENT = 0.2
-#: Prints per block of :meth:`LinearPath.max_deviation` (memory: poses x 3 x block doubles; with curvature, times
-#: the parameters: hence a smaller block).
+#: Prints per block of :meth:`LinearPath.max_deviation` (memory: poses x 3 x block doubles, and with curvature the
+#: block's k (k + 1) / 2 monomials).
 _BLOCK = 20_000
-_CURVED_BLOCK = 2_000
 
 
 @dataclass(frozen=True)
@@ -97,9 +96,6 @@ class LinearPath:
         """1 for the first-order model, 2 where its second derivatives are given."""
         return 1 if self.curvature is None else 2
 
-    def _block(self) -> int:
-        return _BLOCK if self.curvature is None else _CURVED_BLOCK
-
     def min_squared_frequency(self, values: NDArray) -> NDArray[np.float64]:
         """``(n,)``: each print's lowest squared frequency of Eq. (B1) over the poses (rad^2/s^2); zero or below
         where the first order says the print reaches a fold (snaps), beyond which it does not hold."""
@@ -120,7 +116,7 @@ class LinearPath:
                 torque += _half_quadratic(curvature, block)
             return np.abs(torque).max(axis=0)
 
-        return _blockwise(values, largest, self._block())
+        return _blockwise(values, largest)
 
     def deviations(self, values: NDArray) -> NDArray[np.float64]:
         """``(n, poses, 3)``: the deviation at every pose of each print ``values`` ``(n, k)``."""
@@ -144,24 +140,25 @@ class LinearPath:
             moved = moved.reshape(poses, 3, -1) + self.nominal[:, :, None]
             return np.sqrt(np.einsum("pcn,pcn->pn", moved, moved)).max(axis=0)
 
-        return _blockwise(values, largest, self._block())
+        return _blockwise(values, largest)
 
 
 def _half_quadratic(curvature: NDArray, values: NDArray) -> NDArray[np.float64]:
     """``(rows, n)``: e^T H_r e / 2 for every row's second derivatives ``curvature`` ``(rows, k, k)`` and every print
-    e of ``values`` ``(n, k)`` (Eq. (D11)'s last term)."""
-    rows, k, _ = curvature.shape
-    products = (curvature.reshape(rows * k, k) @ values.T).reshape(rows, k, -1)
-    return 0.5 * np.einsum("rkn,nk->rn", products, values)
+    e of ``values`` ``(n, k)`` (Eq. (D11)'s last term), as one matrix product over the k (k + 1) / 2 monomials
+    e_i e_j (i <= j) with the coefficients H_ii / 2 and H_ij: half the products of H e, all of them in BLAS."""
+    i, j = np.triu_indices(curvature.shape[1])
+    coefficients = curvature[:, i, j] * np.where(i == j, 0.5, 1.0)
+    return coefficients @ (values[:, i] * values[:, j]).T
 
 
-def _blockwise(values: NDArray, per_block: Callable[[NDArray], NDArray], block: int = _BLOCK) -> NDArray[np.float64]:
-    """``per_block`` of the prints ``values`` ``(n, k)`` in blocks of ``block`` prints (memory: poses x 3 x block
-    doubles, with curvature times k), one value per print."""
+def _blockwise(values: NDArray, per_block: Callable[[NDArray], NDArray]) -> NDArray[np.float64]:
+    """``per_block`` of the prints ``values`` ``(n, k)`` in blocks of :data:`_BLOCK` (memory: poses x 3 x block
+    doubles), one value per print."""
     values = np.atleast_2d(np.asarray(values, dtype=float))
     out = np.empty(len(values))
-    for start in range(0, len(values), block):
-        out[start : start + block] = per_block(values[start : start + block])
+    for start in range(0, len(values), _BLOCK):
+        out[start : start + _BLOCK] = per_block(values[start : start + _BLOCK])
     return out
 
 

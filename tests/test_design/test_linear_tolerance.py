@@ -74,6 +74,28 @@ def test_a_quadratic_output_gives_the_chi_square_percentiles():
     np.testing.assert_allclose(model.deviations(values[:3])[:, 0, 0], 1.5e-3 * values[:3, 0] ** 2, rtol=1e-14)
 
 
+def test_the_second_order_sampler_is_the_quadratic_form_print_by_print():
+    """Three poses, four parameters, random nominal values, slopes and symmetric second derivatives: every print's
+    deviation, largest deviation and largest torque are y0 + S e + e^T H e / 2 formed print by print (to 1e-14)."""
+    rng = np.random.default_rng(9)
+    poses, k = 3, 4
+    curvature = rng.normal(size=(poses, 3, k, k))
+    curvature = curvature + curvature.transpose(0, 1, 3, 2)
+    torque_curvature = rng.normal(size=(poses, k, k))
+    torque_curvature = torque_curvature + torque_curvature.transpose(0, 2, 1)
+    model = LinearPath(
+        tuple("abcd"), np.zeros(poses), rng.normal(size=(poses, 3)), rng.normal(size=(poses, 3, k)), {},
+        rng.normal(size=poses), rng.normal(size=(poses, k)), curvature=curvature, torque_curvature=torque_curvature,
+    )  # fmt: skip
+    values = rng.normal(size=(5, k))
+    for n, e in enumerate(values):
+        deviation = model.nominal + model.slopes @ e + 0.5 * np.einsum("pcij,i,j->pc", curvature, e, e)
+        torque = model.torque + model.torque_slopes @ e + 0.5 * np.einsum("pij,i,j->p", torque_curvature, e, e)
+        np.testing.assert_allclose(model.deviations(values)[n], deviation, rtol=1e-14, atol=1e-14)
+        assert model.max_deviation(values)[n] == pytest.approx(np.linalg.norm(deviation, axis=1).max(), rel=1e-14)
+        assert model.max_torque(values)[n] == pytest.approx(np.abs(torque).max(), rel=1e-14)
+
+
 def test_first_differences_far_from_the_exact_slopes_are_refused():
     """A parameter whose runs at +-h disagree with its exact slope by 30 % of its largest (a jump between them) is
     named; 10 % passes."""
