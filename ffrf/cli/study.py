@@ -119,12 +119,15 @@ def _linear(study: Study, out: Path, prints: int, checks: int, target: float | N
             print(f"error: {error}", file=sys.stderr)
             return 3
     order = "first" if report["order"] == 1 else "second"
+    second_s = report["seconds"].get("second_order")
     path = out / "linear.json"
     path.write_text(json.dumps(report, indent=2) + "\n")
     p = report["max_coupler_deviation_m"]
     print(
         f"{study.name}, to {order} order: {prints} prints in {report['seconds']['prints']:.2f} s (base run "
-        f"{report['seconds']['base_run']:.1f} s, sensitivities {report['seconds']['sensitivities']:.1f} s); largest "
+        f"{report['seconds']['base_run']:.1f} s, sensitivities {report['seconds']['sensitivities']:.1f} s"
+        + ("" if second_s is None else f", second order {second_s:.1f} s")
+        + "); largest "
         "coupler deviation "
         + ", ".join(
             f"{name} {1e3 * v['value']:.4g} mm [{_mm(v['low'], '-inf')}, {_mm(v['high'], 'inf')}]"

@@ -237,7 +237,10 @@ def test_the_study_command_runs_a_bore_study_to_second_order(tmp_path, capsys):
     assert report["prints"] == 1000 and len(report["checks"]) == 2 and report["verified"] and report["order"] == 2
     assert set(report["max_abs_driving_torque_Nm"]) == {"p50", "p95", "p99"}  # given, not refused, to second order
     assert set(report["max_coupler_deviation_m"]) == {"p50", "p95", "p99"}
-    assert capsys.readouterr().out.splitlines()[-1].startswith("verified: true")
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[-1].startswith("verified: true")
+    assert "two bores, to second order: 1000 prints" in lines[0] and ", second order " in lines[0], lines[0]
+    assert lines[1].startswith("largest driving torque p50 "), lines[1]
     other = tmp_path / "material.toml"
     other.write_text(
         '[study]\nname = "E"\nmethod = "lhs"\nsamples = 4\n[base]\nbennett = "pla"\nmode = "quasi_static"\n'
