@@ -86,6 +86,17 @@ def test_a_later_process_reads_from_disk_what_building_afresh_gives_bit_for_bit(
     _assert_same_bits(computed, fresh)
 
 
+def test_bodies_reduced_in_threads_are_those_reduced_one_by_one(monkeypatch):
+    """The four links reduced at once in threads (one link per thread) and one after the other: every array of the
+    build equal bit for bit, whatever the machine's cores."""
+    from ffrf.scenes import builder
+
+    monkeypatch.setattr(builder, "REDUCTION_THREADS", 4)
+    threaded = _build(SceneCache(enabled=False))
+    monkeypatch.setattr(builder, "REDUCTION_THREADS", 1)
+    _assert_same_bits(threaded, _build(SceneCache(enabled=False)))
+
+
 @pytest.mark.parametrize("damage", ["truncated", "flipped byte", "empty"])
 def test_a_corrupt_file_is_recomputed_with_a_one_line_warning(monkeypatch, tmp_path, caplog, damage):
     monkeypatch.setenv(CACHE_DIR_VARIABLE, str(tmp_path))
