@@ -407,15 +407,20 @@ class Reduced(NamedTuple):
 #: iterations run outside the GIL, so the default scene's four links reduce in 2.3 s on two cores instead of 4.1 s.
 #: Each body is reduced whole by one thread, so its basis does not depend on the count.
 REDUCTION_THREADS = os.cpu_count() or 1
+#: Above this many unknowns in a body the bodies reduce one at a time, so that one factorisation's fill is in memory
+#: at once (a link of 10^6 unknowns needs gigabytes of it; the default links have about 15000 each).
+THREADED_REDUCTION_DOFS = 200_000
 
 
 def _reductions(meshed: list[MeshedBody], entries: list[dict], reductions: LRUCache[Reduced]) -> list[Reduced]:
-    """:func:`_reduction` of every body: the first body of each reduction key in :data:`REDUCTION_THREADS` threads,
-    then the others in order (a body sharing an earlier one's key finds it in ``reductions``)."""
+    """:func:`_reduction` of every body: the first body of each reduction key in :data:`REDUCTION_THREADS` threads
+    (where no body has more than :data:`THREADED_REDUCTION_DOFS` unknowns), then the others in order (a body sharing
+    an earlier one's key finds it in ``reductions``)."""
     keys = [_reduction_key(m, e) for m, e in zip(meshed, entries, strict=True)]
     firsts = [keys.index(key) for key in dict.fromkeys(keys)]
     computed: dict[int, Reduced] = {}
-    if min(len(firsts), REDUCTION_THREADS) > 1:
+    small = max(m.fe.n_dofs for m in meshed) <= THREADED_REDUCTION_DOFS
+    if small and min(len(firsts), REDUCTION_THREADS) > 1:
         with ThreadPoolExecutor(max_workers=min(len(firsts), REDUCTION_THREADS)) as pool:
             futures = {k: pool.submit(_reduction, k, meshed[k], entries[k], reductions) for k in firsts}
         computed = {k: future.result() for k, future in futures.items()}  # the first failure in body order raises
