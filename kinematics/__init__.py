@@ -8,7 +8,14 @@ and the paper's line embedding ``l - eps m``.
 """
 
 from .assemblies import Assembly, NearbyAssemblies, nearby_assemblies, solve_closure
-from .bennett import PAPER_A, PAPER_ALPHA, BennettConditionError, BennettLinkage, MotionPolynomial
+from .bennett import (
+    BENNETT_PARAMETERS,
+    PAPER_A,
+    PAPER_ALPHA,
+    BennettConditionError,
+    BennettLinkage,
+    MotionPolynomial,
+)
 from .dh import (
     ClosureResidual,
     DHParameters,
@@ -40,6 +47,7 @@ from .single_loop import (
 )
 
 __all__ = [
+    "BENNETT_PARAMETERS",
     "PAPER_A",
     "PAPER_ALPHA",
     "Assembly",

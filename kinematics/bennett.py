@@ -27,6 +27,7 @@ from .dual_quaternion import DualQuaternion
 from .pluecker import Line, common_normal
 
 __all__ = [
+    "BENNETT_PARAMETERS",
     "BennettLinkage",
     "BennettConditionError",
     "MotionPolynomial",
@@ -38,6 +39,9 @@ __all__ = [
 #: The paper's Table "DH parameters of the 4R mechanism" (metres, radians).
 PAPER_A = (0.110, 0.220, 0.110, 0.220)
 PAPER_ALPHA = tuple(np.radians([150.0, 90.0, 150.0, 90.0]))
+#: The DH parameters a Bennett linkage is free in; the others follow from its conditions (:class:`BennettLinkage`):
+#: a2 = a0, alpha2 = alpha0, alpha3 = alpha1, a1 = a3 = a0 sin(alpha1) / sin(alpha0).
+BENNETT_PARAMETERS = ("a0", "alpha0", "alpha1")
 
 
 class BennettConditionError(ValueError):
@@ -122,6 +126,17 @@ class BennettLinkage:
         axes = tuple(dh_axes(a, alpha))
         object.__setattr__(self, "axes", axes)
         object.__setattr__(self, "coefficients", _configuration_coefficients(axes))
+
+    @classmethod
+    def from_free(cls, a0: float, alpha0: float, alpha1: float) -> BennettLinkage:
+        """The Bennett linkage of the free parameters :data:`BENNETT_PARAMETERS` (m, rad)."""
+        a1 = a0 * np.sin(alpha1) / np.sin(alpha0)
+        return cls((a0, a1, a0, a1), (alpha0, alpha1, alpha0, alpha1))
+
+    @property
+    def free(self) -> dict[str, float]:
+        """Its free parameters :data:`BENNETT_PARAMETERS` by name (m, rad)."""
+        return {"a0": self.a[0], "alpha0": self.alpha[0], "alpha1": self.alpha[1]}
 
     @classmethod
     def paper(cls) -> BennettLinkage:

@@ -32,7 +32,8 @@ chooses where that offset lives (:func:`ffrf.system.markers.attach_joint_point`)
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from collections.abc import Callable
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -43,6 +44,7 @@ from ffrf.scenes.assembly import assemble
 from ffrf.scenes.collision_free import Stacking
 from ffrf.scenes.linkage_description import BoreError, LinkageOptions, linkage_description
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage
+from ffrf.scenes.path_sensitivity import LoopChange
 from ffrf.scenes.scene_cache import SceneCache
 from ffrf.studies.spec import NamedBases
 from ffrf.system.drives import rpm
@@ -55,6 +57,7 @@ __all__ = [
     "PAPER_MAX_COUPLER_DEVIATION_MM",
     "paper_max_coupler_deviation",
     "BennettScene",
+    "bennett_changes",
     "bennett_description",
     "bennett_options",
     "build_bennett",
@@ -243,6 +246,27 @@ def build_bennett_from_options(
     )
     built = {f.name: getattr(scene, f.name) for f in fields(LinkageScene)}
     return BennettScene(**dict(built, settings=settings), variant=variant, linkage=BennettLinkage(PAPER_A, PAPER_ALPHA))
+
+
+def bennett_changes(
+    options: LinkageOptions, stacking: Stacking | None = COLLISION_FREE_STACKING, linkage: BennettLinkage | None = None
+) -> tuple[LoopChange, ...]:
+    """The free DH parameters of the Bennett ``linkage`` (default the paper's; :data:`kinematics.BENNETT_PARAMETERS`:
+    a0, alpha0, alpha1, the others kept by the Bennett conditions) as changes of the linkage built from it with
+    ``options`` (:func:`ffrf.scenes.path_sensitivity.loop_sensitivity`): the housings stacked on the changed axes by
+    ``stacking`` as :func:`bennett_options` stacks them (``None``: centred on the joint points)."""
+    nominal = BennettLinkage(PAPER_A, PAPER_ALPHA) if linkage is None else linkage
+    free = nominal.free
+
+    def changed(name: str) -> Callable[[float], tuple[SingleLoop, LinkageOptions]]:
+        def linkage_at(s: float) -> tuple[SingleLoop, LinkageOptions]:
+            moved = nominal if s == 0.0 else BennettLinkage.from_free(**(free | {name: free[name] + s}))
+            loop = SingleLoop(moved.axes)
+            return loop, replace(options, attach_points=None if stacking is None else stacking.attach_points(loop))
+
+        return linkage_at
+
+    return tuple(LoopChange(name, value, changed(name)) for name, value in free.items())
 
 
 #: The paper's variants as a study's named bases: ``[base] bennett = "pla"`` (:mod:`ffrf.studies.spec`).

@@ -71,7 +71,16 @@ from ffrf.system.forces import ForceElement
 from ffrf.system.markers import BodyMarker, rigid_interface_marker
 from ffrf.system.multibody import MultibodySystem
 
-__all__ = ["MeshedBody", "SceneBody", "JointGeometry", "Scene", "build_scene", "morphed_body", "parametric_link"]
+__all__ = [
+    "MeshedBody",
+    "SceneBody",
+    "JointGeometry",
+    "Scene",
+    "build_scene",
+    "morphed_body",
+    "morphed_scene",
+    "parametric_link",
+]
 
 log = logging.getLogger(__name__)
 
@@ -467,12 +476,15 @@ def _reduced(k: int, meshed: MeshedBody, entry: dict, aligned_to: ModeBasis | No
     return Reduced(basis, modal_moments(fe.nodes, fe.mass, basis.basis), markers)
 
 
-def morphed_body(scene: Scene, k: int, points: NDArray) -> SceneBody:
+def morphed_body(scene: Scene, k: int, points: NDArray, entry: dict | None = None) -> SceneBody:
     """Body ``k`` of ``scene`` built again on its own tetrahedra with the points moved to ``points`` (a morph of its
     mesh, :mod:`ffrf.geometry.design_velocity`), not cached: same interfaces (refused if the morph changes which
     nodes they take), its fixed-interface modes turned towards the nominal body's so that its coordinates change
-    smoothly with the morph."""
-    entry, nominal = scene.description["bodies"][k], scene.bodies[k]
+    smoothly with the morph. ``entry``: the body's description in a changed design (default its own; a changed
+    one's body has no parametric geometry of its own)."""
+    nominal = scene.bodies[k]
+    own = entry is None
+    entry = scene.description["bodies"][k] if entry is None else entry
     if not isinstance(nominal.fe, FEModel):
         raise SceneError(f"body {nominal.name!r} is given by its matrices: it has no mesh to morph")
     mesh = TetMesh(np.asarray(points, dtype=float), nominal.fe.mesh.tets, dict(nominal.fe.mesh.groups), entry["name"])
@@ -483,8 +495,26 @@ def morphed_body(scene: Scene, k: int, points: NDArray) -> SceneBody:
                 f"body {nominal.name!r}: the morph changes the nodes of interface {name!r}; "
                 "a design parameter that moves a bore is not a section parameter"
             )
-    meshed = replace(meshed, geometry=nominal.geometry)
+    meshed = replace(meshed, geometry=nominal.geometry if own else None)
     return _body(k, entry, meshed, scene.settings, _reduced(k, meshed, entry, nominal.reduction))
+
+
+def morphed_scene(scene: Scene, description: dict, points: list[NDArray]) -> Scene:
+    """``description``, a changed design of ``scene``'s (the same bodies, interfaces, joints and sensors by name,
+    other geometry: e.g. the loop's DH parameters changed), built on ``scene``'s tetrahedra with each body's points
+    moved to ``points[k]`` (a morph, :func:`morphed_body`), not cached; the node sensors keep their nodes."""
+    check_scene(description, "changed design")
+    names = [entry["name"] for entry in description["bodies"]]
+    if names != [body.name for body in scene.bodies]:
+        raise SceneError(f"a changed design has the same bodies: {names} is not {[b.name for b in scene.bodies]}")
+    bodies = tuple(morphed_body(scene, k, points[k], entry) for k, entry in enumerate(description["bodies"]))
+    settings = scene.settings
+    index = {b.name: b.index for b in bodies}
+    joints = tuple(
+        joint_geometry(spec, index, bodies, settings.get("clearance")) for spec in description.get("joints", [])
+    )
+    changed = replace(scene, description=description, bodies=bodies, joints=joints)
+    return replace(changed, system=changed.with_misfit(1.0))
 
 
 def _file_digest(path: Path) -> str | None:

@@ -50,7 +50,7 @@ from kinematics import (
     trace_motion,
 )
 
-__all__ = ["LinkageScene", "build_linkage"]
+__all__ = ["LinkageScene", "as_linkage", "build_linkage"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -300,13 +300,22 @@ def build_linkage(
     options = LinkageOptions() if options is None else options
     where = options.name if where is None else where
     cache = PROCESS_CACHE if cache is None else cache
-    tool = checked_tool_link(loop, options)
+    checked_tool_link(loop, options)
     start_phi = _cached_start(loop, options, cache)
     description = linkage_description(loop, options, start_phi)
     t_end = float(description["scene"]["t_end"])
     turn = float(CosineRamp(options.omega, options.ramp_time)(t_end))
     _cached_range_check(loop, options, start_phi, turn, where, cache)
-    scene = build_scene(description, where=where, cache=cache)
+    return as_linkage(build_scene(description, where=where, cache=cache), loop, options, start_phi, cache)
+
+
+def as_linkage(
+    scene: Scene, loop: SingleLoop, options: LinkageOptions, start_phi: NDArray, cache: SceneCache
+) -> LinkageScene:
+    """The built ``scene`` of :func:`~ffrf.scenes.linkage_description.linkage_description` of ``loop`` and
+    ``options`` from the rigid loop's joint rotations ``start_phi``, as a :class:`LinkageScene` keeping its ideal
+    path in ``cache``."""
+    tool = checked_tool_link(loop, options)
     angle = next(j.angle for j in scene.joints if j.angle is not None)  # the drive the system runs with
     settings = dict(
         scene.settings,
@@ -329,7 +338,7 @@ def build_linkage(
         drive=angle.ramp,
         start_angle=angle.start,
         start_phi=start_phi,
-        t_end=t_end,
+        t_end=float(scene.description["scene"]["t_end"]),
         tool_link=tool,
         coupler_home=seated_joint_points(loop, options.attach_points)[[tool - 1, tool]].mean(axis=0),
         cache=cache,

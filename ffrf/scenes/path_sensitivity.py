@@ -32,12 +32,12 @@ from numpy.typing import NDArray
 
 from ffrf.errors import SceneError, SensitivityError
 from ffrf.fe.fe_model import FEModel
-from ffrf.geometry.design_velocity import SECTION_PARAMETERS, design_velocity
+from ffrf.geometry.design_velocity import SECTION_PARAMETERS, VELOCITY_STEP, design_velocity, shape_velocity
 from ffrf.output.peak_stress import corner_stress, peak_stress, strain_modes, stress_norm, stress_norm_at
 from ffrf.output.sensors import path_sensors
-from ffrf.scenes.builder import morphed_body, parametric_link
-from ffrf.scenes.linkage_description import BoreError, LinkageOptions, bore_side
-from ffrf.scenes.linkage_scene import LinkageScene
+from ffrf.scenes.builder import morphed_body, morphed_scene, parametric_link
+from ffrf.scenes.linkage_description import BoreError, LinkageOptions, bore_side, linkage_description, start_pose
+from ffrf.scenes.linkage_scene import LinkageScene, as_linkage
 from ffrf.scenes.scene_joints import joint_constraint
 from ffrf.solvers.equilibrium_sensitivity import equilibrium_response, material_rates
 from ffrf.solvers.stability import LowestMode, frequency_form, lowest_mode
@@ -48,13 +48,18 @@ from kinematics.single_loop import SingleLoop
 
 __all__ = [
     "FREQUENCY_STEP",
+    "LOOP_STEP",
     "MATERIAL_STEP",
     "MORPH_STEP",
     "OUTPUT_STEP",
     "SHIFT_STEP",
     "TWIST_STEP",
+    "LoopChange",
     "PathSensitivity",
     "bore_sensitivity",
+    "changed_linkage",
+    "loop_sensitivity",
+    "loop_velocities",
     "material_sensitivity",
     "section_sensitivity",
     "section_velocities",
@@ -68,6 +73,12 @@ TWIST_STEP = 1e-6
 SHIFT_STEP = 1e-6
 #: Step of a section dimension's central differences along its morph, relative to the dimension.
 MORPH_STEP = 1e-4
+#: Step of a loop parameter's central differences (the changed linkage and its rigid loop), relative to its value: the
+#: deviation from the ideal path is a small difference (1e-3 of the coupler point's change on the PLA Bennett), so
+#: the truncation must stay far below it (the coarse PLA Bennett's derivatives by alpha0 change with the step as its
+#: square: the deviation's by 8.9e-5 of it from 1e-4 to 1e-5 and 1e-6 from 1e-5 to 3e-6, the peak stresses' by 1e-5
+#: from 3e-5 to 1e-5 and 1.1e-6 from 1e-5 to 3e-6).
+LOOP_STEP = 3e-6
 #: Step of the relative Young's modulus and density (ln E, ln rho) in the outputs' own change (Eq. (D2)): the
 #: matrices scale as exp(step), so central differences are off by step^2 / 6.
 MATERIAL_STEP = 1e-4
@@ -90,7 +101,9 @@ class PathSensitivity:
     ``peak_stress_corner`` ``(poses, links, 2)`` (element, its corner; -1 without elements) and its derivatives
     ``peak_stress_slopes`` ``(poses, links, k)`` (Eq. (D9): those of the stress at that corner), and the p-norm of
     each link's corner stresses that a design bounds, ``stress_norm`` ``(poses, links)`` (Pa, Eq. (D10)) with its
-    derivatives ``stress_norm_slopes`` ``(poses, links, k)``."""
+    derivatives ``stress_norm_slopes`` ``(poses, links, k)``; for a change of the loop itself, the ideal (rigid)
+    coupler point's derivatives at the same drive angles ``ideal_coupler_point`` ``(poses, 3, k)``
+    (:attr:`deviation`)."""
 
     parameters: tuple[str, ...]
     drive_angle: NDArray[np.float64]
@@ -105,6 +118,16 @@ class PathSensitivity:
     peak_stress_corner: NDArray[np.int64] | None = None
     stress_norm: NDArray[np.float64] | None = None
     stress_norm_slopes: NDArray[np.float64] | None = None
+    ideal_coupler_point: NDArray[np.float64] | None = None
+
+    @property
+    def deviation(self) -> NDArray[np.float64]:
+        """``(poses, 3, k)``: the derivatives of the coupler's deviation from the ideal path at the same drive angle:
+        the coupler point's, less the ideal path's own (``ideal_coupler_point``, where a parameter moves it: the
+        loop's own, :func:`loop_sensitivity`; no other parameter does)."""
+        if self.ideal_coupler_point is None:
+            return self.coupler_point
+        return self.coupler_point - self.ideal_coupler_point
 
     def fold_distance(self) -> NDArray[np.float64]:
         """``(poses, k)``: the change of each parameter alone that brings the pose's lowest squared frequency of
@@ -273,19 +296,121 @@ def section_sensitivity(
             shifted.append((morphed, delta))
             names.append(f"{parameter} {bodies[k]['name']}")
 
+    sides = [(plus, minus, delta) for (plus, minus), delta in shifted]
+    rates = _residual_rates(scene, q, multipliers, sides)
+    sensitivity = _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability, stress)
+    return replace(sensitivity, mass=_mass_rates(sides))
+
+
+@dataclass(frozen=True)
+class LoopChange:
+    """A design parameter of the loop itself, a DH parameter along a change that keeps the loop mobile (the Bennett
+    conditions, :func:`ffrf.paper.bennett_scene.bennett_changes`): its ``name``, its nominal ``value`` (m or rad;
+    the steps of the central differences are relative to it) and ``linkage(s)``, the loop and linkage options of the
+    design changed by ``s`` (``s = 0``: the scene's own)."""
+
+    name: str
+    value: float
+    linkage: Callable[[float], tuple[SingleLoop, LinkageOptions]]
+
+
+def loop_velocities(
+    scene: LinkageScene, changes: tuple[LoopChange, ...], step: float = VELOCITY_STEP
+) -> dict[tuple[int, str], NDArray[np.float64]]:
+    """The velocity of every link's mesh per unit of each of ``changes`` (Eq. (D12): the link's own frame moves
+    rigidly with its first housing, the rest morphs, :func:`~ffrf.geometry.design_velocity.shape_velocity`), by
+    ``(link, change name)``."""
+    bodies = scene.description["bodies"]
+    out = {}
+    for change in changes:
+        nominal = _changed_design(change, 0.0)[3]
+        if [b.get("parametric") for b in nominal["bodies"]] != [b.get("parametric") for b in bodies]:
+            raise SceneError(f"change {change.name!r}: its design unchanged (s = 0) is not this scene's")
+        delta = step * abs(change.value)
+        plus, minus = (_changed_design(change, sign * delta)[3]["bodies"] for sign in (1.0, -1.0))
+        for k, entry in enumerate(bodies):
+            if "parametric" not in entry:
+                raise SceneError(f"body {entry['name']!r} is not a parametric link: a change of the loop remakes it")
+            build = parametric_link(entry["parametric"], entry["name"])
+            shifted = (parametric_link(plus[k]["parametric"]), parametric_link(minus[k]["parametric"]))
+            what = f"changing {change.name} by {delta:.3g}"
+            mesh, velocity = shape_velocity(build, float(entry["parametric"].get("h", 6e-3)), shifted, delta, what)
+            if not np.array_equal(mesh.points, scene.bodies[k].mesh_model.mesh.points):
+                raise SceneError(f"body {entry['name']!r}: its mesh is not the one its description builds today")
+            out[k, change.name] = velocity
+    return out
+
+
+def loop_sensitivity(
+    scene: LinkageScene,
+    time: NDArray,
+    q: NDArray,
+    multipliers: NDArray,
+    changes: tuple[LoopChange, ...],
+    step: float = LOOP_STEP,
+    velocities: dict[tuple[int, str], NDArray] | None = None,
+    stability: bool = False,
+    stress: bool = False,
+) -> PathSensitivity:
+    """The derivatives of the coupler point, driving torque and mass at a quasi-static run's equilibria (as
+    :func:`material_sensitivity`) with respect to each of ``changes`` of the loop itself (per its unit, m or rad),
+    and of the ideal (rigid) coupler point at the same drive angles (Eq. (D13), :attr:`PathSensitivity.deviation`).
+    The right-hand side of Eq. (D1) and the outputs' own change are central differences of the linkage described
+    at ``+-step`` of the change's value (its joints, drive and sensors) on its meshes moved along their velocities
+    (:func:`loop_velocities`, default computed here); the ideal path's, of the rigid loops at the same steps."""
+    velocities = loop_velocities(scene, changes) if velocities is None else velocities
+    time, q, multipliers = np.asarray(time, float), np.asarray(q, float), np.asarray(multipliers, float)
+    angles = np.array([scene.drive_angle(float(t)) for t in time])
+    sides, ideal = [], []
+    for change in changes:
+        delta = step * abs(change.value)
+        plus, minus = (changed_linkage(scene, change, sign * delta, velocities) for sign in (1.0, -1.0))
+        sides.append((plus, minus, delta))
+        ideal.append((plus.ideal_coupler_points(angles) - minus.ideal_coupler_points(angles)) / (2.0 * delta))
+    names = tuple(change.name for change in changes)
+    rates = _residual_rates(scene, q, multipliers, sides)
+    sensitivity = _path_derivatives(scene, time, q, multipliers, names, rates, sides, stability, stress)
+    return replace(sensitivity, mass=_mass_rates(sides), ideal_coupler_point=np.stack(ideal, axis=2))
+
+
+def _changed_design(change: LoopChange, s: float) -> tuple[SingleLoop, LinkageOptions, NDArray, dict]:
+    """The loop, options, start rotations and description of the design changed by ``s``."""
+    loop, options = change.linkage(s)
+    start = start_pose(loop, options.driver, options.start_angle, options.origin)
+    return loop, options, start, linkage_description(loop, options, start)
+
+
+def changed_linkage(
+    scene: LinkageScene, change: LoopChange, s: float, velocities: dict[tuple[int, str], NDArray]
+) -> LinkageScene:
+    """The linkage of the design changed by ``s``, built on ``scene``'s meshes moved along the change's
+    ``velocities``."""
+    loop, options, start, description = _changed_design(change, s)
+    points = [body.mesh_model.mesh.points + s * velocities[k, change.name] for k, body in enumerate(scene.bodies)]
+    return as_linkage(morphed_scene(scene, description, points), loop, options, start, scene.cache)
+
+
+def _residual_rates(
+    scene: LinkageScene, q: NDArray, multipliers: NDArray, sides: list[tuple[LinkageScene, LinkageScene, float]]
+) -> Callable[[int, float], NDArray[np.float64]]:
+    """Eq. (D1)'s right-hand sides at row ``row`` of ``q`` and ``multipliers``: the central differences of the whole
+    residual between the linkages of each of ``sides`` ``(plus, minus, step)``, at the same coordinates."""
+
     def rates(row: int, t: float) -> NDArray[np.float64]:
-        out = np.zeros((scene.system.n_coordinates + scene.system.n_constraints, len(shifted)))
+        out = np.zeros((scene.system.n_coordinates + scene.system.n_constraints, len(sides)))
         zeros = np.zeros(scene.system.n_coordinates)
-        for column, ((plus, minus), delta) in enumerate(shifted):
+        for column, (plus, minus, delta) in enumerate(sides):
             upper = np.concatenate(plus.system.residual(q[row], zeros, zeros, multipliers[row], t))
             lower = np.concatenate(minus.system.residual(q[row], zeros, zeros, multipliers[row], t))
             out[:, column] = (upper - lower) / (2.0 * delta)
         return out
 
-    sides = [(plus, minus, delta) for (plus, minus), delta in shifted]
-    sensitivity = _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability, stress)
-    mass = np.array([(_mass(plus) - _mass(minus)) / (2.0 * delta) for (plus, minus), delta in shifted])
-    return replace(sensitivity, mass=mass)
+    return rates
+
+
+def _mass_rates(sides: list[tuple[LinkageScene, LinkageScene, float]]) -> NDArray[np.float64]:
+    """The links' total mass's central differences over each of ``sides``."""
+    return np.array([(_mass(plus) - _mass(minus)) / (2.0 * delta) for plus, minus, delta in sides])
 
 
 def _mass(scene: LinkageScene) -> float:
