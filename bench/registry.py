@@ -236,6 +236,11 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         records=(Recording("section_design"),),
     ),
     Benchmark(
+        "loop_sensitivity",
+        "derivatives by the Bennett's own DH parameters against re-solved morphed and remeshed linkages",
+        records=(Recording("loop_sensitivity"),),
+    ),
+    Benchmark(
         "stress_convergence",
         "each link's peak von Mises stress of the PLA Bennett against the element size: a singular stress or not",
         records=(Recording("stress_convergence"),),
