@@ -179,17 +179,21 @@ def test_the_path_derivatives_agree_with_re_solved_linkages_on_the_morphed_meshe
         q = np.array([x.q for x in solved])
         out = path_sensors(moved, result.time[ROWS], q, np.array([x.multipliers for x in solved]))
         out["deviation"] = out["coupler_point"] - moved.ideal_coupler_points(angles)
-        out["mu"] = [
-            equilibrium_stability(moved.system, x.q, x.multipliers, float(result.time[r]), 1).squared_frequencies[0]
-            for x, r in zip(solved, ROWS, strict=True)
-        ]
-        out["peaks"] = [
+        out["mu"] = np.array(
             [
-                corner_stress(body.mesh_model, body.reduction.basis, x.q[moved.system.block(k)][7:], *corner)
-                for k, (body, corner) in enumerate(zip(moved.bodies, exact.peak_stress_corner[r], strict=True))
+                equilibrium_stability(moved.system, x.q, x.multipliers, float(result.time[r]), 1).squared_frequencies[0]
+                for x, r in zip(solved, ROWS, strict=True)
             ]
-            for x, r in zip(solved, ROWS, strict=True)
-        ]
+        )
+        out["peaks"] = np.array(
+            [
+                [
+                    corner_stress(body.mesh_model, body.reduction.basis, x.q[moved.system.block(k)][7:], *corner)
+                    for k, (body, corner) in enumerate(zip(moved.bodies, exact.peak_stress_corner[r], strict=True))
+                ]
+                for x, r in zip(solved, ROWS, strict=True)
+            ]
+        )
         return out
 
     near, far = ((outputs(s * step), outputs(-s * step)) for s in (1.0, 2.0))
