@@ -76,7 +76,7 @@ def gradients() -> list[dict]:
             "deviation": found.deviation[:, :, 0],
             "driving_torque": found.driving_torque[:, 0],
         }
-        steps = []
+        steps: list[dict[str, float | str]] = []
         for relative in STEPS:
             delta = relative * abs(change.value)
             try:
@@ -96,7 +96,7 @@ def gradients() -> list[dict]:
         assert found.mass is not None
         remeshed = _errors(sides[0][0], sides[1][0], delta, exact)
         remeshed["mass_error"] = abs((sides[0][1] - sides[1][1]) / (2 * delta) / found.mass[0] - 1.0)
-        best = min((s for s in steps if "folded" not in s), key=lambda s: s["deviation_error"])
+        best = min((s for s in steps if "folded" not in s), key=lambda s: float(s["deviation_error"]))
         row = {
             "parameter": change.name,
             "value": change.value,
