@@ -42,6 +42,7 @@ from scipy.spatial.transform import Rotation
 from .dh import DHParameters, LoopClosureError, dh_axes, dh_from_axes
 from .dual_quaternion import DualQuaternion
 from .pluecker import Line
+from .quaternion import rotation_vector
 
 __all__ = [
     "LoopFoldError",
@@ -69,7 +70,7 @@ class LoopFoldError(ValueError):
 
 def _residual(product: NDArray[np.float64]) -> NDArray[np.float64]:
     """Translation and rotation vector of the loop product, Eq. (L2)."""
-    return np.concatenate([product[:3, 3], Rotation.from_matrix(product[:3, :3]).as_rotvec()])
+    return np.concatenate([product[:3, 3], rotation_vector(product[:3, :3])])
 
 
 def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -227,10 +228,11 @@ class SingleLoop:
         """Eq. (L3) from the displacements of :meth:`link_transforms`."""
         translation = transforms[self.n][:3, 3]
         jacobian = np.empty((6, self.n))
-        for i, axis in enumerate(self.axes):
+        points, directions = self._axis_arrays  # a Line's point is a cross product: formed once per loop
+        for i in range(self.n):
             rotation, shift = transforms[i][:3, :3], transforms[i][:3, 3]
-            direction = rotation @ axis.direction
-            moment = _cross(rotation @ axis.point + shift, direction)
+            direction = rotation @ directions[i]
+            moment = _cross(rotation @ points[i] + shift, direction)
             jacobian[:3, i] = _cross(direction, translation) + moment
             jacobian[3:, i] = direction
         return jacobian

@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 from kinematics_reference import random_rigid_displacement, rot_x, rot_z, trans
+from scipy.spatial.transform import Rotation
 
 from kinematics import DualQuaternion
-from kinematics.quaternion import axis_angle_quaternion, quaternion_product
+from kinematics.quaternion import axis_angle_quaternion, quaternion_product, rotation_vector
 
 
 def test_quaternion_units_multiply_like_hamilton():
@@ -79,3 +80,22 @@ def test_point_action_agrees_with_rational_linkages(rng):
         point = rng.normal(size=3)
         theirs = rl.DualQuaternion(sigma.coeffs.tolist()).act(rl.PointHomogeneous(np.r_[1.0, point]))
         np.testing.assert_allclose(theirs.normalized_euclidean(), sigma.act(point), atol=1e-12)
+
+
+def test_rotation_vector_is_the_axis_times_the_angle_up_to_pi():
+    """The rotation vector of Rodrigues' matrix of a known axis and angle is that axis times that angle (the closed
+    form, 1e-15), from the identity to half a turn, where v and -v are the same rotation; and it agrees with
+    scipy's on random rotations."""
+    rng = np.random.default_rng(7)
+    for angle in (0.0, 1e-14, 1e-9, 1e-5, 0.3, 2.0, np.pi - 1e-4, np.pi - 1e-9):
+        for _ in range(20):
+            axis = rng.normal(size=3)
+            axis /= np.linalg.norm(axis)
+            skew = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+            matrix = np.eye(3) + np.sin(angle) * skew + (1 - np.cos(angle)) * skew @ skew
+            found = rotation_vector(matrix)
+            np.testing.assert_allclose(found, angle * axis, rtol=0, atol=2e-15 + 1e-7 * (angle > 3.1))
+    half_turn = rotation_vector(np.diag([1.0, -1.0, -1.0]))
+    np.testing.assert_allclose(np.abs(half_turn), [np.pi, 0.0, 0.0], atol=1e-15)
+    for matrix in Rotation.random(200, random_state=3).as_matrix():
+        np.testing.assert_allclose(rotation_vector(matrix), Rotation.from_matrix(matrix).as_rotvec(), atol=2e-15)
