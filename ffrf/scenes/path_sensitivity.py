@@ -325,7 +325,10 @@ def loop_velocities(
     for change in changes:
         nominal = _changed_design(change, 0.0)[3]
         if [b.get("parametric") for b in nominal["bodies"]] != [b.get("parametric") for b in bodies]:
-            raise SceneError(f"change {change.name!r}: its design unchanged (s = 0) is not this scene's")
+            raise SceneError(
+                f"change {change.name!r}: its design unchanged (s = 0) is not this scene's; make the change from the "
+                "loop and options the scene was built with"
+            )
         delta = step * abs(change.value)
         plus, minus = (_changed_design(change, sign * delta)[3]["bodies"] for sign in (1.0, -1.0))
         for k, entry in enumerate(bodies):
@@ -334,7 +337,8 @@ def loop_velocities(
             build = parametric_link(entry["parametric"], entry["name"])
             shifted = (parametric_link(plus[k]["parametric"]), parametric_link(minus[k]["parametric"]))
             what = f"changing {change.name} by {delta:.3g}"
-            mesh, velocity = shape_velocity(build, float(entry["parametric"].get("h", 6e-3)), shifted, delta, what)
+            h = float(entry["parametric"].get("h", 6e-3))
+            mesh, velocity = shape_velocity(build, h, shifted, delta, what, entry["name"])
             if not np.array_equal(mesh.points, scene.bodies[k].mesh_model.mesh.points):
                 raise SceneError(f"body {entry['name']!r}: its mesh is not the one its description builds today")
             out[k, change.name] = velocity
