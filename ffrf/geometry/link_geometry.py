@@ -41,6 +41,7 @@ __all__ = [
     "arm_frame",
     "arm_waypoints",
     "build_link",
+    "housing_centers",
     "mesh_link",
     "trim_covering",
     "trim_reach",
@@ -164,9 +165,18 @@ def arm_waypoints(joint_points: ArrayLike, axes, design: LinkDesign = LinkDesign
     radial stubs between them where the arm leaves its housings radially (:func:`_arm_path`)."""
     points = np.asarray(joint_points, dtype=float)
     lines = (Axis.of(axes[0]), Axis.of(axes[1]))
-    s = design.housing_offset
-    centers = np.stack([points[0] + s * lines[0].direction, points[1] - s * lines[1].direction])
+    centers = housing_centers(points, lines, design)
     return np.array([points[0], *_arm_path(centers, lines, design)[1:-1], points[1]])
+
+
+def housing_centers(joint_points: ArrayLike, axes, design: LinkDesign) -> NDArray[np.float64]:
+    """The centres ``(2, 3)`` of a link's two housings: each ``design.housing_offset`` from its joint point along
+    its axis, the first housing towards the axis' direction, the second against it (the offset rule that stacks
+    the two links' housings at a joint one axial gap apart)."""
+    points = np.asarray(joint_points, dtype=float).reshape(2, 3)
+    lines = (Axis.of(axes[0]), Axis.of(axes[1]))
+    s = design.housing_offset
+    return np.stack([points[0] + s * lines[0].direction, points[1] - s * lines[1].direction])
 
 
 def _placed_box(
@@ -285,7 +295,7 @@ def build_link(
     axes = (Axis.of(axis_a), Axis.of(axis_b))
     feet = common_normal_feet(*axes) if joint_points is None else _points_on_axes(joint_points, axes, names)
     s = design.housing_offset
-    centers = np.stack([feet[0] + s * axes[0].direction, feet[1] - s * axes[1].direction])
+    centers = housing_centers(feet, axes, design)
     span = float(np.linalg.norm(centers[1] - centers[0]))
     if span > MAX_LINK_EXTENT_M:
         raise GeometryError(

@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 
 from ffrf.output.solid_distance import DEPTH_TOLERANCE, JointZone, LinkSolid, SolidPair
 
-__all__ = ["Clearance", "RigidMotion", "signed_clearance", "SPEED_SAFETY"]
+__all__ = ["Clearance", "RigidMotion", "clearance_at", "signed_clearance", "SPEED_SAFETY"]
 
 #: Safety factor on the largest relative point speed of an interval (Eq. (CL4)).
 SPEED_SAFETY = 1.5
@@ -151,6 +151,29 @@ def signed_clearance(
         float(margin),
         np.array(counts, dtype=np.int64),
     )
+
+
+def clearance_at(
+    solids: Sequence[LinkSolid],
+    motion: RigidMotion,
+    joint_zones: Mapping[tuple[int, int], JointZone] | None,
+    pairs: NDArray[np.int64],
+    angles: NDArray[np.float64],
+    *,
+    tolerance: float = DEPTH_TOLERANCE,
+) -> NDArray[np.float64]:
+    """The signed clearance ``(k,)`` of each row of ``pairs`` ``(k, 2)`` (a pair may come in several rows) at the
+    row's drive angle ``angles`` ``(k,)`` along ``motion`` (Eqs. (CL1)-(CL3)): e.g. at the poses where
+    :func:`signed_clearance` found each pair's smallest."""
+    zones = {} if joint_zones is None else dict(joint_zones)
+    transforms, _ = motion.poses(np.asarray(angles, dtype=float))  # one pose per row, (k, links, 4, 4)
+    built: dict[tuple[int, int], SolidPair] = {}  # a pair's zone cut once, whatever its number of rows
+    out = np.empty(len(pairs))
+    for row, (a, b) in enumerate(np.asarray(pairs).tolist()):
+        if (a, b) not in built:
+            built[a, b] = SolidPair(solids[a], solids[b], zones.get((a, b)), tolerance)
+        out[row] = built[a, b].clearance(np.linalg.solve(transforms[row, a], transforms[row, b]))
+    return out
 
 
 def _sphere(solid: LinkSolid) -> tuple[NDArray[np.float64], float]:

@@ -11,7 +11,7 @@ the same curve (``tests/test_kinematics/test_single_loop.py``).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields
 from functools import cached_property
 from typing import Any
@@ -21,13 +21,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from ffrf.errors import SceneError
 from ffrf.fe.interfaces import boundary_triangles
-from ffrf.geometry.link_geometry import LinkDesign
+from ffrf.geometry.joint_axes import Axis, common_normal_feet
+from ffrf.geometry.link_geometry import LinkDesign, housing_centers
 from ffrf.output.clearance import Clearance, signed_clearance
 from ffrf.output.clearance_sensitivity import clearance_slopes
 from ffrf.output.loop_poses import LoopPoses
 from ffrf.output.path_distance import ExactCurve
 from ffrf.output.solid_distance import JointZone, LinkSolid
-from ffrf.scenes.builder import Scene, SceneBody, build_scene
+from ffrf.scenes.builder import Scene, SceneBody, build_scene, parametric_link
 from ffrf.scenes.linkage_description import (
     BoreError,
     LinkageOptions,
@@ -50,7 +51,7 @@ from kinematics import (
     trace_motion,
 )
 
-__all__ = ["LinkageScene", "as_linkage", "build_linkage"]
+__all__ = ["Housings", "LinkageScene", "as_linkage", "build_linkage", "described_housings", "joint_zones"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,7 +127,7 @@ class LinkageScene(Scene):
         """Signed clearance of every pair of links along one revolution of the rigid nominal motion from the start,
         sampled at ``n_poses`` poses and bounded between them, against ``margin`` (m)
         (:func:`ffrf.output.clearance.signed_clearance`, ``docs/formulation.md`` Eqs. (CL1)-(CL4))."""
-        return signed_clearance(self.link_solids(), self._revolution(n_poses), self.joint_zones(), margin)
+        return signed_clearance(self.link_solids(), self.rigid_revolution(n_poses), self.joint_zones(), margin)
 
     def link_solids(self) -> list[LinkSolid]:
         """Every link's solid at home: its mesh's points and boundary triangles (normals out)."""
@@ -135,7 +136,9 @@ class LinkageScene(Scene):
             for body in self.bodies
         ]
 
-    def _revolution(self, n_poses: int) -> LoopPoses:
+    def rigid_revolution(self, n_poses: int) -> LoopPoses:
+        """One revolution of the rigid nominal loop's drive from the start, ``n_poses`` equal steps (the clearance
+        check's samples)."""
         sign = drive_sign(self.driver, self.loop.n)  # turn the way the drive turns
         return LoopPoses.revolution(self.loop, self.driver, n_poses, self.start_phi, sign)
 
@@ -153,7 +156,7 @@ class LinkageScene(Scene):
         pose that holds the smallest, for the rigid motion does not depend on the links' shape; ``n_poses``: those of
         :meth:`clearance`'s samples, from which each pose is closed."""
         solids, zones = self.link_solids(), self.joint_zones()
-        transforms, _ = self._revolution(n_poses).poses(found.drive_angle)  # one pose per pair, (pairs, links, 4, 4)
+        transforms, _ = self.rigid_revolution(n_poses).poses(found.drive_angle)  # (pairs, links, 4, 4)
         fields = [
             np.stack([velocities.get((k, p), np.zeros_like(solid.vertices)) for p in parameters], axis=-1)
             for k, solid in enumerate(solids)
@@ -166,31 +169,18 @@ class LinkageScene(Scene):
         return out
 
     def joint_zones(self) -> dict[tuple[int, int], JointZone]:
-        """The zone of each joint (Eq. (CL3)), keyed by the two links that share it: about the nominal axis, around
-        both links' housings there (a link from a mesh file: housings of the default design stacked about the
-        joint point, the offset rule of :mod:`ffrf.geometry.link_geometry`)."""
-        n = self.loop.n
-        points = joint_points(self.loop)
-        zones = {}
-        for joint, axis in enumerate(self.loop.axes):
-            links = (joint, (joint + 1) % n)
-            centres, design = [], LinkDesign()
-            for link, side in zip(links, (1, -1), strict=True):  # h_joint: the near link's second axis, far's first
-                geometry = self.bodies[link].geometry
-                if geometry is None:
-                    centres.append(points[joint] - side * design.housing_offset * axis.direction)
-                else:
-                    design = geometry.design
-                    centres.append(geometry.housing_centers[geometry.interface_names.index(f"joint{joint}")])
-            zones[min(links), max(links)] = JointZone.around_housings(
-                points[joint],
-                axis.direction,
-                centres,
-                design.housing_length,
-                design.housing_outer_radius,
-                design.axial_gap,
-            )
-        return zones
+        """The zone of each joint (Eq. (CL3)), keyed by the two links that share it (:func:`joint_zones`), the
+        housings of each link from its geometry, else from its description's parametric table (a changed design's
+        morphed link, :func:`~ffrf.scenes.builder.morphed_scene`)."""
+        housings = []
+        for body, entry in zip(self.bodies, self.description["bodies"], strict=True):
+            geometry = body.geometry
+            if geometry is None:
+                housings.append(described_housings(entry))
+            else:
+                centres = dict(zip(geometry.interface_names, geometry.housing_centers, strict=True))
+                housings.append((centres, geometry.design))
+        return joint_zones(self.loop, housings)
 
     def ideal_coupler_curve(self, n: int = 720) -> NDArray[np.float64]:
         """``n`` points of the ideal coupler curve over one revolution of the driver from the start."""
@@ -307,6 +297,51 @@ def build_linkage(
     turn = float(CosineRamp(options.omega, options.ramp_time)(t_end))
     _cached_range_check(loop, options, start_phi, turn, where, cache)
     return as_linkage(build_scene(description, where=where, cache=cache), loop, options, start_phi, cache)
+
+
+#: A link's housing centres by its interfaces' names and its design (:func:`joint_zones`).
+Housings = tuple[dict[str, NDArray[np.float64]], LinkDesign]
+
+
+def described_housings(entry: dict) -> Housings | None:
+    """The housings of a body described by a ``parametric`` table (``None`` for a body from a mesh file): its
+    housing centres where :func:`~ffrf.geometry.link_geometry.build_link` puts them."""
+    if "parametric" not in entry:
+        return None
+    link = parametric_link(entry["parametric"], entry["name"])
+    axes = (Axis.of(link["axis_a"]), Axis.of(link["axis_b"]))
+    points = common_normal_feet(*axes) if link["joint_points"] is None else link["joint_points"]
+    centres = housing_centers(points, axes, link["design"])
+    return dict(zip(link["names"], centres, strict=True)), link["design"]
+
+
+def joint_zones(loop: SingleLoop, housings: Sequence[Housings | None]) -> dict[tuple[int, int], JointZone]:
+    """The zone of each joint of ``loop`` (Eq. (CL3)), keyed by the two links that share it: about the nominal
+    axis, around both links' housings there; ``housings[k]``: link ``k``'s (``None``, a link from a mesh file: the
+    default design's housings stacked about the joint point, the offset rule of
+    :mod:`ffrf.geometry.link_geometry`)."""
+    n = loop.n
+    points = joint_points(loop)
+    zones = {}
+    for joint, axis in enumerate(loop.axes):
+        links = (joint, (joint + 1) % n)
+        centres, design = [], LinkDesign()
+        for link, side in zip(links, (1, -1), strict=True):  # h_joint: the near link's second axis, far's first
+            own = housings[link]
+            if own is None:
+                centres.append(points[joint] - side * design.housing_offset * axis.direction)
+            else:
+                design = own[1]
+                centres.append(own[0][f"joint{joint}"])
+        zones[min(links), max(links)] = JointZone.around_housings(
+            points[joint],
+            axis.direction,
+            centres,
+            design.housing_length,
+            design.housing_outer_radius,
+            design.axial_gap,
+        )
+    return zones
 
 
 def as_linkage(

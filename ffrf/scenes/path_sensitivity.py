@@ -33,11 +33,21 @@ from numpy.typing import NDArray
 from ffrf.errors import SceneError, SensitivityError
 from ffrf.fe.fe_model import FEModel
 from ffrf.geometry.design_velocity import SECTION_PARAMETERS, VELOCITY_STEP, design_velocity, shape_velocity
+from ffrf.output.clearance import Clearance, clearance_at
+from ffrf.output.loop_poses import LoopPoses
 from ffrf.output.peak_stress import corner_stress, peak_stress, strain_modes, stress_norm, stress_norm_at
 from ffrf.output.sensors import path_sensors
+from ffrf.output.solid_distance import LinkSolid
 from ffrf.scenes.builder import morphed_body, morphed_scene, parametric_link
-from ffrf.scenes.linkage_description import BoreError, LinkageOptions, bore_side, linkage_description, start_pose
-from ffrf.scenes.linkage_scene import LinkageScene, as_linkage
+from ffrf.scenes.linkage_description import (
+    BoreError,
+    LinkageOptions,
+    bore_side,
+    drive_sign,
+    linkage_description,
+    start_pose,
+)
+from ffrf.scenes.linkage_scene import LinkageScene, as_linkage, described_housings, joint_zones
 from ffrf.scenes.scene_joints import joint_constraint
 from ffrf.solvers.equilibrium_sensitivity import equilibrium_response, material_rates
 from ffrf.solvers.stability import LowestMode, frequency_form, lowest_mode
@@ -47,6 +57,7 @@ from ffrf.system.multibody import MultibodySystem
 from kinematics.single_loop import SingleLoop
 
 __all__ = [
+    "CLEARANCE_TIE",
     "FREQUENCY_STEP",
     "LOOP_STEP",
     "MATERIAL_STEP",
@@ -54,10 +65,12 @@ __all__ = [
     "OUTPUT_STEP",
     "SHIFT_STEP",
     "TWIST_STEP",
+    "ClearanceRates",
     "LoopChange",
     "PathSensitivity",
     "bore_sensitivity",
     "changed_linkage",
+    "loop_clearance_slopes",
     "loop_sensitivity",
     "loop_velocities",
     "material_sensitivity",
@@ -79,6 +92,12 @@ MORPH_STEP = 1e-4
 #: square: the deviation's by 8.9e-5 of it from 1e-4 to 1e-5 and 1e-6 from 1e-5 to 3e-6, the peak stresses' by 1e-5
 #: from 3e-5 to 1e-5 and 1.1e-6 from 1e-5 to 3e-6).
 LOOP_STEP = 3e-6
+#: Poses whose clearance lies within this of a pair's smallest hold it too (m), for the smallest clearance's rates by
+#: a loop change (Eq. (CL6)): a tenth of a millimetre, below a print's resolution. Adjacent links keep their
+#: clearance near a joint constant along the motion, which the links' faceted surfaces turn into wiggles of microns
+#: (up to 2e-5 m over a revolution of the coarse PLA Bennett), and a loop change tilts the surfaces differently at
+#: each pose.
+CLEARANCE_TIE = 1e-4
 #: Step of the relative Young's modulus and density (ln E, ln rho) in the outputs' own change (Eq. (D2)): the
 #: matrices scale as exp(step), so central differences are off by step^2 / 6.
 MATERIAL_STEP = 1e-4
@@ -392,6 +411,87 @@ def changed_linkage(
     loop, options, start, description = _changed_design(change, s)
     points = [body.mesh_model.mesh.points + s * velocities[k, change.name] for k, body in enumerate(scene.bodies)]
     return as_linkage(morphed_scene(scene, description, points), loop, options, start, scene.cache)
+
+
+@dataclass(frozen=True)
+class ClearanceRates:
+    """How each pair's smallest clearance along the revolution changes with each loop change (Eq. (CL6)), arrays
+    ``(pairs, k)``: ``at_smallest`` the derivative at the pose that holds the smallest; over the poses that hold it
+    within :data:`CLEARANCE_TIE` (``poses`` ``(pairs,)`` of them), the smallest clearance's one-sided rates: ``right``
+    (the change increasing: the least of their derivatives) and ``left`` (decreasing: the largest). Where one pose
+    holds it, all three agree and the smallest clearance has a derivative."""
+
+    at_smallest: NDArray[np.float64]
+    right: NDArray[np.float64]
+    left: NDArray[np.float64]
+    poses: NDArray[np.int64]
+
+    @property
+    def differentiable(self) -> NDArray[np.bool_]:
+        """Per pair, whether one pose holds its smallest clearance (else it has only one-sided rates)."""
+        return self.poses == 1
+
+
+def loop_clearance_slopes(
+    scene: LinkageScene,
+    found: Clearance,
+    changes: tuple[LoopChange, ...],
+    n_poses: int,
+    step: float = LOOP_STEP,
+    velocities: dict[tuple[int, str], NDArray] | None = None,
+    tie: float = CLEARANCE_TIE,
+) -> ClearanceRates:
+    """How each pair's smallest clearance in ``found`` (``scene.clearance(n_poses)``) changes with each of
+    ``changes`` of the loop (Eq. (CL6)). At each pose that holds it (the pose found and every sample of the
+    revolution within ``tie`` of it), central differences over ``+-step`` of each change's value of the clearance
+    there on the changed design: its rigid motion at the same drive angle, its links morphed along their
+    ``velocities`` (:func:`loop_velocities`, default computed here) and its joint zones."""
+    velocities = loop_velocities(scene, changes) if velocities is None else velocities
+    solids, motion = scene.link_solids(), scene.rigid_revolution(n_poses)
+    samples = motion.drive_angles[:-1]  # the last closes the revolution: the first again
+    rows = np.repeat(found.pairs, len(samples), axis=0)
+    nominal = clearance_at(solids, motion, scene.joint_zones(), rows, np.tile(samples, len(found.pairs)))
+    turn = np.angle(np.exp(1j * (samples[None, :] - found.drive_angle[:, None])))  # from the pose found, in (-pi, pi]
+    holding = (nominal.reshape(len(found.pairs), len(samples)) <= found.distance[:, None] + tie) & (np.abs(turn) > 1e-9)
+    pair_of = [i for i, held in enumerate(holding) for _ in range(1 + int(held.sum()))]
+    angles = np.concatenate([[found.drive_angle[i], *samples[held]] for i, held in enumerate(holding)])
+    pairs = found.pairs[pair_of]
+    slopes = np.empty((len(angles), len(changes)))
+    for column, change in enumerate(changes):
+        delta = step * abs(change.value)
+        plus, minus = (
+            _changed_clearance(solids, change, sign * delta, velocities, pairs, angles, n_poses) for sign in (1.0, -1.0)
+        )
+        slopes[:, column] = (plus - minus) / (2.0 * delta)
+    first = np.searchsorted(pair_of, np.arange(len(found.pairs)))  # each pair's own pose comes first
+    return ClearanceRates(
+        slopes[first],
+        np.minimum.reduceat(slopes, first, axis=0),
+        np.maximum.reduceat(slopes, first, axis=0),
+        np.diff(np.append(first, len(angles))),
+    )
+
+
+def _changed_clearance(
+    solids: list[LinkSolid],
+    change: LoopChange,
+    s: float,
+    velocities: dict[tuple[int, str], NDArray],
+    pairs: NDArray[np.int64],
+    angles: NDArray[np.float64],
+    n_poses: int,
+) -> NDArray[np.float64]:
+    """The clearance of each row of ``pairs`` at its drive angle in ``angles`` in the design changed by ``s``: the
+    links' solids moved along the change's ``velocities``, the changed loop's motion traced as ``n_poses`` samples of
+    a revolution (each pose closed from the nearest) and its joint zones; no FE model is built."""
+    loop, options, start, description = _changed_design(change, s)
+    moved = [
+        LinkSolid(solid.vertices + s * velocities[k, change.name], solid.triangles, solid.name)
+        for k, solid in enumerate(solids)
+    ]
+    zones = joint_zones(loop, [described_housings(entry) for entry in description["bodies"]])
+    motion = LoopPoses.revolution(loop, options.driver, n_poses, start, drive_sign(options.driver, loop.n))
+    return clearance_at(moved, motion, zones, pairs, angles)
 
 
 def _residual_rates(

@@ -19,8 +19,14 @@ from ffrf.paper.bennett_scene import bennett_changes, bennett_options, build_ben
 from ffrf.scenes.builder import parametric_link
 from ffrf.scenes.linkage_description import linkage_description, seated_joint_points
 from ffrf.scenes.linkage_run import run_linkage
-from ffrf.scenes.linkage_scene import build_linkage
-from ffrf.scenes.path_sensitivity import LoopChange, changed_linkage, loop_sensitivity, loop_velocities
+from ffrf.scenes.linkage_scene import build_linkage, described_housings, joint_zones
+from ffrf.scenes.path_sensitivity import (
+    LoopChange,
+    changed_linkage,
+    loop_clearance_slopes,
+    loop_sensitivity,
+    loop_velocities,
+)
 from ffrf.solvers.stability import equilibrium_stability
 from ffrf.solvers.static_solver import static_equilibrium
 from kinematics import BennettLinkage
@@ -213,6 +219,52 @@ def test_the_path_derivatives_agree_with_re_solved_linkages_on_the_morphed_meshe
         print(name, key, np.abs(np.asarray(ours) - theirs).max() / np.abs(theirs).max())
         assert np.abs(theirs).max() > 0.0
         np.testing.assert_allclose(ours, theirs, rtol=0, atol=tolerance * np.abs(theirs).max())
+
+
+def test_a_changed_links_joint_zones_come_from_its_description_as_from_its_geometry(bennett):
+    """A changed design's links are morphed meshes without CAD geometry: their joint zones come from the
+    description's parametric tables, placed as the link builder places the housings; on the nominal design they are
+    the zones from the built geometry, bit for bit."""
+    scene = bennett[0]
+    described = joint_zones(scene.loop, [described_housings(entry) for entry in scene.description["bodies"]])
+    built = scene.joint_zones()
+    assert described.keys() == built.keys()
+    for key, zone in built.items():
+        other = described[key]
+        assert np.array_equal(zone.point, other.point) and np.array_equal(zone.direction, other.direction)
+        assert (zone.radius, zone.lower, zone.upper) == (other.radius, other.lower, other.upper)
+
+
+def test_the_smallest_clearances_rates_agree_with_the_whole_check_re_run_on_changed_linkages(bennett):
+    """Eq. (CL6): each pair's smallest clearance along the revolution (24 poses and the bisections of Eq. (CL4))
+    against the whole check re-run on the changed linkages (their own motion, joint zones and morphed links, the
+    smallest found again anywhere) at +-1e-4 of each parameter. The crossing pairs (0-2, 1-3) have one pose that
+    holds the smallest: their derivative agrees with the central difference to 1e-6 of the column's largest
+    (measured 2e-10, 5e-7, 4e-9). Adjacent links keep their clearance near the joint along the whole motion (to
+    microns: the faceted surfaces), and a loop change tilts the surfaces differently at each pose, so their smallest
+    clearance has one-sided rates only (Danskin's theorem over the poses that hold it): the forward difference is at
+    least the right rate, the backward one at most the left rate (to 1e-4 of the largest: the truncation; measured
+    at least 7e-9 inside), and the central difference lies between them."""
+    scene, _, changes, velocities, _ = bennett
+    found = scene.clearance(n_poses=24)
+    assert np.all(found.distance > 0.0)  # apart: a pose holds each pair's smallest
+    rates = loop_clearance_slopes(scene, found, changes, 24, velocities=velocities)
+    crossing = np.array([list(pair) in ([0, 2], [1, 3]) for pair in found.pairs.tolist()])
+    np.testing.assert_array_equal(rates.differentiable, crossing)
+    assert np.all(rates.right[~crossing] < rates.left[~crossing])  # a kink, not a derivative
+    for j, change in enumerate(changes):
+        delta = 1e-4 * abs(change.value)
+        plus, minus = (changed_linkage(scene, change, sign * delta, velocities).clearance(24) for sign in (1.0, -1.0))
+        central = (plus.distance - minus.distance) / (2.0 * delta)
+        forward, backward = (plus.distance - found.distance) / delta, (found.distance - minus.distance) / delta
+        largest = np.abs(rates.at_smallest[:, j]).max()
+        right, left, tolerance = rates.right[~crossing, j], rates.left[~crossing, j], 1e-4 * largest
+        error = np.abs(rates.at_smallest[crossing, j] - central[crossing]).max() / largest
+        inside = np.minimum(forward[~crossing] - right, left - backward[~crossing]).min() / largest
+        print(change.name, "crossing pairs' error", error, "adjacent pairs' one-sided differences inside by", inside)
+        np.testing.assert_allclose(rates.at_smallest[crossing, j], central[crossing], rtol=0, atol=1e-6 * largest)
+        assert np.all(forward[~crossing] >= right - tolerance) and np.all(backward[~crossing] <= left + tolerance)
+        assert np.all((central[~crossing] >= right - tolerance) & (central[~crossing] <= left + tolerance))
 
 
 def test_a_change_that_is_not_the_scenes_design_is_refused(bennett):

@@ -159,7 +159,7 @@ def test_the_smallest_clearance_moves_as_the_morphed_links_clearance_over_the_wh
     found = scene.clearance(n_poses=24)
     assert np.all(found.distance > 0.0)  # apart: the witness of a smallest clearance is a pose
     ours = scene.clearance_slopes(found, velocities, parameters, steps, n_poses=24)
-    solids, zones, motion = scene.link_solids(), scene.joint_zones(), scene._revolution(24)
+    solids, zones, motion = scene.link_solids(), scene.joint_zones(), scene.rigid_revolution(24)
     for j, parameter in enumerate(parameters):
         sides = [
             signed_clearance(
