@@ -11,9 +11,10 @@ nominal mesh, :math:`x(p) = x_0 + (p - p_0)\,V`, with the velocity :math:`V` of 
   is the morph :math:`V_r` relative to that frame (zero for a link the change only carries along);
 * a boundary node stays on the faces it lies on: each face of the nominal solid is matched to the face of the
   shifted solid (relative to the link's frame) whose surface its nodes are closest to, and the node's velocity
-  normal to each of its faces is its closest point's on that surface (gmsh's OpenCASCADE projection), by central
-  differences, :math:`n \cdot V_r = n \cdot (x_+ - x_-)/(2\delta)` (the boxes and cylinders move linearly in the
-  dimension: truncation :math:`O(\delta^2)`). A face node's normal velocity, a node on an edge its velocity across
+  normal to each of its faces is its closest point's on that surface (gmsh's OpenCASCADE projection, continued
+  beyond the face's parameter box by Gauss-Newton steps; of faces on one surface, the one that holds the most of the
+  face's triangle centres), by central differences, :math:`n \cdot V_r = n \cdot (x_+ - x_-)/(2\delta)` (the
+  boxes and cylinders move linearly in the dimension: truncation :math:`O(\delta^2)`). A face node's normal velocity, a node on an edge its velocity across
   the edge (its two faces' normals), a corner node's whole velocity are so prescribed; faces that meet tangentially
   (one cylinder cut by a seam or by the arm) count as one direction. Working with faces alone makes the matching
   blind to how OpenCASCADE splits curves and places the seams of cylinders, which jumps as an axis crosses a
@@ -56,6 +57,8 @@ VELOCITY_STEP = 1e-4
 _MATCH_STEPS = 50.0
 #: How far (m) gmsh's projection of a node onto its own face may land from it (a link the change only carries along).
 _PROJECTION_ERROR = 1e-8
+#: Gauss-Newton steps of a projection on a face's untrimmed surface (:func:`_surface_projection`).
+_PROJECTION_STEPS = 8
 #: Faces at a node whose normals span a direction less than this (relative singular value) meet tangentially there
 #: (one surface cut in two, to round-off); faces that meet almost tangentially make an edge that moves much faster
 #: than the change, which is refused (a change of topology is next to it).
@@ -102,6 +105,7 @@ def shape_velocity(
         configure_meshing(h)
         mesh = mesh_current_model(name)
         faces = _face_nodes(gmsh, mesh)
+        inner = _inner_points(gmsh, faces)
         adjacent = _adjacent_faces(gmsh)
         normals = {face: _normals(gmsh, face, mesh.points[nodes]) for face, nodes in faces.items()}
         pinned = _pinned_nodes(nominal, faces)
@@ -117,7 +121,7 @@ def shape_velocity(
             moves_by = max(feature.largest_move(_landmarks(nominal)) for feature in features)
             tolerance = _MATCH_STEPS * max(reach, moves_by, _PROJECTION_ERROR)
             tolerances.append(tolerance)
-            projected = _projected(gmsh, faces, adjacent, mesh.points, link, tolerance, change)
+            projected = _projected(gmsh, faces, inner, adjacent, mesh.points, link, tolerance, change)
             normal_moves.append(
                 {
                     face: np.einsum("ka,ka->k", normals[face], projected[face] - mesh.points[faces[face]])
@@ -218,6 +222,25 @@ def _face_nodes(gmsh: Any, mesh: TetMesh) -> dict[int, NDArray[np.int64]]:
     return out
 
 
+def _inner_points(gmsh: Any, faces: dict[int, NDArray]) -> dict[int, NDArray[np.float64]]:
+    """Per face of the current model's mesh, the centres ``(k, 3)`` of its surface triangles (of their corners):
+    points inside the face, near its surface."""
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    order = np.argsort(tags)
+    coords = np.reshape(coords, (-1, 3))[order]
+    out = {}
+    for face in faces:
+        types, _, nodes = gmsh.model.mesh.getElements(2, face)
+        corners = np.concatenate(
+            [
+                np.reshape(n, (-1, gmsh.model.mesh.getElementProperties(t)[3]))[:, :3]
+                for t, n in zip(types, nodes, strict=True)
+            ]
+        )
+        out[face] = coords[np.searchsorted(tags[order], corners)].mean(axis=1)
+    return out
+
+
 def _normals(gmsh: Any, face: int, points: NDArray) -> NDArray[np.float64]:
     """Unit normals ``(k, 3)`` of ``face`` at ``points`` on it."""
     parametric = gmsh.model.getParametrization(2, face, np.ravel(points))
@@ -236,6 +259,7 @@ def _pinned_nodes(geometry: LinkGeometry, faces: dict[int, NDArray]) -> list[tup
 def _projected(
     gmsh: Any,
     faces: dict[int, NDArray],
+    inner: dict[int, NDArray],
     adjacent: set[frozenset[int]],
     points: NDArray,
     link: _Motion,
@@ -245,33 +269,58 @@ def _projected(
     """Per face, its nodes carried by the link's own motion ``link``, projected on the surface of the face of the
     current model (the shifted solid) they are closest to, and carried back: their place relative to the link's
     frame. A surface is the face's untrimmed one (a cylinder's whole cylinder), so a face cut differently in the
-    shifted solid still finds it. The faces must match one to one and meet as ``adjacent``, the nominal ones do
-    (:func:`_check_topology`)."""
+    shifted solid still finds it; of faces on one surface, the one that holds the most of the face's ``inner`` points
+    (:func:`_inner_points`), carried and projected alike. The faces must match one to one and meet as ``adjacent``,
+    the nominal ones do (:func:`_check_topology`)."""
     candidates = [int(tag) for _, tag in gmsh.model.getEntities(2)]
     boxes = {tag: np.reshape(gmsh.model.getBoundingBox(2, tag), (2, 3)) for tag in candidates}
     back = link.inverse()
     out, matched = {}, {}
     for face, nodes in faces.items():
         x = link(points[nodes])
-        best, best_distance = None, np.inf
+        found = {}
         for other in candidates:
             low, high = boxes[other]
             if np.any(x.max(axis=0) < low - tolerance) or np.any(x.min(axis=0) > high + tolerance):
                 continue  # no overlap
-            closest, _ = gmsh.model.getClosestPoint(2, other, np.ravel(x))
-            projected = np.reshape(closest, (-1, 3))
-            distance = float(np.linalg.norm(projected - x, axis=1).max())
-            if distance < best_distance:
-                best, best_distance, matched[face] = projected, distance, other
-        if best is None or best_distance > tolerance:
+            projected = _surface_projection(gmsh, other, x)
+            found[other] = (float(np.linalg.norm(projected - x, axis=1).max()), projected)
+        closest = min((distance for distance, _ in found.values()), default=np.inf)
+        if closest > tolerance:
             raise GeometryError(
                 f"{change} changes the link's topology near its face {face} (closest counterpart "
-                f"{best_distance:.3g} m away): its derivative is not defined there; take a nominal design away from "
+                f"{closest:.3g} m away): its derivative is not defined there; take a nominal design away from "
                 "that change"
             )
-        out[face] = back(best)
+        # Faces on one surface (a housing's end face cut in two by the arm) are equally close; their nodes may all
+        # lie on their edges (a sliver face), so the points inside the face tell them apart.
+        tied = [other for other, (distance, _) in found.items() if distance <= closest * (1.0 + 1e-6) + 1e-12]
+        if len(tied) > 1:
+            samples = link(inner[face])
+            tied.sort(key=lambda o: -gmsh.model.isInside(2, o, np.ravel(_surface_projection(gmsh, o, samples))))
+        matched[face] = tied[0]
+        out[face] = back(found[matched[face]][1])
     _check_topology(matched, adjacent, _adjacent_faces(gmsh), change)
     return out
+
+
+def _surface_projection(gmsh: Any, face: int, x: NDArray) -> NDArray[np.float64]:
+    """The closest points ``(k, 3)`` to ``x`` on the untrimmed surface of ``face`` of the current model: gmsh's
+    projection, which stays within the face's parameter box (OpenCASCADE's extrema search may stop on its boundary
+    millimetres away for points that lie just beyond it), refined by Gauss-Newton steps on the surface's
+    parametrization, which extends beyond the box (planes exactly in one step, cylinders in a few)."""
+    _, start = gmsh.model.getClosestPoint(2, face, np.ravel(x))
+    uv = np.reshape(start, (-1, 2))
+    for _ in range(_PROJECTION_STEPS):
+        value = np.reshape(gmsh.model.getValue(2, face, np.ravel(uv)), (-1, 3))
+        tangents = np.reshape(gmsh.model.getDerivative(2, face, np.ravel(uv)), (-1, 2, 3))
+        normal = np.einsum("kij,kj->ki", tangents, x - value)
+        metric = np.einsum("kij,klj->kil", tangents, tangents)
+        step = np.linalg.solve(metric, normal[..., None])[..., 0]
+        uv = uv + step
+        if np.all(np.abs(step) <= 1e-14 * (1.0 + np.abs(uv))):
+            break
+    return np.reshape(gmsh.model.getValue(2, face, np.ravel(uv)), (-1, 3))
 
 
 def _adjacent_faces(gmsh: Any) -> set[frozenset[int]]:

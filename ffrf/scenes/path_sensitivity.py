@@ -54,6 +54,7 @@ from ffrf.solvers.stability import LowestMode, frequency_form, lowest_mode
 from ffrf.system.constraints import Constraint
 from ffrf.system.joints import MarkerJoint
 from ffrf.system.multibody import MultibodySystem
+from kinematics.pluecker import Line
 from kinematics.single_loop import SingleLoop
 
 __all__ = [
@@ -76,6 +77,7 @@ __all__ = [
     "material_sensitivity",
     "section_sensitivity",
     "section_velocities",
+    "size_change",
 ]
 
 #: Largest coordinate change (m, or Euler parameter, or modal coordinate) of Eq. (D2)'s central differences.
@@ -331,6 +333,22 @@ class LoopChange:
     name: str
     value: float
     linkage: Callable[[float], tuple[SingleLoop, LinkageOptions]]
+
+
+def size_change(loop: SingleLoop, options: LinkageOptions) -> LoopChange:
+    """The size of any loop as a change of its DH parameters: every length (a_i, d_i, the axes' distances from the
+    origin and the housings' attach points) times ``1 + s``, the twists, joint angles and the links' section kept.
+    A similar loop is as mobile as the nominal one, so this is a change of any linkage; its ideal path at a drive
+    angle is the nominal one scaled about the origin (its derivative by ``s`` is the path itself)."""
+
+    def linkage_at(s: float) -> tuple[SingleLoop, LinkageOptions]:
+        if s == 0.0:
+            return loop, options
+        axes = [Line(axis.direction, (1.0 + s) * axis.moment) for axis in loop.axes]
+        attach = None if options.attach_points is None else (1.0 + s) * np.asarray(options.attach_points, dtype=float)
+        return SingleLoop(axes), replace(options, attach_points=attach)
+
+    return LoopChange("size", 1.0, linkage_at)
 
 
 def loop_velocities(

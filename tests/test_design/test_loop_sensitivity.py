@@ -3,7 +3,9 @@ its family (a0, alpha0, alpha1 with the Bennett conditions kept): the morph agai
 the ideal path's derivative against the motion polynomial's closed form, and the path's derivatives against
 re-solved linkages on the morphed meshes and on remeshed links."""
 
+import tomllib
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +20,7 @@ from ffrf.output.sensors import path_sensors
 from ffrf.paper.bennett_scene import bennett_changes, bennett_options, build_bennett_from_options
 from ffrf.scenes.builder import parametric_link
 from ffrf.scenes.linkage_description import linkage_description, seated_joint_points
+from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import build_linkage, described_housings, joint_zones
 from ffrf.scenes.path_sensitivity import (
@@ -26,12 +29,14 @@ from ffrf.scenes.path_sensitivity import (
     loop_clearance_slopes,
     loop_sensitivity,
     loop_velocities,
+    size_change,
 )
 from ffrf.solvers.stability import equilibrium_stability
 from ffrf.solvers.static_solver import static_equilibrium
 from kinematics import BennettLinkage
 
 ROWS = [1, 3, 4]
+EXAMPLES = Path(__file__).parents[2] / "examples"
 
 
 def _options(h: float = 8e-3, order: int = 1, n_modes: int = 2):
@@ -273,6 +278,50 @@ def test_a_change_that_is_not_the_scenes_design_is_refused(bennett):
     wrong = LoopChange("a0", changes[0].value, lambda s: (changes[0].linkage(s)[0], other))
     with pytest.raises(SceneError, match="is not this scene's"):
         loop_velocities(scene, (wrong,))
+
+
+def test_a_6r_grown_as_a_whole_moves_its_path_as_re_solved_linkages_and_its_ideal_path_scales():
+    """Any loop's size (every length times 1 + s, the section kept: :func:`size_change`) on Rational Linkages'
+    collisions_free_6r (coarse, linear links), a quasi-static stretch of its revolution: the ideal path's derivative
+    is the ideal path itself (a similar loop, scaled about the origin: closed form, measured 1.2e-10), and against
+    equilibria re-solved for the changed linkage on the morphed meshes (Richardson over +-3e-4, +-6e-4) the coupler
+    point and torque agree within 1e-6 of the largest (measured 7e-10, 4e-10), the deviation within 1e-5 of its own
+    (measured 5e-8). Its six links morph with faces on one plane (a housing's end face cut by the arm, a sliver) and
+    nodes just beyond a cylinder face's parameter box, which the face matching must tell apart."""
+    document = tomllib.loads((EXAMPLES / "collisions_free_6r.toml").read_text())
+    document["linkage"].update(h=8e-3, order=1, modes=2)
+    loop, options, _ = linkage_options(document)
+    scene = build_linkage(loop, options)
+    result = run_linkage(scene, mode="quasi_static", n_outputs=5, t_end=0.4 * scene.t_end, sensors="path")
+    change = size_change(loop, options)
+    velocities = loop_velocities(scene, (change,))
+    exact = loop_sensitivity(scene, result.time, result.q, result.multipliers, (change,), velocities=velocities)
+    angles = np.array([scene.drive_angle(float(t)) for t in result.time])
+    ideal = scene.ideal_coupler_points(angles)
+    np.testing.assert_allclose(exact.ideal_coupler_point[:, :, 0], ideal, rtol=0, atol=1e-8 * np.abs(ideal).max())
+
+    def outputs(s: float) -> dict:
+        moved = changed_linkage(scene, change, s, velocities)
+        solved = []
+        for r in ROWS:
+            first = static_equilibrium(moved.system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
+            solved.append(static_equilibrium(moved.system, first.q, t=float(result.time[r]), tolerance=1e-15))
+        out = path_sensors(
+            moved, result.time[ROWS], np.array([x.q for x in solved]), np.array([x.multipliers for x in solved])
+        )
+        return out | {"deviation": out["coupler_point"] - moved.ideal_coupler_points(angles[ROWS])}
+
+    step = 3e-4
+    near, far = ((outputs(s * step), outputs(-s * step)) for s in (1.0, 2.0))
+    for key, ours, tolerance in (
+        ("coupler_point", exact.coupler_point[ROWS, :, 0], 1e-6),
+        ("deviation", exact.deviation[ROWS, :, 0], 1e-5),
+        ("driving_torque", exact.driving_torque[ROWS, 0], 1e-6),
+    ):
+        central = [(plus[key] - minus[key]) / (2 * s * step) for s, (plus, minus) in ((1, near), (2, far))]
+        theirs = (4 * central[0] - central[1]) / 3
+        print(key, np.abs(ours - theirs).max() / np.abs(theirs).max())
+        np.testing.assert_allclose(ours, theirs, rtol=0, atol=tolerance * np.abs(theirs).max())
 
 
 @pytest.mark.slow
