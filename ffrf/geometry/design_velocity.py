@@ -9,15 +9,15 @@ nominal mesh, :math:`x(p) = x_0 + (p - p_0)\,V`, with the velocity :math:`V` of 
 * the link's own frame (at its first housing: z on its axis, x towards the other housing) moves rigidly with the
   solids built at :math:`p_0 \pm \delta`, :math:`V = V_T + V_r` with :math:`V_T` the rigid motion's velocity; the rest
   is the morph :math:`V_r` relative to that frame (zero for a link the change only carries along);
-* a boundary node stays on the faces it lies on: each face of the nominal solid is matched to the face of the
-  shifted solid (relative to the link's frame) whose surface its nodes are closest to, and the node's velocity
-  normal to each of its faces is its closest point's on that surface (gmsh's OpenCASCADE projection, continued
-  beyond the face's parameter box by Gauss-Newton steps; of faces on one surface, the one that holds the most of the
-  face's triangle centres), by central differences, :math:`n \cdot V_r = n \cdot (x_+ - x_-)/(2\delta)` (the
-  boxes and cylinders move linearly in the dimension: truncation :math:`O(\delta^2)`). A face node's normal velocity, a node on an edge its velocity across
-  the edge (its two faces' normals), a corner node's whole velocity are so prescribed; faces that meet tangentially
-  (one cylinder cut by a seam or by the arm) count as one direction. Working with faces alone makes the matching
-  blind to how OpenCASCADE splits curves and places the seams of cylinders, which jumps as an axis crosses a
+* a boundary node stays on the faces it lies on: each face of the nominal solid is matched to the face of the shifted
+  solid (relative to the link's frame) whose surface its nodes are closest to, and the node's velocity normal to each
+  of its faces is its closest point's on that surface (gmsh's OpenCASCADE projection, continued beyond the face's
+  parameter box by Gauss-Newton steps; of faces on one surface, the one that holds the most of the face's triangle
+  centres), by central differences, :math:`n \cdot V_r = n \cdot (x_+ - x_-)/(2\delta)` (the boxes and cylinders move
+  linearly in the dimension: truncation :math:`O(\delta^2)`). A face node's normal velocity, a node on an edge its
+  velocity across the edge (its two faces' normals), a corner node's whole velocity are so prescribed; faces that meet
+  tangentially (one cylinder cut by a seam or by the arm) count as one direction. Working with faces alone makes the
+  matching blind to how OpenCASCADE splits curves and places the seams of cylinders, which jumps as an axis crosses a
   coordinate plane;
 * the faces of the physical groups (the bores and the mount, whose nodes carry the joints' interfaces) move rigidly
   with their feature (a bore with its housing's frame, the mount with its own), their nodes wholly prescribed;

@@ -245,7 +245,7 @@ def test_the_smallest_clearances_rates_agree_with_the_whole_check_re_run_on_chan
     against the whole check re-run on the changed linkages (their own motion, joint zones and morphed links, the
     smallest found again anywhere) at +-1e-4 of each parameter. The crossing pairs (0-2, 1-3) have one pose that
     holds the smallest: their derivative agrees with the central difference to 1e-6 of the column's largest
-    (measured 2e-10, 5e-7, 4e-9). Adjacent links keep their clearance near the joint along the whole motion (to
+    (measured 3e-10, 5e-7, 4e-9). Adjacent links keep their clearance near the joint along the whole motion (to
     microns: the faceted surfaces), and a loop change tilts the surfaces differently at each pose, so their smallest
     clearance has one-sided rates only (Danskin's theorem over the poses that hold it): the forward difference is at
     least the right rate, the backward one at most the left rate (to 1e-4 of the largest: the truncation; measured
