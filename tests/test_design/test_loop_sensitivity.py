@@ -1,9 +1,10 @@
 """Exact derivatives by the loop's own DH parameters (Eqs. (D1), (D12), (D13), issue #35), on the PLA Bennett along
-its family (a0, alpha0, alpha1 with the Bennett conditions kept): the morph against rigid motion and the CAD's volumes,
+its family (a0, alpha0, alpha1 with the Bennett conditions kept) and on a 6R by its size (and its sections): the morph against rigid motion and the CAD's volumes,
 the ideal path's derivative against the motion polynomial's closed form, and the path's derivatives against
 re-solved linkages on the morphed meshes and on remeshed links."""
 
 import tomllib
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 
@@ -18,17 +19,19 @@ from ffrf.mesh.tet_mesh import TetMesh
 from ffrf.output.peak_stress import corner_stress
 from ffrf.output.sensors import path_sensors
 from ffrf.paper.bennett_scene import bennett_changes, bennett_options, build_bennett_from_options
-from ffrf.scenes.builder import parametric_link
+from ffrf.scenes.builder import morphed_body, parametric_link
 from ffrf.scenes.linkage_description import linkage_description, seated_joint_points
 from ffrf.scenes.linkage_file import linkage_options
 from ffrf.scenes.linkage_run import run_linkage
-from ffrf.scenes.linkage_scene import build_linkage, described_housings, joint_zones
+from ffrf.scenes.linkage_scene import LinkageScene, build_linkage, described_housings, joint_zones
 from ffrf.scenes.path_sensitivity import (
     LoopChange,
     changed_linkage,
     loop_clearance_slopes,
     loop_sensitivity,
     loop_velocities,
+    section_sensitivity,
+    section_velocities,
     size_change,
 )
 from ffrf.solvers.stability import equilibrium_stability
@@ -280,7 +283,70 @@ def test_a_change_that_is_not_the_scenes_design_is_refused(bennett):
         loop_velocities(scene, (wrong,))
 
 
-def test_a_6r_grown_as_a_whole_moves_its_path_as_re_solved_linkages_and_its_ideal_path_scales():
+@pytest.fixture(scope="module")
+def six_r():
+    """Rational Linkages' collisions_free_6r (coarse, linear links, two modes) and a quasi-static stretch of its
+    revolution."""
+    document = tomllib.loads((EXAMPLES / "collisions_free_6r.toml").read_text())
+    document["linkage"].update(h=8e-3, order=1, modes=2)
+    loop, options, _ = linkage_options(document)
+    scene = build_linkage(loop, options)
+    result = run_linkage(scene, mode="quasi_static", n_outputs=5, t_end=0.4 * scene.t_end, sensors="path")
+    return loop, options, scene, result
+
+
+def _re_solved(linkage: LinkageScene, result, angles: np.ndarray | None = None) -> dict:
+    """The path sensors of ``linkage`` at ``result``'s rows :data:`ROWS`, each equilibrium re-solved by Newton from
+    ``result``'s, and with ``angles`` (the drive angles of those rows) the deviation from its own ideal path."""
+    solved = []
+    for r in ROWS:
+        first = static_equilibrium(linkage.system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
+        solved.append(static_equilibrium(linkage.system, first.q, t=float(result.time[r]), tolerance=1e-15))
+    out = path_sensors(
+        linkage, result.time[ROWS], np.array([x.q for x in solved]), np.array([x.multipliers for x in solved])
+    )
+    if angles is None:
+        return out
+    return out | {"deviation": out["coupler_point"] - linkage.ideal_coupler_points(angles)}
+
+
+def _richardson(outputs: Callable[[float], dict], step: float, key: str) -> np.ndarray:
+    """Richardson's rule on the central differences of ``outputs(s)[key]`` over +-step and +-2 step."""
+    central = [(outputs(s * step)[key] - outputs(-s * step)[key]) / (2 * s * step) for s in (1.0, 2.0)]
+    return (4 * central[0] - central[1]) / 3
+
+
+def test_a_6r_s_section_derivatives_agree_with_re_solved_linkages_on_the_morphed_mesh(six_r):
+    """Eq. (D5) on the 6R: the coupler point's and the driving torque's derivatives by a moving link's arm
+    thickness and housing radius against equilibria re-solved for the linkage with that link on its mesh morphed by
+    +-1e-3 and +-2e-3 of the dimension (Richardson), within 1e-6 of the largest derivative (measured 4e-11 to 6e-9)."""
+    _, _, scene, result = six_r
+    link = 3
+    parameters = ("arm_thickness", "housing_outer_radius")
+    velocities = section_velocities(scene, parameters, (link,))
+    exact = section_sensitivity(
+        scene, result.time, result.q, result.multipliers, parameters, (link,), velocities=velocities
+    )
+    design = parametric_link(scene.description["bodies"][link]["parametric"])["design"]
+    points = scene.bodies[link].mesh_model.mesh.points
+    for column, parameter in enumerate(parameters):
+        velocity = velocities[link, parameter]
+
+        def outputs(change: float, velocity: np.ndarray = velocity) -> dict:
+            return _re_solved(scene.with_body(morphed_body(scene, link, points + change * velocity)), result)
+
+        step = 1e-3 * getattr(design, parameter)
+        for key, ours in (
+            ("coupler_point", exact.coupler_point[ROWS, :, column]),
+            ("driving_torque", exact.driving_torque[ROWS, column]),
+        ):
+            theirs = _richardson(outputs, step, key)
+            print(parameter, key, np.abs(ours - theirs).max() / np.abs(theirs).max())
+            assert np.abs(theirs).max() > 0.0
+            np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-6 * np.abs(theirs).max())
+
+
+def test_a_6r_grown_as_a_whole_moves_its_path_as_re_solved_linkages_and_its_ideal_path_scales(six_r):
     """Any loop's size (every length times 1 + s, the section kept: :func:`size_change`) on Rational Linkages'
     collisions_free_6r (coarse, linear links), a quasi-static stretch of its revolution: the ideal path's derivative
     is the ideal path itself (a similar loop, scaled about the origin: closed form, measured 1.2e-10), and against
@@ -288,11 +354,7 @@ def test_a_6r_grown_as_a_whole_moves_its_path_as_re_solved_linkages_and_its_idea
     point and torque agree within 1e-6 of the largest (measured 7e-10, 4e-10), the deviation within 1e-5 of its own
     (measured 5e-8). Its six links morph with faces on one plane (a housing's end face cut by the arm, a sliver) and
     nodes just beyond a cylinder face's parameter box, which the face matching must tell apart."""
-    document = tomllib.loads((EXAMPLES / "collisions_free_6r.toml").read_text())
-    document["linkage"].update(h=8e-3, order=1, modes=2)
-    loop, options, _ = linkage_options(document)
-    scene = build_linkage(loop, options)
-    result = run_linkage(scene, mode="quasi_static", n_outputs=5, t_end=0.4 * scene.t_end, sensors="path")
+    loop, options, scene, result = six_r
     change = size_change(loop, options)
     velocities = loop_velocities(scene, (change,))
     exact = loop_sensitivity(scene, result.time, result.q, result.multipliers, (change,), velocities=velocities)
@@ -300,26 +362,19 @@ def test_a_6r_grown_as_a_whole_moves_its_path_as_re_solved_linkages_and_its_idea
     ideal = scene.ideal_coupler_points(angles)
     np.testing.assert_allclose(exact.ideal_coupler_point[:, :, 0], ideal, rtol=0, atol=1e-8 * np.abs(ideal).max())
 
-    def outputs(s: float) -> dict:
-        moved = changed_linkage(scene, change, s, velocities)
-        solved = []
-        for r in ROWS:
-            first = static_equilibrium(moved.system, result.q[r], t=float(result.time[r]), tolerance=1e-13)
-            solved.append(static_equilibrium(moved.system, first.q, t=float(result.time[r]), tolerance=1e-15))
-        out = path_sensors(
-            moved, result.time[ROWS], np.array([x.q for x in solved]), np.array([x.multipliers for x in solved])
-        )
-        return out | {"deviation": out["coupler_point"] - moved.ideal_coupler_points(angles[ROWS])}
+    runs: dict[float, dict] = {}
 
-    step = 3e-4
-    near, far = ((outputs(s * step), outputs(-s * step)) for s in (1.0, 2.0))
+    def outputs(s: float) -> dict:
+        if s not in runs:
+            runs[s] = _re_solved(changed_linkage(scene, change, s, velocities), result, angles[ROWS])
+        return runs[s]
+
     for key, ours, tolerance in (
         ("coupler_point", exact.coupler_point[ROWS, :, 0], 1e-6),
         ("deviation", exact.deviation[ROWS, :, 0], 1e-5),
         ("driving_torque", exact.driving_torque[ROWS, 0], 1e-6),
     ):
-        central = [(plus[key] - minus[key]) / (2 * s * step) for s, (plus, minus) in ((1, near), (2, far))]
-        theirs = (4 * central[0] - central[1]) / 3
+        theirs = _richardson(outputs, 3e-4, key)
         print(key, np.abs(ours - theirs).max() / np.abs(theirs).max())
         np.testing.assert_allclose(ours, theirs, rtol=0, atol=tolerance * np.abs(theirs).max())
 
