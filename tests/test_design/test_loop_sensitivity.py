@@ -1,7 +1,8 @@
 """Exact derivatives by the loop's own DH parameters (Eqs. (D1), (D12), (D13), issue #35), on the PLA Bennett along
-its family (a0, alpha0, alpha1 with the Bennett conditions kept) and on a 6R by its size (and its sections): the morph against rigid motion and the CAD's volumes,
-the ideal path's derivative against the motion polynomial's closed form, and the path's derivatives against
-re-solved linkages on the morphed meshes and on remeshed links."""
+its family (a0, alpha0, alpha1 with the Bennett conditions kept) and on a 6R by its size (and by its sections): the
+morph against rigid motion and the CAD's volumes, the ideal path's derivative against closed forms (the motion
+polynomial; a scaled path), the path's derivatives against re-solved linkages on the morphed meshes and on remeshed
+links, and the smallest clearance's rates against the clearance check re-run on changed linkages."""
 
 import tomllib
 from collections.abc import Callable
