@@ -94,7 +94,7 @@ MORPH_STEP = 1e-4
 #: square: the deviation's by 8.9e-5 of it from 1e-4 to 1e-5 and 1e-6 from 1e-5 to 3e-6, the peak stresses' by 1e-5
 #: from 3e-5 to 1e-5 and 1.1e-6 from 1e-5 to 3e-6).
 LOOP_STEP = 3e-6
-#: Other local minima of a pair's sampled clearance within this of its smallest hold it too (m), for the smallest
+#: Samples of a pair's clearance within this of its smallest, outside its basin, hold it too (m), for the smallest
 #: clearance's rates by a loop change (Eq. (CL6)): a tenth of a millimetre, below a print's resolution. Adjacent
 #: links keep their clearance near a joint constant along the motion, which the links' faceted surfaces turn into
 #: wiggles of microns (up to 2e-5 m over a revolution of the coarse PLA Bennett), and a loop change tilts the
@@ -344,7 +344,7 @@ def size_change(loop: SingleLoop, options: LinkageOptions) -> LoopChange:
     def linkage_at(s: float) -> tuple[SingleLoop, LinkageOptions]:
         if s == 0.0:
             return loop, options
-        axes = [Line(axis.direction, (1.0 + s) * axis.moment) for axis in loop.axes]
+        axes = tuple(Line(axis.direction, (1.0 + s) * axis.moment) for axis in loop.axes)
         attach = None if options.attach_points is None else (1.0 + s) * np.asarray(options.attach_points, dtype=float)
         return SingleLoop(axes), replace(options, attach_points=attach)
 
@@ -435,7 +435,7 @@ def changed_linkage(
 class ClearanceRates:
     """How each pair's smallest clearance along the revolution changes with each loop change (Eq. (CL6)), arrays
     ``(pairs, k)``: ``at_smallest`` the derivative at the pose that holds the smallest; over the poses that hold it
-    within :data:`CLEARANCE_TIE` (``poses`` ``(pairs,)`` of them: local minima of the sampled clearance), the
+    within :data:`CLEARANCE_TIE` (``poses`` ``(pairs,)`` of them: samples outside the found pose's basin), the
     smallest clearance's one-sided rates: ``right`` (the change increasing: the least of their derivatives) and
     ``left`` (decreasing: the largest). Where one pose holds it, all three agree and the smallest clearance has a
     derivative."""
@@ -461,22 +461,25 @@ def loop_clearance_slopes(
     tie: float = CLEARANCE_TIE,
 ) -> ClearanceRates:
     """How each pair's smallest clearance in ``found`` (``scene.clearance(n_poses)``) changes with each of
-    ``changes`` of the loop (Eq. (CL6)). At each pose that holds it (the pose found and every other local minimum of
-    the revolution's samples within ``tie`` of it), central differences over ``+-step`` of each change's value of
-    the clearance there on the changed design: its rigid motion at the same drive angle, its links morphed along
-    their ``velocities`` (:func:`loop_velocities`, default computed here) and its joint zones."""
+    ``changes`` of the loop (Eq. (CL6)). At each pose that holds it (the pose found and every sample of the
+    revolution within ``tie`` of it outside the found pose's basin, :func:`_basin`), central differences over
+    ``+-step`` of each change's value of the clearance there on the changed design: its rigid motion at the same
+    drive angle, its links morphed along their ``velocities`` (:func:`loop_velocities`, default computed here) and
+    its joint zones."""
     velocities = loop_velocities(scene, changes) if velocities is None else velocities
     solids, motion = scene.link_solids(), scene.rigid_revolution(n_poses)
     samples = motion.drive_angles[:-1]  # the last closes the revolution: the first again
     rows = np.repeat(found.pairs, len(samples), axis=0)
     nominal = clearance_at(solids, motion, scene.joint_zones(), rows, np.tile(samples, len(found.pairs)))
     values = nominal.reshape(len(found.pairs), len(samples))
-    # Another pose holds the smallest where the sampled clearance has another local minimum within the tie, outside
-    # the found pose's own basin (its neighbouring samples, which a smooth minimum between samples also has near it).
-    local = (values <= np.roll(values, 1, axis=1)) & (values <= np.roll(values, -1, axis=1))
     turn = np.angle(np.exp(1j * (samples[None, :] - found.drive_angle[:, None])))  # from the pose found, in (-pi, pi]
-    apart = np.abs(turn) > abs(samples[1] - samples[0]) * (1.0 + 1e-9)
-    holding = local & apart & (values <= found.distance[:, None] + tie)
+    nearest = np.argmin(np.abs(turn), axis=1)
+    holding = np.array(
+        [
+            (row <= distance + tie) & ~_basin(row, i)
+            for row, i, distance in zip(values, nearest, found.distance, strict=True)
+        ]
+    )
     pair_of = [i for i, held in enumerate(holding) for _ in range(1 + int(held.sum()))]
     angles = np.concatenate([[found.drive_angle[i], *samples[held]] for i, held in enumerate(holding)])
     pairs = found.pairs[pair_of]
@@ -494,6 +497,23 @@ def loop_clearance_slopes(
         np.maximum.reduceat(slopes, first, axis=0),
         np.diff(np.append(first, len(angles))),
     )
+
+
+def _basin(values: NDArray[np.float64], start: int) -> NDArray[np.bool_]:
+    """The samples of a periodic sequence ``values`` in the basin of sample ``start``: from the local minimum it
+    descends to, those that rise strictly on either side (a smooth minimum between samples has its neighbours in
+    it; a clearance constant to microns, wiggling, has a basin of a sample or two)."""
+    n = len(values)
+    while min(values[(start - 1) % n], values[(start + 1) % n]) < values[start]:
+        start = (start - 1) % n if values[(start - 1) % n] < values[(start + 1) % n] else (start + 1) % n
+    out = np.zeros(n, dtype=bool)
+    out[start] = True
+    for direction in (1, -1):
+        k = start
+        while not out[(k + direction) % n] and values[(k + direction) % n] > values[k % n]:
+            k += direction
+            out[k % n] = True
+    return out
 
 
 def _changed_clearance(
