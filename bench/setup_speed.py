@@ -5,9 +5,10 @@ second process reading the scene cache's disk files), with the cold build's brea
 Each run is a new process (``--child``) with the scene cache in a folder of this benchmark's own
 (``FFRF_CACHE_DIR``): ``cold_no_cache`` with the disk cache off, ``cold`` writing it, ``warm`` reading it. The
 stages are timed by wrapping the functions that do them (the same functions the build calls), each call's wall time
-added up: ``reductions_s`` is the wall time of all the bodies' reductions together, which run in threads
-(``ffrf.scenes.builder.REDUCTION_THREADS``), so the stages inside them (Craig-Bampton and its parts) add up the threads'
-times and exceed it; ``import_s`` is the import of the solver, outside the build.
+added up: ``bodies_s`` is the wall time of meshing, assembling and reducing all the bodies together, the reductions
+running in threads (``ffrf.scenes.builder.REDUCTION_THREADS``) while the next bodies are meshed, so the stages inside
+it (meshing, assembly, Craig-Bampton and its parts) add up the threads' times and may exceed it; ``import_s`` is the
+import of the solver, outside the build.
 
 Usage::
 
@@ -35,7 +36,7 @@ from bench.report import write_report
 #: (module, function, stage): the functions whose time makes the stages of a cold build (keys in s).
 STAGES = tuple(
     (module, name, f"{stage}_s")
-    for module, name, stage in (("ffrf.scenes.builder", "_reductions", "reductions"), *SETUP_STAGES)
+    for module, name, stage in (("ffrf.scenes.builder", "_meshed_and_reduced", "bodies"), *SETUP_STAGES)
 )
 
 

@@ -27,7 +27,7 @@ from __future__ import annotations
 import hashlib
 import logging
 import os
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -243,8 +243,7 @@ def build_scene(
     # One BLAS thread, as in a study's workers and the command line: under some OpenBLAS kernels (Haswell) the
     # reductions' dense factorisations differ in their last digits with the thread count.
     with threadpool_limits(limits=1, user_api="blas"):
-        meshed = [_meshed(entry, base, cache) for entry in description["bodies"]]
-        reduced = _reductions(meshed, description["bodies"], cache.reductions)
+        meshed, reduced = _meshed_and_reduced(description["bodies"], base, cache)
         bodies = tuple(
             _body(k, entry, meshed[k], settings, reduced[k]) for k, entry in enumerate(description["bodies"])
         )
@@ -412,30 +411,45 @@ class Reduced(NamedTuple):
     markers: dict[str, BodyMarker]
 
 
-#: Threads that reduce a scene's bodies at once (at most the machine's cores): SuperLU's factorisations and ARPACK's
-#: iterations run outside the GIL, so the default scene's four links reduce in 2.3 s on two cores instead of 4.1 s.
-#: Each body is reduced whole by one thread, so its basis does not depend on the count.
+#: Threads that reduce a scene's bodies at once (at most the machine's cores), while the next bodies are meshed:
+#: SuperLU's factorisations and ARPACK's iterations run outside the GIL, so the default scene's four links reduce in
+#: 2.3 s on two cores instead of 4.1 s. Each body is reduced whole by one thread, so its basis does not depend on the
+#: count.
 REDUCTION_THREADS = os.cpu_count() or 1
 #: Above this many unknowns in a body the bodies reduce one at a time, so that one factorisation's fill is in memory
 #: at once (a link of 10^6 unknowns needs gigabytes of it; the default links have about 15000 each).
 THREADED_REDUCTION_DOFS = 200_000
 
 
-def _reductions(meshed: list[MeshedBody], entries: list[dict], reductions: LRUCache[Reduced]) -> list[Reduced]:
-    """:func:`_reduction` of every body: the first body of each reduction key in :data:`REDUCTION_THREADS` threads
-    (where no body has more than :data:`THREADED_REDUCTION_DOFS` unknowns), then the others in order (a body sharing
-    an earlier one's key finds it in ``reductions``)."""
-    keys = [_reduction_key(m, e) for m, e in zip(meshed, entries, strict=True)]
-    firsts = [keys.index(key) for key in dict.fromkeys(keys)]
+def _meshed_and_reduced(entries: list[dict], base: Path, cache: SceneCache) -> tuple[list[MeshedBody], list[Reduced]]:
+    """Every body's FE model (:func:`_meshed`, in order, in this thread: gmsh is not thread-safe) and reduction
+    (:func:`_reduction`): the first body of each reduction key is reduced in one of :data:`REDUCTION_THREADS`
+    threads as soon as it is meshed, while the next ones are meshed (gmsh's calls and SuperLU's and ARPACK's release
+    the GIL); a body of more than :data:`THREADED_REDUCTION_DOFS` unknowns waits for the others and is reduced alone.
+    The others find their key's reduction in the cache afterwards."""
+    meshed: list[MeshedBody] = []
+    pending: dict[int, Future[Reduced]] = {}
     computed: dict[int, Reduced] = {}
-    small = max(m.fe.n_dofs for m in meshed) <= THREADED_REDUCTION_DOFS
-    if small and min(len(firsts), REDUCTION_THREADS) > 1:
-        with ThreadPoolExecutor(max_workers=min(len(firsts), REDUCTION_THREADS)) as pool:
-            futures = {k: pool.submit(_reduction, k, meshed[k], entries[k], reductions) for k in firsts}
-        computed = {k: future.result() for k, future in futures.items()}  # the first failure in body order raises
-    return [
-        computed[k] if k in computed else _reduction(k, meshed[k], entries[k], reductions) for k in range(len(entries))
+    seen: set[str] = set()
+    with ThreadPoolExecutor(max_workers=REDUCTION_THREADS) as pool:
+        for k, entry in enumerate(entries):
+            body = _meshed(entry, base, cache)
+            meshed.append(body)
+            key = _reduction_key(body, entry)
+            if key in seen:
+                continue
+            seen.add(key)
+            if body.fe.n_dofs > THREADED_REDUCTION_DOFS:  # one factorisation's fill in memory at a time
+                wait(pending.values())
+                computed[k] = _reduction(k, body, entry, cache.reductions)
+            else:
+                pending[k] = pool.submit(_reduction, k, body, entry, cache.reductions)
+    computed |= {k: future.result() for k, future in pending.items()}  # the first failure in body order raises
+    reduced = [
+        computed[k] if k in computed else _reduction(k, meshed[k], entries[k], cache.reductions)
+        for k in range(len(entries))
     ]
+    return meshed, reduced
 
 
 def _reduction_key(meshed: MeshedBody, entry: dict) -> str:

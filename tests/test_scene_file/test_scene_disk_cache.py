@@ -87,13 +87,16 @@ def test_a_later_process_reads_from_disk_what_building_afresh_gives_bit_for_bit(
 
 
 def test_bodies_reduced_in_threads_are_those_reduced_one_by_one(monkeypatch):
-    """The four links reduced at once in threads (one link per thread) and one after the other: every array of the
-    build equal bit for bit, whatever the machine's cores."""
+    """The four links reduced at once in threads (one link per thread, while the next links are meshed), one after
+    the other in one thread, and each alone in the building thread (as links above THREADED_REDUCTION_DOFS are):
+    every array of the build equal bit for bit, whatever the machine's cores."""
     from ffrf.scenes import builder
 
     monkeypatch.setattr(builder, "REDUCTION_THREADS", 4)
     threaded = _build(SceneCache(enabled=False))
     monkeypatch.setattr(builder, "REDUCTION_THREADS", 1)
+    _assert_same_bits(threaded, _build(SceneCache(enabled=False)))
+    monkeypatch.setattr(builder, "THREADED_REDUCTION_DOFS", 0)
     _assert_same_bits(threaded, _build(SceneCache(enabled=False)))
 
 
