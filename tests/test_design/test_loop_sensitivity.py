@@ -27,6 +27,7 @@ from ffrf.scenes.linkage_run import run_linkage
 from ffrf.scenes.linkage_scene import LinkageScene, build_linkage, described_housings, joint_zones
 from ffrf.scenes.path_sensitivity import (
     LoopChange,
+    _basin,
     changed_linkage,
     loop_clearance_slopes,
     loop_sensitivity,
@@ -242,6 +243,21 @@ def test_a_changed_links_joint_zones_come_from_its_description_as_from_its_geome
         other = described[key]
         assert np.array_equal(zone.point, other.point) and np.array_equal(zone.direction, other.direction)
         assert (zone.radius, zone.lower, zone.upper) == (other.radius, other.lower, other.upper)
+
+
+def test_the_basin_of_a_sampled_minimum_is_its_valley_and_a_flat_sequence_has_none():
+    """The poses that hold a smallest besides the one found are the samples outside its basin: a smooth valley's
+    samples all belong to it (the neighbours of a minimum between samples too), on a periodic sequence and from a
+    start beside the minimum (a bisection's pose lands next to a sample); equal neighbours stop it (a constant
+    clearance wiggling by microns holds its smallest at many poses)."""
+    valley = np.cos(np.linspace(0.0, 2 * np.pi, 12, endpoint=False))  # one smooth minimum, at sample 6
+    assert _basin(valley, 6).all() and _basin(valley, 5).all()
+    shifted = np.roll(valley, 6)  # the minimum at sample 0: the valley wraps around
+    assert _basin(shifted, 11).all()
+    flat = np.array([1.0, 1.0, 1.0 + 1e-9, 1.0, 1.0])
+    np.testing.assert_array_equal(_basin(flat, 0), [True, False, False, False, False])
+    two = np.array([0.0, 1.0, 2.0, 1.0, 0.0, 1.0, 2.0, 1.0]) + np.array([0, 0, 0, 0, 1e-3, 0, 0, 0])
+    np.testing.assert_array_equal(_basin(two, 1), [True, True, True, False, False, False, True, True])
 
 
 def test_the_smallest_clearances_rates_agree_with_the_whole_check_re_run_on_changed_linkages(bennett):
