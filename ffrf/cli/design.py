@@ -72,8 +72,9 @@ def run(args: argparse.Namespace) -> int:
         )
         if largest is not None and problem.max_stress is not None:
             frequency += (
-                f", peak stress {1e-6 * largest:.4g} MPa, its norm (D10) {1e-6 * (point.max_stress_norm or 0.0):.4g} "
-                f"MPa (bound {1e-6 * problem.max_stress:.4g} MPa)"
+                f", peak stress {1e-6 * largest:.4g} MPa over {1e3 * (problem.stress_radius or 0.0):.3g} mm balls, "
+                f"its norm (D10) {1e-6 * (point.max_stress_norm or 0.0):.4g} MPa "
+                f"(bound {1e-6 * problem.max_stress:.4g} MPa)"
             )
         if point.clearance is not None and problem.min_clearance is not None:
             frequency += (
@@ -228,6 +229,7 @@ def _summary(design: SectionDesign, seconds: float) -> dict:
             "max_deviation_mm": 1e3 * problem.max_deviation,
             "min_frequency_hz": problem.min_frequency_hz,
             "max_stress_mpa": None if problem.max_stress is None else 1e-6 * problem.max_stress,
+            "stress_radius_mm": None if problem.stress_radius is None else 1e3 * problem.stress_radius,
             "min_clearance_mm": None if problem.min_clearance is None else 1e3 * problem.min_clearance,
             "outputs": problem.outputs,
         },

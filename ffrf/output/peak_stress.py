@@ -20,6 +20,11 @@ over; a design bounds instead the p-norm of the corner stresses (Eq. (D10)),
 
 smooth wherever the stress is not zero everywhere, never below the peak and at most :math:`N^{1/p}` times it for
 :math:`N` corners (measured on the PLA Bennett's links with p = 32: 3e-5 to 2 % above the peak).
+
+Where the elastic stress is singular (re-entrant edges) the corner values grow as the mesh is refined; with an
+``average`` (:class:`~ffrf.output.stress_average.BallAverage`, Eq. (D14)) the same functions take the strain
+averaged over a ball of material around each vertex instead, one 'corner' per vertex: finite, converging, and
+linear in the modal coordinates as the corner strains are.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ffrf.fe.fe_model import FEModel
+from ffrf.output.stress_average import BallAverage
 from ffrf.reduction.component_modes_post import von_mises_stress
 
 __all__ = [
@@ -49,10 +55,12 @@ __all__ = [
 STRESS_NORM_POWER = 32
 
 
-def strain_modes(fe: FEModel, basis: ArrayLike) -> NDArray[np.float64]:
-    """The corner strains of each mode (column of ``basis``, ``(3N, m)``): ``(n_tets, 4, 3, 3, m)``."""
+def strain_modes(fe: FEModel, basis: ArrayLike, average: BallAverage | None = None) -> NDArray[np.float64]:
+    """The corner strains of each mode (column of ``basis``, ``(3N, m)``): ``(n_tets, 4, 3, 3, m)``; with an
+    ``average``, the averaged strains of Eq. (D14), ``(vertices, 1, 3, 3, m)``."""
     basis = np.asarray(basis, dtype=float)
-    return np.stack([fe.vertex_strains(basis[:, j]) for j in range(basis.shape[1])], axis=-1)
+    modes = np.stack([fe.vertex_strains(basis[:, j]) for j in range(basis.shape[1])], axis=-1)
+    return modes if average is None else average.strains(fe, modes)
 
 
 @dataclass(frozen=True)
@@ -84,11 +92,19 @@ def peak_stress(modes: NDArray, zeta: ArrayLike, E: float, nu: float) -> PeakStr
     return PeakStress(value, int(element), int(corner), gradient)
 
 
-def corner_stress(fe: FEModel, basis: ArrayLike, zeta: ArrayLike, element: int, corner: int) -> float:
+def corner_stress(
+    fe: FEModel, basis: ArrayLike, zeta: ArrayLike, element: int, corner: int, average: BallAverage | None = None
+) -> float:
     """The von Mises stress (Pa) at one element's corner of the link ``fe`` with mode ``basis`` at coordinates
-    ``zeta``."""
-    strain = fe.vertex_strains(np.asarray(basis, dtype=float) @ np.asarray(zeta, dtype=float))[element, corner]
+    ``zeta``; with an ``average``, the averaged stress at its centre ``element`` (``corner`` 0)."""
+    strain = _strains(fe, np.asarray(basis, dtype=float) @ np.asarray(zeta, dtype=float), average)[element, corner]
     return float(von_mises_stress(strain, fe.material.E, fe.material.nu))
+
+
+def _strains(fe: FEModel, displacement: NDArray, average: BallAverage | None) -> NDArray[np.float64]:
+    """The corner strains of ``displacement``, or their averages of Eq. (D14)."""
+    corners = fe.vertex_strains(displacement)
+    return corners if average is None else average.strains(fe, corners)
 
 
 def p_norm(values: NDArray, power: float = STRESS_NORM_POWER) -> float:
@@ -125,8 +141,14 @@ def stress_norm(modes: NDArray, zeta: ArrayLike, E: float, nu: float, power: flo
     return StressNorm(value, np.einsum("ec,ecab,ecabj->j", weight, deviator, modes))
 
 
-def stress_norm_at(fe: FEModel, basis: ArrayLike, zeta: ArrayLike, power: float = STRESS_NORM_POWER) -> float:
+def stress_norm_at(
+    fe: FEModel,
+    basis: ArrayLike,
+    zeta: ArrayLike,
+    power: float = STRESS_NORM_POWER,
+    average: BallAverage | None = None,
+) -> float:
     """The p-norm of Eq. (D10) (Pa) of the corner stresses of the link ``fe`` with mode ``basis`` at coordinates
-    ``zeta``."""
-    strain = fe.vertex_strains(np.asarray(basis, dtype=float) @ np.asarray(zeta, dtype=float))
+    ``zeta`` (with an ``average``, of its averaged stresses, Eq. (D14))."""
+    strain = _strains(fe, np.asarray(basis, dtype=float) @ np.asarray(zeta, dtype=float), average)
     return p_norm(von_mises_stress(strain, fe.material.E, fe.material.nu), power)

@@ -38,6 +38,7 @@ from ffrf.output.loop_poses import LoopPoses
 from ffrf.output.peak_stress import corner_stress, peak_stress, strain_modes, stress_norm, stress_norm_at
 from ffrf.output.sensors import path_sensors
 from ffrf.output.solid_distance import LinkSolid
+from ffrf.output.stress_average import ball_average
 from ffrf.scenes.builder import morphed_body, morphed_scene, parametric_link
 from ffrf.scenes.linkage_description import (
     BoreError,
@@ -169,6 +170,7 @@ def material_sensitivity(
     links: tuple[int, ...] | None = None,
     stability: bool = False,
     stress: bool = False,
+    stress_radius: float | None = None,
 ) -> PathSensitivity:
     """The derivatives of the coupler point, driving torque and mass at the equilibria ``q`` ``(poses, n)``,
     ``multipliers`` ``(poses, m)`` at ``time`` (a quasi-static run's rows) with respect to the relative Young's
@@ -195,6 +197,7 @@ def material_sensitivity(
         sides,
         stability,
         stress,
+        stress_radius,
     )
     for values, slopes in (
         (found.peak_stress, found.peak_stress_slopes),
@@ -224,6 +227,7 @@ def bore_sensitivity(
     bores: tuple[tuple[int, int], ...] | None = None,
     stability: bool = False,
     stress: bool = False,
+    stress_radius: float | None = None,
 ) -> PathSensitivity:
     """The derivatives of the coupler point and driving torque at a quasi-static run's equilibria (as
     :func:`material_sensitivity`) with respect to the three errors of :class:`BoreError` (``twist``, rad;
@@ -255,7 +259,7 @@ def bore_sensitivity(
 
     # The outputs read the joints' points: a bore error of the tool link moves the coupler point itself (the mean of
     # its joint points as built), at fixed coordinates too.
-    return _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability, stress)
+    return _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability, stress, stress_radius)
 
 
 def section_velocities(
@@ -291,6 +295,7 @@ def section_sensitivity(
     velocities: dict[tuple[int, str], NDArray] | None = None,
     stability: bool = False,
     stress: bool = False,
+    stress_radius: float | None = None,
 ) -> PathSensitivity:
     """The derivatives of the coupler point, driving torque and mass at a quasi-static run's equilibria (as
     :func:`material_sensitivity`) with respect to each of ``parameters`` (fields of
@@ -319,7 +324,9 @@ def section_sensitivity(
 
     sides = [(plus, minus, delta) for (plus, minus), delta in shifted]
     rates = _residual_rates(scene, q, multipliers, sides)
-    sensitivity = _path_derivatives(scene, time, q, multipliers, tuple(names), rates, sides, stability, stress)
+    sensitivity = _path_derivatives(
+        scene, time, q, multipliers, tuple(names), rates, sides, stability, stress, stress_radius
+    )
     return replace(sensitivity, mass=_mass_rates(sides))
 
 
@@ -392,6 +399,7 @@ def loop_sensitivity(
     velocities: dict[tuple[int, str], NDArray] | None = None,
     stability: bool = False,
     stress: bool = False,
+    stress_radius: float | None = None,
 ) -> PathSensitivity:
     """The derivatives of the coupler point, driving torque and mass at a quasi-static run's equilibria (as
     :func:`material_sensitivity`) with respect to each of ``changes`` of the loop itself (per its unit, m or rad),
@@ -410,7 +418,7 @@ def loop_sensitivity(
         ideal.append((plus.ideal_coupler_points(angles) - minus.ideal_coupler_points(angles)) / (2.0 * delta))
     names = tuple(change.name for change in changes)
     rates = _residual_rates(scene, q, multipliers, sides)
-    sensitivity = _path_derivatives(scene, time, q, multipliers, names, rates, sides, stability, stress)
+    sensitivity = _path_derivatives(scene, time, q, multipliers, names, rates, sides, stability, stress, stress_radius)
     return replace(sensitivity, mass=_mass_rates(sides), ideal_coupler_point=np.stack(ideal, axis=2))
 
 
@@ -650,11 +658,14 @@ def _path_derivatives(
     sides: list[tuple[LinkageScene, LinkageScene, float]],
     stability: bool = False,
     stress: bool = False,
+    stress_radius: float | None = None,
 ) -> PathSensitivity:
     """Eq. (D1) at every pose with ``rates(row, t)``'s right-hand sides, then Eq. (D2) for the outputs: along the
     response, plus, per parameter, the outputs' own change at fixed coordinates, central differences of the linkage
     built at +-step of it (``sides``: ``(plus, minus, step)``). With ``stability`` the lowest squared frequency of
-    Eq. (B1) too, refused (:class:`SensitivityError`) at a pose where it is not positive."""
+    Eq. (B1) too, refused (:class:`SensitivityError`) at a pose where it is not positive. With ``stress`` each link's
+    peak stress and its norm too (Eqs. (D9), (D10)); with a ``stress_radius`` (m) of the strain averaged over balls of
+    that radius (Eq. (D14)) instead of the corner strains."""
     if scene.loose_joints:  # contact switches make the path non-smooth; Eq. (D1) assumes a smooth one
         raise SensitivityError(
             f"path sensitivities of a linkage with joints with play ({', '.join(j.name for j in scene.loose_joints)}) "
@@ -690,7 +701,7 @@ def _path_derivatives(
         upper, lower = (_outputs(side, time, q, multipliers, modes) for side in (plus, minus))
         for name, values in derivatives.items():
             values[:, column] += (upper[name] - lower[name]) / (2.0 * step)
-    stresses = _stress_derivatives(scene, q, dq, sides) if stress else None
+    stresses = _stress_derivatives(scene, q, dq, sides, stress_radius) if stress else None
     angles = np.array([scene.drive_angle(float(t)) for t in time])
     # a joint's reaction force is its first three multipliers (Eq. (J2)): its derivative is the response's, exactly
     reactions = {
@@ -711,7 +722,11 @@ def _path_derivatives(
 
 
 def _stress_derivatives(
-    scene: LinkageScene, q: NDArray, dq: NDArray, sides: list[tuple[LinkageScene, LinkageScene, float]]
+    scene: LinkageScene,
+    q: NDArray,
+    dq: NDArray,
+    sides: list[tuple[LinkageScene, LinkageScene, float]],
+    radius: float | None = None,
 ) -> dict[str, NDArray]:
     """Each link's peak von Mises stress at every pose ``(poses, links)``, its element and corner, and its
     derivatives ``(poses, links, k)`` (Eq. (D9)); the p-norm of its corner stresses and its derivatives likewise
@@ -719,7 +734,9 @@ def _stress_derivatives(
     gradients in the link's modal coordinates; plus, for a parameter whose linkage at +-step has that link rebuilt (a
     section), the stress at the peak's corner (and the norm) of the rebuilt link at the same coordinates, by central
     differences. A material's own share (the stress is proportional to E at fixed strain) is the caller's
-    (:func:`material_sensitivity`)."""
+    (:func:`material_sensitivity`). With a ``radius`` (m), of the strains averaged over balls of that radius around
+    each vertex (Eq. (D14)): the 'element' is then the ball's centre (its row of the averaging), the corner 0, and a
+    rebuilt link is averaged with the nominal one's balls (the same elements, their moved volumes)."""
     system = scene.system
     poses, k = dq.shape[:2]
     links = len(scene.bodies)
@@ -733,7 +750,8 @@ def _stress_derivatives(
     for link, body in enumerate(scene.bodies):
         if not isinstance(body.fe, FEModel):
             continue
-        modes = strain_modes(body.fe, body.reduction.basis)
+        average = None if radius is None else ball_average(body.fe, radius)
+        modes = strain_modes(body.fe, body.reduction.basis, average)
         block = system.block(link)
         material = body.fe.material
         for row in range(poses):
@@ -753,11 +771,13 @@ def _stress_derivatives(
                 if all(other is body for other in rebuilt):
                     continue
                 at = [
-                    corner_stress(other.mesh_model, other.reduction.basis, zeta, peak.element, peak.corner)
+                    corner_stress(other.mesh_model, other.reduction.basis, zeta, peak.element, peak.corner, average)
                     for other in rebuilt
                 ]
                 out["peak_stress_slopes"][row, link, column] += (at[0] - at[1]) / (2.0 * step)
-                norms = [stress_norm_at(other.mesh_model, other.reduction.basis, zeta) for other in rebuilt]
+                norms = [
+                    stress_norm_at(other.mesh_model, other.reduction.basis, zeta, average=average) for other in rebuilt
+                ]
                 out["stress_norm_slopes"][row, link, column] += (norms[0] - norms[1]) / (2.0 * step)
     return out
 

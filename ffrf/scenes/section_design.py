@@ -10,8 +10,10 @@ bores in place, every link alike) solve
 with :math:`m` the links' mass, :math:`d_i` the coupler's deviation from the ideal path at pose :math:`i` of a
 quasi-static revolution under the linkage's load (its weight, its bore errors) and, where a lowest frequency
 :math:`\underline f` is asked for, :math:`\mu_i` the lowest squared frequency of Eq. (B1) there (its gradient by
-Eq. (D7)); where a stress bound :math:`\bar v` is asked for, :math:`v_{ik}` the p-norm of link :math:`k`'s corner
-von Mises stresses there (Eq. (D10): smooth where the peak of Eq. (D9) is not, and never below it). Each design is
+Eq. (D7)); where a stress bound :math:`\bar v` is asked for, :math:`v_{ik}` the p-norm of link :math:`k`'s von
+Mises stresses there (Eq. (D10): smooth where the peak of Eq. (D9) is not, and never below it), of the strains
+averaged over balls of the problem's radius around each vertex (Eq. (D14): finite where the corner strains are
+singular). Each design is
 meshed and run afresh; the gradients are exact for the meshed model (Eq. (D1) with the section's morph, Eq. (D5),
 :func:`~ffrf.scenes.path_sensitivity.section_sensitivity`): :math:`\partial|d_i|/\partial p = d_i^T
 (\partial d_i/\partial p)/|d_i|`. scipy's SLSQP works in dimensions relative to the start, mass relative to the
@@ -65,6 +67,7 @@ DESIGN = {
     "max_deviation": Key("number", True, positive),
     "min_frequency_hz": Key("number", False, positive),
     "max_stress_mpa": Key("number", False, positive),
+    "stress_radius": Key("number", False, positive),
     "min_clearance": Key("number", False, positive),
     "outputs": Key("integer", False, positive),
     "max_iterations": Key("integer", False, positive),
@@ -92,8 +95,9 @@ class DesignProblem:
     """The section ``parameters`` with their ``lower`` and ``upper`` bounds (m), the bound on the coupler's
     deviation ``max_deviation`` (m) at each of ``outputs`` poses of a revolution, SLSQP's ``max_iterations`` and,
     optionally, the least lowest vibration frequency ``min_frequency_hz`` (Hz, Eq. (B1)) at each pose and the
-    largest von Mises stress of any link ``max_stress`` (Pa, Eq. (D9)) at each pose, and the least clearance of
-    every pair of links along a revolution of the rigid motion ``min_clearance`` (m, Eqs. (CL1)-(CL5))."""
+    largest von Mises stress of any link ``max_stress`` (Pa) at each pose, averaged over balls of ``stress_radius``
+    (m, Eq. (D14): the corner stress of Eq. (D9) is singular where an arm meets its housing), and the least clearance
+    of every pair of links along a revolution of the rigid motion ``min_clearance`` (m, Eqs. (CL1)-(CL5))."""
 
     parameters: tuple[str, ...]
     lower: tuple[float, ...]
@@ -104,6 +108,7 @@ class DesignProblem:
     min_frequency_hz: float | None = None
     max_stress: float | None = None
     min_clearance: float | None = None
+    stress_radius: float | None = None
 
     @property
     def min_squared_frequency(self) -> float | None:
@@ -126,6 +131,14 @@ class DesignProblem:
             raise SceneError(f"design: min_frequency_hz must be > 0, got {self.min_frequency_hz!r}")
         if self.max_stress is not None and not self.max_stress > 0.0:
             raise SceneError(f"design: max_stress_mpa must be > 0, got {self.max_stress!r} Pa")
+        if (self.max_stress is None) != (self.stress_radius is None):
+            raise SceneError(
+                "design: give max_stress_mpa and stress_radius together: the links' stress is singular where an arm "
+                "meets its housing, so the bound holds the stress averaged over balls of stress_radius (the "
+                "material's critical distance, in the linkage's unit; Eq. (D14))"
+            )
+        if self.stress_radius is not None and not self.stress_radius > 0.0:
+            raise SceneError(f"design: stress_radius must be > 0, got {self.stress_radius!r} m")
         if self.min_clearance is not None and not self.min_clearance > 0.0:
             raise SceneError(f"design: min_clearance must be > 0, got {self.min_clearance!r} m")
 
@@ -136,10 +149,11 @@ class DesignPoint:
     ``deviation`` (m) at each pose, with their gradients by the parameters (``(k,)`` and ``(poses, k)``); for a
     problem with a frequency bound the lowest squared frequency of Eq. (B1) at each pose (rad^2/s^2) and its
     gradients likewise, and for one with a stress bound every link's peak von Mises stress at each pose
-    ``(poses, links)`` (Pa, Eq. (D9)) and the norm of its corner stresses that the bound holds, ``stress_norm``
-    (Pa, Eq. (D10)), with the norm's gradients ``(poses, links, k)``; for one with a clearance bound the smallest
-    clearance of each pair of links along the revolution ``clearance`` ``(pairs,)`` (m, Eq. (CL1)) and its gradients
-    ``(pairs, k)`` (Eq. (CL5)), the pairs ``clearance_pairs`` ``(pairs, 2)``."""
+    ``(poses, links)`` (Pa, Eq. (D9), of the strains averaged over the problem's balls, Eq. (D14)) and the norm of
+    those stresses that the bound holds, ``stress_norm`` (Pa, Eq. (D10)), with the norm's gradients
+    ``(poses, links, k)``; for one with a clearance bound the smallest clearance of each pair of links along the
+    revolution ``clearance`` ``(pairs,)`` (m, Eq. (CL1)) and its gradients ``(pairs, k)`` (Eq. (CL5)), the pairs
+    ``clearance_pairs`` ``(pairs, 2)``."""
 
     values: NDArray[np.float64]
     mass: float
@@ -254,6 +268,7 @@ def evaluate(loop: SingleLoop, options: LinkageOptions, problem: DesignProblem, 
             velocities=velocities,
             stability=problem.min_frequency_hz is not None,
             stress=problem.max_stress is not None,
+            stress_radius=problem.stress_radius,
         )
     except GeometryError as error:
         section = ", ".join(f"{p} {1e3 * v:.4g} mm" for p, v in zip(problem.parameters, values, strict=True))
@@ -413,6 +428,7 @@ def load_design(document: dict, where: str = "design") -> tuple[SingleLoop, Link
             float(spec["min_frequency_hz"]) if "min_frequency_hz" in spec else None,
             1e6 * float(spec["max_stress_mpa"]) if "max_stress_mpa" in spec else None,
             length * float(spec["min_clearance"]) if "min_clearance" in spec else None,
+            length * float(spec["stress_radius"]) if "stress_radius" in spec else None,
         )
     except SceneError as error:
         raise SceneError(f"{where}, {error}") from error
