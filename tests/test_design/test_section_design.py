@@ -107,7 +107,7 @@ def test_a_stress_bound_is_one_constraint_per_link_and_pose_with_its_gradient():
     is not bounded), after the deviations', named for the KKT report."""
     from ffrf.scenes.section_design import DesignPoint, DesignProblem
 
-    problem = DesignProblem(("arm_width",), (0.008,), (0.03,), 2e-4, max_stress=2e6)
+    problem = DesignProblem(("arm_width",), (0.008,), (0.03,), 2e-4, max_stress=2e6, stress_radius=2e-3)
     stress = np.array([[1e6, 3e6], [np.nan, 2e6]])  # (poses, links): the norms
     peaks = 0.9 * stress
     slopes = np.array([[[1e8], [-2e8]], [[np.nan], [4e8]]])  # (poses, links, k)
@@ -122,7 +122,8 @@ def test_a_stress_bound_is_one_constraint_per_link_and_pose_with_its_gradient():
         "stress of link 1 at pose 1",
     ]  # fmt: skip
     assert point.max_stress_norm == 3e6 and point.max_stress == 2.7e6 and not point.feasible(problem)
-    assert load_design(tomllib.loads(EXAMPLE.read_text() + "max_stress_mpa = 20\n"))[2].max_stress == 2e7
+    problem = load_design(tomllib.loads(EXAMPLE.read_text() + "max_stress_mpa = 20\nstress_radius = 2\n"))[2]
+    assert problem.max_stress == 2e7 and problem.stress_radius == 2e-3  # mm in the file, as its linkage
 
 
 def test_a_clearance_bound_is_one_constraint_per_pair_of_links_with_its_gradient():
@@ -158,7 +159,9 @@ def load_design_free(path: Path):
         (("lower = [8, 8]", "lower = [8, 40]"), "0 < lower < upper"),
         (("max_deviation = 0.2", "max_deviation = -0.2"), "max_deviation"),
         (("outputs = 37", "outputs = 37\nmin_frequency_hz = 0"), "min_frequency_hz"),
-        (("outputs = 37", "outputs = 37\nmax_stress_mpa = -5"), "max_stress_mpa"),
+        (("outputs = 37", "outputs = 37\nmax_stress_mpa = -5\nstress_radius = 2"), "max_stress_mpa"),
+        (("outputs = 37", "outputs = 37\nmax_stress_mpa = 5"), "give max_stress_mpa and stress_radius together"),
+        (("outputs = 37", "outputs = 37\nmax_stress_mpa = 5\nstress_radius = 0"), "stress_radius"),
         (("outputs = 37", "outputs = 37\nmin_clearance = 0"), "min_clearance"),
         (("[design]", "[designs]"), "unknown key 'designs'"),
     ],
