@@ -431,7 +431,12 @@ def test_the_averaged_stress_and_its_derivatives_agree_with_re_solved_linkages(b
             [
                 [
                     corner_stress(
-                        body.mesh_model, body.reduction.basis, s.q[scene.system.block(k)][7:], *at, averages[k]
+                        body.mesh_model,
+                        body.reduction.basis,
+                        s.q[scene.system.block(k)][7:],
+                        int(at[0]),
+                        int(at[1]),
+                        averages[k],
                     )
                     for k, (body, at) in enumerate(zip(scene.bodies, exact.peak_stress_corner[r], strict=True))
                 ]

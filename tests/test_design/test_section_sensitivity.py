@@ -238,7 +238,7 @@ def test_the_averaged_stress_derivatives_agree_with_re_solved_linkages_on_the_mo
             zetas = [q[moved.system.block(k)][7:] for k in range(len(moved.bodies))]
             peaks.append(
                 [
-                    corner_stress(body.mesh_model, body.reduction.basis, zeta, *at, average)
+                    corner_stress(body.mesh_model, body.reduction.basis, zeta, int(at[0]), int(at[1]), average)
                     for body, zeta, at, average in zip(
                         moved.bodies, zetas, exact.peak_stress_corner[r], averages, strict=True
                     )
