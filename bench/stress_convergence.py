@@ -96,7 +96,7 @@ def main() -> int:
     summary: dict = {"peak_growth_finest_over_coarsest": (peaks[-1] / peaks[0]).tolist()}
     for index, radius_mm in enumerate(RADII_MM):
         averaged = np.array([[link["averaged"][index]["peak_pa"] for link in row["links"]] for row in rows])
-        summary[f"averaged_{radius_mm:g}_mm"] = {
+        summary[f"averaged_over_{radius_mm:g}_mm_balls"] = {
             "finest_over_coarsest": (averaged[-1] / averaged[0]).tolist(),
             "spread_over_meshes": (averaged.max(axis=0) / averaged.min(axis=0) - 1.0).tolist(),
             "last_change": (averaged[-1] / averaged[-2] - 1.0).tolist(),
