@@ -125,7 +125,9 @@ class PathSensitivity:
     each link's corner stresses that a design bounds, ``stress_norm`` ``(poses, links)`` (Pa, Eq. (D10)) with its
     derivatives ``stress_norm_slopes`` ``(poses, links, k)``; for a change of the loop itself, the ideal (rigid)
     coupler point's derivatives at the same drive angles ``ideal_coupler_point`` ``(poses, 3, k)``
-    (:attr:`deviation`)."""
+    (:attr:`deviation`); and the equilibria's own response ``coordinates`` ``(poses, n, k)`` (Eq. (D1): the
+    derivatives of every coordinate, which any other output of the coordinates can be differentiated along,
+    :func:`~ffrf.scenes.loaded_clearance.loaded_clearance`)."""
 
     parameters: tuple[str, ...]
     drive_angle: NDArray[np.float64]
@@ -141,6 +143,7 @@ class PathSensitivity:
     stress_norm: NDArray[np.float64] | None = None
     stress_norm_slopes: NDArray[np.float64] | None = None
     ideal_coupler_point: NDArray[np.float64] | None = None
+    coordinates: NDArray[np.float64] | None = None
 
     @property
     def deviation(self) -> NDArray[np.float64]:
@@ -717,6 +720,7 @@ def _path_derivatives(
         reaction_forces=reactions,
         squared_frequency=frequencies,
         lowest_squared_frequency=derivatives.get("lowest_squared_frequency"),
+        coordinates=np.transpose(dq, (0, 2, 1)),
         **({} if stresses is None else stresses),
     )
 

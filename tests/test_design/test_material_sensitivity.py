@@ -459,3 +459,58 @@ def test_the_averaged_stress_and_its_derivatives_agree_with_re_solved_linkages(b
         theirs = (4 * central[1e-3] - central[2e-3]) / 3
         print("averaged", index, np.abs(ours[rows, :, 0] - theirs).max() / np.abs(theirs).max())
         np.testing.assert_allclose(ours[rows, :, 0], theirs, rtol=0, atol=1e-6 * np.abs(theirs).max())
+
+
+def test_the_loaded_clearance_without_load_is_the_rigid_motions(misfit_bennett):
+    """Without gravity the equilibria are the rigid motion's poses, and the clearance of the links placed as the
+    model has them (frames and modes, Eq. (CL7)) is the rigid motion's clearance at the same drive angles
+    (Eqs. (CL1)-(CL3)) for every pair, to 1e-12 m (measured 1.3e-15); under the links' weight it differs by their sag
+    (measured up to 3.6e-5 m)."""
+    from ffrf.output.clearance import clearance_at
+    from ffrf.scenes.loaded_clearance import loaded_clearance
+
+    _, _, scene, result = misfit_bennett
+    unloaded = replace(scene, system=replace(scene.system, gravity=np.zeros(3)))
+    run = run_linkage(unloaded, mode="quasi_static", n_outputs=5, t_end=0.4 * scene.t_end, sensors="path")
+    angles = np.array([scene.drive_angle(float(t)) for t in run.time])
+    ours = loaded_clearance(unloaded, run.q)
+    rows = np.repeat(ours.pairs, len(angles), axis=0)
+    rigid = clearance_at(scene.link_solids(), scene.rigid_revolution(72), scene.joint_zones(), rows, np.tile(angles, 6))
+    rigid = rigid.reshape(len(ours.pairs), len(angles)).T
+    np.testing.assert_allclose(ours.distance, rigid, rtol=0, atol=1e-12)
+    sagging = loaded_clearance(scene, result.q).distance
+    assert 1e-6 < np.abs(sagging - rigid).max() < 1e-4
+
+
+@pytest.mark.parametrize("field, joint, link, delta", [("twist", 3, 0, 5e-5), ("offset", 1, 1, 1e-5)])
+def test_the_loaded_clearance_derivatives_by_bore_errors_agree_with_linkages_built_with_the_error(
+    misfit_bennett, field, joint, link, delta
+):
+    """The clearance of every pair of links along the loaded motion (Eq. (CL7)) differentiated along the response of
+    Eq. (D1) by a bore error, against the clearance of the linkage built with that BoreError at its equilibria
+    re-solved by Newton at +-delta and +-2 delta (Richardson), within 1e-6 of the largest (measured 5e-9 for the
+    twist, 3e-9 for the offset)."""
+    from ffrf.scenes.linkage_description import BoreError
+    from ffrf.scenes.linkage_scene import build_linkage
+    from ffrf.scenes.loaded_clearance import loaded_clearance
+    from ffrf.scenes.path_sensitivity import bore_sensitivity
+
+    loop, options, scene, result = misfit_bennett
+    exact = bore_sensitivity(scene, loop, options, result.time, result.q, result.multipliers, ((joint, link),))
+    column = ("twist", "offset", "axial").index(field)
+    rows = [1, 3, 4]
+    assert exact.coordinates is not None
+    ours = loaded_clearance(scene, result.q[rows], exact.coordinates[rows][:, :, [column]])
+    assert ours.slopes is not None
+
+    def clearance(error: float) -> np.ndarray:
+        built = build_linkage(loop, replace(options, bore_errors=(BoreError.single(joint, link, field, error),)))
+        return loaded_clearance(built, np.array([s.q for s in _re_solved(built.system, result, rows)])).distance
+
+    def central(step: float) -> np.ndarray:
+        return (clearance(step) - clearance(-step)) / (2 * step)
+
+    theirs = (4 * central(delta) - central(2 * delta)) / 3
+    print(field, np.abs(ours.slopes[:, :, 0] - theirs).max() / np.abs(theirs).max())
+    assert np.abs(theirs).max() > 1e-3  # the error moves the links against each other
+    np.testing.assert_allclose(ours.slopes[:, :, 0], theirs, rtol=0, atol=1e-6 * np.abs(theirs).max())
