@@ -40,6 +40,7 @@ from kinematics.quaternion import matrix_to_quaternion
 
 __all__ = [
     "BORE_ERROR_MODELS",
+    "BORE_FIELDS",
     "LINKAGE_VARIANTS",
     "TRACKED_FRACTIONS",
     "BoreError",
@@ -68,10 +69,13 @@ _TRACE_STEP = np.radians(2.0)
 class BoreError:
     """A bore made off its axis: joint ``joint``'s axis as link ``link`` carries it, turned by ``twist``
     (rad) about the link's common normal (which changes the link's DH twist by ``twist``), moved by
-    ``offset`` (m) along that normal, away from the link's other axis (which changes its DH length), and its
-    seat moved by ``axial`` (m) along the bore's own axis (which changes the joint's DH offset d); or, with
-    ``axis``, the bore on that line (as measured on a part), its joint point the nearest point of ``axis``
-    to the nominal one."""
+    ``offset`` (m) along that normal, away from the link's other axis (which changes its DH length), then
+    tilted by ``tilt`` (rad) about the binormal (the axis crossed with the normal) through its joint point and
+    moved by ``shift`` (m) along the binormal (the two errors that take the axes out of their DH relation), and
+    its seat moved by ``axial`` (m) along the bore's own axis (which changes the joint's DH offset d): every
+    change of a line, and where the bore sits on it. Or, with ``axis``, the bore on that line (as measured on a
+    part), its joint point the nearest point of ``axis`` to the nominal one. (A turn of the bore about its own
+    axis leaves the joint alone.)"""
 
     joint: int
     link: int
@@ -79,19 +83,28 @@ class BoreError:
     offset: float = 0.0
     axis: Line | None = None
     axial: float = 0.0
+    tilt: float = 0.0
+    shift: float = 0.0
 
     @classmethod
     def single(cls, joint: int, link: int, field: str, value: float) -> BoreError:
-        """The bore error with ``value`` in one of its ``field`` (``twist``, ``offset``, ``axial``), the others 0."""
-        if field not in ("twist", "offset", "axial"):
-            raise ValueError(f"a bore error's field is twist, offset or axial, got {field!r}")
+        """The bore error with ``value`` in one of its ``field`` (:data:`BORE_FIELDS`), the others 0."""
+        if field not in BORE_FIELDS:
+            raise ValueError(f"a bore error's field is one of {', '.join(BORE_FIELDS)}, got {field!r}")
+        values = {name: value if name == field else 0.0 for name in BORE_FIELDS}
         return cls(
             joint,
             link,
-            twist=value if field == "twist" else 0.0,
-            offset=value if field == "offset" else 0.0,
-            axial=value if field == "axial" else 0.0,
+            twist=values["twist"],
+            offset=values["offset"],
+            axial=values["axial"],
+            tilt=values["tilt"],
+            shift=values["shift"],
         )
+
+
+#: The errors of a bore that :class:`BoreError` names: its turns (rad) and moves (m).
+BORE_FIELDS = ("twist", "offset", "axial", "tilt", "shift")
 
 
 def _link_joints(k: int, n: int) -> tuple[int, int]:
@@ -138,14 +151,17 @@ def _erroneous_side(side: _Side, other: Line, error: BoreError) -> _Side:
         raise ValueError(f"bore error on joint {error.joint} of link {error.link}: the link's two axes coincide")
     rotation = Rotation.from_rotvec(error.twist * direction).as_matrix()
     foot = normal.foot1
-
     axis = rotation @ side.axis.direction
-
-    def moved(point: NDArray) -> NDArray:
-        return foot + rotation @ (point - foot) + error.offset * direction + error.axial * axis
-
-    moved_point = moved(side.point)
-    return _Side(Line.from_point_direction(moved_point, axis), moved_point, moved(side.seat))
+    point, seat = (foot + rotation @ (x - foot) + error.offset * direction for x in (side.point, side.seat))
+    if error.tilt or error.shift:
+        binormal = np.cross(axis, direction)
+        binormal /= np.linalg.norm(binormal)
+        tilt = Rotation.from_rotvec(error.tilt * binormal).as_matrix()
+        axis = tilt @ axis
+        seat = point + tilt @ (seat - point) + error.shift * binormal
+        point = point + error.shift * binormal
+    point, seat = point + error.axial * axis, seat + error.axial * axis
+    return _Side(Line.from_point_direction(point, axis), point, seat)
 
 
 def _seats(loop: SingleLoop, attach: NDArray | None, design: LinkDesign) -> NDArray[np.float64] | None:

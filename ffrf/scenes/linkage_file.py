@@ -29,7 +29,8 @@ drive and sensors are generated (:func:`ffrf.scenes.linkage_description.linkage_
                                        #   (ffrf.scenes.collision_free.design_stacking), or give a designed set:
     # stacking = {offsets = [...], spacers = [...], orders = [1, -1, ...]}   # per joint, offsets and spacers in unit
     bore_errors = [{joint = 5, link = 0, twist_deg = 1.0, offset = 0.2, axial = 0.1}]   # as built (offset
-                                       # along the normal, axial along the bore, in unit), or the measured
+                                       # along the normal, axial along the bore, in unit; tilt_deg and
+                                       # shift about and along the binormal), or the measured
                                        # bore: {joint, link, point = [...], direction = [...], axial = ...}
 
     [scene]                            # gravity, beta, mode, outputs, step, rho_inf, joint_offsets, max_steps, ...
@@ -143,6 +144,8 @@ BORE_ERROR = {
     "twist_deg": Key("number", False, between(-MAX_BORE_TWIST_DEG, MAX_BORE_TWIST_DEG, closed=True)),
     "offset": Key("number"),
     "axial": Key("number"),
+    "tilt_deg": Key("number", False, between(-MAX_BORE_TWIST_DEG, MAX_BORE_TWIST_DEG, closed=True)),
+    "shift": Key("number"),
     "point": Key("vector3"),
     "direction": Key("vector3", False, nonzero_vector),
 }
@@ -230,22 +233,26 @@ def _loop(spec: dict, where: str) -> tuple[SingleLoop, np.ndarray | None, int | 
 
 
 def _bore_error(entry: dict, length: float, where: str) -> BoreError:
-    """A bore error of a linkage file: a twist and offset, or the line the bore is on (point, direction)."""
+    """A bore error of a linkage file: a twist, offset, tilt and shift, or the line the bore is on (point,
+    direction)."""
     measured = "point" in entry or "direction" in entry
     if measured and ("point" not in entry or "direction" not in entry):
         raise SceneError(f"{where}: give both point and direction of the bore's axis")
-    if measured and ("twist_deg" in entry or "offset" in entry):
-        raise SceneError(f"{where}: give either twist_deg/offset or the bore's axis (point, direction), not both")
+    if measured and any(key in entry for key in ("twist_deg", "offset", "tilt_deg", "shift")):
+        raise SceneError(
+            f"{where}: give either twist_deg/offset/tilt_deg/shift or the bore's axis (point, direction), not both"
+        )
     axis = Line.from_point_direction(length * np.asarray(entry["point"]), entry["direction"]) if measured else None
     twist, offset = math.radians(entry.get("twist_deg", 0.0)), length * entry.get("offset", 0.0)
     axial = length * entry.get("axial", 0.0)
-    for key, value in (("offset", offset), ("axial", axial)):
+    tilt, shift = math.radians(entry.get("tilt_deg", 0.0)), length * entry.get("shift", 0.0)
+    for key, value in (("offset", offset), ("axial", axial), ("shift", shift)):
         if abs(value) > MAX_BORE_SHIFT:
             raise SceneError(
                 f"{where}: {key!r} = {entry[key]!r} is {value:.3g} m, more than {MAX_BORE_SHIFT:g} m: no bore error; "
                 "check the unit"
             )
-    return BoreError(entry["joint"], entry["link"], twist, offset, axis, axial)
+    return BoreError(entry["joint"], entry["link"], twist, offset, axis, axial, tilt, shift)
 
 
 def _warn_duplicate_bores(entries: list[dict], where: str) -> None:

@@ -231,10 +231,13 @@ def bore_sensitivity(
     stability: bool = False,
     stress: bool = False,
     stress_radius: float | None = None,
+    fields: tuple[str, ...] = ("twist", "offset", "axial"),
 ) -> PathSensitivity:
     """The derivatives of the coupler point and driving torque at a quasi-static run's equilibria (as
-    :func:`material_sensitivity`) with respect to the three errors of :class:`BoreError` (``twist``, rad;
-    ``offset`` and ``axial``, m) of each bore ``(joint, link)`` of ``bores`` (default every one), in the misfit model
+    :func:`material_sensitivity`) with respect to the errors ``fields`` of :class:`BoreError` (``twist`` and
+    ``tilt``, rad; ``offset``, ``shift`` and ``axial``, m; default the three of the DH parameters,
+    :data:`~ffrf.scenes.linkage_description.BORE_FIELDS` for all five) of each bore ``(joint, link)`` of ``bores``
+    (default every one), in the misfit model
     (the linkage ``scene`` built from ``loop`` and ``options`` with ``bore_error_model = "misfit"`` or without bore
     errors: the error only in the joint's frame and point on that link's side). The rates of the joint's equations
     and reactions (Eq. (D1)'s right-hand side) are central differences in the error of the joint built by the
@@ -246,8 +249,9 @@ def bore_sensitivity(
     pairs, names, sides = [], [], []
     for joint, link in bores:
         index = len(system.bodies) + _joint_index(scene, joint)  # among all constraints
-        for field, unit in (("twist", 1.0), ("offset", loop.scale), ("axial", loop.scale)):
-            step = (TWIST_STEP if field == "twist" else SHIFT_STEP) * unit
+        for field in fields:
+            turn = field in ("twist", "tilt")
+            step = TWIST_STEP if turn else SHIFT_STEP * loop.scale
             plus, minus = (_bore_joint(scene, loop, options, (joint, link), field, s) for s in (step, -step))
             pairs.append((index, plus, minus, step))
             names.append(f"{field} joint{joint} link{link}")

@@ -74,7 +74,7 @@ LINKAGE_CASES = {
         "tool_link = 2",
         "tool_link = 2\nbore_errors = [{joint = 3, link = 0, twist_deg = 1.0, point = [0, 0, 0], "
         "direction = [0, 0, 1]}]",
-        ["give either twist_deg/offset or the bore's axis"],
+        ["give either twist_deg/offset/tilt_deg/shift or the bore's axis"],
     ),
     "design points for a DH table": (
         "driver = 3",

@@ -33,6 +33,42 @@ def test_an_axial_bore_error_moves_the_seat_along_the_bore_and_keeps_its_line():
     assert built[0] == nominal[0]
 
 
+def test_a_tilted_or_shifted_bore_turns_about_or_moves_along_the_binormal_through_its_joint_point():
+    """The bore of joint 1 on link 1 tilted by 0.5 deg: its axis turns by 0.5 deg towards the link's common normal
+    (about the binormal, the axis crossed with the normal) and its joint point stays; shifted by 0.2 mm: the same
+    direction, the joint point and the seat moved by 0.2 mm along the binormal, which is square to the axis and the
+    normal. The link's other bore is untouched either way; with both zero the side is the nominal one (1e-15 m)."""
+    from kinematics.pluecker import common_normal
+
+    loop = loop_from_mechanism(load_model("collisions_free_6r"), scale=0.1)
+    nominal = linkage_description(loop)["bodies"][1]["parametric"]["axes"]
+    other, own = (np.asarray(nominal[k]["direction"], dtype=float) for k in (0, 1))
+    own /= np.linalg.norm(own)
+    normal = common_normal(loop.axes[0], loop.axes[1]).unit
+    binormal = np.cross(own, normal)
+    tilted = LinkageOptions(bore_errors=(BoreError(joint=1, link=1, tilt=np.radians(0.5)),))
+    built = linkage_description(loop, tilted)["bodies"][1]["parametric"]["axes"]
+    turned = np.asarray(built[1]["direction"], dtype=float)
+    turned /= np.linalg.norm(turned)
+    assert abs(np.arccos(np.clip(turned @ own, -1, 1)) - np.radians(0.5)) < 1e-12
+    assert abs(turned @ binormal) < 1e-15  # turned about the binormal: towards the normal
+    assert abs(abs(turned @ normal) - np.sin(np.radians(0.5))) < 1e-12
+    assert np.allclose(built[1]["joint_point"], nominal[1]["joint_point"], atol=1e-15)
+    assert built[0] == nominal[0]
+    shifted = LinkageOptions(bore_errors=(BoreError(joint=1, link=1, shift=2e-4),))
+    built = linkage_description(loop, shifted)["bodies"][1]["parametric"]["axes"]
+    assert np.allclose(built[1]["direction"], nominal[1]["direction"], atol=1e-15)
+    for key in ("joint_point", "point"):
+        moved = np.subtract(built[1][key], nominal[1][key])
+        assert np.allclose(moved, 2e-4 * binormal, atol=1e-15), key
+    assert abs(binormal @ other) > 0.1  # not a move the DH offset of the other axis would be
+    assert built[0] == nominal[0]
+    none = LinkageOptions(bore_errors=(BoreError(joint=1, link=1, tilt=0.0, shift=0.0),))
+    unchanged = linkage_description(loop, none)["bodies"][1]["parametric"]["axes"]
+    for key in ("direction", "joint_point", "point"):
+        assert np.allclose(unchanged[1][key], nominal[1][key], rtol=0, atol=1e-15), key
+
+
 def _assembly_strain_energy(options: LinkageOptions) -> float:
     scene = build_bennett_from_options(options)
     q = assemble(scene).q

@@ -217,3 +217,17 @@ def test_near_rigid_interp_4poses_6r_without_load_follows_rational_linkages_thro
     (pose,) = result.metadata["near_dead_poses"]
     assert pose["joint"] == 5 and pose["ratio"] == pytest.approx(41.6, abs=0.05)
     assert pose["drive_angle_deg"] == pytest.approx(-16.45, abs=0.05)
+
+
+def test_a_bore_s_tilt_and_shift_are_read_in_degrees_and_the_file_s_unit():
+    """``tilt_deg`` and ``shift`` of a linkage file's bore error reach the BoreError in rad and m (the file in mm)."""
+    import tomllib
+
+    from ffrf.scenes.linkage_file import linkage_options
+
+    text = DH_FILE.replace("twist_deg = 1.0}", "twist_deg = 1.0, tilt_deg = 0.5, shift = 0.2}")
+    assert text != DH_FILE
+    _, options, _ = linkage_options(tomllib.loads(text))
+    (error,) = options.bore_errors
+    assert error.tilt == pytest.approx(np.radians(0.5), rel=1e-15) and error.shift == pytest.approx(2e-4, rel=1e-15)
+    assert error.twist == pytest.approx(np.radians(1.0), rel=1e-15)
