@@ -40,7 +40,7 @@ from kinematics.quaternion import matrix_to_quaternion
 
 __all__ = [
     "BORE_ERROR_MODELS",
-    "BORE_FIELDS",
+    "BORE_ERROR_FIELDS",
     "LINKAGE_VARIANTS",
     "TRACKED_FRACTIONS",
     "BoreError",
@@ -88,10 +88,10 @@ class BoreError:
 
     @classmethod
     def single(cls, joint: int, link: int, field: str, value: float) -> BoreError:
-        """The bore error with ``value`` in one of its ``field`` (:data:`BORE_FIELDS`), the others 0."""
-        if field not in BORE_FIELDS:
-            raise ValueError(f"a bore error's field is one of {', '.join(BORE_FIELDS)}, got {field!r}")
-        values = {name: value if name == field else 0.0 for name in BORE_FIELDS}
+        """The bore error with ``value`` in one of its ``field`` (:data:`BORE_ERROR_FIELDS`), the others 0."""
+        if field not in BORE_ERROR_FIELDS:
+            raise ValueError(f"a bore error's field is one of {', '.join(BORE_ERROR_FIELDS)}, got {field!r}")
+        values = {name: value if name == field else 0.0 for name in BORE_ERROR_FIELDS}
         return cls(
             joint,
             link,
@@ -104,7 +104,7 @@ class BoreError:
 
 
 #: The errors of a bore that :class:`BoreError` names: its turns (rad) and moves (m).
-BORE_FIELDS = ("twist", "offset", "axial", "tilt", "shift")
+BORE_ERROR_FIELDS = ("twist", "offset", "axial", "tilt", "shift")
 
 
 def _link_joints(k: int, n: int) -> tuple[int, int]:

@@ -236,7 +236,7 @@ def bore_sensitivity(
     """The derivatives of the coupler point and driving torque at a quasi-static run's equilibria (as
     :func:`material_sensitivity`) with respect to the errors ``fields`` of :class:`BoreError` (``twist`` and
     ``tilt``, rad; ``offset``, ``shift`` and ``axial``, m; default the three of the DH parameters,
-    :data:`~ffrf.scenes.linkage_description.BORE_FIELDS` for all five) of each bore ``(joint, link)`` of ``bores``
+    :data:`~ffrf.scenes.linkage_description.BORE_ERROR_FIELDS` for all five) of each bore ``(joint, link)`` of ``bores``
     (default every one), in the misfit model
     (the linkage ``scene`` built from ``loop`` and ``options`` with ``bore_error_model = "misfit"`` or without bore
     errors: the error only in the joint's frame and point on that link's side). The rates of the joint's equations

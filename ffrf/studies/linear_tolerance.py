@@ -1,8 +1,8 @@
 r"""Tolerance analysis of bore errors to first and second order: a study's prints in a second
 (``docs/formulation.md``, (D3), (D11)).
 
-A study whose parameters are bore errors (twist, offset, axial of :class:`~ffrf.scenes.linkage_description.BoreError`
-in the misfit model) varies a linkage whose quasi-static path responds smoothly to them. To first order the coupler's
+A study whose parameters are bore errors (twist, offset, axial, tilt, shift of
+:class:`~ffrf.scenes.linkage_description.BoreError` in the misfit model) varies a linkage whose quasi-static path responds smoothly to them. To first order the coupler's
 deviation from the ideal path at pose :math:`i` of a print with errors :math:`e` is
 
 .. math:: d_i(e) \approx d_i(0) + S_i\,e,
@@ -195,8 +195,17 @@ def linear_path(study: Study) -> LinearPath:
     ran = time.perf_counter()
     bores = tuple(sorted({(int(p.joint or 0), int(p.link or 0)) for p in study.parameters}))
     assert result.multipliers is not None  # a quasi-static run keeps its equilibria's multipliers
+    fields = tuple(dict.fromkeys(BORE_FIELDS[p.target][0] for p in study.parameters))
     exact = bore_sensitivity(
-        scene, scene.loop, options, result.time, result.q, result.multipliers, bores, stability=study.stability
+        scene,
+        scene.loop,
+        options,
+        result.time,
+        result.q,
+        result.multipliers,
+        bores,
+        stability=study.stability,
+        fields=fields,
     )
     columns, torques, frequencies = [], [], []
     for p in study.parameters:

@@ -82,6 +82,8 @@ TARGETS = {
     "bore_twist_deg": "deg",
     "bore_offset_mm": "mm",
     "bore_axial_mm": "mm",
+    "bore_tilt_deg": "deg",
+    "bore_shift_mm": "mm",
     "arm_width_mm": "mm",
     "arm_thickness_mm": "mm",
     "E": "Pa",
@@ -91,7 +93,7 @@ TARGETS = {
     "modes": "",
     "radial_clearance_mm": "mm",
 }
-BORE_TARGETS = ("bore_twist_deg", "bore_offset_mm", "bore_axial_mm")
+BORE_TARGETS = ("bore_twist_deg", "bore_offset_mm", "bore_axial_mm", "bore_tilt_deg", "bore_shift_mm")
 RUN_MODES = ("auto", "quasi_static", "dynamic")
 #: Column names of a study's rows that a parameter may not take (:mod:`ffrf.studies.variant`).
 RESERVED = ("id", "block", "sample", "status", "reason", "assembles", "wall_time_s", "worker")

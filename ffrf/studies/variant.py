@@ -100,6 +100,8 @@ BORE_FIELDS = {
     "bore_twist_deg": ("twist", math.radians(1.0)),
     "bore_offset_mm": ("offset", 1e-3),
     "bore_axial_mm": ("axial", 1e-3),
+    "bore_tilt_deg": ("tilt", math.radians(1.0)),
+    "bore_shift_mm": ("shift", 1e-3),
 }
 #: A section target's field of :class:`LinkDesign` (m from mm).
 DESIGN_FIELDS = {"arm_width_mm": "arm_width", "arm_thickness_mm": "arm_thickness"}
