@@ -168,6 +168,13 @@ BENCHMARKS: tuple[Benchmark, ...] = (
         helpers=("full_revolution",),
     ),
     Benchmark(
+        "end_to_end",
+        "from a cold start, set-up included: the default scene's revolutions, ours against Exudyn",
+        measures=WITH_VALIDATION,
+        records=(Recording("end_to_end"),),
+        helpers=("speed_vs_error", "memory_probe"),
+    ),
+    Benchmark(
         "fe_beam_convergence",
         "P1 and P2 prisms' frequencies against beam theory",
         measures=(*ENGINE, "tests/test_fe_models/test_ffrf_beam_theory.py", "tests/test_fe_models/ffrf_reference.py"),
