@@ -2,8 +2,9 @@ r"""Tolerance analysis of bore errors to first and second order: a study's print
 (``docs/formulation.md``, (D3), (D11)).
 
 A study whose parameters are bore errors (twist, offset, axial, tilt, shift of
-:class:`~ffrf.scenes.linkage_description.BoreError` in the misfit model) varies a linkage whose quasi-static path responds smoothly to them. To first order the coupler's
-deviation from the ideal path at pose :math:`i` of a print with errors :math:`e` is
+:class:`~ffrf.scenes.linkage_description.BoreError` in the misfit model) varies a linkage whose quasi-static path
+responds smoothly to them. To first order the coupler's deviation from the ideal path at pose :math:`i` of a print
+with errors :math:`e` is
 
 .. math:: d_i(e) \approx d_i(0) + S_i\,e,
 
