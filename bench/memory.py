@@ -248,7 +248,7 @@ def residual_breakdown(packed, q, qd, qdd, lam, phi) -> dict:
     }
     for b in range(offsets.shape[0] - 1):
         s, e = offsets[b], offsets[b + 1]
-        moments = sk._moments(bodies[3], bodies[5], b, e - s - 7)
+        moments = sk._moments(bodies[3], bodies[4], b, e - s - 7)
         common = (gravity, bodies[1][b], *moments, bodies[2][b])
         out["body_residual"].append(kernel_allocations(body_residual, q[s:e], qd[s:e], qdd[s:e], *common))
         rest = np.zeros(e - s)

@@ -19,7 +19,8 @@ D_ab     Psi^(a)T M_s Psi^(b)            ``d[a, b, :, :]``
 
 The equations (Eqs. (F5)-(F10) of ``docs/formulation.md``) are cited at each kernel. All
 arrays passed to one call must share one dtype: float64, or complex128 for the exact
-complex-step derivatives of :mod:`ffrf.body.flexible_body`.
+complex-step derivatives that test the analytic tangents (:mod:`ffrf.body.body_tangents`) and give
+:func:`ffrf.body.flexible_body.mass_matrix_rate`.
 """
 
 from __future__ import annotations

@@ -14,7 +14,7 @@ Useful identities (unit ``p``): :math:`\bar G p = 0`, :math:`\bar G(\dot p)\,\do
 :math:`\dot{\bar\omega} = \bar G\ddot p`), and the variation
 :math:`\delta(A u) = -A\tilde u\,\bar G\,\delta p` for variations tangent to :math:`p^Tp = 1`.
 All functions are numba kernels on plain arrays; they also run on complex arrays (of one
-dtype throughout), which the solver uses for exact complex-step derivatives.
+dtype throughout), for exact complex-step derivatives.
 """
 
 from __future__ import annotations

@@ -4,12 +4,12 @@ Its residual (``docs/formulation.md``, Eqs. (F8)-(F11))
 
 .. math:: f(q, \dot q, \ddot q) = M(q)\ddot q - Q_v(q, \dot q) - Q_g(q) + K_r\zeta + D_r\dot\zeta
 
-and its exact Jacobians :math:`\partial f/\partial q` and :math:`\partial f/\partial\dot q`.
-The Jacobians come from complex-step differentiation (Squire and Trapp 1998): every term
-of ``f`` is a polynomial in ``(p, zeta, pd, zetad)``, so
-:math:`\partial f/\partial q_k = \mathrm{Im}\,f(q + ih e_k)/h` holds to round-off for any
-small ``h`` (no subtractive cancellation). They include the terms Exudyn's solver leaves
+and its exact Jacobians :math:`\partial f/\partial q` and :math:`\partial f/\partial\dot q`, analytic
+(:func:`ffrf.body.body_tangents.body_tangents`, Eqs. (F12)-(F14)). They include the terms Exudyn's solver leaves
 out, such as :math:`\partial(M(q)\ddot q)/\partial q`, so Newton converges quadratically.
+:func:`body_residual` takes one dtype throughout, complex128 too: its complex-step derivatives (Squire and Trapp
+1998; every term of ``f`` is a polynomial in ``(p, zeta, pd, zetad)``, so
+:math:`\partial f/\partial q_k = \mathrm{Im}\,f(q + ih e_k)/h` to round-off) are the tests' truth for the tangents.
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from ffrf.body.body_kernels import (
     rotation_mode_coupling,
     second_moment,
 )
+from ffrf.body.body_tangents import body_tangents
 from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix
 from ffrf.body.modal_moments import ModalMoments
 from ffrf.numerics.small_linalg import mat_vec
@@ -37,7 +38,6 @@ __all__ = [
     "FlexibleBody",
     "node_positions",
     "body_residual",
-    "body_jacobians",
     "kinetic_energy_gradient",
     "mass_matrix_rate",
 ]
@@ -107,10 +107,8 @@ class FlexibleBody:
         return body_residual(*_floats(q, qd, qdd, gravity), self.moments.mass, *self._packed, self.exact_gravity)
 
     def jacobians(self, q, qd, qdd, gravity) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Exact ``(df/dq, df/dqd)``, each ``(7+m, 7+m)``."""
-        return body_jacobians(
-            *_floats(q, qd, qdd, gravity), self.moments.mass, *self._packed_complex, self.exact_gravity
-        )
+        """Exact ``(df/dq, df/dqd)``, each ``(7+m, 7+m)`` (Eqs. (F13)-(F14))."""
+        return body_tangents(*_floats(q, qd, qdd, gravity), self.moments.mass, *self._packed, self.exact_gravity, True)
 
     def mass_matrix(self, q: ArrayLike) -> NDArray[np.float64]:
         q = np.asarray(q, float)
@@ -187,35 +185,6 @@ def body_residual(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
     out -= gravity_force(p, zeta, gravity.astype(q.dtype), mass, s0, s1, exact_gravity)
     out[7:] += mat_vec(kred, zeta) + mat_vec(dred, zetad)
     return out
-
-
-@njit(cache=True)
-def body_jacobians(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity, velocity=True):
-    """Complex-step Jacobians of :func:`body_residual`; the constant arrays must be complex128.
-    ``velocity=False`` leaves ``df/dqd`` zero: statics does not use it, and its columns are the
-    expensive ones (a complex velocity switches on ``M`` and ``Q_v`` in every evaluation)."""
-    n = q.shape[0]
-    jac_q = np.zeros((n, n))
-    jac_qd = np.zeros((n, n))
-    qc = q.astype(np.complex128)
-    qdc = qd.astype(np.complex128)
-    qddc = qdd.astype(np.complex128)
-    for k in range(3, n):  # the residual depends on neither R nor dR/dt (Eqs. (F8)-(F11)): their columns are zero
-        qc[k] += 1j * _COMPLEX_STEP
-        jac_q[:, k] = (
-            body_residual(qc, qdc, qddc, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity).imag
-            / _COMPLEX_STEP
-        )
-        qc[k] = q[k]
-        if not velocity:
-            continue
-        qdc[k] += 1j * _COMPLEX_STEP
-        jac_qd[:, k] = (
-            body_residual(qc, qdc, qddc, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity).imag
-            / _COMPLEX_STEP
-        )
-        qdc[k] = qd[k]
-    return jac_q, jac_qd
 
 
 @njit(cache=True)

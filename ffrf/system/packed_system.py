@@ -159,7 +159,7 @@ def _ragged(arrays, dtype=np.float64) -> tuple[NDArray, NDArray[np.int64]]:
 
 
 def _pack_bodies(bodies: tuple[FlexibleBody, ...], offsets: NDArray) -> tuple:
-    """``(offsets, mass, exact_gravity, real, complex, starts)``
+    """``(offsets, mass, exact_gravity, real, starts)``
     (module docstring of :mod:`ffrf.system.system_kernels`)."""
     columns = [_ragged([body._packed[k] for body in bodies]) for k in range(8)]
     real = tuple(flat for flat, _ in columns)
@@ -169,7 +169,6 @@ def _pack_bodies(bodies: tuple[FlexibleBody, ...], offsets: NDArray) -> tuple:
         np.array([b.moments.mass for b in bodies], dtype=float),
         np.array([b.exact_gravity for b in bodies], dtype=np.bool_),
         real,
-        tuple(flat.astype(np.complex128) for flat in real),
         starts,
     )
 

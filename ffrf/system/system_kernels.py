@@ -5,7 +5,7 @@ what :class:`ffrf.system.multibody.MultibodySystem` assembles body by body and c
 in Python (``docs/formulation.md``, Eqs. (G1), (G3), (FP4)-(FP6)):
 
 * body terms: Eqs. (F8)-(F11) with :func:`ffrf.body.flexible_body.body_residual`, exact tangents
-  with :func:`ffrf.body.flexible_body.body_jacobians` (complex step, inside the kernel);
+  with :func:`ffrf.body.body_tangents.body_tangents` (analytic, Eqs. (F12)-(F14));
 * constraints: Euler normalisations (Eq. (R2)) and marker joints (Eqs. (J1)-(J3)) with
   :func:`ffrf.system.marker_kernels.marker_frame`; the term :math:`H = \partial(C_q^T\lambda)/\partial q`
   analytically from :func:`ffrf.system.marker_kernels.marker_frame_hessian` (Eq. (FP5)).
@@ -14,10 +14,9 @@ Packed data (built by :func:`ffrf.system.packed_system.pack_system`), plain arra
 costs microseconds; arrays of different sizes per body or joint are concatenated flat
 (``flat[starts[i]:starts[i + 1]]``, reshaped in the kernel):
 
-``bodies = (offsets, mass, exact_gravity, real, complex, starts)``: coordinate offsets (B+1), and
+``bodies = (offsets, mass, exact_gravity, real, starts)``: coordinate offsets (B+1), and
 per body the modal moments of Eq. (F4), ``K_r`` and ``D_r``, in the order ``s0, s1, x2, c, d,
-mred, kred, dred``: ``real`` and ``complex`` are tuples of eight flat float64 and complex128
-buffers (the latter for the complex-step tangents), ``starts`` is (8, B+1).
+mred, kred, dred``: ``real`` is a tuple of eight flat float64 buffers, ``starts`` is (8, B+1).
 
 ``joints = (kind, body0, body1, rows, locked, side0, side1)``: per constraint its kind (0: Euler
 normalisation of ``body1``, 1: marker joint), bodies (-1: ground), first row (J+1, the last is
@@ -34,7 +33,8 @@ import numpy as np
 from numba import njit
 
 from ffrf.body.body_kernels import mass_matrix
-from ffrf.body.flexible_body import body_jacobians, body_residual
+from ffrf.body.body_tangents import body_tangents
+from ffrf.body.flexible_body import body_residual
 from ffrf.numerics.small_linalg import dot, mat_mat, vec_mat
 from ffrf.system.marker_kernels import marker_frame, marker_frame_hessian
 
@@ -248,7 +248,7 @@ def _body_residuals(bodies, q, qd, qdd, gravity):
     out = np.empty(offsets[-1])
     for b in range(offsets.shape[0] - 1):
         s, e = offsets[b], offsets[b + 1]
-        moments = _moments(bodies[3], bodies[5], b, e - s - 7)
+        moments = _moments(bodies[3], bodies[4], b, e - s - 7)
         out[s:e] = body_residual(q[s:e], qd[s:e], qdd[s:e], gravity, bodies[1][b], *moments, bodies[2][b])
     return out
 
@@ -281,8 +281,8 @@ def system_body_tangents(bodies, q, qd, qdd, gravity, velocity=True):
     jac_q, jac_qd = np.zeros((n, n)), np.zeros((n, n))
     for b in range(offsets.shape[0] - 1):
         s, e = offsets[b], offsets[b + 1]
-        moments = _moments(bodies[4], bodies[5], b, e - s - 7)
-        jq, jqd = body_jacobians(q[s:e], qd[s:e], qdd[s:e], gravity, bodies[1][b], *moments, bodies[2][b], velocity)
+        moments = _moments(bodies[3], bodies[4], b, e - s - 7)
+        jq, jqd = body_tangents(q[s:e], qd[s:e], qdd[s:e], gravity, bodies[1][b], *moments, bodies[2][b], velocity)
         jac_q[s:e, s:e] = jq
         jac_qd[s:e, s:e] = jqd
     return jac_q, jac_qd
@@ -296,7 +296,7 @@ def system_mass_matrix(bodies, q):
     out = np.zeros((n, n))
     for b in range(offsets.shape[0] - 1):
         s, e = offsets[b], offsets[b + 1]
-        s0, s1, x2, c, d, mred, _, _ = _moments(bodies[3], bodies[5], b, e - s - 7)
+        s0, s1, x2, c, d, mred, _, _ = _moments(bodies[3], bodies[4], b, e - s - 7)
         out[s:e, s:e] = mass_matrix(q[s + 3 : s + 7], q[s + 7 : e], bodies[1][b], s0, s1, x2, c, d, mred)
     return out
 

@@ -1,0 +1,196 @@
+r"""Exact tangents of a reduced FFRF body's residual, analytic (``docs/formulation.md``, Eqs. (F12)-(F14)).
+
+The residual of Eqs. (F8)-(F11), :math:`f = M(q)\ddot q - Q_v - Q_g + [0; 0; K_r\zeta + D_r\dot\zeta]`, written
+with body-frame vectors (:math:`\omega = \bar G\dot p`, :math:`\alpha = \bar G\ddot p`, :math:`s = S_0 + S_1\zeta`):
+
+.. math::
+    f_R = m(\ddot R - g) + A v_R,\qquad f_p = \bar G^T v_p,\qquad f_\zeta = \dots\ \text{(Eq. (F12))}
+
+Each block is differentiated by the chain rule through :math:`\omega, \alpha` (linear in ``p``:
+:math:`\partial\omega/\partial p = -\bar G(\dot p)`), ``A`` (Eq. (R3)), :math:`\bar G^T v` (linear in ``p``),
+``s``, ``J`` (Eqs. (F5)-(F6)), :math:`M_{\omega\zeta}` (Eq. (F7)) and ``N``, ``E`` of Eq. (F9). The
+tangents include every term, :math:`\partial(M(q)\ddot q)/\partial q` too, so Newton converges quadratically.
+Float64 only: one compiled type, no complex-step copies of the body kernels. Tested against complex-step
+derivatives of :func:`ffrf.body.flexible_body.body_residual` in ``tests/test_ffrf_body/test_body_tangents.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ffrf.body.body_kernels import (
+    _levi_civita,
+    _second_moment,
+    inertia_about_origin,
+    modal_products,
+    rotation_mode_coupling,
+)
+from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix
+from ffrf.numerics.small_linalg import dot, mat_mat, mat_vec, skew, vec_mat
+
+__all__ = ["body_tangents"]
+
+
+@njit(cache=True, inline="always")
+def _transposed_products(d: np.ndarray, v: np.ndarray) -> np.ndarray:
+    r""":math:`D_{ab}^Tv` for all components ``a, b`` (3, 3, m)."""
+    out = np.empty((3, 3, v.shape[0]))
+    for a in range(3):
+        for b in range(3):
+            out[a, b] = vec_mat(v, d[a, b])
+    return out
+
+
+@njit(cache=True, inline="always")
+def _transpose_rotated(p: np.ndarray, u: np.ndarray) -> np.ndarray:
+    r""":math:`\partial(A(p)^Tu)/\partial p` (3 x 4): :math:`A(p)^T = A(p^*)` with :math:`p^* = (p_0, -\mathbf p)`,
+    so Eq. (R3) at :math:`p^*` with the signs of the conjugation."""
+    conjugate = np.array([p[0], -p[1], -p[2], -p[3]])
+    out = rotation_derivative(conjugate, u)
+    out[:, 1:] *= -1.0
+    return out
+
+
+@njit(cache=True, inline="always")
+def _g_transpose_derivative(v: np.ndarray) -> np.ndarray:
+    r""":math:`\partial(\bar G(p)^Tv)/\partial p` (4 x 4): constant, as :math:`\bar G` is linear in ``p``
+    (Eq. (R2))."""
+    out = np.empty((4, 4))
+    unit = np.zeros(4)
+    for k in range(4):
+        unit[:] = 0.0
+        unit[k] = 1.0
+        out[:, k] = vec_mat(v, g_bar(unit))
+    return out
+
+
+@njit(cache=True)
+def body_tangents(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity, velocity):
+    r"""Eqs. (F13)-(F14): exact ``(df/dq, df/dqd)`` of :func:`ffrf.body.flexible_body.body_residual`, each
+    ``(7+m, 7+m)``; ``velocity=False`` leaves ``df/dqd`` zero (statics does not use it). The columns of ``R`` and
+    ``Rd`` are zero: the residual depends on neither."""
+    n = q.shape[0]
+    m = n - 7
+    jac_q = np.zeros((n, n))
+    jac_qd = np.zeros((n, n))
+    p, zeta, pd, zetad = q[3:7], q[7:], qd[3:7], qd[7:]
+    rdd, pdd, zetadd = qdd[0:3], qdd[3:7], qdd[7:]
+    a_mat, g = rotation_matrix(p), g_bar(p)
+    d_omega = -g_bar(pd)  # d omega / dp, from G(p) pd = -G(pd) p
+    d_alpha = -g_bar(pdd)
+    omega, alpha = mat_vec(g, pd), mat_vec(g, pdd)
+    s = s0 + mat_vec(s1, zeta)
+    s_g = s if exact_gravity else s0
+    w = mat_vec(s1, zetad)
+    d_zeta = modal_products(d, zeta)  # D_ab zeta
+    dt_zeta = _transposed_products(d, zeta)  # D_ab^T zeta
+    dt_zetad = _transposed_products(d, zetad)
+    d_zetadd = modal_products(d, zetadd)
+    inertia = inertia_about_origin(_second_moment(zeta, x2, c, d_zeta))
+    coupling = rotation_mode_coupling(zeta, c, d)
+    r_local = vec_mat(rdd, a_mat)  # A^T Rdd
+    g_local = vec_mat(gravity, a_mat)  # A^T g
+    dr_local = _transpose_rotated(p, rdd)
+    dg_local = _transpose_rotated(p, gravity)
+    n_mat = np.empty((3, 3))
+    for a in range(3):
+        for b in range(3):
+            n_mat[a, b] = dot(zetad, c[a, b]) + dot(zetad, d_zeta[a, b])
+    trace_n = n_mat[0, 0] + n_mat[1, 1] + n_mat[2, 2]
+    omega_t, s_t, w_t = skew(omega), skew(s), skew(w)
+
+    # (F13), rows R: f_R = m (Rdd - g) + A v_R, v_R = alpha x s + S1 zetadd + omega x (omega x s) + 2 omega x w
+    v_r = np.cross(alpha, s) + mat_vec(s1, zetadd) + np.cross(omega, np.cross(omega, s)) + 2.0 * np.cross(omega, w)
+    dv_r_omega = -skew(np.cross(omega, s)) - mat_mat(omega_t, s_t) - 2.0 * w_t
+    dv_r_p = mat_mat(dv_r_omega, d_omega) - mat_mat(s_t, d_alpha)  # d(alpha x s)/d alpha = -s~
+    jac_q[0:3, 3:7] = rotation_derivative(p, v_r) + mat_mat(a_mat, dv_r_p)
+    jac_q[0:3, 7:] = mat_mat(a_mat, mat_mat(skew(alpha) + mat_mat(omega_t, omega_t), s1))
+
+    # (F13), rows p: f_p = G^T v_p, v_p = s x A^T Rdd + J alpha + M_wz zetadd + omega x J omega
+    #                                     + 2 (omega tr N - N omega) - s_g x A^T g
+    j_omega = mat_vec(inertia, omega)
+    v_p = (
+        np.cross(s, r_local)
+        + mat_vec(inertia, alpha)
+        + mat_vec(coupling, zetadd)
+        + np.cross(omega, j_omega)
+        + 2.0 * (trace_n * omega - mat_vec(n_mat, omega))
+        - np.cross(s_g, g_local)
+    )
+    dv_p_omega = -skew(j_omega) + mat_mat(omega_t, inertia) + 2.0 * (trace_n * np.eye(3) - n_mat)
+    dv_p_p = (
+        mat_mat(s_t, dr_local) + mat_mat(inertia, d_alpha) + mat_mat(dv_p_omega, d_omega) - mat_mat(skew(s_g), dg_local)
+    )
+    jac_q[3:7, 3:7] = _g_transpose_derivative(v_p) + mat_mat(g.T, dv_p_p)
+    dv_p_zeta = mat_mat(skew(g_local) if exact_gravity else np.zeros((3, 3)), s1) - mat_mat(skew(r_local), s1)
+    for j in range(m):
+        du = np.empty((3, 3))  # dU/dzeta_j, Eq. (F5)
+        dn = np.empty((3, 3))  # dN/dzeta_j, Eq. (F9)
+        for a in range(3):
+            for b in range(3):
+                du[a, b] = c[a, b, j] + c[b, a, j] + d_zeta[a, b, j] + dt_zeta[a, b, j]
+                dn[a, b] = dt_zetad[a, b, j]
+        dj = (du[0, 0] + du[1, 1] + du[2, 2]) * np.eye(3) - du  # Eq. (F6)
+        column = mat_vec(dj, alpha) + np.cross(omega, mat_vec(dj, omega))
+        column += 2.0 * ((dn[0, 0] + dn[1, 1] + dn[2, 2]) * omega - mat_vec(dn, omega))
+        for a in range(3):  # d(M_wz zetadd)/dzeta_j, Eq. (F7)
+            for b in range(3):
+                for cc in range(3):
+                    eps = _levi_civita(a, b, cc)
+                    if eps != 0.0:
+                        column[a] += eps * d_zetadd[b, cc, j]
+        dv_p_zeta[:, j] += column
+    jac_q[3:7, 7:] = mat_mat(g.T, dv_p_zeta)
+
+    # (F13), rows zeta: f_zeta = S1^T A^T (Rdd - g) + M_wz^T alpha + Mred zetadd + K zeta + D zetad
+    #                            + sum_ab omega_a omega_b E_ab - |omega|^2 sum_a E_aa + 2 sum eps_abc omega_b D_ac zetad
+    e_sum = np.zeros(m)
+    for a in range(3):
+        e_sum += c[a, a] + d_zeta[a, a]
+    df_omega = np.zeros((m, 3))  # d f_zeta / d omega
+    for k in range(3):
+        column = -2.0 * omega[k] * e_sum
+        for b in range(3):
+            column += omega[b] * (c[k, b] + d_zeta[k, b] + c[b, k] + d_zeta[b, k])
+        for a in range(3):
+            for cc in range(3):
+                eps = _levi_civita(a, k, cc)
+                if eps != 0.0:
+                    column += 2.0 * eps * mat_vec(d[a, cc], zetad)
+        df_omega[:, k] = column
+    jac_q[7:, 3:7] = mat_mat(s1.T, dr_local - dg_local) + mat_mat(coupling.T, d_alpha) + mat_mat(df_omega, d_omega)
+    omega2 = dot(omega, omega)
+    block = kred.copy()
+    for a in range(3):
+        for b in range(3):
+            weight = omega[a] * omega[b] - (omega2 if a == b else 0.0)
+            block += weight * d[a, b]
+            for cc in range(3):
+                eps = _levi_civita(a, b, cc)
+                if eps != 0.0:
+                    block += alpha[a] * eps * d[b, cc].T
+    jac_q[7:, 7:] = block
+
+    if velocity:  # (F14): d f / d qd, through omega (pd) and N, w, the damping (zetad)
+        jac_qd[0:3, 3:7] = mat_mat(a_mat, mat_mat(dv_r_omega, g))
+        jac_qd[0:3, 7:] = 2.0 * mat_mat(a_mat, mat_mat(omega_t, s1))
+        jac_qd[3:7, 3:7] = mat_mat(g.T, mat_mat(dv_p_omega, g))
+        dv_p_zetad = np.empty((3, m))
+        for j in range(m):
+            dn = np.empty((3, 3))
+            for a in range(3):
+                for b in range(3):
+                    dn[a, b] = c[a, b, j] + d_zeta[a, b, j]  # dN/dzetad_j = E_ab
+            dv_p_zetad[:, j] = 2.0 * ((dn[0, 0] + dn[1, 1] + dn[2, 2]) * omega - mat_vec(dn, omega))
+        jac_qd[3:7, 7:] = mat_mat(g.T, dv_p_zetad)
+        jac_qd[7:, 3:7] = mat_mat(df_omega, g)
+        block = dred.copy()
+        for a in range(3):
+            for b in range(3):
+                for cc in range(3):
+                    eps = _levi_civita(a, b, cc)
+                    if eps != 0.0:
+                        block += 2.0 * eps * omega[b] * d[a, cc]
+        jac_qd[7:, 7:] = block
+    return jac_q, jac_qd
