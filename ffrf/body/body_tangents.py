@@ -27,7 +27,7 @@ from ffrf.body.body_kernels import (
     rotation_mode_coupling,
 )
 from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix
-from ffrf.numerics.small_linalg import dot, mat_mat, mat_vec, skew, vec_mat
+from ffrf.numerics.small_linalg import cross3, dot, mat_mat, mat_vec, skew, vec_mat
 
 __all__ = ["body_tangents"]
 
@@ -101,8 +101,8 @@ def body_tangents(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
     omega_t, s_t, w_t = skew(omega), skew(s), skew(w)
 
     # (F13), rows R: f_R = m (Rdd - g) + A v_R, v_R = alpha x s + S1 zetadd + omega x (omega x s) + 2 omega x w
-    v_r = np.cross(alpha, s) + mat_vec(s1, zetadd) + np.cross(omega, np.cross(omega, s)) + 2.0 * np.cross(omega, w)
-    dv_r_omega = -skew(np.cross(omega, s)) - mat_mat(omega_t, s_t) - 2.0 * w_t
+    v_r = cross3(alpha, s) + mat_vec(s1, zetadd) + cross3(omega, cross3(omega, s)) + 2.0 * cross3(omega, w)
+    dv_r_omega = -skew(cross3(omega, s)) - mat_mat(omega_t, s_t) - 2.0 * w_t
     dv_r_p = mat_mat(dv_r_omega, d_omega) - mat_mat(s_t, d_alpha)  # d(alpha x s)/d alpha = -s~
     jac_q[0:3, 3:7] = rotation_derivative(p, v_r) + mat_mat(a_mat, dv_r_p)
     jac_q[0:3, 7:] = mat_mat(a_mat, mat_mat(skew(alpha) + mat_mat(omega_t, omega_t), s1))
@@ -111,12 +111,12 @@ def body_tangents(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
     #                                     + 2 (omega tr N - N omega) - s_g x A^T g
     j_omega = mat_vec(inertia, omega)
     v_p = (
-        np.cross(s, r_local)
+        cross3(s, r_local)
         + mat_vec(inertia, alpha)
         + mat_vec(coupling, zetadd)
-        + np.cross(omega, j_omega)
+        + cross3(omega, j_omega)
         + 2.0 * (trace_n * omega - mat_vec(n_mat, omega))
-        - np.cross(s_g, g_local)
+        - cross3(s_g, g_local)
     )
     dv_p_omega = -skew(j_omega) + mat_mat(omega_t, inertia) + 2.0 * (trace_n * np.eye(3) - n_mat)
     dv_p_p = (
@@ -124,23 +124,28 @@ def body_tangents(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
     )
     jac_q[3:7, 3:7] = _g_transpose_derivative(v_p) + mat_mat(g.T, dv_p_p)
     dv_p_zeta = mat_mat(skew(g_local) if exact_gravity else np.zeros((3, 3)), s1) - mat_mat(skew(r_local), s1)
+    dj = np.empty((3, 3))  # dJ/dzeta_j, Eqs. (F5)-(F6); the loops below reuse it and allocate nothing
+    dj_omega = np.empty(3)
     for j in range(m):
-        du = np.empty((3, 3))  # dU/dzeta_j, Eq. (F5)
-        dn = np.empty((3, 3))  # dN/dzeta_j, Eq. (F9)
+        trace_du = 2.0 * (c[0, 0, j] + c[1, 1, j] + c[2, 2, j])
+        for a in range(3):
+            trace_du += d_zeta[a, a, j] + dt_zeta[a, a, j]
+        trace_dn = dt_zetad[0, 0, j] + dt_zetad[1, 1, j] + dt_zetad[2, 2, j]
         for a in range(3):
             for b in range(3):
-                du[a, b] = c[a, b, j] + c[b, a, j] + d_zeta[a, b, j] + dt_zeta[a, b, j]
-                dn[a, b] = dt_zetad[a, b, j]
-        dj = (du[0, 0] + du[1, 1] + du[2, 2]) * np.eye(3) - du  # Eq. (F6)
-        column = mat_vec(dj, alpha) + np.cross(omega, mat_vec(dj, omega))
-        column += 2.0 * ((dn[0, 0] + dn[1, 1] + dn[2, 2]) * omega - mat_vec(dn, omega))
-        for a in range(3):  # d(M_wz zetadd)/dzeta_j, Eq. (F7)
+                dj[a, b] = -(c[a, b, j] + c[b, a, j] + d_zeta[a, b, j] + dt_zeta[a, b, j])
+            dj[a, a] += trace_du
+        for a in range(3):
+            dj_omega[a] = dj[a, 0] * omega[0] + dj[a, 1] * omega[1] + dj[a, 2] * omega[2]
+        for a in range(3):
+            a1, a2 = (a + 1) % 3, (a + 2) % 3
+            value = dj[a, 0] * alpha[0] + dj[a, 1] * alpha[1] + dj[a, 2] * alpha[2]
+            value += omega[a1] * dj_omega[a2] - omega[a2] * dj_omega[a1]  # omega x dJ omega
+            value += 2.0 * trace_dn * omega[a]  # 2 (omega tr dN - dN omega), dN_ab = (D_ab^T zetad)_j
             for b in range(3):
-                for cc in range(3):
-                    eps = _levi_civita(a, b, cc)
-                    if eps != 0.0:
-                        column[a] += eps * d_zetadd[b, cc, j]
-        dv_p_zeta[:, j] += column
+                value -= 2.0 * dt_zetad[a, b, j] * omega[b]
+            value += d_zetadd[a1, a2, j] - d_zetadd[a2, a1, j]  # d(M_wz zetadd)/dzeta_j, Eq. (F7)
+            dv_p_zeta[a, j] += value
     jac_q[3:7, 7:] = mat_mat(g.T, dv_p_zeta)
 
     # (F13), rows zeta: f_zeta = S1^T A^T (Rdd - g) + M_wz^T alpha + Mred zetadd + K zeta + D zetad
@@ -161,36 +166,37 @@ def body_tangents(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
         df_omega[:, k] = column
     jac_q[7:, 3:7] = mat_mat(s1.T, dr_local - dg_local) + mat_mat(coupling.T, d_alpha) + mat_mat(df_omega, d_omega)
     omega2 = dot(omega, omega)
-    block = kred.copy()
-    for a in range(3):
-        for b in range(3):
-            weight = omega[a] * omega[b] - (omega2 if a == b else 0.0)
-            block += weight * d[a, b]
-            for cc in range(3):
-                eps = _levi_civita(a, b, cc)
-                if eps != 0.0:
-                    block += alpha[a] * eps * d[b, cc].T
-    jac_q[7:, 7:] = block
+    for i in range(m):
+        for k in range(m):
+            total = kred[i, k]
+            for a in range(3):
+                a1, a2 = (a + 1) % 3, (a + 2) % 3
+                total += alpha[a] * (d[a1, a2, k, i] - d[a2, a1, k, i])  # sum_bc eps_abc D_bc^T
+                for b in range(3):
+                    total += (omega[a] * omega[b] - (omega2 if a == b else 0.0)) * d[a, b, i, k]
+            jac_q[7 + i, 7 + k] = total
 
     if velocity:  # (F14): d f / d qd, through omega (pd) and N, w, the damping (zetad)
         jac_qd[0:3, 3:7] = mat_mat(a_mat, mat_mat(dv_r_omega, g))
         jac_qd[0:3, 7:] = 2.0 * mat_mat(a_mat, mat_mat(omega_t, s1))
         jac_qd[3:7, 3:7] = mat_mat(g.T, mat_mat(dv_p_omega, g))
         dv_p_zetad = np.empty((3, m))
-        for j in range(m):
-            dn = np.empty((3, 3))
+        for j in range(m):  # dN/dzetad_j = (E_ab)_j = C_ab,j + (D_ab zeta)_j
+            trace_e = 0.0
             for a in range(3):
+                trace_e += c[a, a, j] + d_zeta[a, a, j]
+            for a in range(3):
+                value = trace_e * omega[a]
                 for b in range(3):
-                    dn[a, b] = c[a, b, j] + d_zeta[a, b, j]  # dN/dzetad_j = E_ab
-            dv_p_zetad[:, j] = 2.0 * ((dn[0, 0] + dn[1, 1] + dn[2, 2]) * omega - mat_vec(dn, omega))
+                    value -= (c[a, b, j] + d_zeta[a, b, j]) * omega[b]
+                dv_p_zetad[a, j] = 2.0 * value
         jac_qd[3:7, 7:] = mat_mat(g.T, dv_p_zetad)
         jac_qd[7:, 3:7] = mat_mat(df_omega, g)
-        block = dred.copy()
-        for a in range(3):
-            for b in range(3):
-                for cc in range(3):
-                    eps = _levi_civita(a, b, cc)
-                    if eps != 0.0:
-                        block += 2.0 * eps * omega[b] * d[a, cc]
-        jac_qd[7:, 7:] = block
+        for i in range(m):
+            for k in range(m):
+                total = dred[i, k]
+                for b in range(3):  # 2 sum_ac eps_abc omega_b D_ac: (a, c) = (b+2, b+1) with +1, (b+1, b+2) with -1
+                    b1, b2 = (b + 1) % 3, (b + 2) % 3
+                    total += 2.0 * omega[b] * (d[b2, b1, i, k] - d[b1, b2, i, k])
+                jac_qd[7 + i, 7 + k] = total
     return jac_q, jac_qd

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ffrf.numerics.small_linalg import skew
+from ffrf.numerics.small_linalg import cross3, skew
 
 __all__ = ["rotation_matrix", "g_bar", "rotation_derivative"]
 
@@ -67,7 +67,7 @@ def rotation_derivative(p: np.ndarray, u: np.ndarray) -> np.ndarray:
     """
     out = np.empty((3, 4), dtype=p.dtype)
     pv = p[1:]
-    cross = np.cross(pv, u)
+    cross = cross3(pv, u)
     dot = pv[0] * u[0] + pv[1] * u[1] + pv[2] * u[2]
     for i in range(3):
         out[i, 0] = 2.0 * (p[0] * u[i] + cross[i])

@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 
 from ffrf.body.euler_parameters import rotation_derivative, rotation_matrix
-from ffrf.numerics.small_linalg import dot, mat_mat, mat_vec, skew, vec_mat
+from ffrf.numerics.small_linalg import cross3, dot, mat_mat, mat_vec, skew, vec_mat
 
 __all__ = ["exp_so3_kernel", "exp_so3_tangent_kernel", "marker_frame", "exp_so3_hessian", "marker_frame_hessian"]
 
@@ -105,19 +105,18 @@ def _exp_so3_coefficients(c: float):
     if c < 1.0:
         a = a1 = a2 = b = b1 = b2 = 0.0
         fa, fb = 1.0, 2.0  # (2k+1)! and (2k+2)!
+        c_k2, c_k1, c_k = 0.0, 0.0, 1.0  # c^(k-2), c^(k-1), c^k (running products: no pow calls in the hot loop)
         for k in range(13):
             sign = -1.0 if k % 2 else 1.0
-            ck = c**k
-            a += sign * ck / fa
-            b += sign * ck / fb
-            if k >= 1:
-                a1 += sign * k * c ** (k - 1) / fa
-                b1 += sign * k * c ** (k - 1) / fb
-            if k >= 2:
-                a2 += sign * k * (k - 1) * c ** (k - 2) / fa
-                b2 += sign * k * (k - 1) * c ** (k - 2) / fb
+            a += sign * c_k / fa
+            b += sign * c_k / fb
+            a1 += sign * k * c_k1 / fa
+            b1 += sign * k * c_k1 / fb
+            a2 += sign * k * (k - 1) * c_k2 / fa
+            b2 += sign * k * (k - 1) * c_k2 / fb
             fa *= (2 * k + 2) * (2 * k + 3)
             fb *= (2 * k + 3) * (2 * k + 4)
+            c_k2, c_k1, c_k = c_k1, c_k, c_k * c
         return a, a1, a2, b, b1, b2
     phi = np.sqrt(c)
     s, co = np.sin(phi), np.cos(phi)
@@ -135,21 +134,51 @@ def exp_so3_hessian(theta: np.ndarray, v: np.ndarray, z: np.ndarray) -> np.ndarr
     r"""Eq. (FP2): :math:`\partial^2 (z\cdot\exp(\tilde\theta)v)/\partial\theta^2` (3x3, float64), from
     :math:`\exp(\tilde\theta)v = v + a\,\theta\times v + b\,((\theta\cdot v)\theta - c\,v)`,
     :math:`c = \theta\cdot\theta`."""
+    return _exp_so3_hessian(_exp_so3_coefficients(dot(theta, theta)), theta, v, z)
+
+
+@njit(cache=True, inline="always")
+def _exp_so3_hessian(coefficients, theta, v, z):
+    """:func:`exp_so3_hessian` with the coefficients of :func:`_exp_so3_coefficients` at ``theta``, which depend on
+    ``theta`` only: a marker's four Hessians share them."""
     c = dot(theta, theta)
-    a, a1, a2, b, b1, b2 = _exp_so3_coefficients(c)
+    a, a1, a2, b, b1, b2 = coefficients
     zv, tv, tz = dot(z, v), dot(theta, v), dot(theta, z)
-    s1 = dot(z, np.cross(theta, v))
-    g1 = np.cross(v, z)
+    g1 = cross3(v, z)
+    s1 = dot(theta, g1)  # z . (theta x v)
     s2 = tv * tz - c * zv
     g2 = v * tz + z * tv - 2.0 * zv * theta
-    grad_a, grad_b = 2.0 * a1 * theta, 2.0 * b1 * theta
-    out = (4.0 * a2 * s1 + 4.0 * b2 * s2) * np.outer(theta, theta)
-    out += np.outer(grad_a, g1) + np.outer(g1, grad_a) + np.outer(grad_b, g2) + np.outer(g2, grad_b)
-    out += b * (np.outer(v, z) + np.outer(z, v))
+    curvature = 4.0 * a2 * s1 + 4.0 * b2 * s2
     diagonal = 2.0 * a1 * s1 + 2.0 * b1 * s2 - 2.0 * b * zv
-    for i in range(3):
+    out = np.empty((3, 3))
+    for i in range(3):  # the outer products as loops: numba's np.outer costs more than this arithmetic
+        for j in range(3):
+            out[i, j] = (
+                curvature * theta[i] * theta[j]
+                + 2.0 * a1 * (theta[i] * g1[j] + g1[i] * theta[j])
+                + 2.0 * b1 * (theta[i] * g2[j] + g2[i] * theta[j])
+                + b * (v[i] * z[j] + z[i] * v[j])
+            )
         out[i, i] += diagonal
     return out
+
+
+@njit(cache=True, inline="always")
+def _add_rotation_hessian(out, u, w):
+    r"""Adds the p-Hessian of :math:`w\cdot A(p)u` (constant: Eq. (R1) is quadratic in ``p``) to ``out[3:7, 3:7]``:
+    :math:`w\cdot Au = p_0^2\,w\cdot u + 2p_0\,\mathbf p\cdot(u\times w)
+    + \mathbf p^T(wu^T + uw^T - (w\cdot u)I)\mathbf p`, so twice
+    :math:`[[w\cdot u, (u\times w)^T], [u\times w, wu^T + uw^T - (w\cdot u)I]]`."""
+    wu = dot(w, u)
+    out[3, 3] += 2.0 * wu
+    for i in range(3):
+        j1, j2 = (i + 1) % 3, (i + 2) % 3
+        cross = u[j1] * w[j2] - u[j2] * w[j1]  # (u x w)_i
+        out[3, 4 + i] += 2.0 * cross
+        out[4 + i, 3] += 2.0 * cross
+        for j in range(3):
+            out[4 + i, 4 + j] += 2.0 * (w[i] * u[j] + u[i] * w[j])
+        out[4 + i, 4 + i] -= 2.0 * wu
 
 
 @njit(cache=True)
@@ -163,7 +192,7 @@ def marker_frame_hessian(q, point, position_modes, rotation_modes, rotation, off
     pe = q[3:7]
     a_body, theta, local, turn, tangent = _marker_state(q, point, position_modes, rotation_modes)
     out = np.zeros((n, n))
-    unit = np.eye(4)
+    coefficients = _exp_so3_coefficients(dot(theta, theta))
     basis3 = np.eye(3)
     for v in range(4):
         if v == 0:  # the joint point: u = x_bar + P zeta + E o
@@ -172,9 +201,7 @@ def marker_frame_hessian(q, point, position_modes, rotation_modes, rotation, off
         else:  # axis k = v - 1: u = E R e_k
             w, direction = weight_axes[:, v - 1].copy(), rotation[:, v - 1].copy()
             u = mat_vec(turn, direction)
-        # A(p) u is quadratic in p: its p-Hessian is constant, d/dp_b of Eq. (R3) is (R3) at p = e_b.
-        for bb in range(4):
-            out[3:7, 3 + bb] += vec_mat(w, rotation_derivative(unit[bb], u))
+        _add_rotation_hessian(out, u, w)
         if m == 0:
             continue
         u_zeta = -mat_mat(mat_mat(mat_mat(turn, skew(direction)), tangent), rotation_modes)
@@ -188,6 +215,7 @@ def marker_frame_hessian(q, point, position_modes, rotation_modes, rotation, off
         out[3:7, 7:] += mixed
         out[7:, 3:7] += mixed.T
         out[7:, 7:] += mat_mat(
-            mat_mat(rotation_modes.T, exp_so3_hessian(theta, direction, vec_mat(w, a_body))), rotation_modes
+            mat_mat(rotation_modes.T, _exp_so3_hessian(coefficients, theta, direction, vec_mat(w, a_body))),
+            rotation_modes,
         )
     return out

@@ -35,7 +35,7 @@ from numba import njit
 from ffrf.body.body_kernels import mass_matrix
 from ffrf.body.body_tangents import body_tangents
 from ffrf.body.flexible_body import body_residual
-from ffrf.numerics.small_linalg import dot, mat_mat, vec_mat
+from ffrf.numerics.small_linalg import dot, vec_mat
 from ffrf.system.marker_kernels import marker_frame, marker_frame_hessian
 
 __all__ = [
@@ -125,6 +125,18 @@ def _joint_coordinates(joints, j, offsets):
     return index, n0
 
 
+@njit(cache=True, inline="always")
+def _add_symmetric_product(out, scale, a, b):
+    """``out += scale (a^T b + b^T a)`` for ``a``, ``b`` of shape (3, n), in place (no temporaries)."""
+    n = a.shape[1]
+    for i in range(n):
+        for j in range(n):
+            total = 0.0
+            for k in range(3):
+                total += a[k, i] * b[k, j] + b[k, i] * a[k, j]
+            out[i, j] += scale * total
+
+
 @njit(cache=True)
 def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
     r"""Eqs. (J1)-(J3) of joint ``j``: values, Jacobian rows on ``[q_0, q_1]`` and, with ``want_hessian``,
@@ -167,8 +179,7 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
                     w_a0[:, i] += lam[row] * gap
                     w_p1 += lam[row] * axes0[:, i]
                     w_p0 -= lam[row] * axes0[:, i]
-                    product = mat_mat(da0[i].T, d_gap)
-                    hessian += lam[row] * (product + product.T)
+                    _add_symmetric_product(hessian, lam[row], da0[i], d_gap)
                 row += 1
     for r in range(3):  # (J2)-(J3): z0.y1, z0.x1, x0'.y1
         if not locked[3 + r]:
@@ -186,8 +197,7 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
             w_a0[:, k0] += c0 * lam[row] * y
             w_a0[:, 1] += c1 * lam[row] * y
             w_a1[:, k1] += lam[row] * x
-            product = mat_mat(dx.T, da1[k1])
-            hessian += lam[row] * (product + product.T)
+            _add_symmetric_product(hessian, lam[row], dx, da1[k1])
         row += 1
     if want_hessian:  # Eq. (FP5): second derivatives of each side's point and axes, weighted
         if b0 >= 0:
