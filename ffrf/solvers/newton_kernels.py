@@ -79,29 +79,25 @@ def should_refactor(
     position_scale: float,
     velocity_scale: float,
 ) -> bool:
-    """Rebuild the iteration matrix after iteration ``step_iteration`` of a step? From the fifth
-    iteration on, yes. Before, never while the position and velocity increments are within
-    ``NEAR_TOLERANCE`` of their tolerances (``*_scale``); otherwise at the second iteration if the
-    increment more than doubled, at the third and fourth if it shrank by less than a half.
+    """Rebuild the iteration matrix after iteration ``step_iteration`` of a step? From the third iteration on, yes.
+    At the second, if the increment more than doubled, unless the position and velocity increments are within
+    ``NEAR_TOLERANCE`` of their tolerances (``*_scale``).
 
     Why not judge the second iteration by its contraction: the first iteration of a step with
     factors kept from earlier steps corrects the predictor's constraint gap, and on the index-3
     matrix factors only one step old repeat that correction in the second iteration before the
     third converges (PLA scene at full drive speed, velocity increments 2.1e-9, 2.0e-9, then
     8e-12; with fresh factors 2.1e-9, then 8e-14; over a revolution the second increment exceeds
-    the first on a quarter of the steps, but never twice it). Why refactor from the fifth even near the tolerance: one
-    factorisation costs about 20 iterations there (7 ms against 0.34 ms), so a kept matrix pays
-    while steps converge in three to five iterations, and an aged one that needs more is rebuilt.
-    Measured on the default P1 scene's revolution (15 250 steps): refactoring at the fourth
-    iteration gave 3.9 iterations per step and 709 factorisations, at the fifth 4.6 and 270, and
-    the earlier rule (contraction judged from the second iteration) 3.0 and 7232."""
-    if step_iteration >= 5:
+    the first on a quarter of the steps, but never twice it). Why refactor from the third: with the analytic body
+    tangents (Eqs. (F12)-(F14)) a factorisation costs about three iterations (the matrix 0.37 ms and its LU 0.1 ms
+    against 0.16 ms per iteration, ``bench/iteration_cost.py``, 4 modes). On the default scene's first 5 s of
+    ramp (500 steps of 10 ms): refactoring from the fifth iteration gave 4.17 iterations per step, from the third
+    2.99 and the fastest steps (0.62 against 0.96 ms), from the second 2.43 at 0.85 ms per step."""
+    if step_iteration >= 3:
         return True
     if beta_p * increment <= NEAR_TOLERANCE * position_scale and gamma_p * increment <= NEAR_TOLERANCE * velocity_scale:
         return False
-    if step_iteration <= 2:
-        return increment > 2.0 * previous
-    return step_iteration >= 5 or increment > 0.5 * previous
+    return increment > 2.0 * previous
 
 
 @njit(cache=True)
