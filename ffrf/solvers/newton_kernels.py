@@ -91,8 +91,9 @@ def should_refactor(
     the first on a quarter of the steps, but never twice it). Why refactor from the third: with the analytic body
     tangents (Eqs. (F12)-(F14)) a factorisation costs about three iterations (the matrix 0.37 ms and its LU 0.1 ms
     against 0.16 ms per iteration, ``bench/iteration_cost.py``, 4 modes). On the default scene's first 5 s of
-    ramp (500 steps of 10 ms): refactoring from the fifth iteration gave 4.17 iterations per step, from the third
-    2.99 and the fastest steps (0.62 against 0.96 ms), from the second 2.43 at 0.85 ms per step."""
+    ramp (500 steps of 10 ms, ``bench/iteration_cost.py``): refactoring from the fifth iteration gave 4.17 iterations
+    per step at 0.67 ms per step, from the third 2.99 at 0.66 ms (fresher factors at the same cost), from the second
+    2.43 and steps about a third slower in a side-by-side run."""
     if step_iteration >= 3:
         return True
     if beta_p * increment <= NEAR_TOLERANCE * position_scale and gamma_p * increment <= NEAR_TOLERANCE * velocity_scale:
