@@ -35,7 +35,7 @@ from ffrf.solvers.common import consistent_accelerations
 from ffrf.solvers.generalized_alpha import generalized_alpha
 from ffrf.solvers.newton_kernels import lu_solve
 from ffrf.system.packed_system import pack_system
-from ffrf.system.system_kernels import _body_residuals, _constraints, system_residual
+from ffrf.system.system_kernels import _body_residuals, _constraint_forces, system_residual
 
 
 @njit(cache=True)
@@ -58,7 +58,7 @@ def _body_terms(calls, bodies, q, qd, qdd, gravity):
 def _constraint_terms(calls, joints, offsets, q, phi, lam):
     total = 0.0
     for _ in range(calls):
-        total += _constraints(joints, offsets, q, phi, lam, np.bool_(False), np.bool_(False), q.shape[0])[2][0]
+        total += _constraint_forces(joints, offsets, q, phi, lam, np.zeros(q.shape[0]))[0]
     return total
 
 

@@ -234,14 +234,15 @@ def residual_breakdown(packed, q, qd, qdd, lam, phi) -> dict:
     """Allocations inside each kernel function of :func:`system_residual` at one state, per call."""
     from ffrf.body.flexible_body import body_residual
     from ffrf.system import system_kernels as sk
-    from ffrf.system.marker_kernels import marker_frame
+    from ffrf.system.marker_kernels import marker_frame_transpose, marker_pose
 
     bodies, joints, gravity = packed.bodies, packed.joints, packed.gravity
-    offsets, row_starts, n = bodies[0], joints[3], q.shape[0]
+    offsets, row_starts = bodies[0], joints[3]
+    forces = np.zeros(q.shape[0])
     out: dict = {
         "system_residual": kernel_allocations(sk.system_residual, bodies, joints, q, qd, qdd, lam, gravity, phi),
         "_body_residuals": kernel_allocations(sk._body_residuals, bodies, q, qd, qdd, gravity),
-        "_constraints": kernel_allocations(sk._constraints, joints, offsets, q, phi, lam, False, False, n),
+        "_constraint_forces": kernel_allocations(sk._constraint_forces, joints, offsets, q, phi, lam, forces),
         "body_residual": [],
         "body_residual_at_rest": [],
         "joints": [],
@@ -253,6 +254,7 @@ def residual_breakdown(packed, q, qd, qdd, lam, phi) -> dict:
         out["body_residual"].append(kernel_allocations(body_residual, q[s:e], qd[s:e], qdd[s:e], *common))
         rest = np.zeros(e - s)
         out["body_residual_at_rest"].append(kernel_allocations(body_residual, q[s:e], rest, rest, *common))
+    weight_point, weight_axes = np.ones(3), np.ones((3, 3))
     for j in range(joints[0].shape[0]):
         r0, r1 = row_starts[j], row_starts[j + 1]
         if joints[0][j] == 0:
@@ -260,34 +262,35 @@ def residual_breakdown(packed, q, qd, qdd, lam, phi) -> dict:
                 {"joint": j, "kind": "euler", "_euler": kernel_allocations(sk._euler, joints, j, q, offsets)}
             )
             continue
-        total = sk._joint_coordinates(joints, j, offsets)[0].shape[0]
         entry: dict[str, Any] = {
             "joint": j,
             "kind": "marker",
             "bodies": [int(joints[1][j]), int(joints[2][j])],
-            "_marker_joint": kernel_allocations(sk._marker_joint, joints, j, q, offsets, phi, lam[r0:r1], False),
-            "_joint_coordinates": kernel_allocations(sk._joint_coordinates, joints, j, offsets),
-            "_side": [],
-            "_pad": 0.0,
+            "_marker_joint_forces": kernel_allocations(
+                sk._marker_joint_forces, joints, j, q, offsets, phi, lam[r0:r1], forces
+            ),
+            "marker_pose": [],
+            "marker_frame_transpose": [],
         }
         for side, body in ((joints[5], joints[1][j]), (joints[6], joints[2][j])):
+            if body < 0:
+                continue
+            q_body = q[offsets[body] : offsets[body + 1]]
             data = sk._side_data(side, j)
-            entry["_side"].append(kernel_allocations(sk._side, body, *data, q, offsets))
-            d_point, d_axes = sk._side(body, *data, q, offsets)[2:]  # type: ignore[call-arg]
-            entry["_pad"] += kernel_allocations(sk._pad, d_point, d_axes, 0, total)
-            if body >= 0:
-                entry["marker_frame"] = kernel_allocations(marker_frame, q[offsets[body] : offsets[body + 1]], *data)
-        entry["_marker_joint_own"] = entry["_marker_joint"] - sum(entry["_side"]) - entry["_pad"]
-        entry["_marker_joint_own"] -= entry["_joint_coordinates"]
+            entry["marker_pose"].append(kernel_allocations(marker_pose, q_body, *data))
+            entry["marker_frame_transpose"].append(
+                kernel_allocations(marker_frame_transpose, q_body, *data, weight_point, weight_axes)
+            )
+        entry["_marker_joint_forces_own"] = (
+            entry["_marker_joint_forces"] - sum(entry["marker_pose"]) - sum(entry["marker_frame_transpose"])
+        )
         out["joints"].append(entry)
     markers = [j for j in out["joints"] if j["kind"] == "marker"]
     out["summary"] = {
-        "marker_frame_calls": sum(1 for j in markers for body in j["bodies"] if body >= 0),
-        "marker_frame_each": markers[0].get("marker_frame"),
-        "marker_sides_total": sum(sum(j["_side"]) for j in markers),
-        "pads_total": sum(j["_pad"] for j in markers),
-        "joint_coordinates_total": sum(j["_joint_coordinates"] for j in markers),
-        "marker_joints_own_total": sum(j["_marker_joint_own"] for j in markers),
+        "marker_sides": sum(len(j["marker_pose"]) for j in markers),
+        "marker_pose_total": sum(sum(j["marker_pose"]) for j in markers),
+        "marker_frame_transpose_total": sum(sum(j["marker_frame_transpose"]) for j in markers),
+        "marker_joints_own_total": sum(j["_marker_joint_forces_own"] for j in markers),
         "euler_total": sum(j["_euler"] for j in out["joints"] if j["kind"] == "euler"),
         "body_residuals_total": sum(out["body_residual"]),
     }

@@ -29,7 +29,7 @@ import numpy as np
 from numba import njit
 
 from ffrf.body.euler_parameters import g_bar, rotation_matrix
-from ffrf.numerics.small_linalg import dot, mat_mat, mat_vec, skew, vec_mat
+from ffrf.numerics.small_linalg import cross3, dot, mat_mat, mat_vec, skew, vec_mat
 
 __all__ = [
     "second_moment",
@@ -39,7 +39,7 @@ __all__ = [
     "quadratic_velocity",
     "gravity_force",
     "modal_products",
-    "mass_and_quadratic_velocity",
+    "frame_terms",
 ]
 
 
@@ -235,10 +235,40 @@ def gravity_force(
 
 
 @njit(cache=True)
-def mass_and_quadratic_velocity(p, zeta, pd, zetad, mass, s0, s1, x2, c, d, reduced_mass):
-    """Eqs. (F8) and (F9) together, their shared pieces computed once (the body residual needs both)."""
-    a_mat, g, s, d_zeta, j = _kinematics(p, zeta, s0, s1, x2, c, d)
-    return (
-        _mass_matrix(zeta, mass, s1, c, d, reduced_mass, a_mat, g, s, j),
-        _quadratic_velocity(pd, zetad, s1, c, d, a_mat, g, s, d_zeta, j),
+def frame_terms(q, qd, qdd, gravity, s0, s1, x2, c, d, exact_gravity):
+    r"""The body-frame pieces of Eq. (F12), shared by the residual and its tangents (Eqs. (F13)-(F14)):
+    ``A``, :math:`\bar G`, :math:`\omega = \bar G\dot p`, :math:`\alpha = \bar G\ddot p`, ``s``, ``s_g`` (``s``, or
+    :math:`S_0` for Exudyn's gravity), :math:`w = S_1\dot\zeta`, the products :math:`D_{ab}\zeta`, ``J``,
+    :math:`M_{\omega\zeta}`, :math:`A^T\ddot R`, :math:`A^Tg`, ``N`` of Eq. (F9), and
+
+    .. math:: v_R = \alpha\times s + S_1\ddot\zeta + \omega\times(\omega\times s) + 2\omega\times w,\quad
+              v_p = s\times A^T\ddot R + J\alpha + M_{\omega\zeta}\ddot\zeta + \omega\times J\omega
+              + 2(\omega\,\mathrm{tr}N - N\omega) - s_g\times A^Tg,
+
+    so that :math:`f_R = m(\ddot R - g) + Av_R` and :math:`f_p = \bar G^Tv_p`. One dtype throughout."""
+    p, zeta, pd, zetad = q[3:7], q[7:], qd[3:7], qd[7:]
+    a_mat, g = rotation_matrix(p), g_bar(p)
+    omega, alpha = mat_vec(g, pd), mat_vec(g, qdd[3:7])
+    s = s0 + mat_vec(s1, zeta)
+    s_g = s if exact_gravity else s0 + 0.0 * s
+    w = mat_vec(s1, zetad)
+    d_zeta = modal_products(d, zeta)
+    inertia = inertia_about_origin(_second_moment(zeta, x2, c, d_zeta))
+    coupling = rotation_mode_coupling(zeta, c, d)
+    r_local = vec_mat(qdd[0:3], a_mat)
+    g_local = vec_mat(gravity, a_mat)
+    n_mat = np.empty((3, 3), dtype=q.dtype)
+    for a in range(3):
+        for b in range(3):
+            n_mat[a, b] = dot(zetad, c[a, b]) + dot(zetad, d_zeta[a, b])
+    trace_n = n_mat[0, 0] + n_mat[1, 1] + n_mat[2, 2]
+    v_r = cross3(alpha, s) + mat_vec(s1, qdd[7:]) + cross3(omega, cross3(omega, s)) + 2.0 * cross3(omega, w)
+    v_p = (
+        cross3(s, r_local)
+        + mat_vec(inertia, alpha)
+        + mat_vec(coupling, qdd[7:])
+        + cross3(omega, mat_vec(inertia, omega))
+        + 2.0 * (trace_n * omega - mat_vec(n_mat, omega))
+        - cross3(s_g, g_local)
     )
+    return a_mat, g, omega, alpha, s, s_g, w, d_zeta, inertia, coupling, r_local, g_local, n_mat, v_r, v_p

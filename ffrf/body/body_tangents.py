@@ -19,14 +19,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ffrf.body.body_kernels import (
-    _levi_civita,
-    _second_moment,
-    inertia_about_origin,
-    modal_products,
-    rotation_mode_coupling,
-)
-from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix
+from ffrf.body.body_kernels import _levi_civita, frame_terms, modal_products
+from ffrf.body.euler_parameters import g_bar, rotation_derivative
 from ffrf.numerics.small_linalg import cross3, dot, mat_mat, mat_vec, skew, vec_mat
 
 __all__ = ["body_tangents"]
@@ -76,32 +70,20 @@ def body_tangents(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
     jac_qd = np.zeros((n, n))
     p, zeta, pd, zetad = q[3:7], q[7:], qd[3:7], qd[7:]
     rdd, pdd, zetadd = qdd[0:3], qdd[3:7], qdd[7:]
-    a_mat, g = rotation_matrix(p), g_bar(p)
+    a_mat, g, omega, alpha, s, s_g, w, d_zeta, inertia, coupling, r_local, g_local, n_mat, v_r, v_p = frame_terms(
+        q, qd, qdd, gravity, s0, s1, x2, c, d, exact_gravity
+    )
     d_omega = -g_bar(pd)  # d omega / dp, from G(p) pd = -G(pd) p
     d_alpha = -g_bar(pdd)
-    omega, alpha = mat_vec(g, pd), mat_vec(g, pdd)
-    s = s0 + mat_vec(s1, zeta)
-    s_g = s if exact_gravity else s0
-    w = mat_vec(s1, zetad)
-    d_zeta = modal_products(d, zeta)  # D_ab zeta
     dt_zeta = _transposed_products(d, zeta)  # D_ab^T zeta
     dt_zetad = _transposed_products(d, zetad)
     d_zetadd = modal_products(d, zetadd)
-    inertia = inertia_about_origin(_second_moment(zeta, x2, c, d_zeta))
-    coupling = rotation_mode_coupling(zeta, c, d)
-    r_local = vec_mat(rdd, a_mat)  # A^T Rdd
-    g_local = vec_mat(gravity, a_mat)  # A^T g
     dr_local = _transpose_rotated(p, rdd)
     dg_local = _transpose_rotated(p, gravity)
-    n_mat = np.empty((3, 3))
-    for a in range(3):
-        for b in range(3):
-            n_mat[a, b] = dot(zetad, c[a, b]) + dot(zetad, d_zeta[a, b])
     trace_n = n_mat[0, 0] + n_mat[1, 1] + n_mat[2, 2]
     omega_t, s_t, w_t = skew(omega), skew(s), skew(w)
 
     # (F13), rows R: f_R = m (Rdd - g) + A v_R, v_R = alpha x s + S1 zetadd + omega x (omega x s) + 2 omega x w
-    v_r = cross3(alpha, s) + mat_vec(s1, zetadd) + cross3(omega, cross3(omega, s)) + 2.0 * cross3(omega, w)
     dv_r_omega = -skew(cross3(omega, s)) - mat_mat(omega_t, s_t) - 2.0 * w_t
     dv_r_p = mat_mat(dv_r_omega, d_omega) - mat_mat(s_t, d_alpha)  # d(alpha x s)/d alpha = -s~
     jac_q[0:3, 3:7] = rotation_derivative(p, v_r) + mat_mat(a_mat, dv_r_p)
@@ -110,14 +92,6 @@ def body_tangents(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
     # (F13), rows p: f_p = G^T v_p, v_p = s x A^T Rdd + J alpha + M_wz zetadd + omega x J omega
     #                                     + 2 (omega tr N - N omega) - s_g x A^T g
     j_omega = mat_vec(inertia, omega)
-    v_p = (
-        cross3(s, r_local)
-        + mat_vec(inertia, alpha)
-        + mat_vec(coupling, zetadd)
-        + cross3(omega, j_omega)
-        + 2.0 * (trace_n * omega - mat_vec(n_mat, omega))
-        - cross3(s_g, g_local)
-    )
     dv_p_omega = -skew(j_omega) + mat_mat(omega_t, inertia) + 2.0 * (trace_n * np.eye(3) - n_mat)
     dv_p_p = (
         mat_mat(s_t, dr_local) + mat_mat(inertia, d_alpha) + mat_mat(dv_p_omega, d_omega) - mat_mat(skew(s_g), dg_local)

@@ -22,9 +22,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ffrf.body.body_kernels import (
     _levi_civita,
-    gravity_force,
+    frame_terms,
     inertia_about_origin,
-    mass_and_quadratic_velocity,
     mass_matrix,
     rotation_mode_coupling,
     second_moment,
@@ -32,7 +31,7 @@ from ffrf.body.body_kernels import (
 from ffrf.body.body_tangents import body_tangents
 from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix
 from ffrf.body.modal_moments import ModalMoments
-from ffrf.numerics.small_linalg import mat_vec
+from ffrf.numerics.small_linalg import dot, mat_vec, vec_mat
 
 __all__ = [
     "FlexibleBody",
@@ -174,16 +173,33 @@ def node_positions(q: ArrayLike, nodes: ArrayLike, basis: ArrayLike, indices: Ar
 
 @njit(cache=True)
 def body_residual(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred, exact_gravity):
-    """Eqs. (F8)-(F11): ``M(q) qdd - Q_v - Q_g + K_r zeta + D_r zetad`` (one dtype throughout)."""
-    p, zeta = q[3:7], q[7:]
-    pd, zetad = qd[3:7], qd[7:]
-    out = np.zeros(q.shape[0], dtype=q.dtype)
-    if np.any(qd != 0) or np.any(qdd != 0):  # at rest (statics) M qdd and Q_v vanish exactly
-        mass_q, velocity_q = mass_and_quadratic_velocity(p, zeta, pd, zetad, mass, s0, s1, x2, c, d, mred)
-        out += mat_vec(mass_q, qdd)
-        out -= velocity_q
-    out -= gravity_force(p, zeta, gravity.astype(q.dtype), mass, s0, s1, exact_gravity)
-    out[7:] += mat_vec(kred, zeta) + mat_vec(dred, zetad)
+    r"""Eqs. (F8)-(F11), ``M(q) qdd - Q_v - Q_g + K_r zeta + D_r zetad``, in the form of Eq. (F12) (no mass matrix
+    formed): :math:`f_R = m(\ddot R - g) + Av_R`, :math:`f_p = \bar G^Tv_p` with the vectors of
+    :func:`ffrf.body.body_kernels.frame_terms`, and
+
+    .. math:: f_\zeta = S_1^TA^T(\ddot R - g) + M_{\omega\zeta}^T\alpha + M_{red}\ddot\zeta + K_r\zeta
+              + D_r\dot\zeta + \sum_{ab}\omega_a\omega_bE_{ab} - |\omega|^2\sum_aE_{aa}
+              + 2\sum_{abc}\epsilon_{abc}\omega_bD_{ac}\dot\zeta.
+
+    One dtype throughout (complex128 for the complex-step derivatives that test the tangents)."""
+    zeta, zetad, zetadd = q[7:], qd[7:], qdd[7:]
+    a_mat, g, omega, alpha, _, _, _, d_zeta, _, coupling, r_local, g_local, _, v_r, v_p = frame_terms(
+        q, qd, qdd, gravity, s0, s1, x2, c, d, exact_gravity
+    )
+    out = np.empty(q.shape[0], dtype=q.dtype)
+    out[0:3] = mass * (qdd[0:3] - gravity) + mat_vec(a_mat, v_r)
+    out[3:7] = vec_mat(v_p, g)
+    f_zeta = vec_mat(r_local - g_local, s1) + vec_mat(alpha, coupling)
+    f_zeta += mat_vec(mred, zetadd) + mat_vec(kred, zeta) + mat_vec(dred, zetad)
+    omega2 = dot(omega, omega)
+    for a in range(3):
+        a1, a2 = (a + 1) % 3, (a + 2) % 3
+        for b in range(3):
+            weight = omega[a] * omega[b] - (omega2 if a == b else 0.0)
+            f_zeta += weight * (c[a, b] + d_zeta[a, b])
+        # 2 sum_bc eps_abc omega_b D_ac zetad: (b, c) = (a+1, a+2) with +1, (a+2, a+1) with -1
+        f_zeta += 2.0 * (omega[a1] * mat_vec(d[a, a2], zetad) - omega[a2] * mat_vec(d[a, a1], zetad))
+    out[7:] = f_zeta
     return out
 
 

@@ -23,7 +23,15 @@ from numba import njit
 from ffrf.body.euler_parameters import rotation_derivative, rotation_matrix
 from ffrf.numerics.small_linalg import cross3, dot, mat_mat, mat_vec, skew, vec_mat
 
-__all__ = ["exp_so3_kernel", "exp_so3_tangent_kernel", "marker_frame", "exp_so3_hessian", "marker_frame_hessian"]
+__all__ = [
+    "exp_so3_kernel",
+    "exp_so3_tangent_kernel",
+    "marker_frame",
+    "marker_pose",
+    "marker_frame_transpose",
+    "exp_so3_hessian",
+    "marker_frame_hessian",
+]
 
 
 @njit(cache=True)
@@ -95,6 +103,57 @@ def marker_frame(q, point, position_modes, rotation_modes, rotation, offset):
         if m > 0:
             d_axes[k, :, 7:] = -mat_mat(mat_mat(mat_mat(a_turn, skew(rotation[:, k])), tangent), rotation_modes)
     return position, axes, d_position, d_axes
+
+
+@njit(cache=True)
+def marker_pose(q, point, position_modes, rotation_modes, rotation, offset):
+    """Joint point ``p`` (3) and axes (3x3, columns) of :func:`marker_frame`, without their derivatives."""
+    a_body, _, local, turn, _ = _marker_state(q, point, position_modes, rotation_modes)
+    position = q[:3] + mat_vec(a_body, local + mat_vec(turn, offset))
+    return position, mat_mat(a_body, mat_mat(turn, rotation))
+
+
+@njit(cache=True, inline="always")
+def _add_rotation_gradient(out, p, u, w):
+    r"""Adds :math:`\partial(w\cdot A(p)u)/\partial p = (\partial(Au)/\partial p)^Tw` (Eq. (R3) transposed) to
+    ``out[3:7]``: from :math:`w\cdot Au = p_0^2\,w\cdot u + 2p_0\,\mathbf p\cdot(u\times w)
+    + \mathbf p^T(wu^T + uw^T - (w\cdot u)I)\mathbf p`."""
+    wu = dot(w, u)
+    pu = p[1] * u[0] + p[2] * u[1] + p[3] * u[2]
+    pw = p[1] * w[0] + p[2] * w[1] + p[3] * w[2]
+    cross = cross3(u, w)
+    out[3] += 2.0 * (p[0] * wu + p[1] * cross[0] + p[2] * cross[1] + p[3] * cross[2])
+    for i in range(3):
+        out[4 + i] += 2.0 * (p[0] * cross[i] + w[i] * pu + u[i] * pw - wu * p[1 + i])
+
+
+@njit(cache=True)
+def marker_frame_transpose(q, point, position_modes, rotation_modes, rotation, offset, weight_point, weight_axes):
+    r"""The generalized force :math:`(\partial p/\partial q)^Tw + \sum_k(\partial a_k/\partial q)^TW_{:k}` (n) of a
+    force ``w`` at the joint point and weights ``W`` on its axes (column ``k`` on axis ``k``), Eqs. (K1)-(K3)
+    transposed without forming the derivatives of :func:`marker_frame`:
+
+    .. math:: [\,w;\ (\partial(Au)/\partial p_E)^Tw + \textstyle\sum_k(\partial(Aw_k)/\partial p_E)^TW_{:k};\
+              P^TA^Tw + \Theta^TT^T(o\times E^TA^Tw + \textstyle\sum_k Re_k\times E^TA^TW_{:k})\,]
+
+    (from :math:`\tilde a^T = -\tilde a`). What the residual needs of a joint: :math:`C_q^T\lambda` as weights."""
+    n = q.shape[0]
+    a_body, _, local, turn, tangent = _marker_state(q, point, position_modes, rotation_modes)
+    out = np.zeros(n)
+    out[0:3] = weight_point
+    p = q[3:7]
+    _add_rotation_gradient(out, p, local + mat_vec(turn, offset), weight_point)
+    axes_local = mat_mat(turn, rotation)
+    for k in range(3):
+        _add_rotation_gradient(out, p, axes_local[:, k], weight_axes[:, k])
+    if n > 7:
+        local_weight = vec_mat(weight_point, a_body)  # A^T w
+        out[7:] = vec_mat(local_weight, position_modes)
+        bracket = cross3(offset, vec_mat(local_weight, turn))
+        for k in range(3):
+            bracket += cross3(rotation[:, k], vec_mat(vec_mat(weight_axes[:, k], a_body), turn))
+        out[7:] += vec_mat(vec_mat(bracket, tangent), rotation_modes)
+    return out
 
 
 @njit(cache=True)

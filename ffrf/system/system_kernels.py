@@ -8,7 +8,9 @@ in Python (``docs/formulation.md``, Eqs. (G1), (G3), (FP4)-(FP6)):
   with :func:`ffrf.body.body_tangents.body_tangents` (analytic, Eqs. (F12)-(F14));
 * constraints: Euler normalisations (Eq. (R2)) and marker joints (Eqs. (J1)-(J3)) with
   :func:`ffrf.system.marker_kernels.marker_frame`; the term :math:`H = \partial(C_q^T\lambda)/\partial q`
-  analytically from :func:`ffrf.system.marker_kernels.marker_frame_hessian` (Eq. (FP5)).
+  analytically from :func:`ffrf.system.marker_kernels.marker_frame_hessian` (Eq. (FP5)); the residual's
+  :math:`C_q^T\lambda` from the joints' weights, without the Jacobian
+  (:func:`ffrf.system.marker_kernels.marker_frame_transpose`, Eq. (FP7)).
 
 Packed data (built by :func:`ffrf.system.packed_system.pack_system`), plain arrays only so that a call
 costs microseconds; arrays of different sizes per body or joint are concatenated flat
@@ -36,7 +38,7 @@ from ffrf.body.body_kernels import mass_matrix
 from ffrf.body.body_tangents import body_tangents
 from ffrf.body.flexible_body import body_residual
 from ffrf.numerics.small_linalg import dot, vec_mat
-from ffrf.system.marker_kernels import marker_frame, marker_frame_hessian
+from ffrf.system.marker_kernels import marker_frame, marker_frame_hessian, marker_frame_transpose, marker_pose
 
 __all__ = [
     "system_residual",
@@ -137,6 +139,51 @@ def _add_symmetric_product(out, scale, a, b):
             out[i, j] += scale * total
 
 
+@njit(cache=True, inline="always")
+def _joint_equations(locked, angle, lam, p0, axes0, p1, axes1):
+    r"""Eqs. (J1)-(J3) of one joint from its two sides' points and axes: the values (rows of the locked
+    directions, in :meth:`ffrf.system.joints.MarkerJoint.jacobian`'s order) and the weights that
+    :math:`\lambda^Tg` puts on each side's point and axes (:math:`\partial(\lambda^Tg)/\partial p_s` and
+    :math:`/\partial a_{s,k}`, columns ``k``): :math:`C_q^T\lambda` is their transpose-map (Eq. (FP3)'s weights)."""
+    size = 0
+    for i in range(6):
+        size += locked[i]
+    values = np.empty(size)
+    w_p0, w_p1 = np.zeros(3), np.zeros(3)
+    w_a0, w_a1 = np.zeros((3, 3)), np.zeros((3, 3))
+    gap = p1 - p0
+    row = 0
+    if locked[0] and locked[1] and locked[2]:  # (J1), world components
+        for i in range(3):
+            values[i] = gap[i]
+            w_p1[i] += lam[i]
+            w_p0[i] -= lam[i]
+        row = 3
+    else:  # (J1), components of J_0^T (p_1 - p_0)
+        for i in range(3):
+            if locked[i]:
+                values[row] = dot(axes0[:, i], gap)
+                w_a0[:, i] += lam[row] * gap
+                w_p1 += lam[row] * axes0[:, i]
+                w_p0 -= lam[row] * axes0[:, i]
+                row += 1
+    for r in range(3):  # (J2)-(J3): z0.y1, z0.x1, x0'.y1
+        if not locked[3 + r]:
+            continue
+        k1 = 1 if r != 1 else 0
+        c0, c1, k0 = 1.0, 0.0, 2
+        if r == 2:
+            c0, c1, k0 = np.cos(angle), np.sin(angle), 0
+        x = c0 * axes0[:, k0] + c1 * axes0[:, 1]
+        y = axes1[:, k1]
+        values[row] = dot(x, y)
+        w_a0[:, k0] += c0 * lam[row] * y
+        w_a0[:, 1] += c1 * lam[row] * y
+        w_a1[:, k1] += lam[row] * x
+        row += 1
+    return values, w_p0, w_a0, w_p1, w_a1
+
+
 @njit(cache=True)
 def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
     r"""Eqs. (J1)-(J3) of joint ``j``: values, Jacobian rows on ``[q_0, q_1]`` and, with ``want_hessian``,
@@ -145,40 +192,28 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
     index, n0 = _joint_coordinates(joints, j, offsets)
     total = index.shape[0]
     locked = joints[4][j]
-    size = 0
-    for i in range(6):
-        size += locked[i]
     b0, b1 = joints[1][j], joints[2][j]
     side0 = _side_data(joints[5], j)
     side1 = _side_data(joints[6], j)
     p0, axes0, dp0_side, da0_side = _side(b0, *side0, q, offsets)
     p1, axes1, dp1_side, da1_side = _side(b1, *side1, q, offsets)
+    values, w_p0, w_a0, w_p1, w_a1 = _joint_equations(locked, phi[j], lam, p0, axes0, p1, axes1)
     dp0, da0 = _pad(dp0_side, da0_side, np.int64(0), total)
     dp1, da1 = _pad(dp1_side, da1_side, n0, total)
-    values = np.empty(size)
-    rows = np.zeros((size, total))
+    rows = np.zeros((values.shape[0], total))
     hessian = np.zeros((total, total))
-    w_p0, w_p1 = np.zeros(3), np.zeros(3)
-    w_a0, w_a1 = np.zeros((3, 3)), np.zeros((3, 3))
     gap = p1 - p0
     d_gap = dp1 - dp0
     row = 0
     if locked[0] and locked[1] and locked[2]:  # (J1), world components
         for i in range(3):
-            values[i] = gap[i]
             rows[i] = d_gap[i]
-            w_p1[i] += lam[i]
-            w_p0[i] -= lam[i]
         row = 3
     else:  # (J1), components of J_0^T (p_1 - p_0)
         for i in range(3):
             if locked[i]:
-                values[row] = dot(axes0[:, i], gap)
                 rows[row] = vec_mat(axes0[:, i], d_gap) + vec_mat(gap, da0[i])
                 if want_hessian:
-                    w_a0[:, i] += lam[row] * gap
-                    w_p1 += lam[row] * axes0[:, i]
-                    w_p0 -= lam[row] * axes0[:, i]
                     _add_symmetric_product(hessian, lam[row], da0[i], d_gap)
                 row += 1
     for r in range(3):  # (J2)-(J3): z0.y1, z0.x1, x0'.y1
@@ -191,12 +226,8 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
         x = c0 * axes0[:, k0] + c1 * axes0[:, 1]
         dx = c0 * da0[k0] + c1 * da0[1]
         y = axes1[:, k1]
-        values[row] = dot(x, y)
         rows[row] = vec_mat(x, da1[k1]) + vec_mat(y, dx)
         if want_hessian:
-            w_a0[:, k0] += c0 * lam[row] * y
-            w_a0[:, 1] += c1 * lam[row] * y
-            w_a1[:, k1] += lam[row] * x
             _add_symmetric_product(hessian, lam[row], dx, da1[k1])
         row += 1
     if want_hessian:  # Eq. (FP5): second derivatives of each side's point and axes, weighted
@@ -204,6 +235,30 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
             hessian[:n0, :n0] += marker_frame_hessian(q[offsets[b0] : offsets[b0 + 1]], *side0, w_p0, w_a0)
         hessian[n0:, n0:] += marker_frame_hessian(q[offsets[b1] : offsets[b1 + 1]], *side1, w_p1, w_a1)
     return values, rows, hessian, index
+
+
+@njit(cache=True)
+def _marker_joint_forces(joints, j, q, offsets, phi, lam, forces):
+    r"""Eqs. (J1)-(J3) of joint ``j`` for the residual: its values, and :math:`C_q^T\lambda` added to ``forces``
+    through each side's :func:`ffrf.system.marker_kernels.marker_frame_transpose`, no Jacobian rows formed."""
+    b0, b1 = joints[1][j], joints[2][j]
+    point0, modes0, rotation_modes0, rotation0, offset0 = _side_data(joints[5], j)
+    point1, modes1, rotation_modes1, rotation1, offset1 = _side_data(joints[6], j)
+    q1 = q[offsets[b1] : offsets[b1 + 1]]
+    p1, axes1 = marker_pose(q1, point1, modes1, rotation_modes1, rotation1, offset1)
+    if b0 < 0:  # the ground keeps its joint point and axes composed
+        p0, axes0 = point0, rotation0
+    else:
+        p0, axes0 = marker_pose(q[offsets[b0] : offsets[b0 + 1]], point0, modes0, rotation_modes0, rotation0, offset0)
+    values, w_p0, w_a0, w_p1, w_a1 = _joint_equations(joints[4][j], phi[j], lam, p0, axes0, p1, axes1)
+    forces[offsets[b1] : offsets[b1 + 1]] += marker_frame_transpose(
+        q1, point1, modes1, rotation_modes1, rotation1, offset1, w_p1, w_a1
+    )
+    if b0 >= 0:
+        forces[offsets[b0] : offsets[b0 + 1]] += marker_frame_transpose(
+            q[offsets[b0] : offsets[b0 + 1]], point0, modes0, rotation_modes0, rotation0, offset0, w_p0, w_a0
+        )
+    return values
 
 
 @njit(cache=True, inline="always")
@@ -263,11 +318,31 @@ def _body_residuals(bodies, q, qd, qdd, gravity):
     return out
 
 
+@njit(cache=True, inline="always")
+def _constraint_forces(joints, offsets, q, phi, lam, forces):
+    """Values ``g`` (k) of every constraint, and ``C_q^T lambda`` added to ``forces`` (n): the residual's share,
+    without the Jacobian :func:`_constraints` forms."""
+    row_starts = joints[3]
+    values = np.empty(row_starts[-1])
+    for j in range(joints[0].shape[0]):
+        r0 = row_starts[j]
+        if joints[0][j] == EULER:
+            value, grad, start = _euler(joints, j, q, offsets)
+            values[r0] = value
+            for i in range(4):
+                forces[start + i] += grad[i] * lam[r0]
+            continue
+        r1 = row_starts[j + 1]
+        values[r0:r1] = _marker_joint_forces(joints, j, q, offsets, phi, lam[r0:r1], forces)
+    return values
+
+
 @njit(cache=True)
 def system_residual(bodies, joints, q, qd, qdd, lam, gravity, phi):
     r"""Eq. (G1): ``M qdd - Q + C_q^T lambda`` (n) and ``g`` (k)."""
-    values, _, forces, _ = _constraints(joints, bodies[0], q, phi, lam, np.bool_(False), np.bool_(False), q.shape[0])
-    return _body_residuals(bodies, q, qd, qdd, gravity) + forces, values
+    out = _body_residuals(bodies, q, qd, qdd, gravity)
+    values = _constraint_forces(joints, bodies[0], q, phi, lam, out)
+    return out, values
 
 
 @njit(cache=True)

@@ -43,7 +43,7 @@ def first_step():
     reason="numba's runtime counts the allocations of compiled code; the JIT is off",
 )
 def test_newton_iterations_allocate_alike_and_free_all(first_step):
-    """With tolerance 0 (Newton never converges) and ``done`` far below the refactoring rule's fifth iteration, a call
+    """With tolerance 0 (Newton never converges) and ``done`` far below the refactoring rule's third iteration, a call
     runs exactly ``max_iterations`` iterations: its allocations must be a fixed number plus the same number per
     iteration, and every allocation must be freed by the time the call returns."""
     head, qdd, lam = first_step

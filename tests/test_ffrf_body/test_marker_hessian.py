@@ -1,12 +1,20 @@
 """The analytic second derivatives of the fast path (docs/formulation.md, Eqs. (FP1)-(FP3)):
 the exponential map's, checked in 40-digit arithmetic (mpmath), and a marker joint frame's,
-checked against complex-step differentiation of the analytic first derivatives."""
+checked against complex-step differentiation of the analytic first derivatives; and the residual's transposed
+map of a joint frame's derivatives, against those derivatives."""
 
 import mpmath
 import numpy as np
 import pytest
 
-from ffrf.system.marker_kernels import _exp_so3_coefficients, exp_so3_hessian, marker_frame, marker_frame_hessian
+from ffrf.system.marker_kernels import (
+    _exp_so3_coefficients,
+    exp_so3_hessian,
+    marker_frame,
+    marker_frame_hessian,
+    marker_frame_transpose,
+    marker_pose,
+)
 
 mpmath.mp.dps = 40
 
@@ -65,3 +73,23 @@ def test_marker_frame_hessian_against_complex_step(rng, scale):
         ref[:, k] = (w_point @ d_point + sum(w_axes[:, i] @ d_axes[i] for i in range(3))).imag / step
     np.testing.assert_allclose(ours, ref, rtol=0, atol=1e-13 * np.abs(ref).max())
     np.testing.assert_allclose(ours, ours.T, rtol=0, atol=1e-14 * np.abs(ours).max())
+
+
+@pytest.mark.parametrize("modes", [0, 5])
+def test_marker_frame_transpose_equals_the_transposed_derivatives(rng, modes):
+    """The residual's C_q^T lambda per side: (dp/dq)^T w + sum_k (da_k/dq)^T W_k without forming dp/dq, against
+    marker_frame's derivatives (themselves checked against complex steps in test_joints); the pose is its."""
+    q = rng.normal(size=7 + modes)
+    q[3:7] /= np.linalg.norm(q[3:7])
+    q[7:] *= 0.5
+    point, position_modes, rotation_modes = rng.normal(size=3), rng.normal(size=(3, modes)), rng.normal(size=(3, modes))
+    rotation, offset = np.linalg.qr(rng.normal(size=(3, 3)))[0], rng.normal(size=3)
+    w_point, w_axes = rng.normal(size=3), rng.normal(size=(3, 3))
+    arrays = (point, position_modes, rotation_modes, rotation, offset)
+    position, axes, d_point, d_axes = marker_frame(q, *arrays)
+    reference = w_point @ d_point + sum(w_axes[:, k] @ d_axes[k] for k in range(3))
+    ours = marker_frame_transpose(q, *arrays, w_point, w_axes)
+    np.testing.assert_allclose(ours, reference, rtol=0, atol=1e-14 * np.abs(reference).max())
+    pose = marker_pose(q, *arrays)
+    np.testing.assert_allclose(pose[0], position, rtol=0, atol=1e-15 * np.abs(position).max())
+    np.testing.assert_allclose(pose[1], axes, rtol=0, atol=1e-15)
