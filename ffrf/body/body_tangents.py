@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 
 from ffrf.body.body_kernels import _levi_civita, frame_terms, modal_products
-from ffrf.body.euler_parameters import g_bar, rotation_derivative
+from ffrf.body.euler_parameters import g_bar, rotation_derivative, transposed_rotation_derivative
 from ffrf.numerics.small_linalg import cross3, dot, mat_mat, mat_vec, skew, vec_mat
 
 __all__ = ["body_tangents"]
@@ -33,16 +33,6 @@ def _transposed_products(d: np.ndarray, v: np.ndarray) -> np.ndarray:
     for a in range(3):
         for b in range(3):
             out[a, b] = vec_mat(v, d[a, b])
-    return out
-
-
-@njit(cache=True, inline="always")
-def _transpose_rotated(p: np.ndarray, u: np.ndarray) -> np.ndarray:
-    r""":math:`\partial(A(p)^Tu)/\partial p` (3 x 4): :math:`A(p)^T = A(p^*)` with :math:`p^* = (p_0, -\mathbf p)`,
-    so Eq. (R3) at :math:`p^*` with the signs of the conjugation."""
-    conjugate = np.array([p[0], -p[1], -p[2], -p[3]])
-    out = rotation_derivative(conjugate, u)
-    out[:, 1:] *= -1.0
     return out
 
 
@@ -78,8 +68,8 @@ def body_tangents(q, qd, qdd, gravity, mass, s0, s1, x2, c, d, mred, kred, dred,
     dt_zeta = _transposed_products(d, zeta)  # D_ab^T zeta
     dt_zetad = _transposed_products(d, zetad)
     d_zetadd = modal_products(d, zetadd)
-    dr_local = _transpose_rotated(p, rdd)
-    dg_local = _transpose_rotated(p, gravity)
+    dr_local = transposed_rotation_derivative(p, rdd)
+    dg_local = transposed_rotation_derivative(p, gravity)
     trace_n = n_mat[0, 0] + n_mat[1, 1] + n_mat[2, 2]
     omega_t, s_t, w_t = skew(omega), skew(s), skew(w)
 

@@ -24,7 +24,7 @@ from numba import njit
 
 from ffrf.numerics.small_linalg import cross3, skew
 
-__all__ = ["rotation_matrix", "g_bar", "rotation_derivative"]
+__all__ = ["rotation_matrix", "g_bar", "rotation_derivative", "transposed_rotation_derivative"]
 
 
 @njit(cache=True)
@@ -75,4 +75,17 @@ def rotation_derivative(p: np.ndarray, u: np.ndarray) -> np.ndarray:
             out[i, j + 1] = 2.0 * (pv[i] * u[j] - u[i] * pv[j])
         out[i, i + 1] += 2.0 * dot
     out[:, 1:] -= 2.0 * p[0] * skew(u)
+    return out
+
+
+@njit(cache=True)
+def transposed_rotation_derivative(p: np.ndarray, u: np.ndarray) -> np.ndarray:
+    r""":math:`\partial(A(p)^Tu)/\partial p` (3 x 4): :math:`A(p)^T = A(p^*)` with :math:`p^* = (p_0, -\mathbf p)`,
+    so Eq. (R3) at :math:`p^*`, its last three columns negated. Row ``c`` is also :math:`\partial(u\cdot A(p)e_c)/
+    \partial p`."""
+    conjugate = np.empty(4, dtype=p.dtype)
+    conjugate[0] = p[0]
+    conjugate[1:] = -p[1:]
+    out = rotation_derivative(conjugate, u)
+    out[:, 1:] *= -1.0
     return out

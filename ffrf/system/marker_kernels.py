@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ffrf.body.euler_parameters import rotation_derivative, rotation_matrix
+from ffrf.body.euler_parameters import rotation_derivative, rotation_matrix, transposed_rotation_derivative
 from ffrf.numerics.small_linalg import cross3, dot, mat_mat, mat_vec, skew, vec_mat
 
 __all__ = [
@@ -252,7 +252,11 @@ def marker_frame_hessian(q, point, position_modes, rotation_modes, rotation, off
     a_body, theta, local, turn, tangent = _marker_state(q, point, position_modes, rotation_modes)
     out = np.zeros((n, n))
     coefficients = _exp_so3_coefficients(dot(theta, theta))
-    basis3 = np.eye(3)
+    # Every term is linear in the weights: the p-zeta blocks sum to mixed_left T Theta + D_point P, the zeta-zeta
+    # block to Theta^T (sum of (FP2)) Theta, so the products with the modes are formed once, not once per vector.
+    mixed_left = np.zeros((4, 3))
+    d_point = np.zeros((4, 3))
+    curvature = np.zeros((3, 3))
     for v in range(4):
         if v == 0:  # the joint point: u = x_bar + P zeta + E o
             w, direction = weight_point, offset
@@ -263,18 +267,15 @@ def marker_frame_hessian(q, point, position_modes, rotation_modes, rotation, off
         _add_rotation_hessian(out, u, w)
         if m == 0:
             continue
-        u_zeta = -mat_mat(mat_mat(mat_mat(turn, skew(direction)), tangent), rotation_modes)
+        # (R3) is linear in u: column c of d_w is d(w . A e_c)/dp_E, and du/dzeta = -E direction~ T Theta (+ P).
+        d_w = transposed_rotation_derivative(pe, w).T
+        mixed_left -= mat_mat(d_w, mat_mat(turn, skew(direction)))
         if v == 0:
-            u_zeta += position_modes
-        # (R3) is linear in u: the mixed p-zeta block is sum_c (dA u/dp at u = e_c)^T w  du_c/dzeta.
-        d_transposed = np.empty((4, 3))
-        for cc in range(3):
-            d_transposed[:, cc] = vec_mat(w, rotation_derivative(pe, basis3[cc]))
-        mixed = mat_mat(d_transposed, u_zeta)
+            d_point = d_w
+        curvature += _exp_so3_hessian(coefficients, theta, direction, vec_mat(w, a_body))
+    if m > 0:
+        mixed = mat_mat(mixed_left, mat_mat(tangent, rotation_modes)) + mat_mat(d_point, position_modes)
         out[3:7, 7:] += mixed
         out[7:, 3:7] += mixed.T
-        out[7:, 7:] += mat_mat(
-            mat_mat(rotation_modes.T, _exp_so3_hessian(coefficients, theta, direction, vec_mat(w, a_body))),
-            rotation_modes,
-        )
+        out[7:, 7:] += mat_mat(rotation_modes.T, mat_mat(curvature, rotation_modes))
     return out
