@@ -5,7 +5,7 @@ import pytest
 from body_fixtures import bar_model, nodal_jacobian, nodal_velocities, random_state
 
 from ffrf.body.body_kernels import gravity_force, mass_matrix, quadratic_velocity
-from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix
+from ffrf.body.euler_parameters import g_bar, rotation_derivative, rotation_matrix, transposed_rotation_derivative
 from ffrf.body.modal_moments import modal_moments
 from ffrf.numerics.small_linalg import skew
 
@@ -35,6 +35,10 @@ def test_euler_parameter_identities(rng):
     u = rng.normal(size=3)
     jac = np.array([(rotation_matrix(p + h * e) @ u - rotation_matrix(p - h * e) @ u) / (2 * h) for e in np.eye(4)]).T
     np.testing.assert_allclose(rotation_derivative(p, u), jac, atol=1e-9)
+    jac_t = np.array(
+        [(rotation_matrix(p + h * e).T @ u - rotation_matrix(p - h * e).T @ u) / (2 * h) for e in np.eye(4)]
+    ).T
+    np.testing.assert_allclose(transposed_rotation_derivative(p, u), jac_t, atol=1e-9)
 
 
 def test_modal_moments_reproduce_mass_and_reduced_mass(body):
