@@ -27,6 +27,7 @@ This package never imports Exudyn.
 """
 
 import os
+import sys
 
 # LLVM at optimisation level 2 instead of numba's default 3, unless the user chose one: it is most of the first
 # run's compilation, which level 2 cuts by about a quarter with our kernels as fast as before
@@ -36,7 +37,10 @@ os.environ.setdefault("NUMBA_OPT", "2")
 from ffrf.numerics.kernel_cache import default_kernel_cache  # imports no numba
 
 # Before numba is imported: compiled kernels in a folder named by their sources (a stale callee cannot survive).
-os.environ.setdefault("NUMBA_CACHE_DIR", default_kernel_cache())
+if "NUMBA_CACHE_DIR" not in os.environ:
+    os.environ["NUMBA_CACHE_DIR"] = default_kernel_cache()
+    if "numba" in sys.modules:  # imported first by the caller: numba read its settings already, so set its own
+        sys.modules["numba"].core.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
 
 from ffrf.errors import (
     AssemblyDivergence,

@@ -105,23 +105,129 @@ def marker_frame(q, point, position_modes, rotation_modes, rotation, offset):
     return position, axes, d_position, d_axes
 
 
+# The residual's kernels below hold 3-vectors and 3 x 3 matrices (row-major) as tuples of floats: numba keeps them in
+# registers, where small arrays would each be a heap allocation (bench/memory.py counts them per iteration).
+
+
+@njit(cache=True, inline="always")
+def _mv(a, v):
+    """``a @ v`` for a 3 x 3 tuple and a 3-tuple."""
+    return (
+        a[0] * v[0] + a[1] * v[1] + a[2] * v[2],
+        a[3] * v[0] + a[4] * v[1] + a[5] * v[2],
+        a[6] * v[0] + a[7] * v[1] + a[8] * v[2],
+    )
+
+
+@njit(cache=True, inline="always")
+def _mtv(a, v):
+    """``a.T @ v`` for a 3 x 3 tuple and a 3-tuple."""
+    return (
+        a[0] * v[0] + a[3] * v[1] + a[6] * v[2],
+        a[1] * v[0] + a[4] * v[1] + a[7] * v[2],
+        a[2] * v[0] + a[5] * v[1] + a[8] * v[2],
+    )
+
+
+@njit(cache=True, inline="always")
+def _cross(u, v):
+    return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+
+
+@njit(cache=True, inline="always")
+def _rotation_rows(p0, p1, p2, p3):
+    """Eq. (R1) as a row-major 9-tuple."""
+    return (
+        p0 * p0 + p1 * p1 - p2 * p2 - p3 * p3,
+        2.0 * (p1 * p2 - p0 * p3),
+        2.0 * (p1 * p3 + p0 * p2),
+        2.0 * (p1 * p2 + p0 * p3),
+        p0 * p0 - p1 * p1 + p2 * p2 - p3 * p3,
+        2.0 * (p2 * p3 - p0 * p1),
+        2.0 * (p1 * p3 - p0 * p2),
+        2.0 * (p2 * p3 + p0 * p1),
+        p0 * p0 - p1 * p1 - p2 * p2 + p3 * p3,
+    )
+
+
+@njit(cache=True, inline="always")
+def _so3_rows(t, a, b):
+    """``I + a t~ + b t~ t~`` as a 9-tuple (``t~ t~ = t t^T - |t|^2 I``): Rodrigues' formula and its right Jacobian."""
+    d = 1.0 - b * (t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+    return (
+        d + b * t[0] * t[0],
+        -a * t[2] + b * t[0] * t[1],
+        a * t[1] + b * t[0] * t[2],
+        a * t[2] + b * t[1] * t[0],
+        d + b * t[1] * t[1],
+        -a * t[0] + b * t[1] * t[2],
+        -a * t[1] + b * t[2] * t[0],
+        a * t[0] + b * t[2] * t[1],
+        d + b * t[2] * t[2],
+    )
+
+
+@njit(cache=True, inline="always")
+def _exp_and_tangent(t):
+    """``exp(t~)`` (Eq. (K3)) and its right Jacobian ``T(t)`` as 9-tuples, with the Taylor series of
+    :func:`exp_so3_kernel` and :func:`exp_so3_tangent_kernel` below ``|t|^2 = 1e-8``."""
+    phi2 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2]
+    if phi2 < 1e-8:
+        a, b = 1.0 - phi2 / 6.0, 0.5 - phi2 / 24.0
+        ta, tb = 0.5 - phi2 / 24.0, 1.0 / 6.0 - phi2 / 120.0
+    else:
+        phi = np.sqrt(phi2)
+        sine, cosine = np.sin(phi), np.cos(phi)
+        a, b = sine / phi, (1.0 - cosine) / phi2
+        ta, tb = (1.0 - cosine) / phi2, (phi - sine) / (phi2 * phi)
+    return _so3_rows(t, a, b), _so3_rows(t, -ta, tb)
+
+
+@njit(cache=True, inline="always")
+def _pose_pieces(q, point, position_modes, rotation_modes, offset):
+    """``A``, ``exp(theta~)``, ``T(theta)`` (9-tuples) and the body-frame joint point ``x_bar + P zeta + E o``."""
+    theta = (0.0, 0.0, 0.0)
+    local = (point[0], point[1], point[2])
+    if q.shape[0] > 7:
+        t = [0.0, 0.0, 0.0]
+        x = [point[0], point[1], point[2]]
+        for i in range(3):
+            for k in range(q.shape[0] - 7):
+                t[i] += rotation_modes[i, k] * q[7 + k]
+                x[i] += position_modes[i, k] * q[7 + k]
+        theta = (t[0], t[1], t[2])
+        local = (x[0], x[1], x[2])
+    turn, tangent = _exp_and_tangent(theta)
+    turned = _mv(turn, (offset[0], offset[1], offset[2]))
+    body_point = (local[0] + turned[0], local[1] + turned[1], local[2] + turned[2])
+    return _rotation_rows(q[3], q[4], q[5], q[6]), turn, tangent, body_point
+
+
 @njit(cache=True)
 def marker_pose(q, point, position_modes, rotation_modes, rotation, offset):
-    """Joint point ``p`` (3) and axes (3x3, columns) of :func:`marker_frame`, without their derivatives."""
-    a_body, _, local, turn, _ = _marker_state(q, point, position_modes, rotation_modes)
-    position = q[:3] + mat_vec(a_body, local + mat_vec(turn, offset))
-    return position, mat_mat(a_body, mat_mat(turn, rotation))
+    """Joint point ``p`` (3) and axes (3x3, columns) of :func:`marker_frame`, without their derivatives (float64)."""
+    a_body, turn, _, body_point = _pose_pieces(q, point, position_modes, rotation_modes, offset)
+    position = np.empty(3)
+    moved = _mv(a_body, body_point)
+    for i in range(3):
+        position[i] = q[i] + moved[i]
+    axes = np.empty((3, 3))
+    for k in range(3):
+        axis = _mv(a_body, _mv(turn, (rotation[0, k], rotation[1, k], rotation[2, k])))
+        for i in range(3):
+            axes[i, k] = axis[i]
+    return position, axes
 
 
 @njit(cache=True, inline="always")
 def _add_rotation_gradient(out, p, u, w):
     r"""Adds :math:`\partial(w\cdot A(p)u)/\partial p = (\partial(Au)/\partial p)^Tw` (Eq. (R3) transposed) to
-    ``out[3:7]``: from :math:`w\cdot Au = p_0^2\,w\cdot u + 2p_0\,\mathbf p\cdot(u\times w)
+    ``out[3:7]`` (``u``, ``w`` 3-tuples): from :math:`w\cdot Au = p_0^2\,w\cdot u + 2p_0\,\mathbf p\cdot(u\times w)
     + \mathbf p^T(wu^T + uw^T - (w\cdot u)I)\mathbf p`."""
-    wu = dot(w, u)
+    wu = w[0] * u[0] + w[1] * u[1] + w[2] * u[2]
     pu = p[1] * u[0] + p[2] * u[1] + p[3] * u[2]
     pw = p[1] * w[0] + p[2] * w[1] + p[3] * w[2]
-    cross = cross3(u, w)
+    cross = _cross(u, w)
     out[3] += 2.0 * (p[0] * wu + p[1] * cross[0] + p[2] * cross[1] + p[3] * cross[2])
     for i in range(3):
         out[4 + i] += 2.0 * (p[0] * cross[i] + w[i] * pu + u[i] * pw - wu * p[1 + i])
@@ -131,28 +237,37 @@ def _add_rotation_gradient(out, p, u, w):
 def marker_frame_transpose(q, point, position_modes, rotation_modes, rotation, offset, weight_point, weight_axes):
     r"""The generalized force :math:`(\partial p/\partial q)^Tw + \sum_k(\partial a_k/\partial q)^TW_{:k}` (n) of a
     force ``w`` at the joint point and weights ``W`` on its axes (column ``k`` on axis ``k``), Eqs. (K1)-(K3)
-    transposed without forming the derivatives of :func:`marker_frame`:
+    transposed without forming the derivatives of :func:`marker_frame` (float64; Eq. (FP7)):
 
     .. math:: [\,w;\ (\partial(Au)/\partial p_E)^Tw + \textstyle\sum_k(\partial(Aw_k)/\partial p_E)^TW_{:k};\
               P^TA^Tw + \Theta^TT^T(o\times E^TA^Tw + \textstyle\sum_k Re_k\times E^TA^TW_{:k})\,]
 
     (from :math:`\tilde a^T = -\tilde a`). What the residual needs of a joint: :math:`C_q^T\lambda` as weights."""
     n = q.shape[0]
-    a_body, _, local, turn, tangent = _marker_state(q, point, position_modes, rotation_modes)
+    a_body, turn, tangent, body_point = _pose_pieces(q, point, position_modes, rotation_modes, offset)
     out = np.zeros(n)
-    out[0:3] = weight_point
+    w = (weight_point[0], weight_point[1], weight_point[2])
+    for i in range(3):
+        out[i] = w[i]
     p = q[3:7]
-    _add_rotation_gradient(out, p, local + mat_vec(turn, offset), weight_point)
-    axes_local = mat_mat(turn, rotation)
+    _add_rotation_gradient(out, p, body_point, w)
+    bracket = (0.0, 0.0, 0.0)
     for k in range(3):
-        _add_rotation_gradient(out, p, axes_local[:, k], weight_axes[:, k])
+        column = (rotation[0, k], rotation[1, k], rotation[2, k])
+        w_k = (weight_axes[0, k], weight_axes[1, k], weight_axes[2, k])
+        _add_rotation_gradient(out, p, _mv(turn, column), w_k)
+        turned = _cross(column, _mtv(turn, _mtv(a_body, w_k)))
+        bracket = (bracket[0] + turned[0], bracket[1] + turned[1], bracket[2] + turned[2])
     if n > 7:
-        local_weight = vec_mat(weight_point, a_body)  # A^T w
-        out[7:] = vec_mat(local_weight, position_modes)
-        bracket = cross3(offset, vec_mat(local_weight, turn))
-        for k in range(3):
-            bracket += cross3(rotation[:, k], vec_mat(vec_mat(weight_axes[:, k], a_body), turn))
-        out[7:] += vec_mat(vec_mat(bracket, tangent), rotation_modes)
+        a_w = _mtv(a_body, w)  # A^T w
+        turned = _cross((offset[0], offset[1], offset[2]), _mtv(turn, a_w))
+        bracket = (bracket[0] + turned[0], bracket[1] + turned[1], bracket[2] + turned[2])
+        t_bracket = _mtv(tangent, bracket)
+        for k in range(n - 7):
+            total = 0.0
+            for i in range(3):
+                total += position_modes[i, k] * a_w[i] + rotation_modes[i, k] * t_bracket[i]
+            out[7 + k] = total
     return out
 
 

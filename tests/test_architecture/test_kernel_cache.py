@@ -1,5 +1,6 @@
 """The numba cache folder is named by the kernels' sources (:mod:`ffrf.numerics.kernel_cache`): a change of any
-kernel's file gives another folder, a change elsewhere the same, and a user's ``NUMBA_CACHE_DIR`` is kept."""
+kernel's file gives another folder, a change elsewhere the same, and a user's ``NUMBA_CACHE_DIR`` is kept; numba
+imported before ffrf gets the folder too."""
 
 import os
 import subprocess
@@ -45,3 +46,13 @@ def test_importing_ffrf_sets_the_folder_unless_the_user_did(tmp_path):
     env["NUMBA_CACHE_DIR"] = str(tmp_path / "mine")
     kept = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert kept.stdout.strip() == str(tmp_path / "mine")
+
+
+def test_numba_imported_first_still_gets_the_folder(tmp_path):
+    """A script that imports numba before ffrf: numba has read its settings already, and its own default cache (next
+    to the sources, checked per file) would keep a kernel's stale callees."""
+    code = "import numba, ffrf; print(numba.core.config.CACHE_DIR)"
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env.update(XDG_CACHE_HOME=str(tmp_path), PYTHONPATH=str(ROOT))
+    chosen = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert Path(chosen.stdout.strip()) == kernel_cache_directory(tmp_path / "ffrf")
