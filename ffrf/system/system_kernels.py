@@ -140,6 +140,15 @@ def _add_symmetric_product(out, scale, a, b):
 
 
 @njit(cache=True, inline="always")
+def _rotation_row(r, angle):
+    """Rotational equation ``r`` of (J2)-(J3), ``x . y`` with ``x = c0 a0_k0 + c1 a0_1`` (side 0) and ``y = a1_k1``
+    (side 1): ``(k0, k1, c0, c1)`` for z0.y1, z0.x1 and x0'.y1 (x0' turned by the prescribed ``angle``)."""
+    if r == 2:
+        return 0, 1, np.cos(angle), np.sin(angle)
+    return 2, 1 if r != 1 else 0, 1.0, 0.0
+
+
+@njit(cache=True, inline="always")
 def _joint_equations(locked, angle, lam, p0, axes0, p1, axes1):
     r"""Eqs. (J1)-(J3) of one joint from its two sides' points and axes: the values (rows of the locked
     directions, in :meth:`ffrf.system.joints.MarkerJoint.jacobian`'s order) and the weights that
@@ -170,10 +179,7 @@ def _joint_equations(locked, angle, lam, p0, axes0, p1, axes1):
     for r in range(3):  # (J2)-(J3): z0.y1, z0.x1, x0'.y1
         if not locked[3 + r]:
             continue
-        k1 = 1 if r != 1 else 0
-        c0, c1, k0 = 1.0, 0.0, 2
-        if r == 2:
-            c0, c1, k0 = np.cos(angle), np.sin(angle), 0
+        k0, k1, c0, c1 = _rotation_row(r, angle)
         x = c0 * axes0[:, k0] + c1 * axes0[:, 1]
         y = axes1[:, k1]
         values[row] = dot(x, y)
@@ -219,10 +225,7 @@ def _marker_joint(joints, j, q, offsets, phi, lam, want_hessian):
     for r in range(3):  # (J2)-(J3): z0.y1, z0.x1, x0'.y1
         if not locked[3 + r]:
             continue
-        k1 = 1 if r != 1 else 0
-        c0, c1, k0 = 1.0, 0.0, 2
-        if r == 2:
-            c0, c1, k0 = np.cos(phi[j]), np.sin(phi[j]), 0
+        k0, k1, c0, c1 = _rotation_row(r, phi[j])
         x = c0 * axes0[:, k0] + c1 * axes0[:, 1]
         dx = c0 * da0[k0] + c1 * da0[1]
         y = axes1[:, k1]
