@@ -274,39 +274,32 @@ def _euler(joints, j, q, offsets):
 
 @njit(cache=True)
 def _constraints(joints, offsets, q, phi, lam, want_jacobian, want_hessian, n):
-    """Values ``g``, Jacobian ``C_q`` (k x n, if wanted), ``C_q^T lambda`` and ``H`` (n x n, if wanted)."""
+    """The Jacobian ``C_q`` (k x n) and ``H`` (n x n), each only if wanted (else empty); the values and
+    ``C_q^T lambda`` are the residual's (:func:`_constraint_forces`)."""
     row_starts = joints[3]
     k = row_starts[-1]
-    values = np.empty(k)
     jacobian = np.zeros((k if want_jacobian else 0, n))
-    forces = np.zeros(n)
     hessian = np.zeros((n if want_hessian else 0, n if want_hessian else 0))
     for j in range(joints[0].shape[0]):
         r0 = row_starts[j]
         if joints[0][j] == EULER:
-            value, grad, start = _euler(joints, j, q, offsets)
-            values[r0] = value
+            _, grad, start = _euler(joints, j, q, offsets)
             for i in range(4):
-                forces[start + i] += grad[i] * lam[r0]
                 if want_jacobian:
                     jacobian[r0, start + i] += grad[i]
                 if want_hessian:
                     hessian[start + i, start + i] += 2.0 * lam[r0]
             continue
         size = row_starts[j + 1] - r0
-        lam_j = lam[r0 : r0 + size]
-        vals, rows, block, index = _marker_joint(joints, j, q, offsets, phi, lam_j, want_hessian)
-        values[r0 : r0 + size] = vals
-        contribution = vec_mat(lam_j, rows)
+        _, rows, block, index = _marker_joint(joints, j, q, offsets, phi, lam[r0 : r0 + size], want_hessian)
         for a in range(index.shape[0]):
-            forces[index[a]] += contribution[a]
             if want_jacobian:
                 for r in range(size):
                     jacobian[r0 + r, index[a]] += rows[r, a]
             if want_hessian:
                 for b in range(index.shape[0]):
                     hessian[index[a], index[b]] += block[a, b]
-    return values, jacobian, forces, hessian
+    return jacobian, hessian
 
 
 @njit(cache=True, inline="always")
@@ -352,13 +345,13 @@ def system_residual(bodies, joints, q, qd, qdd, lam, gravity, phi):
 def system_jacobian(bodies, joints, q, phi):
     """``C_q`` (k x n)."""
     lam = np.zeros(joints[3][-1])
-    return _constraints(joints, bodies[0], q, phi, lam, np.bool_(True), np.bool_(False), q.shape[0])[1]
+    return _constraints(joints, bodies[0], q, phi, lam, np.bool_(True), np.bool_(False), q.shape[0])[0]
 
 
 @njit(cache=True)
 def system_hessian(bodies, joints, q, lam, phi):
     r"""Eq. (FP4): :math:`H = \partial(C_q^T\lambda)/\partial q` (n x n)."""
-    return _constraints(joints, bodies[0], q, phi, lam, np.bool_(False), np.bool_(True), q.shape[0])[3]
+    return _constraints(joints, bodies[0], q, phi, lam, np.bool_(False), np.bool_(True), q.shape[0])[1]
 
 
 @njit(cache=True, inline="always")
@@ -394,7 +387,7 @@ def system_iteration_matrix(bodies, joints, q, qd, qdd, lam, gravity, phi, mass_
     r"""Eq. (FP6): ``[[c M + beta' (K_t + H) + gamma' D_t, C_q^T], [C_q, 0]]`` in one pass;
     ``c = 1`` for generalized-alpha (Eq. (G3)), ``c = 0, beta' = 1, gamma' = 0`` for statics (Eq. (S1))."""
     n = q.shape[0]
-    _, jacobian, _, hessian = _constraints(joints, bodies[0], q, phi, lam, np.bool_(True), np.bool_(True), n)
+    jacobian, hessian = _constraints(joints, bodies[0], q, phi, lam, np.bool_(True), np.bool_(True), n)
     k = jacobian.shape[0]
     jac_q, jac_qd = system_body_tangents(bodies, q, qd, qdd, gravity, gamma_p != 0.0)
     out = np.zeros((n + k, n + k))
