@@ -158,34 +158,40 @@ def _joint_equations(locked, angle, lam, p0, axes0, p1, axes1):
     for i in range(6):
         size += locked[i]
     values = np.empty(size)
-    w_p0, w_p1 = np.zeros(3), np.zeros(3)
-    w_a0, w_a1 = np.zeros((3, 3)), np.zeros((3, 3))
-    gap = p1 - p0
+    weights = np.zeros(24)  # one buffer, four views: no array per weight or per update (bench/memory.py)
+    w_p0, w_p1 = weights[0:3], weights[3:6]
+    w_a0, w_a1 = weights[6:15].reshape(3, 3), weights[15:24].reshape(3, 3)
     row = 0
     if locked[0] and locked[1] and locked[2]:  # (J1), world components
         for i in range(3):
-            values[i] = gap[i]
+            values[i] = p1[i] - p0[i]
             w_p1[i] += lam[i]
             w_p0[i] -= lam[i]
         row = 3
     else:  # (J1), components of J_0^T (p_1 - p_0)
         for i in range(3):
             if locked[i]:
-                values[row] = dot(axes0[:, i], gap)
-                w_a0[:, i] += lam[row] * gap
-                w_p1 += lam[row] * axes0[:, i]
-                w_p0 -= lam[row] * axes0[:, i]
+                value = 0.0
+                for c in range(3):
+                    gap = p1[c] - p0[c]
+                    value += axes0[c, i] * gap
+                    w_a0[c, i] += lam[row] * gap
+                    w_p1[c] += lam[row] * axes0[c, i]
+                    w_p0[c] -= lam[row] * axes0[c, i]
+                values[row] = value
                 row += 1
     for r in range(3):  # (J2)-(J3): z0.y1, z0.x1, x0'.y1
         if not locked[3 + r]:
             continue
         k0, k1, c0, c1 = _rotation_row(r, angle)
-        x = c0 * axes0[:, k0] + c1 * axes0[:, 1]
-        y = axes1[:, k1]
-        values[row] = dot(x, y)
-        w_a0[:, k0] += c0 * lam[row] * y
-        w_a0[:, 1] += c1 * lam[row] * y
-        w_a1[:, k1] += lam[row] * x
+        value = 0.0
+        for c in range(3):
+            x, y = c0 * axes0[c, k0] + c1 * axes0[c, 1], axes1[c, k1]
+            value += x * y
+            w_a0[c, k0] += c0 * lam[row] * y
+            w_a0[c, 1] += c1 * lam[row] * y
+            w_a1[c, k1] += lam[row] * x
+        values[row] = value
         row += 1
     return values, w_p0, w_a0, w_p1, w_a1
 
@@ -269,7 +275,7 @@ def _euler(joints, j, q, offsets):
     """Eq. (R2) normalisation p.p - 1 of body ``joints[2][j]``: value and its Jacobian on ``p``."""
     start = offsets[joints[2][j]] + 3
     p = q[start : start + 4]
-    return dot(p, p) - 1.0, 2.0 * p, start
+    return dot(p, p) - 1.0, (2.0 * p[0], 2.0 * p[1], 2.0 * p[2], 2.0 * p[3]), start
 
 
 @njit(cache=True)
